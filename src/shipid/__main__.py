@@ -1,0 +1,3 @@
+from shipid.cli import run
+
+run()

@@ -1,0 +1,1 @@
+"""Estimators: Kalman filters and smoothers, instrumental variables, regression (pure functions)."""

@@ -1,0 +1,1 @@
+"""Simulation: integrators, manoeuvres, noise and disturbance generators."""

@@ -1,0 +1,114 @@
+"""Integrate ``dx/dt = f(t, x, u, theta)``: fixed-step RK4 and scipy's adaptive solvers.
+
+One dynamics signature everywhere (DESIGN.md practice 3, after python-control
+``nlsys``): ``f(t, x, u, theta) -> dx/dt`` with ``x`` shape ``(nx,)``, ``u`` shape
+``(nu,)`` and ``theta`` any parameter object.
+
+Inputs ``u`` are given either as
+
+* a sampled signal: an array ``(n, nu)`` on the output time grid, held constant
+  over each step (zero-order hold, as a digital controller applies it), or
+* a closed-loop callback ``u(t, x) -> (nu,)`` (an autopilot, a zig-zag rule),
+  evaluated once at the start of each output step and held over it, so that the
+  switching instants lie on the sample grid and the recorded input is exactly
+  the one applied.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+Dynamics = Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray]
+InputLaw = Callable[[float, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Result of :func:`simulate`: states ``x`` (n, nx) and applied inputs ``u`` (n, nu) at times ``t``."""
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+
+
+def rk4_step(f: Dynamics, t: float, x: np.ndarray, u: np.ndarray, theta: Any, h: float) -> np.ndarray:
+    """One classical Runge–Kutta step of length ``h`` with ``u`` held constant."""
+    k1 = f(t, x, u, theta)
+    k2 = f(t + 0.5 * h, x + 0.5 * h * k1, u, theta)
+    k3 = f(t + 0.5 * h, x + 0.5 * h * k2, u, theta)
+    k4 = f(t + h, x + h * k3, u, theta)
+    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLaw | None,
+             theta: Any = None, *, method: str = "rk4", substeps: int = 1,
+             rtol: float = 1e-8, atol: float = 1e-10, progress: Callable[[int], None] | None = None
+             ) -> Simulation:
+    """Simulate ``f`` on the time grid ``t``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(t, x, u, theta)``.
+    t : ndarray, shape (n,)
+        Output times, strictly increasing (need not be uniform).
+    x0 : ndarray, shape (nx,)
+    u : ndarray (n, nu) or (n,), callable ``u(t, x)``, or None
+        Input signal on the grid or closed-loop law; held over each step.
+    theta : object
+        Parameters passed through to ``f``.
+    method : str
+        ``"rk4"`` (fixed step, ``substeps`` RK4 steps per output step) or any
+        :func:`scipy.integrate.solve_ivp` method (``"RK45"``, ``"DOP853"``,
+        ``"LSODA"`` ...), restarted at each output step because the input jumps there.
+    progress : callable, optional
+        Called with the number of steps done, for progress bars.
+
+    Returns
+    -------
+    Simulation
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.array(x0, dtype=float)
+    n = t.size
+    closed_loop = callable(u)
+    if u is None:
+        u_arr = np.zeros((n, 0))
+    elif not closed_loop:
+        u_arr = np.asarray(u, dtype=float)
+        if u_arr.ndim == 1:
+            u_arr = u_arr[:, None]
+        if u_arr.shape[0] != n:
+            raise ValueError(f"input has {u_arr.shape[0]} samples, time grid has {n}")
+    X = np.empty((n, x.size))
+    X[0] = x
+    u0 = np.atleast_1d(np.asarray(u(t[0], x), dtype=float)) if closed_loop else u_arr[0]
+    U = np.empty((n, u0.size))
+    U[0] = u0
+    for k in range(n - 1):
+        uk = U[k]
+        h = t[k + 1] - t[k]
+        if method == "rk4":
+            hs = h / substeps
+            tk = t[k]
+            for _ in range(substeps):
+                x = rk4_step(f, tk, x, uk, theta, hs)
+                tk += hs
+        else:
+            sol = solve_ivp(lambda tt, xx: f(tt, xx, uk, theta), (t[k], t[k + 1]), x,
+                            method=method, rtol=rtol, atol=atol)
+            if not sol.success:
+                raise RuntimeError(f"{method} failed at t = {t[k]:.6g} s: {sol.message}")
+            x = sol.y[:, -1]
+        X[k + 1] = x
+        if closed_loop:
+            U[k + 1] = np.atleast_1d(np.asarray(u(t[k + 1], x), dtype=float))
+        else:
+            U[k + 1] = u_arr[k + 1]
+        if progress is not None:
+            progress(k + 1)
+    return Simulation(t=t, x=X, u=U)

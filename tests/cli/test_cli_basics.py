@@ -1,0 +1,26 @@
+"""The command line answers --help and --version, and unknown commands with exit 2."""
+
+import subprocess
+import sys
+
+import shipid
+from shipid.cli import main
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert shipid.__version__ in capsys.readouterr().out
+
+
+def test_help_lists_groups(capsys):
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    for group in ("identify", "study", "analyse", "design"):
+        assert group in out
+
+
+def test_unknown_command_is_one_line_exit_2():
+    proc = subprocess.run([sys.executable, "-m", "shipid", "no-such-command"], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in proc.stderr
