@@ -1,0 +1,55 @@
+"""The interface between a vessel's dynamics and the simulator, the CLI and the manoeuvres.
+
+Each model family (``shipid.models.roll``, ``shipid.models.dp``,
+``shipid.models.abkowitz``) provides a function ``ship_model(vessel) -> ShipModel``;
+:mod:`shipid.simulate.registry` maps vessel names to those functions, so
+``shipid simulate VESSEL MANOEUVRE`` works for every packaged vessel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ShipModel:
+    """A simulatable ship.
+
+    Attributes
+    ----------
+    name : str
+        Vessel name.
+    f : callable
+        ``f(t, x, u, theta) -> dx/dt``.
+    theta : object
+        Parameters passed to ``f`` (a frozen dataclass).
+    state_names, input_names : tuple of str
+        Names of the entries of ``x`` and ``u``; input names are Trial channel names
+        (``"delta"``, ``"n"``, ``"p1"`` ...).
+    x0 : callable
+        ``x0(speed) -> (nx,)``: straight-ahead initial state at the given speed (m/s).
+    outputs : callable
+        ``outputs(t, X, U) -> dict[str, ndarray]``: Trial channels (SI) from the
+        state and input histories (``x, y, psi, u, v, r`` ... as the model has them).
+    service_speed : float
+        Default speed (m/s) for manoeuvres.
+    heading_index : int or None
+        Index of ψ in ``x`` (for heading-based rules such as the zig-zag), None if absent.
+    rudder_limit, rudder_rate_limit : float
+        Rudder angle (rad) and rate (rad/s) limits of the steering gear.
+    """
+
+    name: str
+    f: Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray]
+    theta: Any
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    x0: Callable[[float], np.ndarray]
+    outputs: Callable[[np.ndarray, np.ndarray, np.ndarray], dict[str, np.ndarray]]
+    service_speed: float
+    heading_index: int | None = None
+    rudder_limit: float = np.deg2rad(35.0)
+    rudder_rate_limit: float = np.deg2rad(2.33)
