@@ -30,6 +30,7 @@ CHANNELS: dict[str, str] = {
     "X": "N", "Y": "N", "N": "N*m",            # forces and yaw moment
     "thrust": "N", "torque": "N*m",
     "wind_speed": "m/s", "wind_dir": "rad",
+    "wind_speed_rel": "m/s", "wind_dir_rel": "rad",  # apparent wind (Esso Osaka 3 m data set)
 }
 
 
