@@ -325,12 +325,19 @@ def ship_model(vessel: Vessel | str = "esso-osaka", *, current_speed: float = 0.
     def x0(speed: float) -> np.ndarray:
         return np.array([float(speed), 0.0, 0.0, 0.0, 0.0, 0.0])
 
-    return ShipModel(name=v.name, f=make_dynamics(p), theta=p, state_names=STATE_NAMES,
-                     input_names=("delta", "n"), x0=x0,
-                     outputs=lambda t, X, U, _p=p: outputs(t, X, U, _p),
-                     service_speed=p.U0, heading_index=5,
-                     rudder_limit=float(np.deg2rad(S["rudder_limit"])),
-                     rudder_rate_limit=float(np.deg2rad(S["rudder_rate_limit"])))
+    def u0(speed: float) -> np.ndarray:
+        # straight-run propeller rate: n0 scales with speed (eq. 14 surge balance is homogeneous)
+        return np.array([0.0, p.n0 * float(speed) / p.U0])
+
+    kwargs = dict(name=v.name, f=make_dynamics(p), theta=p, state_names=STATE_NAMES,
+                  input_names=("delta", "n"), x0=x0,
+                  outputs=lambda t, X, U, _p=p: outputs(t, X, U, _p),
+                  service_speed=p.U0, heading_index=5,
+                  rudder_limit=float(np.deg2rad(S["rudder_limit"])),
+                  rudder_rate_limit=float(np.deg2rad(S["rudder_rate_limit"])))
+    if "u0" in ShipModel.__dataclass_fields__:  # nominal inputs (newer ShipModel)
+        kwargs["u0"] = u0
+    return ShipModel(**kwargs)
 
 
 __all__ = ["AbkowitzParams", "THETA_X_NAMES", "THETA_Y_NAMES", "THETA_N_NAMES", "REGRESSORS_X",
