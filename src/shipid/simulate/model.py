@@ -8,8 +8,8 @@ Each model family (``shipid.models.roll``, ``shipid.models.dp``,
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -40,6 +40,16 @@ class ShipModel:
         Index of ψ in ``x`` (for heading-based rules such as the zig-zag), None if absent.
     rudder_limit, rudder_rate_limit : float
         Rudder angle (rad) and rate (rad/s) limits of the steering gear.
+    u0 : callable or None
+        ``u0(speed) -> (nu,)``: the input vector that holds the straight-ahead state
+        ``x0(speed)`` (propeller rps, thruster pitch offsets p_i0 giving zero thrust,
+        azimuth angle ...). ``None`` means all zeros. Manoeuvres change only the
+        inputs they drive (``delta``, or ``p1``...``p6``, ``alpha6``) and hold the
+        others at these values; DP pitch steps are added to them.
+    input_limits, input_rate_limits : mapping of str to float
+        Optional magnitude limits (about 0) and rate limits (per second) of other
+        actuators, by input name (``"p1": 0.1`` ...); the manoeuvres use their own
+        documented defaults where a name is absent.
     """
 
     name: str
@@ -53,3 +63,15 @@ class ShipModel:
     heading_index: int | None = None
     rudder_limit: float = np.deg2rad(35.0)
     rudder_rate_limit: float = np.deg2rad(2.33)
+    u0: Callable[[float], np.ndarray] | None = None
+    input_limits: Mapping[str, float] = field(default_factory=dict)
+    input_rate_limits: Mapping[str, float] = field(default_factory=dict)
+
+    def nominal_input(self, speed: float) -> np.ndarray:
+        """``u0(speed)`` as a float array of shape ``(nu,)`` (zeros when ``u0`` is None)."""
+        if self.u0 is None:
+            return np.zeros(len(self.input_names))
+        u = np.atleast_1d(np.asarray(self.u0(speed), dtype=float)).copy()
+        if u.shape != (len(self.input_names),):
+            raise ValueError(f"{self.name}: u0 gives shape {u.shape}, inputs are {self.input_names}")
+        return u

@@ -1,0 +1,132 @@
+"""``shipid demo``: a list of demonstration steps that any module can add to.
+
+A step is a function ``step(ctx: DemoContext) -> list[dict]`` returning rows for
+the summary table (each row a mapping column → value); it writes its files into
+``ctx.out_dir`` and may print a line with ``ctx.echo``. Register it with the
+decorator::
+
+    from shipid.demo import demo_step
+
+    @demo_step("mass-cm", order=20, description="mass and CoM from a simulated trial")
+    def _demo(ctx):
+        ...
+        return [{"step": "mass-cm", "result": "m = 22.1 kg"}]
+
+Steps run in ``order`` (ties by name). Modules are discovered by importing every
+module of :mod:`shipid.methods` (and :mod:`shipid.cli`, which imports the command
+modules), so a method registers its step simply by being in the package. Every
+step must be quick (the whole demo runs in well under a minute on a laptop).
+
+The first step, ``simulate`` (order 0), simulates every packaged vessel on a
+representative manoeuvre (:data:`DEMO_MANOEUVRES`).
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from shipid.errors import ShipidError
+
+DemoFn = Callable[["DemoContext"], list[dict]]
+
+
+@dataclass
+class DemoContext:
+    """What a demo step gets: where to write, whether to overwrite, the seed, a printer."""
+
+    out_dir: Path
+    force: bool = False
+    seed: int = 0
+    echo: Callable[[str], None] = print
+    files: list[Path] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class DemoStep:
+    name: str
+    fn: DemoFn
+    order: int = 100
+    description: str = ""
+
+
+_STEPS: dict[str, DemoStep] = {}
+
+
+def demo_step(name: str, *, order: int = 100, description: str = "") -> Callable[[DemoFn], DemoFn]:
+    """Decorator registering ``fn`` as the demo step ``name`` (re-registering replaces it)."""
+    def register(fn: DemoFn) -> DemoFn:
+        _STEPS[name] = DemoStep(name, fn, order, description or (fn.__doc__ or "").strip().split("\n")[0])
+        return fn
+    return register
+
+
+def _discover() -> None:
+    import shipid.methods
+    for mod in pkgutil.walk_packages(shipid.methods.__path__, "shipid.methods."):
+        importlib.import_module(mod.name)
+    importlib.import_module("shipid.cli")
+
+
+def demo_steps() -> list[DemoStep]:
+    """All registered steps, in order."""
+    _discover()
+    return sorted(_STEPS.values(), key=lambda s: (s.order, s.name))
+
+
+#: Representative manoeuvre per vessel for the demo: (manoeuvre, duration s, dt s).
+DEMO_MANOEUVRES: dict[str, tuple[str, float, float]] = {
+    "esso-osaka": ("zigzag-20", 600.0, 0.5),
+    "supply": ("dp-sway-yaw", 600.0, 0.5),
+    "fishing-vessel": ("zigzag-10", 60.0, 0.05),
+    "nomoto": ("turning-35", 300.0, 0.2),
+}
+DEFAULT_DEMO_MANOEUVRE = ("zigzag-20", 600.0, 0.5)
+
+
+@demo_step("simulate", order=0, description="simulate every packaged vessel on a typical manoeuvre")
+def simulate_vessels(ctx: DemoContext) -> list[dict]:
+    """Simulate every packaged vessel (and the generic Nomoto ship) and write the trials as CSV."""
+    from shipid.data.io import write_trial
+    from shipid.simulate.manoeuvres import run_manoeuvre
+    from shipid.simulate.registry import get_ship_model, list_vessels
+
+    rows = []
+    for entry in list_vessels():
+        man, duration, dt = DEMO_MANOEUVRES.get(entry.name, DEFAULT_DEMO_MANOEUVRE)
+        row: dict = {"step": "simulate", "vessel": entry.name, "manoeuvre": man}
+        try:
+            model = get_ship_model(entry.name)
+        except ShipidError as err:
+            row["result"] = f"skipped: {err}"
+            rows.append(row)
+            continue
+        trial = run_manoeuvre(model, man, duration=duration, dt=dt, seed=ctx.seed)
+        path = ctx.out_dir / f"{entry.name}_{man}.csv"
+        write_trial(trial, path, force=ctx.force)
+        ctx.files.append(path)
+        row["result"] = summarise(trial) + f"; wrote {path.name}"
+        rows.append(row)
+    return rows
+
+
+def summarise(trial) -> str:
+    """One line on what a simulated trial did (duration, heading, yaw rate, rudder, distance)."""
+    parts = [f"{trial.duration:.0f} s"]
+    if "psi" in trial:
+        parts.append(f"final heading {np.rad2deg(trial['psi'][-1]):.1f} deg")
+    if "r" in trial:
+        parts.append(f"max |r| {np.rad2deg(np.max(np.abs(trial['r']))):.2f} deg/s")
+    if "delta" in trial:
+        parts.append(f"max |delta| {np.rad2deg(np.max(np.abs(trial['delta']))):.1f} deg")
+    if "phi" in trial:
+        parts.append(f"max |phi| {np.rad2deg(np.max(np.abs(trial['phi']))):.1f} deg")
+    if "x" in trial and "y" in trial:
+        d = np.sum(np.hypot(np.diff(trial["x"]), np.diff(trial["y"])))
+        parts.append(f"track {d:.0f} m")
+    return ", ".join(parts)
