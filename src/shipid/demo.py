@@ -1,7 +1,7 @@
 """``shipid demo``: a list of demonstration steps that any module can add to.
 
-A step is a function ``step(ctx: DemoContext) -> list[dict]`` returning rows for
-the summary table (each row a mapping column → value); it writes its files into
+A step is a function ``step(ctx: DemoContext) -> list[dict]`` returning rows of
+its summary table (each row a mapping column → text, printed as an aligned table); it writes its files into
 ``ctx.out_dir`` and may print a line with ``ctx.echo``. Register it with the
 decorator::
 
@@ -10,7 +10,7 @@ decorator::
     @demo_step("mass-cm", order=20, description="mass and CoM from a simulated trial")
     def _demo(ctx):
         ...
-        return [{"step": "mass-cm", "result": "m = 22.1 kg"}]
+        return [{"vessel": "fishing-vessel", "m [kg]": "22.1 ± 0.3"}]
 
 Steps run in ``order`` (ties by name). Modules are discovered by importing every
 module of :mod:`shipid.methods` (and :mod:`shipid.cli`, which imports the command
@@ -99,34 +99,44 @@ def simulate_vessels(ctx: DemoContext) -> list[dict]:
     rows = []
     for entry in list_vessels():
         man, duration, dt = DEMO_MANOEUVRES.get(entry.name, DEFAULT_DEMO_MANOEUVRE)
-        row: dict = {"step": "simulate", "vessel": entry.name, "manoeuvre": man}
+        row: dict = {"vessel": entry.name, "manoeuvre": man}
         try:
             model = get_ship_model(entry.name)
         except ShipidError as err:
-            row["result"] = f"skipped: {err}"
+            row["file"] = f"skipped: {err}"
             rows.append(row)
             continue
         trial = run_manoeuvre(model, man, duration=duration, dt=dt, seed=ctx.seed)
         path = ctx.out_dir / f"{entry.name}_{man}.csv"
         write_trial(trial, path, force=ctx.force)
         ctx.files.append(path)
-        row["result"] = summarise(trial) + f"; wrote {path.name}"
+        row.update(summarise(trial))
+        row["file"] = path.name
         rows.append(row)
     return rows
 
 
-def summarise(trial) -> str:
-    """One line on what a simulated trial did (duration, heading, yaw rate, rudder, distance)."""
-    parts = [f"{trial.duration:.0f} s"]
-    if "psi" in trial:
-        parts.append(f"final heading {np.rad2deg(trial['psi'][-1]):.1f} deg")
-    if "r" in trial:
-        parts.append(f"max |r| {np.rad2deg(np.max(np.abs(trial['r']))):.2f} deg/s")
-    if "delta" in trial:
-        parts.append(f"max |delta| {np.rad2deg(np.max(np.abs(trial['delta']))):.1f} deg")
-    if "phi" in trial:
-        parts.append(f"max |phi| {np.rad2deg(np.max(np.abs(trial['phi']))):.1f} deg")
+def summarise(trial) -> dict[str, str]:
+    """What a simulated trial did: duration, final heading, peak yaw rate, rudder and roll, track length."""
+    out = {"duration [s]": f"{trial.duration:.0f}"}
+    deg = np.rad2deg
+    out["final psi [deg]"] = f"{deg(trial['psi'][-1]):.1f}" if "psi" in trial else "-"
+    out["max |r| [deg/s]"] = f"{deg(np.max(np.abs(trial['r']))):.2f}" if "r" in trial else "-"
+    out["max |delta| [deg]"] = f"{deg(np.max(np.abs(trial['delta']))):.1f}" if "delta" in trial else "-"
+    out["max |phi| [deg]"] = f"{deg(np.max(np.abs(trial['phi']))):.1f}" if "phi" in trial else "-"
     if "x" in trial and "y" in trial:
-        d = np.sum(np.hypot(np.diff(trial["x"]), np.diff(trial["y"])))
-        parts.append(f"track {d:.0f} m")
-    return ", ".join(parts)
+        out["track [m]"] = f"{np.sum(np.hypot(np.diff(trial['x']), np.diff(trial['y']))):.0f}"
+    else:
+        out["track [m]"] = "-"
+    return out
+
+
+def format_table(rows: list[dict]) -> list[str]:
+    """Rows (dicts) as aligned text lines, columns in first-seen order, missing cells blank."""
+    cols: list[str] = []
+    for r in rows:
+        cols += [k for k in r if k not in cols]
+    cells = [[str(r.get(c, "")) for c in cols] for r in rows]
+    width = [max([len(c)] + [len(row[i]) for row in cells]) for i, c in enumerate(cols)]
+    fmt = lambda vals: "  ".join(v.ljust(w) for v, w in zip(vals, width)).rstrip()
+    return [fmt(cols), fmt(["-" * w for w in width])] + [fmt(r) for r in cells]

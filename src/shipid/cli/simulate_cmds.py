@@ -99,7 +99,7 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     Simulates every packaged vessel on a representative manoeuvre, then runs the
     demo step of each method. Finishes in well under a minute.
     """
-    from shipid.demo import DemoContext, demo_steps
+    from shipid.demo import DemoContext, demo_steps, format_table
 
     if out_dir is None:
         base = Path("shipid-demo")
@@ -119,8 +119,8 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
         click.echo(f"[{step.name}] {step.description}")
         ts = time.perf_counter()
         got = step.fn(ctx) or []
-        for r in got:
-            click.echo("    " + "  ".join(f"{v}" for k, v in r.items() if k != "step"))
+        for line in format_table(got) if got else []:
+            click.echo("    " + line)
         click.echo(f"    ({time.perf_counter() - ts:.1f} s)")
         rows += got
     click.echo(f"demo done in {time.perf_counter() - t0:.1f} s; {len(ctx.files)} files in {target}")

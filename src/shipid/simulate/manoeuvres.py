@@ -436,7 +436,7 @@ def run_manoeuvre(model: ShipModel, name: str, duration: float | None = None, dt
     if not np.all(np.isfinite(sim.x)):
         raise ShipidError(f"simulation of {model.name!r} {spec.name!r} diverged (non-finite state)")
     channels = dict(model.outputs(sim.t, sim.x, sim.u))
-    units = {k: CHANNELS.get(k, "-") for k in channels}
+    units = {k: model.output_units.get(k, CHANNELS.get(k, "-")) for k in channels}
     for i, nm in enumerate(model.input_names):
         channels.setdefault(nm, sim.u[:, i])
         units.setdefault(nm, CHANNELS.get(nm, "-"))

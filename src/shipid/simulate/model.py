@@ -50,6 +50,10 @@ class ShipModel:
         Optional magnitude limits (about 0) and rate limits (per second) of other
         actuators, by input name (``"p1": 0.1`` ...); the manoeuvres use their own
         documented defaults where a name is absent.
+    output_units : mapping of str to str
+        SI units of output channels that are not standard Trial channels
+        (``"u_r": "m/s"``); standard names take their unit from
+        :data:`shipid.data.trial.CHANNELS`, anything else is ``"-"``.
     """
 
     name: str
@@ -66,6 +70,7 @@ class ShipModel:
     u0: Callable[[float], np.ndarray] | None = None
     input_limits: Mapping[str, float] = field(default_factory=dict)
     input_rate_limits: Mapping[str, float] = field(default_factory=dict)
+    output_units: Mapping[str, str] = field(default_factory=dict)
 
     def nominal_input(self, speed: float) -> np.ndarray:
         """``u0(speed)`` as a float array of shape ``(nu,)`` (zeros when ``u0`` is None)."""

@@ -1,0 +1,114 @@
+"""`shipid simulate`, `shipid vessels` and `shipid demo`, in-process through main() and once as a subprocess."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from shipid.cli import main
+from shipid.data.io import read_trial
+from shipid.simulate.manoeuvres import run_manoeuvre
+from shipid.simulate.nomoto import nomoto_model
+
+
+def test_simulate_writes_csv_that_reads_back(tmp_path, capsys):
+    out = tmp_path / "z.csv"
+    assert main(["simulate", "nomoto", "zigzag-20", "--out", str(out), "--duration", "120",
+                 "--dt", "0.5"]) == 0
+    assert "wrote" in capsys.readouterr().out
+    tr = read_trial(out)
+    ref = run_manoeuvre(nomoto_model(), "zigzag-20", duration=120, dt=0.5)
+    assert len(tr) == len(ref) == 241
+    for ch in ("x", "y", "psi", "r", "delta", "delta_cmd"):
+        np.testing.assert_allclose(tr[ch], ref[ch], rtol=1e-12, atol=1e-12)
+
+
+def test_simulate_parquet(tmp_path):
+    out = tmp_path / "t.parquet"
+    assert main(["simulate", "nomoto", "turning-35-port", "--out", str(out), "--duration", "60"]) == 0
+    tr = read_trial(out)
+    assert tr["r"][-1] < 0 and len(tr) == 601
+
+
+def test_refuses_to_clobber_without_force(tmp_path, capsys):
+    out = tmp_path / "z.csv"
+    out.write_text("precious\n")
+    assert main(["simulate", "nomoto", "straight", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--force" in err
+    assert out.read_text() == "precious\n"
+    assert main(["simulate", "nomoto", "straight", "--out", str(out), "--force", "--duration", "10"]) == 0
+    assert len(read_trial(out)) == 101
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["no-such-ship", "zigzag-20"], "unknown vessel"),
+    (["nomoto", "zigzag"], "unknown manoeuvre"),
+    (["nomoto", "dp-surge"], "drives p1"),
+    (["nomoto", "zigzag-20", "--duration", "-5"], "duration"),
+])
+def test_bad_arguments_one_line_exit_2(tmp_path, capsys, args, needle):
+    out = tmp_path / "o.csv"
+    assert main(["simulate", *args, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and needle in err
+    assert not out.exists()
+
+
+def test_bad_extension(tmp_path, capsys):
+    assert main(["simulate", "nomoto", "straight", "--out", str(tmp_path / "o.txt")]) == 2
+    assert ".csv or .parquet" in capsys.readouterr().err
+
+
+def test_noise_is_seeded(tmp_path):
+    paths = [tmp_path / f"{i}.csv" for i in range(3)]
+    for p, seed in zip(paths, (4, 4, 5)):
+        assert main(["simulate", "nomoto", "straight", "--out", str(p), "--duration", "30",
+                     "--noise", "--seed", str(seed)]) == 0
+    a, b, c = (read_trial(p) for p in paths)
+    np.testing.assert_array_equal(a["psi"], b["psi"])
+    assert not np.array_equal(a["psi"], c["psi"])
+    assert 0 < np.std(a["psi"]) < np.deg2rad(0.2)       # default gyro noise 0.1 deg on ψ = 0
+
+
+def test_subprocess_simulate(tmp_path):
+    out = tmp_path / "s.csv"
+    proc = subprocess.run([sys.executable, "-m", "shipid", "simulate", "nomoto", "prbs-10-20",
+                           "--out", str(out), "--duration", "100", "--seed", "3"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert len(read_trial(out)) == 1001
+    proc = subprocess.run([sys.executable, "-m", "shipid", "simulate", "nomoto", "prbs-10",
+                           "--out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in proc.stderr
+
+
+def test_vessels_lists_packaged_vessels_with_sources(capsys):
+    assert main(["vessels"]) == 0
+    out = capsys.readouterr().out
+    for name in ("esso-osaka", "supply", "fishing-vessel", "nomoto"):
+        assert name in out
+    assert "Yoon" in out and "Fossen" in out and "Linder" in out
+
+
+def test_demo_writes_and_does_not_clobber(tmp_path, capsys):
+    d = tmp_path / "demo"
+    assert main(["demo", "--out-dir", str(d)]) == 0
+    out = capsys.readouterr().out
+    files = sorted(p.name for p in d.iterdir())
+    assert "nomoto_turning-35.csv" in files
+    assert "demo done" in out and "skipped" not in out
+    for f in files:
+        assert len(read_trial(d / f)) > 100
+    assert main(["demo", "--out-dir", str(d)]) == 2
+    assert main(["demo", "--out-dir", str(d), "--force"]) == 0
+
+
+def test_demo_default_folder_is_fresh(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["demo"]) == 0
+    assert main(["demo"]) == 0                      # a second run gets its own folder
+    runs = sorted((tmp_path / "shipid-demo").iterdir())
+    assert len(runs) == 2 and all(any(r.iterdir()) for r in runs)
