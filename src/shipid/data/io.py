@@ -204,7 +204,7 @@ def read_trial(
     if profile is not None:
         missing = [c for c in PROFILES[profile].values() if c not in table.names]
         if missing:
-            raise InputError(f"not a {profile} file: column '{missing[0]}' missing "
+            raise InputError(f"not in the {profile} format: column '{missing[0]}' missing "
                              f"(has: {', '.join(table.names)})", file=label)
     t, chans, units, units_in, columns = _map_columns(table, profile, user_map, label)
 
@@ -322,6 +322,8 @@ def _decode(raw: bytes, label: str, what: str = "CSV") -> tuple[str, str]:
         raise InputError(f"is a Parquet file, not {what} text (use a .parquet extension or --format parquet)",
                          file=label)
     head = raw[:65536]
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise InputError(f"UTF-16 encoded; save the {what} file as UTF-8", file=label)
     if b"\x00" in head:
         raise InputError(f"binary content (NUL bytes), not {what} text", file=label)
     try:
@@ -459,7 +461,8 @@ def _read_parquet(p: Path, label: str) -> _Table:
         table = pq.read_table(p)
     except (pa.ArrowException, OSError, ValueError) as err:
         msg = " ".join(str(err).split())
-        raise InputError(f"not a readable Parquet file ({msg[:120]})", file=label) from None
+        msg = re.sub(r"^Could not open Parquet input source '[^']*': ", "", msg).split(". ")[0].rstrip(".")
+        raise InputError(f"not a readable Parquet file ({msg[:100]})", file=label) from None
     md = table.schema.metadata or {}
     try:
         units_md = json.loads(md.get(b"shipid.units", b"{}").decode("utf-8"))

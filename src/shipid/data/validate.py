@@ -273,8 +273,9 @@ def _check_run(i, j, t, v, file, name, rows, limit, value) -> None:
         raise InputError(f"{what}{more}; {hint}", file=file, channel=name, row=int(rows[i]))
     if i == 0 or j == n - 1:
         where = "start" if i == 0 else "end"
-        raise InputError(f"{what} at the {where} of the record ({j - i + 1} rows to row {rows[j]}); "
-                         "cannot interpolate there", file=file, channel=name, row=int(rows[i]))
+        more = f" ({j - i + 1} rows to row {rows[j]})" if j > i else ""
+        raise InputError(f"{what} at the {where} of the record{more}; cannot interpolate there",
+                         file=file, channel=name, row=int(rows[i]))
     length = float(t[j + 1] - t[i - 1])
     if not np.isfinite(length):
         raise InputError(f"{what} where time is missing too; cannot interpolate",
