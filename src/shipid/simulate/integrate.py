@@ -22,6 +22,8 @@ from typing import Any, Callable
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from shipid.errors import ConvergenceError
+
 Dynamics = Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray]
 InputLaw = Callable[[float, np.ndarray], np.ndarray]
 
@@ -71,6 +73,11 @@ def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLa
     Returns
     -------
     Simulation
+
+    Raises
+    ------
+    ConvergenceError
+        When an adaptive solver fails (step size underflow ...).
     """
     t = np.asarray(t, dtype=float)
     x = np.array(x0, dtype=float)
@@ -101,8 +108,8 @@ def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLa
         else:
             sol = solve_ivp(lambda tt, xx: f(tt, xx, uk, theta), (t[k], t[k + 1]), x,
                             method=method, rtol=rtol, atol=atol)
-            if not sol.success:
-                raise RuntimeError(f"{method} failed at t = {t[k]:.6g} s: {sol.message}")
+            if not sol.success:  # a ShipidError, so the CLI reports it in one line
+                raise ConvergenceError(f"{method} failed at t = {t[k]:.6g} s: {sol.message}")
             x = sol.y[:, -1]
         X[k + 1] = x
         if closed_loop:
