@@ -1,0 +1,287 @@
+"""Estimation-Before-Modelling (EBM), end to end (seed 002, Yoon & Rhee 2003).
+
+Step 1 (§3): for every trial, the continuous–discrete EKF (:mod:`shipid.estimate.cd_ekf`)
+and the modified Bryson–Frazier smoother (:mod:`shipid.estimate.smoothers`) estimate
+the 17 states of :mod:`shipid.models.ebm_state` — relative velocities, heading,
+the hydrodynamic forces X, Y, N and the current — from the measurements of eq. 8.
+As in §5.1.1 the estimation is run twice: the second pass starts from initial
+velocities corrected by the current found in the first.
+
+Step 2 (§4): the smoothed ``u_r, v_r, r`` (with the known δ and n) build the
+regressors of eqs. 14–15 for all trials together, and ridge regression with the
+Hoerl–Kennard biasing parameter (:mod:`shipid.estimate.ridge`) fits θ_X, θ_Y, θ_N
+(eq. 13) to the smoothed X, Y, N.
+
+Required trial channels: ``x, y`` (DGPS antenna, m), ``x_dot, y_dot`` (m/s),
+``psi`` (rad), ``U`` (speed log, m/s), ``delta`` (rad), ``n`` (1/s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError, ShipidError
+from shipid.estimate.cd_ekf import FilterResult, cd_ekf
+from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.estimate.ridge import RidgeFit, ridge
+from shipid.estimate.smoothers import SmootherResult, mbf_smoother, rts_smoother
+from shipid.models import abkowitz as ab
+from shipid.models.ebm_state import EbmModel, initial_state, measurement_noise
+from shipid.result import Estimate, Result
+
+REQUIRED = ("x", "y", "x_dot", "y_dot", "psi", "U", "delta", "n")
+
+
+@dataclass(frozen=True)
+class EbmConfig:
+    """Tuning of the EBM pipeline.
+
+    Attributes
+    ----------
+    q_force : (float, float, float)
+        Spectral densities of the third derivatives of X (N²/s⁵), Y (N²/s⁵) and
+        N (N²m²/s⁵). Chosen on the simulated 20°/20° zig-zag so that the mean
+        normalised innovation squared is close to its expected value 6 (see
+        ``tests/methods/test_ebm.py``).
+    q_current : float
+        Spectral density of the current's random walk ((m/s)²/s).
+    passes : int
+        Number of estimation passes (2 in §5.1.1).
+    smoother : str
+        ``"mbf"`` (the paper's) or ``"rts"``.
+    ridge_k : float or None
+        Ridge biasing parameter; None = Hoerl–Kennard iteration, 0 = OLS.
+    yaw_rudder_variant : bool
+        Use the yaw rudder regressors of eq. 22.
+    substeps : int
+        RK4 steps per sample in the filter's prediction.
+    """
+
+    q_force: tuple[float, float, float] = (1e7, 1e7, 1e12)
+    q_current: float = 1e-12
+    passes: int = 2
+    smoother: str = "mbf"
+    ridge_k: float | None = None
+    yaw_rudder_variant: bool = False
+    substeps: int = 1
+
+
+@dataclass(frozen=True)
+class StateEstimate:
+    """Step-1 output for one trial."""
+
+    trial: Trial
+    filt: FilterResult
+    smooth: SmootherResult
+    current: np.ndarray          # (c_x, c_y) from the smoothed initial state
+    current_std: np.ndarray
+    passes: int
+
+    def series(self, name: str) -> np.ndarray:
+        from shipid.models.ebm_state import STATE_NAMES
+        return self.smooth.x[:, STATE_NAMES.index(name)]
+
+
+def _sensor_positions(trial: Trial, vessel: str) -> dict[str, float]:
+    conds = ab.trial_conditions(vessel)
+    out = {}
+    for k in ("x_D", "y_D", "y_S"):
+        out[k] = float(trial.meta.get(k, conds[k]))
+    return out
+
+
+def measurements(trial: Trial) -> np.ndarray:
+    """The measurement matrix ``z`` (N, 6) of eq. 8 from a trial."""
+    trial.require(list(REQUIRED), method="ebm")
+    return np.column_stack([trial["x"], trial["y"], trial["x_dot"], trial["y_dot"],
+                            trial["psi"], trial["U"]])
+
+
+def _prior_cov(current_known: bool) -> np.ndarray:
+    sd = np.array([0.05, 0.5, 1e-3, 30.0, 30.0, 1e-3,
+                   1e6, 1e4, 1e2, 2e6, 2e4, 2e2, 5e8, 5e6, 5e4,
+                   0.05 if current_known else 2.0, 0.05 if current_known else 2.0])
+    return np.diag(sd ** 2)
+
+
+def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-osaka",
+                    config: EbmConfig = EbmConfig()) -> StateEstimate:
+    """Step 1 for one trial: EKF + fixed-interval smoother, ``config.passes`` passes (§5.1.1)."""
+    z = measurements(trial)
+    t = trial.t - trial.t[0]
+    sens = _sensor_positions(trial, vessel)
+    conds = ab.trial_conditions(vessel)
+    sig = {k: float(trial.meta.get(k, conds[k])) for k in ("sigma_xy", "sigma_xy_dot", "sigma_psi", "sigma_u_log")}
+    R = measurement_noise(sig["sigma_xy"], sig["sigma_xy_dot"], sig["sigma_psi"], sig["sigma_u_log"])
+    model = EbmModel.from_abkowitz(p, sens["x_D"], sens["y_D"], sens["y_S"],
+                                   q_force=config.q_force, q_current=config.q_current)
+    Q = model.Q()
+    smooth_fn = mbf_smoother if config.smoother == "mbf" else rts_smoother
+    current = np.zeros(2)
+    x0 = initial_state(z[0], model)
+    P0 = _prior_cov(False)
+    fr = sm = None
+    for k in range(max(1, config.passes)):
+        if k > 0:
+            # §5.1.1: initial velocities corrected by the current of the previous pass
+            psi0 = z[0, 4]
+            c, s = np.cos(psi0), np.sin(psi0)
+            ug = z[0, 2] * c + z[0, 3] * s
+            vg = -z[0, 2] * s + z[0, 3] * c
+            uc = current[0] * c + current[1] * s
+            vc = -current[0] * s + current[1] * c
+            x0 = initial_state(z[0], model, u_r0=ug - uc, v_r0=vg - vc, current=tuple(current))
+            x0[2] = sm.x[0, 2]
+            P0 = _prior_cov(True)
+        try:
+            fr = cd_ekf(model.f, model.F, model.h, model.H, Q, R, t, z, x0, P0,
+                        substeps=config.substeps)
+        except NotPositiveDefiniteError as err:
+            raise ShipidError(f"EBM step 1 failed on {trial.meta.get('source', 'trial')}: {err}") from None
+        sm = smooth_fn(fr)
+        current = sm.x[0, 15:17].copy()
+    cstd = sm.std[0, 15:17]
+    return StateEstimate(trial=trial, filt=fr, smooth=sm, current=current, current_std=cstd,
+                         passes=max(1, config.passes))
+
+
+@dataclass(frozen=True)
+class RegressionData:
+    """Stacked step-2 data of all trials."""
+
+    HX: np.ndarray
+    HY: np.ndarray
+    HN: np.ndarray
+    X: np.ndarray
+    Y: np.ndarray
+    N: np.ndarray
+    v: np.ndarray
+    r: np.ndarray
+
+
+def regression_data(states: Sequence[StateEstimate], p: ab.AbkowitzParams, *, skip: int = 0
+                    ) -> RegressionData:
+    """Build the regressors of eq. 14 from smoothed states and the known inputs."""
+    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r")}
+    for st in states:
+        x = st.smooth.x[skip:]
+        tr = st.trial
+        HX, HY, HN = ab.regressors(x[:, 0], x[:, 1], x[:, 2], tr["delta"][skip:], tr["n"][skip:], p)
+        for k, val in (("HX", HX), ("HY", HY), ("HN", HN), ("X", x[:, 6]), ("Y", x[:, 9]),
+                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2])):
+            parts[k].append(val)
+    return RegressionData(**{k: np.concatenate(v) for k, v in parts.items()})
+
+
+def combined_coefficients(theta_Y, theta_N, alpha: float) -> tuple[float, float]:
+    """Eq. 21: ``Y'_v + Y'_r/α`` and ``N'_v α + N'_r`` (with ``v ≅ L α r``, eq. 20)."""
+    return (float(theta_Y[1] + theta_Y[2] / alpha), float(theta_N[1] * alpha + theta_N[2]))
+
+
+def slope_alpha(v: np.ndarray, r: np.ndarray, L: float) -> float:
+    """Eq. 20: least-squares slope α of ``v ≅ L α r`` (through the origin)."""
+    Lr = L * np.asarray(r)
+    return float(np.dot(np.asarray(v), Lr) / np.dot(Lr, Lr))
+
+
+@dataclass(frozen=True)
+class EbmFit:
+    """Step-2 output."""
+
+    surge: RidgeFit
+    sway: RidgeFit
+    yaw: RidgeFit
+    alpha: float
+    data: RegressionData
+
+
+def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
+                     config: EbmConfig = EbmConfig()) -> EbmFit:
+    """Step 2: ridge regression per mode on all trials together (§5.1.2)."""
+    pp = replace(p, yaw_rudder_variant=config.yaw_rudder_variant)
+    d = regression_data(states, pp)
+    fx = ridge(d.HX, d.X, config.ridge_k)
+    fy = ridge(d.HY, d.Y, config.ridge_k)
+    fn = ridge(d.HN, d.N, config.ridge_k)
+    return EbmFit(surge=fx, sway=fy, yaw=fn, alpha=slope_alpha(d.v, d.r, p.L), data=d)
+
+
+def identify(trials: Sequence[Trial], vessel: str = "esso-osaka", *,
+             config: EbmConfig = EbmConfig(), progress=None) -> Result:
+    """Both EBM steps on ``trials``; returns a :class:`~shipid.result.Result`.
+
+    Estimates: the 26 coefficients of eq. 13 (non-dimensional, with standard errors),
+    the current speed (m/s) and direction (rad) per trial and averaged. Diagnostics:
+    κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
+    combined coefficients of eq. 21 and the step-1 consistency (mean NIS).
+    """
+    if not trials:
+        raise InputError("no trial given")
+    p = ab.params_from_vessel(vessel)
+    states = []
+    for tr in trials:
+        states.append(estimate_states(tr, p, vessel=vessel, config=config))
+        if progress is not None:
+            progress()
+    fit = fit_coefficients(states, p, config)
+    return build_result(states, fit, p, config, vessel)
+
+
+def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Result:
+    est: dict[str, Estimate] = {}
+    names = {"surge": ab.THETA_X_NAMES, "sway": ab.THETA_Y_NAMES, "yaw": ab.THETA_N_NAMES}
+    se_note = "ridge SE assuming independent residuals (optimistic: smoothed forces are correlated)"
+    for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
+        for nm, th, se in zip(names[mode], f.theta, f.se):
+            est[nm] = Estimate(float(th), float(se), "-", "estimated", se_note)
+    cs = np.array([s.current for s in states])
+    cstd = np.array([s.current_std for s in states])
+    w = 1.0 / np.maximum(cstd ** 2, 1e-300)
+    cm = np.sum(w * cs, axis=0) / np.sum(w, axis=0)
+    cm_std = np.sqrt(1.0 / np.sum(w, axis=0))
+    speed = float(np.hypot(*cm))
+    dirn = float(np.arctan2(cm[1], cm[0]))
+    sp_std = float(np.hypot(cm[0] * cm_std[0], cm[1] * cm_std[1]) / max(speed, 1e-12))
+    dr_std = float(np.hypot(cm[1] * cm_std[0], cm[0] * cm_std[1]) / max(speed ** 2, 1e-12))
+    est["current_speed"] = Estimate(speed, sp_std, "m/s", "estimated", "U_c of eq. 2, all trials")
+    est["current_direction"] = Estimate(dirn, dr_std, "rad", "estimated",
+                                        "psi_c of eq. 2 (direction the current sets towards)")
+    thY = fit.sway.theta
+    thN = fit.yaw.theta
+    comb = combined_coefficients(thY, thN, fit.alpha)
+    comb_true = combined_coefficients(p.theta_Y, p.theta_N, fit.alpha)
+    diag = {
+        "converged": bool(fit.surge.converged and fit.sway.converged and fit.yaw.converged),
+        "iterations": {m: f.iterations for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
+        "modes": {m: {"kappa": f.kappa, "R2": f.R2, "R2_uncentred": f.R2_uncentred, "Cp": f.Cp,
+                      "p": f.p, "k": f.k, "n": f.n}
+                  for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
+        "correlation": {"surge": fit.surge.correlation, "sway": fit.sway.correlation},
+        "alpha": fit.alpha,
+        "combined_eq21": {"Yv+Yr/alpha": comb[0], "Nv*alpha+Nr": comb[1],
+                          "packaged_true": {"Yv+Yr/alpha": comb_true[0], "Nv*alpha+Nr": comb_true[1]}},
+        "trials": [{"source": s.trial.meta.get("source", ""), "manoeuvre": s.trial.meta.get("manoeuvre", ""),
+                    "n": int(s.trial.t.size), "mean_nis": float(np.nanmean(s.filt.nis)),
+                    "current": s.current.tolist(), "passes": s.passes} for s in states],
+    }
+    st0 = states[0]
+    series = {"t": st0.smooth.t[::5], "u_r": st0.smooth.x[::5, 0], "v_r": st0.smooth.x[::5, 1],
+              "r": st0.smooth.x[::5, 2], "X": st0.smooth.x[::5, 6], "Y": st0.smooth.x[::5, 9],
+              "N": st0.smooth.x[::5, 12]}
+    model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15", "vessel": vessel,
+             "L": p.L, "rho": p.rho, "c0": p.c0, "U0": p.U0, "n0": p.n0,
+             "nondimensionalisation": "X, Y by rho/2 L^2, N by rho/2 L^3 (eq. 14)",
+             "yaw_rudder_variant": config.yaw_rudder_variant}
+    prov = {"config": {"q_force": list(config.q_force), "q_current": config.q_current,
+                       "passes": config.passes, "smoother": config.smoother, "ridge_k": config.ridge_k},
+            "inputs": [s.trial.meta.get("source", "") for s in states]}
+    return Result(method="ebm", estimates=est, model=model, diagnostics=diag, series=series, provenance=prov)
+
+
+__all__ = ["EbmConfig", "StateEstimate", "RegressionData", "EbmFit", "estimate_states",
+           "regression_data", "fit_coefficients", "identify", "combined_coefficients",
+           "slope_alpha", "measurements", "build_result", "REQUIRED"]
