@@ -66,10 +66,26 @@ def demo_step(name: str, *, order: int = 100, description: str = "") -> Callable
     return register
 
 
+#: Modules whose demo steps could not be loaded for a missing optional dependency: name → reason.
+SKIPPED: dict[str, str] = {}
+
+
 def _discover() -> None:
+    """Import every module of :mod:`shipid.methods` (and the CLI) so their steps register.
+
+    A module that needs an optional third-party package which is not installed
+    (dask, say) is listed in :data:`SKIPPED` instead of failing the whole demo;
+    any other import error is a bug and propagates.
+    """
     import shipid.methods
-    for mod in pkgutil.walk_packages(shipid.methods.__path__, "shipid.methods."):
-        importlib.import_module(mod.name)
+    for mod in pkgutil.walk_packages(shipid.methods.__path__, "shipid.methods.",
+                                     onerror=lambda name: None):
+        try:
+            importlib.import_module(mod.name)
+        except ModuleNotFoundError as err:
+            if not err.name or err.name.split(".")[0] == "shipid":
+                raise
+            SKIPPED[mod.name] = f"needs the optional package {err.name!r}"
     importlib.import_module("shipid.cli")
 
 

@@ -106,9 +106,27 @@ def test_demo_writes_and_does_not_clobber(tmp_path, capsys):
     assert main(["demo", "--out-dir", str(d), "--force"]) == 0
 
 
-def test_demo_default_folder_is_fresh(tmp_path, monkeypatch):
+def test_demo_default_folder_is_fresh(tmp_path, monkeypatch, capsys):
+    import shipid.demo as demo
+
+    def tiny(ctx):                                  # a quick stand-in step: the folder logic is under test
+        p = ctx.out_dir / "a.txt"
+        p.write_text("x")
+        ctx.files.append(p)
+        return [{"vessel": "v", "value": "1"}]
+
+    monkeypatch.setattr(demo, "demo_steps", lambda: [demo.DemoStep("tiny", tiny, 0, "tiny step")])
     monkeypatch.chdir(tmp_path)
     assert main(["demo"]) == 0
     assert main(["demo"]) == 0                      # a second run gets its own folder
     runs = sorted((tmp_path / "shipid-demo").iterdir())
-    assert len(runs) == 2 and all(any(r.iterdir()) for r in runs)
+    assert len(runs) == 2 and all((r / "a.txt").exists() for r in runs)
+    out = capsys.readouterr().out
+    assert "[tiny] tiny step" in out and "vessel  value" in out
+
+
+def test_demo_step_registry_order():
+    from shipid.demo import demo_steps
+    steps = demo_steps()
+    assert steps[0].name == "simulate"
+    assert [s.order for s in steps] == sorted(s.order for s in steps)

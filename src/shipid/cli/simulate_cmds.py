@@ -99,7 +99,7 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     Simulates every packaged vessel on a representative manoeuvre, then runs the
     demo step of each method. Finishes in well under a minute.
     """
-    from shipid.demo import DemoContext, demo_steps, format_table
+    from shipid.demo import SKIPPED, DemoContext, demo_steps, format_table
 
     if out_dir is None:
         base = Path("shipid-demo")
@@ -115,7 +115,10 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     ctx = DemoContext(out_dir=target, force=force, seed=seed, echo=click.echo)
     t0 = time.perf_counter()
     rows = []
-    for step in demo_steps():
+    steps = demo_steps()
+    for mod, why in SKIPPED.items():
+        click.echo(f"[skipped] {mod}: {why}")
+    for step in steps:
         click.echo(f"[{step.name}] {step.description}")
         ts = time.perf_counter()
         got = step.fn(ctx) or []
