@@ -1,0 +1,88 @@
+"""Tests of unit-length scaling and ridge regression (seed 002 eqs. 16–18)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from shipid.estimate.ridge import hoerl_kennard_k, ols, ridge, unit_length_scale
+
+
+def _collinear(n=400, seed=0, noise=0.05):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=n)
+    H = np.column_stack([a, a + 0.05 * rng.normal(size=n), rng.normal(size=n) * 3.0, a ** 3])
+    theta = np.array([1.0, -0.5, 0.02, 0.3])
+    y = H @ theta + noise * rng.normal(size=n)
+    return H, y, theta
+
+
+def test_unit_length_scaling_gives_correlation_matrix():
+    H, y, _ = _collinear()
+    sc = unit_length_scale(H, y)
+    C = sc.correlation
+    np.testing.assert_allclose(np.diag(C), 1.0)
+    # uncentred correlation: cosine between columns
+    c01 = H[:, 0] @ H[:, 1] / np.linalg.norm(H[:, 0]) / np.linalg.norm(H[:, 1])
+    assert C[0, 1] == pytest.approx(c01)
+    assert sc.y @ sc.y == pytest.approx(1.0)
+
+
+def test_ridge_with_k_to_zero_is_ols():
+    """DESIGN practice 8: ridge with k → 0 equals OLS."""
+    H, y, _ = _collinear()
+    ref = ols(H, y)
+    np.testing.assert_allclose(ridge(H, y, 0.0).theta, ref, rtol=1e-9)
+    np.testing.assert_allclose(ridge(H, y, 1e-13).theta, ref, rtol=1e-6)
+    f = ridge(H, y, 0.0)
+    assert f.Cp == pytest.approx(f.p)  # Mallows' Cp of the full OLS model is p
+
+
+def test_ols_standard_errors_match_statsmodels():
+    sm = pytest.importorskip("statsmodels.api")
+    H, y, _ = _collinear(noise=0.3)
+    f = ridge(H, y, 0.0)
+    r = sm.OLS(y, H).fit()
+    np.testing.assert_allclose(f.theta, r.params, rtol=1e-9)
+    np.testing.assert_allclose(f.se, r.bse, rtol=1e-8)
+    assert f.R2_uncentred == pytest.approx(r.rsquared, rel=1e-10)  # statsmodels: uncentred without constant
+
+
+def test_back_transformation_recovers_exact_coefficients():
+    H, _, theta = _collinear()
+    y = H @ theta
+    y = y + 1e-9 * np.random.default_rng(1).normal(size=y.size)
+    f = ridge(H, y)
+    np.testing.assert_allclose(f.theta, theta, rtol=1e-5)
+    assert f.R2 == pytest.approx(1.0, abs=1e-12)
+
+
+def test_hoerl_kennard_fixed_point_and_shrinkage():
+    H, y, _ = _collinear(noise=0.5)
+    f = ridge(H, y)
+    assert f.converged and f.k > 0
+    b = f.b
+    # fixed point of k = p sigma^2 / b'b
+    assert f.k == pytest.approx(f.p * f.sigma2 / (b @ b), rel=1e-5)
+    # ridge shrinks the scaled coefficient vector
+    assert b @ b < ridge(H, y, 0.0).b @ ridge(H, y, 0.0).b
+    assert f.kappa > 100  # columns 0, 1 nearly collinear
+
+
+def test_non_convergence_is_reported():
+    H, y, _ = _collinear(noise=0.5)
+    sc = unit_length_scale(H, y)
+    C, g = sc.W.T @ sc.W, sc.W.T @ sc.y
+    k, it, conv = hoerl_kennard_k(C, g, 0.01, tol=0.0, max_iter=3)
+    assert not conv and it == 3
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        f = ridge(H, y, tol=0.0, max_iter=2)
+    assert not f.converged and any("did not converge" in str(x.message) for x in w)
+
+
+def test_zero_column_is_an_error():
+    H, y, _ = _collinear()
+    H[:, 2] = 0.0
+    with pytest.raises(ValueError, match="identically zero"):
+        ridge(H, y)
