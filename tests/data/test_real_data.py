@@ -56,6 +56,7 @@ def test_every_esso_run_reads_into_si_ranges():
             continue
         tr = read_trial(f, required=["x", "y", "psi", "u", "v", "r", "n", "delta"])
         assert tr.meta["profile"] == "esso" and tr.meta["repairs"] == []
+        assert tr.meta["manoeuvre"] == f.parent.name
         assert tr.dt == pytest.approx(0.1, abs=1e-9)              # 10 Hz
         assert len(tr) > 900
         # 3 m model at pond speeds (Wakita et al. 2022): well under 1 m/s

@@ -167,3 +167,9 @@ def test_too_short_and_bad_options():
         validate_arrays(t, ch, interpolate_gaps=-1)
     with pytest.raises(InputError, match="resample must be a positive"):
         validate_arrays(t, ch, resample=0.0)
+
+
+def test_required_message_names_the_method():
+    t, ch = ramp()
+    with pytest.raises(InputError, match=r"channel 'delta': required by identify ebm but missing"):
+        validate_arrays(t, ch, required=["delta"], method="identify ebm")

@@ -81,6 +81,9 @@ KVLCC2_COLUMNS: list[tuple[str, str]] = [
 ]
 KVLCC2_HEADER_LINES = 4
 
+#: Folders of the Esso Osaka data set; a run's folder names its manoeuvre.
+ESSO_MANOEUVRES = ("turning", "zigzag", "random", "berthing")
+
 _EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2"}
 
 
@@ -139,6 +142,7 @@ def read_trial(
     vessel: str | None = None,
     manoeuvre: str | None = None,
     trim_empty_rows: bool = False,
+    method: str | None = None,
 ) -> Trial:
     """Read a trial file, convert it to SI and validate it.
 
@@ -163,6 +167,8 @@ def read_trial(
         Stored in ``trial.meta``.
     trim_empty_rows : bool
         Remove rows without any value at the start and the end of the file (recorded).
+    method : str, optional
+        Name of the method asking for ``required`` (for the message: "required by ...").
 
     Returns
     -------
@@ -218,7 +224,8 @@ def read_trial(
 
     t, chans, repairs = validate_arrays(
         t, chans, file=label, rows=table.rows, units=units, required=required,
-        interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows)
+        interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows,
+        method=method)
 
     meta: dict = {"source": label, "format": fmt, "profile": profile}
     meta.update(table.meta)
@@ -226,8 +233,8 @@ def read_trial(
         meta["vessel"] = vessel
     if manoeuvre is not None:
         meta["manoeuvre"] = manoeuvre
-    elif profile == "esso":
-        meta["manoeuvre"] = p.parent.name  # turning / zigzag / random / berthing
+    elif profile == "esso" and p.parent.name in ESSO_MANOEUVRES:
+        meta["manoeuvre"] = p.parent.name  # the data set's folders name the manoeuvre
     meta["units_in"] = units_in
     meta["columns"] = columns
     meta["repairs"] = list(table.meta.get("repairs", [])) + repairs

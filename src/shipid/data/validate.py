@@ -96,6 +96,7 @@ def validate_arrays(
     resample: float | None = None,
     trim_empty_rows: bool = False,
     time_name: str = "t",
+    method: str | None = None,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], list[dict]]:
     """Check (and, where asked, repair) a time vector and its channels.
 
@@ -121,6 +122,8 @@ def validate_arrays(
         Remove rows without any finite value at the start and the end.
     time_name : str
         Name of the time channel in the messages.
+    method : str, optional
+        Who needs the ``required`` channels, for the message.
 
     Returns
     -------
@@ -147,7 +150,8 @@ def validate_arrays(
     # 1. required channels
     for name in required or ():
         if name != time_name and name not in chans:
-            raise InputError(f"required channel missing (has: {', '.join(chans) or 'none'})",
+            who = f"required by {method} but missing" if method else "required channel missing"
+            raise InputError(f"{who} (has: {', '.join(chans) or 'none'})",
                              file=file, channel=name)
     for k, v in chans.items():
         if v.shape != t.shape:
