@@ -1,0 +1,83 @@
+"""Dask executors: a 2-worker LocalCluster gives the local results bit for bit, even when a worker dies."""
+
+import pytest
+
+distributed = pytest.importorskip("distributed")
+
+from shipid.cli import main  # noqa: E402
+from shipid.errors import ShipidError  # noqa: E402
+from shipid.studies.engine import run_campaign  # noqa: E402
+
+TOY = "shipid.studies.toy:toy_run"
+KW = {"n": 50, "fail_every": 61}
+
+
+def _key(res):
+    return [(r.index, r.seed, r.inputs, r.outputs, r.status, r.error) for r in res.records]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """One real 2-worker LocalCluster (separate processes, loopback) shared by this module."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cl, distributed.Client(cl) as client:
+        yield cl, client
+
+
+@pytest.fixture(scope="module")
+def local_reference():
+    return run_campaign(TOY, 400, 21, kwargs=KW, workers=1, progress=False)
+
+
+def test_scheduler_executor_equals_local(cluster, local_reference):
+    cl, client = cluster
+    res = run_campaign(TOY, 400, 21, kwargs=KW, executor="scheduler", scheduler_address=cl.scheduler_address,
+                       progress=False)
+    assert res.executor == "scheduler" and res.workers == 2
+    assert _key(res) == _key(local_reference)
+    assert res.records[60].error == "ValueError: toy failure at run 60"
+
+
+def test_two_local_workers_equal_dask(cluster, local_reference):
+    res = run_campaign(TOY, 400, 21, kwargs=KW, workers=2, progress=False)
+    assert _key(res) == _key(local_reference)
+
+
+def test_dask_cli_with_store_then_resume_is_noop(cluster, tmp_path, capsys):
+    cl, _ = cluster
+    store = str(tmp_path / "d.sqlite")
+    args = ["study", "toy", "--runs", "50", "--seed", "3", "--scheduler", cl.scheduler_address, "--store", store]
+    assert main(args + ["--json"]) == 0
+    assert main(args + ["--resume", "--json"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert '"reused_from_store": 50' in out[-1]
+    assert main(["study", "toy", "--workers", "2", "--scheduler", cl.scheduler_address]) == 2
+    assert "--workers is for the local pool" in capsys.readouterr().err
+
+
+def test_unreachable_scheduler_is_one_line(monkeypatch):
+    monkeypatch.setattr("shipid.studies.engine.DASK_CONNECT_TIMEOUT_S", 1)
+    with pytest.raises(ShipidError, match="cannot reach the Dask scheduler"):
+        run_campaign(TOY, 3, 0, executor="scheduler", scheduler_address="tcp://127.0.0.1:9", progress=False)
+
+
+def test_killed_worker_mid_campaign_still_equals_local(cluster, local_reference, tmp_path):
+    """A worker process dies (os._exit) while running run 200; Dask re-runs its work elsewhere."""
+    cl, client = cluster
+    pids_before = set(client.run(lambda: __import__("os").getpid()).values())
+    marker = tmp_path / "died"
+    res = run_campaign(TOY, 400, 21, kwargs={**KW, "die_at": 200, "marker": str(marker)},
+                       executor="scheduler", scheduler_address=cl.scheduler_address, progress=False)
+    assert marker.exists()
+    dead_pid = int(marker.read_text())
+    assert dead_pid in pids_before           # it was one of the cluster's worker processes
+    assert [(r.index, r.outputs, r.status, r.error) for r in res.records] == \
+        [(r.index, r.outputs, r.status, r.error) for r in local_reference.records]
+    client.wait_for_workers(2, timeout=60)   # the nanny restarts it
+    assert dead_pid not in set(client.run(lambda: __import__("os").getpid()).values())
+
+
+def test_dask_local_executor_starts_its_own_cluster(local_reference):
+    res = run_campaign(TOY, 400, 21, kwargs=KW, executor="dask-local", workers=2, progress=False)
+    assert res.executor == "dask-local" and res.workers == 2
+    assert _key(res) == _key(local_reference)
