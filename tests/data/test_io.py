@@ -38,6 +38,8 @@ def test_simple_csv_is_converted_to_si():
 
 
 def test_bom_and_crlf_are_accepted():
+    raw = (GOOD / "crlf_bom.csv").read_bytes()
+    assert raw.startswith(b"\xef\xbb\xbf") and b"\r\n" in raw
     assert_same(read_trial(GOOD / "simple.csv"), read_trial(GOOD / "crlf_bom.csv"))
 
 

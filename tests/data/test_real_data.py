@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from shipid.data import data_root, read_trial
-from shipid.data.validate import validate_arrays
+from shipid.data.combine import concat_trials
 from shipid.errors import InputError
 
 pytestmark = pytest.mark.realdata
@@ -103,12 +103,11 @@ def test_random_run_parts_gap_is_reported():
     assert parts[1].t[0] == 0.0 and parts[3].t[0] == pytest.approx(1176.1)
 
     def join(keys, **kw):
-        t = np.concatenate([parts[k].t for k in keys])
-        ch = {n: np.concatenate([parts[k][n] for k in keys]) for n in ("x", "u", "psi")}
-        return validate_arrays(t, ch, file="+".join(map(str, keys)), **kw)
+        return concat_trials([parts[k] for k in keys], **kw)
 
-    t, _, repairs = join([3, 4, 5, 6])                       # consecutive parts: one clean record
-    assert repairs == [] and t[-1] == pytest.approx(3917.2)
+    whole = join([3, 4, 5, 6])                               # consecutive parts: one clean record
+    assert whole.meta["repairs"] == [] and whole.t[-1] == pytest.approx(3917.2)
+    assert len(whole) == sum(len(parts[k]) for k in (3, 4, 5, 6))
     with pytest.raises(InputError, match=r"time gap of 504\.5 s"):
         join([1, 3])
     with pytest.raises(InputError, match="longer than --interpolate-gaps 1 s"):

@@ -173,3 +173,21 @@ def test_required_message_names_the_method():
     t, ch = ramp()
     with pytest.raises(InputError, match=r"channel 'delta': required by identify ebm but missing"):
         validate_arrays(t, ch, required=["delta"], method="identify ebm")
+
+
+def test_concat_trials_reports_gap_between_parts():
+    from shipid.data import Trial
+    from shipid.data.combine import concat_trials
+    t = 0.1 * np.arange(10)
+    a = Trial(t[:4], {"x": t[:4]}, meta={"source": "a.csv"})
+    b = Trial(t[4:], {"x": t[4:]}, meta={"source": "b.csv"})
+    c = Trial(t[6:], {"x": t[6:]}, meta={"source": "c.csv"})
+    joined = concat_trials([a, b])
+    np.testing.assert_array_equal(joined.t, t)
+    assert joined.meta["parts"] == ["a.csv", "b.csv"]
+    with pytest.raises(InputError, match=r"a\.csv \+ c\.csv, channel 't', row 5: time gap of 0\.3 s"):
+        concat_trials([a, c])
+    filled = concat_trials([a, c], interpolate_gaps=0.35)
+    np.testing.assert_allclose(filled["x"], t, atol=1e-12)
+    with pytest.raises(InputError, match="time not increasing"):
+        concat_trials([b, a])
