@@ -127,6 +127,7 @@ def simulate_vessels(ctx: DemoContext) -> list[dict]:
         write_trial(trial, path, force=ctx.force)
         ctx.files.append(path)
         row.update(summarise(trial))
+        row["manoeuvre measures"] = manoeuvre_measures(trial, man)
         row["file"] = path.name
         rows.append(row)
     return rows
@@ -145,6 +146,25 @@ def summarise(trial) -> dict[str, str]:
     else:
         out["track [m]"] = "-"
     return out
+
+
+def manoeuvre_measures(trial, manoeuvre: str) -> str:
+    """Overshoot angles of a zig-zag or the diameters of a turning circle, as text ("-" if none)."""
+    from shipid.errors import InputError
+    from shipid.simulate.manoeuvres import parse_manoeuvre
+    from shipid.simulate.metrics import turning_metrics, zigzag_metrics
+
+    spec = parse_manoeuvre(manoeuvre)
+    try:
+        if spec.kind == "zigzag":
+            zm = zigzag_metrics(trial, float(spec.params["psi"]))
+            return "overshoots " + "/".join(f"{np.rad2deg(o):.1f}" for o in zm.overshoots[:2]) + " deg"
+        if spec.kind == "turning":
+            tm = turning_metrics(trial)
+            return f"tactical D {tm.tactical_diameter:.0f} m, steady D {tm.steady_diameter:.0f} m"
+    except InputError:
+        pass
+    return "-"
 
 
 def format_table(rows: list[dict]) -> list[str]:

@@ -1,0 +1,135 @@
+"""Standard measures of turning circles and zig-zags, from a Trial (recorded or simulated).
+
+Definitions after the ITTC Recommended Procedure 7.5-04-02-01 (Full scale manoeuvring
+trials) and IMO MSC.137(76):
+
+* turning circle — *advance*: distance travelled along the approach course from
+  the execute point until the heading has changed by 90°; *transfer*: the lateral
+  distance at that moment; *tactical diameter*: the lateral distance when the
+  heading has changed by 180°; *steady turning diameter*: ``2 U / |r|`` averaged
+  over the steady part, taken as the second half of the record after execute and
+  after 360° of heading change when the turn got that far.
+* zig-zag — *overshoot angles*: after each rudder reversal, the largest heading
+  excursion beyond the switching angle ψ before the next reversal; *initial
+  turning time*: execute to first reversal.
+
+The execute and reversal instants are taken from the commanded rudder
+``delta_cmd`` (written by :func:`shipid.simulate.manoeuvres.run_manoeuvre`), or from
+``delta`` when there is no command channel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError
+
+
+def _rudder_events(trial: Trial) -> np.ndarray:
+    name = "delta_cmd" if "delta_cmd" in trial else "delta"
+    trial.require([name], method="manoeuvre metrics")
+    return np.flatnonzero(np.diff(trial[name]) != 0) + 1
+
+
+def _crossing_time(t: np.ndarray, y: np.ndarray, level: float) -> float | None:
+    """First time ``y`` reaches ``level`` (linear interpolation between samples), or None."""
+    above = np.flatnonzero(y >= level)
+    if above.size == 0:
+        return None
+    k = int(above[0])
+    if k == 0:
+        return float(t[0])
+    return float(t[k - 1] + (level - y[k - 1]) / (y[k] - y[k - 1]) * (t[k] - t[k - 1]))
+
+
+@dataclass(frozen=True)
+class TurningMetrics:
+    """Turning-circle measures (m, rad/s); NaN where the record is too short."""
+
+    advance: float
+    transfer: float
+    tactical_diameter: float
+    steady_diameter: float
+    steady_yaw_rate: float
+    side: int
+
+
+def turning_metrics(trial: Trial) -> TurningMetrics:
+    """Advance, transfer, tactical and steady diameters of a turning-circle trial.
+
+    Needs ``x, y, psi`` and ``delta_cmd`` (or ``delta``); the speed is ``U`` if
+    present, else ``hypot(u, v)``.
+    """
+    trial.require(["x", "y", "psi", "r"], method="turning metrics")
+    ev = _rudder_events(trial)
+    if ev.size == 0:
+        raise InputError("no rudder order found (constant rudder)", file=trial.meta.get("source"),
+                         channel="delta_cmd" if "delta_cmd" in trial else "delta")
+    k0 = int(ev[0])
+    t, psi = trial.t[k0:], trial["psi"][k0:] - trial["psi"][k0]
+    side = 1 if psi[-1] >= 0 else -1
+    c, s = np.cos(trial["psi"][k0]), np.sin(trial["psi"][k0])
+    dx, dy = trial["x"][k0:] - trial["x"][k0], trial["y"][k0:] - trial["y"][k0]
+    along, across = c * dx + s * dy, side * (-s * dx + c * dy)
+
+    def at(level):
+        tc = _crossing_time(t, side * psi, level)
+        if tc is None:
+            return np.nan, np.nan
+        return float(np.interp(tc, t, along)), float(np.interp(tc, t, across))
+
+    adv, trf = at(np.pi / 2)
+    _, tac = at(np.pi)
+    t360 = _crossing_time(t, side * psi, 2 * np.pi)
+    steady = t >= max(t360 if t360 is not None else t[0], 0.5 * (t[0] + t[-1]))
+    if "U" in trial:
+        speed = trial["U"][k0:]
+    else:
+        speed = np.hypot(trial["u"][k0:], trial["v"][k0:] if "v" in trial else 0.0)
+    r = trial["r"][k0:][steady]
+    r_ss = float(np.mean(r))
+    D = float(np.mean(2 * speed[steady] / np.abs(r))) if np.all(r != 0) else np.inf
+    return TurningMetrics(advance=adv, transfer=trf, tactical_diameter=tac, steady_diameter=D,
+                          steady_yaw_rate=r_ss, side=side)
+
+
+@dataclass(frozen=True)
+class ZigZagMetrics:
+    """Zig-zag measures: overshoot angles (rad) and the times (s) of the reversals they follow."""
+
+    overshoots: tuple[float, ...]
+    reversal_times: tuple[float, ...]
+    initial_turning_time: float
+    switch_angle: float
+
+
+def zigzag_metrics(trial: Trial, switch_angle: float) -> ZigZagMetrics:
+    """Overshoot angles of a zig-zag with switching heading ``switch_angle`` (rad).
+
+    The overshoot after reversal ``i`` is ``max(d_i (ψ − ψ_0)) − switch_angle`` over
+    the samples from reversal ``i`` to reversal ``i+1`` (or the end), ``d_i`` the
+    direction of the heading change that triggered reversal ``i``. The last
+    overshoot is reported only if the heading turned back before the record ended.
+    """
+    trial.require(["psi"], method="zig-zag metrics")
+    ev = _rudder_events(trial)
+    if ev.size < 2:
+        raise InputError("fewer than one rudder reversal after execute",
+                         file=trial.meta.get("source"), channel="delta_cmd")
+    psi = trial["psi"] - trial["psi"][ev[0]]
+    over, times = [], []
+    for i, k in enumerate(ev[1:]):
+        d = 1.0 if psi[k] > 0 else -1.0
+        end = int(ev[i + 2]) if i + 2 < ev.size else psi.size
+        seg = d * psi[k:end]
+        j = int(np.argmax(seg))
+        if end == psi.size and j == seg.size - 1:
+            break                                  # still turning when the record ends
+        over.append(float(seg[j] - switch_angle))
+        times.append(float(trial.t[k]))
+    return ZigZagMetrics(overshoots=tuple(over), reversal_times=tuple(times),
+                         initial_turning_time=float(trial.t[ev[1]] - trial.t[ev[0]]),
+                         switch_angle=float(switch_angle))
