@@ -130,6 +130,32 @@ def test_momentum_jacobian_matches_finite_differences(supply):
     np.testing.assert_allclose(Ft, Ft_fd, atol=1e-8)
 
 
+def test_momentum_current_form_is_lf_form_with_current(supply):
+    """With the current as earth-fixed states, ḣ equals M × (eq. 8 with D(ν − ν_c)) and the Jacobians are exact."""
+    rng = np.random.default_rng(5)
+    nu = rng.normal(size=3) * 0.05
+    Vc = np.array([0.01, -0.006])
+    psi = 0.8
+    x = np.concatenate([supply.M @ nu, [0.1, 0.2, psi], rng.normal(size=3) * 1e-4, Vc])
+    uc = rng.normal(size=6) * 0.1
+    f = dp.momentum_current_rhs(x, uc, 0.3, supply.M, supply.Minv, supply.A_h, supply.K, supply.arms)
+    nuc = dp.rotation(psi).T @ np.array([Vc[0], Vc[1], 0.0])
+    rhs = (supply.T(0.3) @ (supply.K * uc) - dp.coriolis_times_nu(supply.M, nu) - supply.D @ (nu - nuc) + x[6:9])
+    np.testing.assert_allclose(f[0:3], rhs, rtol=1e-10, atol=1e-15)
+    th = supply.theta
+
+    def fun(xx, tt):
+        A_h, K = dp.matrices_from_theta(tt)
+        return dp.momentum_current_rhs(xx, uc, 0.3, supply.M, supply.Minv, A_h, K, supply.arms)
+
+    Fx, Ft = dp.momentum_current_jacobian(x, uc, 0.3, supply.M, supply.Minv, supply.A_h, supply.K, supply.arms)
+    eps = 1e-7
+    Fx_fd = np.column_stack([(fun(x + eps * e, th) - fun(x - eps * e, th)) / (2 * eps) for e in np.eye(11)])
+    Ft_fd = np.column_stack([(fun(x, th + eps * e) - fun(x, th - eps * e)) / (2 * eps) for e in np.eye(9)])
+    np.testing.assert_allclose(Fx, Fx_fd, atol=1e-8)
+    np.testing.assert_allclose(Ft, Ft_fd, atol=1e-8)
+
+
 def test_ship_model_simulates_supply_steady_surge(supply):
     from shipid.simulate.integrate import simulate
 

@@ -355,12 +355,12 @@ class ParallelEKFResult:
         return self.theta[-1]
 
 
-def _blocks(a: Any, N: int) -> list[np.ndarray]:
+def _blocks(a: Any, N: int) -> list[Any]:
     if isinstance(a, (list, tuple)):
         if len(a) != N:
             raise ValueError(f"expected {N} per-trial entries, got {len(a)}")
-        return [np.asarray(b, dtype=float) for b in a]
-    return [np.asarray(a, dtype=float)] * N
+        return [b if callable(b) else np.asarray(b, dtype=float) for b in a]
+    return [a if callable(a) else np.asarray(a, dtype=float)] * N
 
 
 def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], theta0: np.ndarray,
@@ -387,8 +387,8 @@ def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], thet
     P0x : ndarray (nx, nx) or sequence of them
         Per-trial prior state covariances (states of different trials start uncorrelated).
     P0theta : ndarray (p, p)
-    Qx : ndarray (nx, nx) or sequence
-        Per-trial process-noise covariance per step.
+    Qx : ndarray (nx, nx), callable ``Qx(k)``, or a sequence of them
+        Per-trial process-noise covariance of the step k → k+1.
     Qtheta : ndarray (p, p)
         Parameter random-walk covariance per step (eq. 16/43).
     R : ndarray (nz, nz) or sequence
@@ -478,7 +478,7 @@ def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], thet
         out = np.zeros((N * nx + p, N * nx + p))
         for i in range(N):
             if active[i](k):
-                out[sx[i], sx[i]] = Qxs[i]
+                out[sx[i], sx[i]] = Qxs[i](k) if callable(Qxs[i]) else Qxs[i]
         out[N * nx:, N * nx:] = Qth
         return out
 

@@ -268,16 +268,69 @@ def momentum_jacobian(x: np.ndarray, uc: np.ndarray, alpha: float, M: np.ndarray
     nu = Minv @ h
     Fx = np.zeros((9, 9))
     Fx[0:3, 0:3] = A_h - coriolis_times_nu_jacobian(M, nu) @ Minv
-    Fx[0:3, 6:9] = np.eye(3)
-    J = rotation(psi)
-    Fx[3:6, 0:3] = J @ Minv
-    Fx[3:6, 5] = rotation_dpsi(psi) @ nu
-    T = configuration_matrix(arms, alpha)
+    Fx[0, 6] = Fx[1, 7] = Fx[2, 8] = 1.0
+    c, s = np.cos(psi), np.sin(psi)
+    Fx[3, 0:3] = c * Minv[0] - s * Minv[1]
+    Fx[4, 0:3] = s * Minv[0] + c * Minv[1]
+    Fx[5, 0:3] = Minv[2]
+    Fx[3, 5] = -s * nu[0] - c * nu[1]
+    Fx[4, 5] = c * nu[0] - s * nu[1]
     Ft = np.zeros((9, 9))
+    # eq. 46: θ1 = A_h[1,1], θ2 = A_h[2,2], θ3 = A_h[2,3], θ4 = A_h[3,2], θ5 = A_h[3,3]
+    Ft[0, 0], Ft[1, 1], Ft[1, 2], Ft[2, 3], Ft[2, 4] = h[0], h[1], h[2], h[1], h[2]
+    # eq. 47 with the columns of eq. 7: θ6 (u1, u2), θ7 (u3, u4), θ8 (u5), θ9 (u6 at α)
+    l1, l2, l3, l4, l5, l6 = arms
+    Ft[0, 5] = uc[0] + uc[1]
+    Ft[2, 5] = l1 * uc[0] - l2 * uc[1]
+    Ft[1, 6] = uc[2] + uc[3]
+    Ft[2, 6] = -l3 * uc[2] - l4 * uc[3]
+    Ft[1, 7] = uc[4]
+    Ft[2, 7] = l5 * uc[4]
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    Ft[0, 8], Ft[1, 8], Ft[2, 8] = ca * uc[5], sa * uc[5], l6 * sa * uc[5]
+    return Fx, Ft
+
+
+#: State of one trial with the current kept as earth-fixed states (eq. 8's ν_c):
+#: x_i = [h, η, b_h, V_x, V_y].
+MOMENTUM_CURRENT_STATES = MOMENTUM_STATES + ("Vc_x", "Vc_y")
+
+
+def momentum_current_rhs(x: np.ndarray, uc: np.ndarray, alpha: float, M: np.ndarray, Minv: np.ndarray,
+                         A_h: np.ndarray, K: np.ndarray, arms: np.ndarray) -> np.ndarray:
+    """Eqs. 35–38 with the current of eq. 8 as earth-fixed states, ``x = [h, η, b_h, V_c]`` (11,).
+
+    With ``A_h = −D M⁻¹`` the current term of eq. 8, ``+D ν_c``, becomes ``−A_h M ν_c`` with
+    ``ν_c = J(ψ)ᵀ [V_x, V_y, 0]`` (a current fixed in the earth frame turns in the body frame
+    as the heading changes; a body-fixed bias b_h alone cannot follow that without a large
+    random walk, which then swallows thrust information). ``ḣ = −C(ν)ν + A_h (h − M ν_c)
+    + T K u + b_h``; ``V̇_c = 0``.
+    """
+    psi = x[5]
+    nuc = rotation(psi).T @ np.array([x[9], x[10], 0.0])
+    f9 = momentum_rhs(x[:9], uc, alpha, M, Minv, A_h, K, arms)
+    f9[0:3] -= A_h @ (M @ nuc)
+    return np.concatenate([f9, [0.0, 0.0]])
+
+
+def momentum_current_jacobian(x: np.ndarray, uc: np.ndarray, alpha: float, M: np.ndarray, Minv: np.ndarray,
+                              A_h: np.ndarray, K: np.ndarray, arms: np.ndarray
+                              ) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians of :func:`momentum_current_rhs`: ``(∂f/∂x (11×11), ∂f/∂θ (11×9))``."""
+    psi = x[5]
+    Vc = np.array([x[9], x[10], 0.0])
+    nuc = rotation(psi).T @ Vc
+    Fx9, Ft9 = momentum_jacobian(x[:9], uc, alpha, M, Minv, A_h, K, arms)
+    Fx = np.zeros((11, 11))
+    Fx[:9, :9] = Fx9
+    AM = A_h @ M
+    Fx[0:3, 5] -= AM @ (rotation_dpsi(psi).T @ Vc)
+    Fx[0:3, 9:11] = -AM @ rotation(psi).T[:, :2]
+    Ft = np.zeros((11, 9))
+    Ft[:9] = Ft9
+    w = M @ nuc
     for i, (r, c) in _AH_INDEX.items():
-        Ft[r, i] = h[c]
-    for i, cols in _K_GROUPS.items():
-        Ft[0:3, i] = T[:, list(cols)] @ uc[list(cols)]
+        Ft[r, i] -= w[c]
     return Fx, Ft
 
 
@@ -297,4 +350,5 @@ def derived_B(M: np.ndarray, T: np.ndarray, K: np.ndarray) -> np.ndarray:
 __all__ = ["THETA_NAMES", "THETA_MEANING", "DPVessel", "dp_vessel", "matrices_from_theta",
            "theta_from_matrices", "coriolis", "coriolis_times_nu", "coriolis_times_nu_jacobian",
            "rotation", "rotation_dpsi", "LFParams", "lf_params", "LF_STATES", "LF_INPUTS", "lf_dynamics",
-           "ship_model", "MOMENTUM_STATES", "momentum_rhs", "momentum_jacobian", "derived_A", "derived_B"]
+           "ship_model", "MOMENTUM_STATES", "momentum_rhs", "momentum_jacobian", "MOMENTUM_CURRENT_STATES",
+           "momentum_current_rhs", "momentum_current_jacobian", "derived_A", "derived_B"]

@@ -1,0 +1,435 @@
+"""DP ship identification of Fossen, Sagatun & Sørensen (1996), §4.2–4.4, end to end.
+
+Decoupled identification (Fig. 4), each scheme a parallel state-augmented EKF (eqs. 20–25,
+41–45) over its trials, each freezing what the previous one found:
+
+* **SI1** (surge trials): θ1 = A_h[1,1] and θ6 = K1 = K2 from the decoupled surge model
+  eqs. 31–32 in momentum form, ``ḣ_u = θ1 h_u + θ6 (u1 + u2) + b_u``, ``ṡ = h_u / m11``;
+* **SI2** (sway–yaw trials): θ2 … θ5 (sway–yaw block of A_h) and θ7 = K3 = K4, θ8 = K5
+  from the full momentum model eqs. 35–38 with θ1, θ6 frozen;
+* **SI3** (azimuth trials): θ9 = K6 with θ1 … θ8 frozen.
+
+Trial data are converted to the bis system (eqs. 26–28): ``t'' = t / sqrt(L/g)``,
+``x'' = x / L``, ``y'' = y / L``; the pitch ratios become the control vector of eq. 5.
+Measured are position and heading (eqs. 44–45).
+
+Surge measurement (a reading of eq. 32 for real trials): eq. 32 needs the distance run
+along the ship's x axis. It is computed from the position fixes as
+``s_k = Σ_j (Δx_j cos ψ̄_j + Δy_j sin ψ̄_j)`` (ψ̄_j the mean measured heading over the step),
+which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ + ẏ sin ψ = u``).
+
+The reported standard deviations are the EKF's (square roots of the diagonal of P̂ at
+the end); the parameters frozen from an earlier scheme are treated as exact in the later
+ones, so cross-scheme correlations are not represented (the covariance is block
+diagonal by scheme).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import ConvergenceError, InputError
+from shipid.estimate.ekf_augmented import AugmentedModel, ParallelEKFResult, parallel_augmented_ekf, rk4_map
+from shipid.models import dp
+from shipid.models.thrusters import control_vector
+from shipid.result import Estimate, Result
+
+#: Free parameters (0-based indices into θ1..θ9) of each scheme, Fig. 4 / eqs. 46–47.
+STAGES = {"SI1": (0, 5), "SI2": (1, 2, 3, 4, 6, 7), "SI3": (8,)}
+#: Trial kind used by each scheme.
+STAGE_KIND = {"SI1": "surge", "SI2": "sway-yaw", "SI3": "azimuth"}
+#: Generic starting values of θ1..θ9 (bis), not the paper's results: stable diagonal
+#: damping, no coupling, equal thrust coefficients.
+THETA_START = np.array([-0.05, -0.1, 0.0, 0.0, -0.1, 5e-3, 5e-3, 5e-3, 5e-3])
+#: Prior standard deviations of θ1..θ9 around the starting values.
+THETA_START_STD = np.array([0.05, 0.1, 0.1, 0.1, 0.2, 5e-3, 5e-3, 5e-3, 5e-3])
+
+
+@dataclass(frozen=True)
+class DPOptions:
+    """Noise model and priors of the DP identification (bis system unless stated).
+
+    Attributes
+    ----------
+    sigma_pos : float
+        Position measurement noise, m.
+    sigma_psi : float
+        Heading measurement noise, rad.
+    q_h : float
+        Intensity of the momentum process noise w_h (eq. 35), bis force² × bis time.
+    q_b : float
+        Intensity of the bias random walk w_b (eq. 37), bis force² per bis time.
+    q_theta : float
+        Intensity of the parameter random walk w_θ (eq. 38) relative to the prior
+        variance, per bis time (0: constant parameters).
+    theta0, theta0_std : tuple of 9 floats
+        Starting values and prior standard deviations of θ1..θ9.
+    h0_std : float
+        Prior std of the initial momentum (bis).
+    b0_std : float
+        Prior std of the initial bias (bis force).
+    current_states : bool
+        SI2/SI3: keep the current of eq. 8 as two earth-fixed states (see
+        :func:`shipid.models.dp.momentum_current_rhs`) besides the body bias b_h of eq. 35.
+        Without them a current turning in the body frame with the heading must be followed by
+        b_h alone, and the large bias random walk needed for that absorbs thrust information.
+    current0_std : float
+        Prior std of each current component, m/s.
+    q_c : float
+        Intensity of the current random walk, (m/s)² per s.
+    passes : int
+        Filter passes per scheme. Pass j + 1 restarts from the final estimate of pass j
+        with the *same* prior covariance (so no information is counted twice); only the
+        point the EKF linearises about improves. With generic starting values one pass
+        leaves a transient bias from the early, badly linearised steps; two remove it.
+    """
+
+    sigma_pos: float = 0.5
+    sigma_psi: float = float(np.deg2rad(0.25))
+    q_h: float = 1e-8
+    q_b: float = 1e-10
+    q_theta: float = 0.0
+    theta0: tuple = tuple(THETA_START)
+    theta0_std: tuple = tuple(THETA_START_STD)
+    h0_std: float = 0.05
+    b0_std: float = 3e-3
+    current_states: bool = True
+    current0_std: float = 0.5
+    q_c: float = 1e-7
+    passes: int = 2
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class StageResult:
+    """One identification scheme: its free parameters and its parallel-EKF result."""
+
+    name: str
+    free: tuple[int, ...]
+    ekf: ParallelEKFResult
+    t: np.ndarray
+    theta_full: np.ndarray
+    seconds: float
+    diagnostics: dict = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------------------------
+# Data preparation
+# ---------------------------------------------------------------------------------------------
+def _prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
+    """Bis time, measurements and inputs of one trial."""
+    need = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6"]
+    trial.require(need, method="identify dp")
+    b = vessel.bis
+    t = trial.t
+    if t.size < 10:
+        raise InputError(f"too short for identification ({t.size} samples)", file=trial.meta.get("source"))
+    tb = b.t_to_bis(t - t[0])
+    P = trial.stack([f"p{i}" for i in range(1, 7)])
+    alpha = trial["alpha6"] if "alpha6" in trial else np.full(t.size, np.pi / 2)
+    U = np.column_stack([control_vector(P, vessel.p0), alpha])
+    x, y, psi = trial["x"], trial["y"], trial["psi"]
+    if kind == "surge":
+        c = 0.5 * (psi[:-1] + psi[1:])
+        # mean of two headings across the ±π cut
+        c = psi[:-1] + 0.5 * np.arctan2(np.sin(psi[1:] - psi[:-1]), np.cos(psi[1:] - psi[:-1]))
+        s = np.concatenate([[0.0], np.cumsum(np.diff(x) * np.cos(c) + np.diff(y) * np.sin(c))])
+        Z = (s / b.L)[:, None]
+    else:
+        Z = np.column_stack([x / b.L, y / b.L, np.unwrap(psi)])
+    return {"t": tb, "Z": Z, "U": U, "source": trial.meta.get("source")}
+
+
+class _RK4Discrete:
+    """Discrete f and Φ of one trial by :func:`rk4_map` over its own (bis) sample intervals, cached."""
+
+    def __init__(self, fc, jc, t: np.ndarray):
+        self.fc, self.jc = fc, jc
+        self.dt = np.diff(t)
+        self._key = None
+        self._val = None
+
+    def _eval(self, k, x, u, th):
+        key = (k, x.tobytes(), th.tobytes())
+        if key != self._key:
+            self._val = rk4_map(self.fc, self.jc, x, u, th, self.dt[k])
+            self._key = key
+        return self._val
+
+    def f(self, k, x, u, th):
+        return self._eval(k, x, u, th)[0]
+
+    def jac(self, k, x, u, th):
+        v = self._eval(k, x, u, th)
+        return v[1], v[2]
+
+
+def _wrap_last(z: np.ndarray, zp: np.ndarray) -> np.ndarray:
+    d = z - zp
+    d[-1] = np.arctan2(np.sin(d[-1]), np.cos(d[-1]))
+    return d
+
+
+def _surge_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray):
+    """Eqs. 31–32 in momentum form; state [h_u, s, b_u]."""
+    m11 = vessel.M[0, 0]
+    l6 = vessel.arms[5]
+    del l6
+    free = list(free)
+
+    def full(th):
+        out = theta_full.copy()
+        out[free] = th
+        return out
+
+    def fc(x, u, th):
+        f = full(th)
+        return np.array([f[0] * x[0] + f[5] * (u[0] + u[1]) + f[8] * np.cos(u[6]) * u[5] + x[2], x[0] / m11, 0.0])
+
+    def jc(x, u, th):
+        f = full(th)
+        A = np.array([[f[0], 0.0, 1.0], [1.0 / m11, 0.0, 0.0], [0.0, 0.0, 0.0]])
+        Bfull = np.zeros((3, 9))
+        Bfull[0, 0] = x[0]
+        Bfull[0, 5] = u[0] + u[1]
+        Bfull[0, 8] = np.cos(u[6]) * u[5]
+        return A, Bfull[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.array([[0.0, 1.0, 0.0]])
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[1:2], nx=3, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((1, len(free)))))
+
+
+def _momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray,
+                    current: bool = True):
+    """Eqs. 35–38 (ERRATA readings); state [h, η, b_h] (+ [V_x, V_y] bis with ``current``)."""
+    M, Minv, arms = vessel.M, vessel.Minv, vessel.arms
+    free = list(free)
+    rhs = dp.momentum_current_rhs if current else dp.momentum_rhs
+    rjac = dp.momentum_current_jacobian if current else dp.momentum_jacobian
+    nx = 11 if current else 9
+
+    cache: dict = {}
+
+    def mats(th):
+        key = th.tobytes()
+        if key not in cache:
+            cache.clear()
+            out = theta_full.copy()
+            out[free] = th
+            cache[key] = dp.matrices_from_theta(out)
+        return cache[key]
+
+    def fc(x, u, th):
+        A_h, K = mats(th)
+        return rhs(x, u[:6], u[6], M, Minv, A_h, K, arms)
+
+    def jc(x, u, th):
+        A_h, K = mats(th)
+        Fx, Ft = rjac(x, u[:6], u[6], M, Minv, A_h, K, arms)
+        return Fx, Ft[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.zeros((3, nx))
+    H[:, 3:6] = np.eye(3)
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[3:6], nx=nx, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((3, len(free)))), residual=_wrap_last)
+
+
+# ---------------------------------------------------------------------------------------------
+# One scheme
+# ---------------------------------------------------------------------------------------------
+def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_full: np.ndarray,
+              options: DPOptions = DPOptions(), *, free: Sequence[int] | None = None) -> StageResult:
+    """Run one identification scheme (SI1, SI2 or SI3) as a parallel augmented EKF over ``trials``.
+
+    Parameters
+    ----------
+    name : {"SI1", "SI2", "SI3"}
+    trials : sequence of Trial
+        N ≥ 1 trials of the scheme's kind (processed in parallel, eqs. 20–25).
+    vessel : DPVessel
+        Supplies M'', T'' arms, p0 and the bis scales (its A_h and K are not used).
+    theta_full : ndarray (9,)
+        Current values of θ1..θ9: the frozen ones are used as they are, the free ones are
+        the starting values.
+    options : DPOptions
+    free : sequence of int, optional
+        Free parameter indices (default :data:`STAGES`\\[name]).
+    """
+    if not trials:
+        raise InputError(f"{name} needs at least one {STAGE_KIND[name]} trial")
+    free = tuple(STAGES[name] if free is None else free)
+    kind = STAGE_KIND[name]
+    b = vessel.bis
+    data = [_prepare(tr, vessel, kind) for tr in trials]
+    th0 = np.asarray(theta_full, dtype=float)[list(free)]
+    std0 = np.asarray(options.theta0_std, dtype=float)[list(free)]
+    P0t = np.diag(std0 ** 2)
+    if kind == "surge":
+        models = [_surge_model(vessel, np.asarray(theta_full, float), free, d["t"]) for d in data]
+        x0 = [np.array([0.0, d["Z"][0, 0], 0.0]) for d in data]
+        sp = options.sigma_pos / b.L
+        P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
+        R = np.array([[sp ** 2]])
+
+        def make_Q(dt):
+            return lambda k: np.diag([options.q_h * dt[k], 0.0, options.q_b * dt[k]])
+    else:
+        cur = options.current_states
+        models = [_momentum_model(vessel, np.asarray(theta_full, float), free, d["t"], cur) for d in data]
+        nc = 2 if cur else 0
+        x0 = [np.concatenate([np.zeros(3), d["Z"][0], np.zeros(3 + nc)]) for d in data]
+        sp = options.sigma_pos / b.L
+        c0 = options.current0_std / b.speed
+        qc = options.q_c / b.speed ** 2 * b.time  # (m/s)²/s → bis speed² per bis time
+        P0x = np.diag([options.h0_std ** 2] * 3 + [sp ** 2, sp ** 2, options.sigma_psi ** 2]
+                      + [options.b0_std ** 2] * 3 + [c0 ** 2] * nc)
+        R = np.diag([sp ** 2, sp ** 2, options.sigma_psi ** 2])
+
+        def make_Q(dt):
+            return lambda k: np.diag([options.q_h * dt[k]] * 3 + [0.0] * 3 + [options.q_b * dt[k]] * 3
+                                     + [qc * dt[k]] * nc)
+    Qx = [make_Q(np.diff(d["t"])) for d in data]
+    # parameter random walk, eq. 38 (per step, with the mean bis step of the first trial)
+    dtm = float(np.mean(np.diff(data[0]["t"])))
+    Qt = np.diag(options.q_theta * std0 ** 2 * dtm)
+    t0 = time.perf_counter()
+    history = []
+    for j in range(max(1, options.passes)):
+        try:
+            ekf = parallel_augmented_ekf(models[0], x0, th0, P0x, P0t, Qx, Qt, R, [d["Z"] for d in data],
+                                         [d["U"] for d in data], models=models)
+        except ConvergenceError as err:
+            raise ConvergenceError(f"{name} (pass {j + 1}): {err}") from None
+        history.append(ekf.theta_final.tolist())
+        th0 = ekf.theta_final.copy()
+    secs = time.perf_counter() - t0
+    longest = int(np.argmax([d["t"].size for d in data]))
+    t_si = b.t_from_bis(data[longest]["t"])
+    full = np.asarray(theta_full, dtype=float).copy()
+    full[list(free)] = ekf.theta_final
+    diag = _stage_diagnostics(ekf, std0, [d["Z"].shape[1] for d in data])
+    diag["trials"] = [d["source"] for d in data]
+    diag["samples"] = [int(d["t"].size) for d in data]
+    diag["seconds"] = secs
+    diag["passes"] = history
+    return StageResult(name=name, free=free, ekf=ekf, t=t_si, theta_full=full, seconds=secs, diagnostics=diag)
+
+
+def _stage_diagnostics(ekf: ParallelEKFResult, std0: np.ndarray, nz: list[int]) -> dict:
+    """Convergence and consistency checks of one scheme.
+
+    *settled*: over the last quarter of the run no estimate strayed more than 2 σ (its σ
+    at the time) from its final value; *informative*: every final σ is below half its
+    prior σ. ``converged`` requires both. NIS means should be near the number of
+    measured channels (χ² consistency); reported, not gated.
+    """
+    th, sd = ekf.theta, ekf.theta_std
+    n = th.shape[0]
+    q = int(0.75 * n)
+    dev = np.max(np.abs(th[q:] - th[-1]) / sd[q:], axis=0)
+    settled = bool(np.all(dev < 2.0))
+    informative = bool(np.all(sd[-1] < 0.5 * std0))
+    nis_mean = [float(np.nanmean(v)) for v in ekf.nis]
+    return {"converged": settled and informative, "settled": settled, "informative": informative,
+            "max_late_deviation_sigma": dev.tolist(), "nis_mean": nis_mean, "nis_dof": nz,
+            "loglik": ekf.loglik, "iterations": int(n)}
+
+
+# ---------------------------------------------------------------------------------------------
+# The pipeline
+# ---------------------------------------------------------------------------------------------
+def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequence[Trial],
+                vessel: dp.DPVessel, options: DPOptions = DPOptions(), *,
+                theta_true: np.ndarray | None = None, provenance: dict | None = None) -> Result:
+    """Identify θ1..θ9 of a DP vessel by SI1 → SI2 → SI3 (Fossen et al. 1996 §4.3, Fig. 4).
+
+    Parameters
+    ----------
+    surge, sway_yaw, azimuth : sequence of Trial
+        The trials of the three manoeuvres (N ≥ 1 each; the paper uses N = 2). Channels
+        ``x, y, psi, p1..p6`` and ``alpha6`` (SI).
+    vessel : DPVessel
+        Known quantities: M'' (eq. 30), the thruster arms (eq. 29), p0 and L, m, g.
+    options : DPOptions
+    theta_true : ndarray, optional
+        Known truth (simulation studies): stored in the result next to the estimates.
+
+    Returns
+    -------
+    Result
+        ``estimates``: θ1..θ9 (bis) with std; ``model``: A_h, K, A'', B'' (eqs. 48–52 form),
+        M'', T''; ``series``: parameter histories of every scheme (Fig. 8);
+        ``diagnostics``: per-scheme convergence, NIS, log-likelihood, run times.
+    """
+    theta = np.asarray(options.theta0, dtype=float).copy()
+    stages: list[StageResult] = []
+    for name, trials in (("SI1", surge), ("SI2", sway_yaw), ("SI3", azimuth)):
+        st = run_stage(name, trials, vessel, theta, options)
+        theta = st.theta_full
+        stages.append(st)
+    return _result(stages, vessel, options, theta_true, provenance or {})
+
+
+def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, theta_true, provenance) -> Result:
+    theta = stages[-1].theta_full
+    std = np.full(9, np.nan)
+    cov = np.zeros((9, 9))
+    where = {}
+    for st in stages:
+        idx = list(st.free)
+        P = st.ekf.theta_cov[-1]
+        cov[np.ix_(idx, idx)] = P
+        std[idx] = np.sqrt(np.diag(P))
+        for i in idx:
+            where[i] = st.name
+    estimates = {}
+    for i, nm in enumerate(dp.THETA_NAMES):
+        estimates[nm] = Estimate(value=float(theta[i]), std=float(std[i]), unit="- (bis)",
+                                 status="estimated", note=f"{dp.THETA_MEANING[nm]}; {where.get(i, '?')}")
+    A_h, K = dp.matrices_from_theta(theta)
+    T = vessel.T(np.pi / 2)
+    model = {
+        "family": "dp-momentum (Fossen, Sagatun & Sorensen 1996 eqs. 35-38)",
+        "vessel": vessel.name, "units": "bis system (L, m, sqrt(L/g))",
+        "L": vessel.bis.L, "m": vessel.bis.m, "g": vessel.bis.g,
+        "theta_names": list(dp.THETA_NAMES),
+        "A_h": A_h, "K": K, "A": dp.derived_A(vessel.M, A_h), "B": dp.derived_B(vessel.M, T, K),
+        "M": vessel.M, "T": T, "D": -A_h @ vessel.M,
+    }
+    diagnostics = {"converged": all(st.diagnostics["converged"] for st in stages),
+                   "iterations": int(sum(st.diagnostics["iterations"] for st in stages)),
+                   "stages": {st.name: st.diagnostics for st in stages},
+                   "seconds": float(sum(st.seconds for st in stages)), "warnings": []}
+    for st in stages:
+        if not st.diagnostics["converged"]:
+            bad = "has not settled" if not st.diagnostics["settled"] else "gained little information"
+            diagnostics["warnings"].append(f"{st.name}: parameter estimate {bad} "
+                                           f"(see diagnostics.stages.{st.name})")
+    if theta_true is not None:
+        tt = np.asarray(theta_true, dtype=float)
+        diagnostics["theta_true"] = tt
+        diagnostics["error"] = theta - tt
+        diagnostics["error_sigma"] = (theta - tt) / std
+        diagnostics["relative_error"] = (theta - tt) / np.abs(tt)
+    series = {}
+    for st in stages:
+        series[st.name] = {"t": st.t, "free": [dp.THETA_NAMES[i] for i in st.free],
+                           "theta": st.ekf.theta, "std": st.ekf.theta_std}
+    prov = {"options": options.as_dict()}
+    prov.update(provenance)
+    return Result(method="dp", estimates=estimates, model=model, covariance=cov,
+                  covariance_names=list(dp.THETA_NAMES), diagnostics=diagnostics, series=series,
+                  provenance=prov)
+
+
+__all__ = ["STAGES", "STAGE_KIND", "DPOptions", "StageResult", "run_stage", "identify_dp"]
