@@ -422,6 +422,8 @@ def _cell(c: str, label: str, channel: str, row: int) -> float:
         except ValueError:
             pass
     shown = s if len(s) <= 30 else s[:27] + "..."
+    if not shown.isprintable():
+        shown = shown.encode("unicode_escape").decode("ascii")
     raise InputError(f"not a number: '{shown}'", file=label, channel=channel, row=row)
 
 
