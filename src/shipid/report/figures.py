@@ -1,0 +1,417 @@
+"""Generic report figures (matplotlib, Agg canvas, no pyplot state).
+
+Every function takes the convention dicts described in :mod:`shipid.report`
+and returns a :class:`matplotlib.figure.Figure`; :func:`to_data_uri` turns a
+figure into an inline ``data:image/png;base64`` URI. Axes are labelled with
+quantity and unit (``t [s]``, ``r [rad/s]``). Long records are decimated for
+drawing only.
+"""
+
+from __future__ import annotations
+
+import base64
+import functools
+import io
+import math
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import LogNorm, TwoSlopeNorm
+from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+from shipid.report.stats import Z95
+
+MAX_POINTS = 4000
+WIDTH_IN = 9.6
+DPI = 100
+
+#: Colours: measured data in near-black, model in blue, bands light, reference dashed red.
+C_MEAS = "#222222"
+C_MODEL = "#1f6fb4"
+C_BAND = "#9cc3e6"
+C_TRUE = "#c0392b"
+PALETTE = ["#1f6fb4", "#e07b00", "#2e8b57", "#c0392b", "#7b4fa0", "#8c6d31", "#d6609f", "#555555"]
+
+_STYLE = {
+    "font.size": 10.0,
+    "axes.titlesize": 10.5,
+    "axes.labelsize": 10.0,
+    "axes.grid": True,
+    "grid.color": "#dddddd",
+    "grid.linewidth": 0.6,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "axes.edgecolor": "#888888",
+    "legend.fontsize": 9.0,
+    "legend.frameon": True,
+    "legend.framealpha": 0.85,
+    "legend.edgecolor": "#dddddd",
+    "xtick.labelsize": 9.0,
+    "ytick.labelsize": 9.0,
+    "axes.formatter.useoffset": False,
+    "axes.formatter.limits": (-4, 5),
+    "lines.linewidth": 1.1,
+    "figure.dpi": DPI,
+}
+
+
+def style():
+    """Context manager applying the report's matplotlib style (use it while building a figure)."""
+    import matplotlib
+
+    return matplotlib.rc_context(_STYLE)
+
+
+def _styled(fn):
+    """Build the figure inside :func:`style` so text sizes and legends follow the report style."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with style():
+            return fn(*args, **kwargs)
+    return wrapper
+
+
+def new_figure(width: float = WIDTH_IN, height: float = 3.2) -> Figure:
+    """A figure attached to an Agg canvas, styled like the rest of the report."""
+    import matplotlib
+
+    with matplotlib.rc_context(_STYLE):
+        fig = Figure(figsize=(width, height), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    fig._shipid_style = dict(_STYLE)  # applied again when drawn
+    return fig
+
+
+def to_png(fig: Figure, dpi: int = DPI) -> bytes:
+    """Render ``fig`` to PNG bytes; a label with broken mathtext is shown literally instead."""
+    import matplotlib
+
+    buf = io.BytesIO()
+    with matplotlib.rc_context(getattr(fig, "_shipid_style", _STYLE)):
+        try:
+            fig.savefig(buf, format="png", dpi=dpi)
+        except ValueError:  # e.g. an unbalanced "$" in a label: show it as plain text
+            for text in fig.findobj(lambda a: hasattr(a, "get_text") and hasattr(a, "set_text")):
+                s = text.get_text()
+                if "$" in s:
+                    text.set_text(s.replace("$", r"\$"))
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
+
+
+def to_data_uri(fig: Figure, dpi: int = DPI) -> str:
+    """``data:image/png;base64,...`` of ``fig``."""
+    return "data:image/png;base64," + base64.b64encode(to_png(fig, dpi)).decode("ascii")
+
+
+# -- helpers ---------------------------------------------------------------------------------------
+
+def axis_label(name: str, unit: str | None) -> str:
+    """``name [unit]`` (no brackets for dimensionless or missing units)."""
+    if unit and unit not in ("-", "1", ""):
+        return f"{name} [{unit}]"
+    return f"{name} [-]" if unit in ("-", "1") else name
+
+
+_SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def eng_scale(*arrays, unit: str | None = None) -> tuple[float, str]:
+    """Engineering scale for an axis: (factor to divide by, unit text such as ``10⁶ kg``).
+
+    Values of magnitude ≥ 10⁴ or < 10⁻³ are shown as multiples of 10^(3k) so that tick
+    labels stay short and no offset text collides with the axis title.
+    """
+    mags = [np.nanmax(np.abs(a)) for a in arrays if np.size(a) and np.isfinite(a).any()]
+    big = max(mags) if mags else 0.0
+    u = unit if unit not in (None, "", "-", "1") else ""
+    if not big or not np.isfinite(big) or 1e-3 <= big < 1e4:
+        return 1.0, (unit or "")
+    e = int(3 * math.floor(math.log10(big) / 3))
+    if e == 0:
+        return 1.0, (unit or "")
+    pre = f"10{str(e).translate(_SUP)}"
+    return 10.0 ** e, f"{pre} {u}".strip()
+
+
+def _arr(a) -> np.ndarray:
+    return np.asarray(a if a is not None else [], dtype=float).ravel()
+
+
+def _short_formatter() -> FuncFormatter:
+    """Tick labels with 3 significant digits and true minus signs (no 3.51235×10¹)."""
+    def f(x, _pos=None):
+        if x == 0:
+            return "0"
+        s = f"{x:.3g}"
+        if "e" in s:
+            m, e = s.split("e")
+            s = f"{m}×10{str(int(e)).translate(_SUP)}"
+        return s.replace("-", "−")
+    return FuncFormatter(f)
+
+
+def decimate(n: int, max_points: int = MAX_POINTS) -> slice:
+    """Stride slice keeping at most about ``max_points`` samples (drawing only)."""
+    step = max(1, int(math.ceil(n / max_points)))
+    return slice(None, None, step)
+
+
+def _grid(n: int, ncols: int) -> tuple[int, int]:
+    ncols = max(1, min(ncols, n))
+    return int(math.ceil(n / ncols)), ncols
+
+
+# -- time histories --------------------------------------------------------------------------------
+
+@_styled
+def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.ndarray,
+                   bound: float) -> Figure:
+    """Measured vs model (top), residual (bottom left) and its ACF with ±1.96/√N bounds (bottom right)."""
+    t = _arr(entry["t"])
+    meas, mod = _arr(entry["measured"]), _arr(entry["model"])
+    unit = entry.get("unit", "")
+    label = entry.get("label", name)
+    fig = new_figure(height=4.8)
+    gs = fig.add_gridspec(2, 3, height_ratios=[1.35, 1.0])
+    ax = fig.add_subplot(gs[0, :])
+    sl = decimate(t.size)
+    k, su = eng_scale(meas, mod, unit=unit)
+    ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
+    ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(axis_label(label, su))
+    ax.legend(loc="upper right", ncols=2)
+    ax.set_title(f"{label}: measured and model", loc="left")
+    ax_r = fig.add_subplot(gs[1, :2])
+    kr, sur = eng_scale(resid, unit=unit)
+    ax_r.plot(t[sl], resid[sl] / kr, color=C_MODEL, lw=0.8)
+    ax_r.axhline(0.0, color="#888888", lw=0.7)
+    ax_r.set_xlabel("t [s]")
+    ax_r.set_ylabel(axis_label("residual", sur))
+    ax_r.set_title("residual = measured − model", loc="left")
+    _acf_axes(fig.add_subplot(gs[1, 2]), acf_vals, bound)
+    return fig
+
+
+@_styled
+def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: float) -> Figure:
+    """Residual (or innovation) vs time with its predicted ±2σ band, and its ACF."""
+    t, v = _arr(entry["t"]), _arr(entry["values"])
+    unit = entry.get("unit", "")
+    label = entry.get("label", name)
+    fig = new_figure(height=2.8)
+    gs = fig.add_gridspec(1, 3)
+    ax = fig.add_subplot(gs[0, :2])
+    sl = decimate(t.size)
+    std = entry.get("std")
+    s = _arr(std) if std is not None else None
+    k, su = eng_scale(v, *([2 * s] if s is not None and s.shape == v.shape else []), unit=unit)
+    if s is not None and s.shape == v.shape:
+        ax.fill_between(t[sl], -2 * s[sl] / k, 2 * s[sl] / k, color=C_BAND, alpha=0.5, lw=0,
+                        label="±2σ predicted")
+        ax.legend(loc="upper right")
+    ax.plot(t[sl], v[sl] / k, color=C_MODEL, lw=0.8)
+    ax.axhline(0.0, color="#888888", lw=0.7)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(axis_label(label, su))
+    ax.set_title(f"{label}", loc="left")
+    _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound)
+    return fig
+
+
+def _acf_axes(ax, r: np.ndarray, bound: float) -> None:
+    lags = np.arange(r.size)
+    ax.vlines(lags, 0.0, r, color=C_MODEL, lw=1.2)
+    ax.plot(lags, r, "o", ms=2.2, color=C_MODEL)
+    if np.isfinite(bound):
+        ax.axhspan(-bound, bound, color=C_BAND, alpha=0.35, lw=0, label="±1.96/√N")
+        ax.legend(loc="upper right")
+    ax.axhline(0.0, color="#888888", lw=0.7)
+    ax.set_xlabel("lag [samples]")
+    ax.set_ylabel("autocorrelation [-]")
+    ax.set_ylim(min(-0.3, float(np.nanmin(r)) - 0.05), 1.05)
+    ax.set_title("residual autocorrelation", loc="left")
+
+
+@_styled
+def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> Figure:
+    """Parameter histories with ±σ bands (seed 001 Fig. 8 style); dashed red line at the true value."""
+    nrows, ncols = _grid(len(entries), ncols)
+    fig = new_figure(height=max(2.0, 1.9 * nrows + 0.3))
+    axes = fig.subplots(nrows, ncols, squeeze=False, sharex=False)
+    for k, (name, e) in enumerate(entries):
+        ax = axes[k // ncols][k % ncols]
+        t, v = _arr(e["t"]), _arr(e["value"])
+        sl = decimate(t.size)
+        true = float(e["true"]) if e.get("true") is not None else float("nan")
+        sc, su = eng_scale(v, np.array([true]), unit=e.get("unit"))
+        if e.get("std") is not None:
+            s = _arr(e["std"])
+            if s.shape == v.shape:
+                ax.fill_between(t[sl], (v - s)[sl] / sc, (v + s)[sl] / sc, color=C_BAND, alpha=0.6, lw=0,
+                                label="±σ")
+        ax.plot(t[sl], v[sl] / sc, color=C_MODEL, lw=1.1, label="estimate")
+        if np.isfinite(true):
+            ax.axhline(true / sc, color=C_TRUE, ls="--", lw=1.0, label="true")
+        ax.set_ylabel(axis_label(e.get("label", name), su))
+        ax.set_xlabel("t [s]")
+        if k == 0:
+            handles, labels = ax.get_legend_handles_labels()
+    if entries:
+        fig.legend(handles, labels, loc="outside upper right", ncols=len(labels))
+    for k in range(len(entries), nrows * ncols):
+        axes[k // ncols][k % ncols].set_visible(False)
+    return fig
+
+
+@_styled
+def signals_figure(entries: Sequence[tuple[str, Mapping]]) -> Figure:
+    """Stacked time histories sharing the time axis (seed 002 Figs 4, 9: smoothed motion, forces)."""
+    n = len(entries)
+    fig = new_figure(height=max(2.2, 1.55 * n + 0.5))
+    axes = fig.subplots(n, 1, squeeze=False, sharex=True)[:, 0]
+    for ax, (name, e) in zip(axes, entries):
+        t = _arr(e["t"])
+        sl = decimate(t.size)
+        lines = e.get("lines")
+        if lines is None and "values" in e:
+            lines = {e.get("label", name): e["values"]}
+        stds = e.get("std") or {}
+        k, su = eng_scale(*[_arr(v) for v in (lines or {}).values()], unit=e.get("unit"))
+        for j, (lab, vals) in enumerate((lines or {}).items()):
+            v = _arr(vals)
+            col = PALETTE[j % len(PALETTE)]
+            if lab in stds:
+                s = _arr(stds[lab])
+                if s.shape == v.shape:
+                    ax.fill_between(t[sl], (v - 2 * s)[sl] / k, (v + 2 * s)[sl] / k, color=col, alpha=0.18,
+                                    lw=0)
+            ax.plot(t[sl], v[sl] / k, color=col, lw=1.0 if j else 1.2, label=lab)
+        ax.set_ylabel(axis_label(e.get("label", name), su))
+        if lines and len(lines) > 1:
+            ax.legend(loc="upper right", ncols=min(4, len(lines)))
+    axes[-1].set_xlabel("t [s]")
+    return fig
+
+
+# -- fields ----------------------------------------------------------------------------------------
+
+@_styled
+def matrix_figure(entry: Mapping, *, title: str | None = None) -> Figure:
+    """Heat map of a matrix with a colour bar; cells annotated when the matrix is small."""
+    m = np.asarray(entry["values"], dtype=float)
+    if m.ndim != 2:
+        raise ValueError(f"matrix must be 2-D, got shape {m.shape}")
+    rows = list(entry.get("rows") or [str(i) for i in range(m.shape[0])])
+    cols = list(entry.get("cols") or rows if m.shape[0] == m.shape[1] else range(m.shape[1]))
+    cols = [str(c) for c in cols]
+    finite = m[np.isfinite(m)]
+    vmin, vmax = entry.get("vmin"), entry.get("vmax")
+    if vmin is None or vmax is None:
+        if finite.size and finite.min() < 0 < finite.max():
+            a = float(np.max(np.abs(finite)))
+            vmin, vmax = (-a, a) if vmin is None and vmax is None else (vmin, vmax)
+        elif finite.size:
+            vmin = float(finite.min()) if vmin is None else vmin
+            vmax = float(finite.max()) if vmax is None else vmax
+    diverging = vmin is not None and vmax is not None and vmin < 0 < vmax
+    side = min(7.5, 2.2 + 0.42 * max(m.shape))
+    fig = new_figure(width=side + 1.4, height=side)
+    ax = fig.add_subplot()
+    norm = TwoSlopeNorm(0.0, vmin, vmax) if diverging else None
+    im = ax.imshow(m, cmap="RdBu_r" if diverging else "viridis", norm=norm,
+                   vmin=None if diverging else vmin, vmax=None if diverging else vmax,
+                   interpolation="nearest", aspect="equal")
+    ax.set_xticks(range(m.shape[1]), cols, rotation=60 if max(len(c) for c in cols) > 3 else 0,
+                  ha="right" if max(len(c) for c in cols) > 3 else "center")
+    ax.set_yticks(range(m.shape[0]), rows)
+    ax.grid(False)
+    for s in ax.spines.values():
+        s.set_visible(False)
+    annotate = entry.get("annotate")
+    if annotate is None:
+        annotate = max(m.shape) <= 14
+    if annotate:
+        scale = max(abs(vmin or 0), abs(vmax or 0)) or 1.0
+        for i in range(m.shape[0]):
+            for j in range(m.shape[1]):
+                val = m[i, j]
+                if np.isfinite(val):
+                    ax.text(j, i, f"{val:.2f}" if abs(val) < 100 else f"{val:.3g}", ha="center",
+                            va="center", fontsize=7, color="white" if abs(val) > 0.6 * scale else "#222222")
+    cb = fig.colorbar(im, ax=ax, shrink=0.8)
+    if entry.get("unit"):
+        cb.set_label(entry["unit"])
+    if title:
+        ax.set_title(title, loc="left")
+    return fig
+
+
+def correlation_from_covariance(cov, names: Sequence[str]) -> dict:
+    """Correlation-matrix entry (convention ``matrices``) from a covariance matrix."""
+    c = np.asarray(cov, dtype=float)
+    d = np.sqrt(np.clip(np.diag(c), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = c / np.outer(d, d)
+    r[~np.isfinite(r)] = np.nan
+    return {"values": r.tolist(), "rows": list(names), "cols": list(names), "vmin": -1.0, "vmax": 1.0,
+            "unit": "correlation [-]"}
+
+
+@_styled
+def contour_figure(entry: Mapping) -> Figure:
+    """Filled contour of a scalar field (mass-cm Fig. 4 cost over (m, z̄_m); EBM Fig. 7 D-optimal map)."""
+    x, y = _arr(entry["x"]), _arr(entry["y"])
+    z = np.asarray(entry["z"], dtype=float)
+    if z.shape != (y.size, x.size):
+        raise ValueError(f"contour z has shape {z.shape}, expected ({y.size}, {x.size})")
+    fig = new_figure(width=6.8, height=4.6)
+    ax = fig.add_subplot()
+    finite = z[np.isfinite(z)]
+    use_log = bool(entry.get("log")) and finite.size and finite.min() > 0
+    if use_log:
+        levels = np.geomspace(finite.min(), finite.max(), 20) if finite.max() > finite.min() else 10
+        cs = ax.contourf(x, y, z, levels=levels, norm=LogNorm(), cmap="viridis")
+    else:
+        cs = ax.contourf(x, y, z, levels=20, cmap="viridis")
+    ax.contour(x, y, z, levels=cs.levels[::2], colors="white", linewidths=0.4, alpha=0.6)
+    cb = fig.colorbar(cs, ax=ax, format=_short_formatter())
+    cb.set_label(entry.get("z_label", "value"))
+    ax.xaxis.set_major_locator(MaxNLocator(7))
+    ax.yaxis.set_major_locator(MaxNLocator(8))
+    for j, p in enumerate(entry.get("points") or []):
+        mk = ["x", "o", "^", "s", "D"][j % 5]
+        ax.plot([p["x"]], [p["y"]], mk, color=["#ffffff", C_TRUE, "#ffb000", "#00d0ff", "#ff66cc"][j % 5],
+                ms=8, mew=2, mfc="none" if mk != "x" else None, label=p.get("label"))
+    if entry.get("points"):
+        ax.legend(loc="upper right", frameon=True, facecolor="white", framealpha=0.8)
+    ax.set_xlabel(axis_label(entry.get("x_label", "x"), entry.get("x_unit")))
+    ax.set_ylabel(axis_label(entry.get("y_label", "y"), entry.get("y_unit")))
+    ax.grid(False)
+    return fig
+
+
+@_styled
+def xy_figure(entry: Mapping) -> Figure:
+    """Generic x–y lines or scatter."""
+    x = _arr(entry["x"])
+    fig = new_figure(width=6.8 if entry.get("style") == "scatter" else WIDTH_IN, height=3.6)
+    ax = fig.add_subplot()
+    lines = entry.get("lines") or {}
+    for j, (lab, vals) in enumerate(lines.items()):
+        v = _arr(vals)
+        col = PALETTE[j % len(PALETTE)]
+        if entry.get("style") == "scatter":
+            ax.plot(x, v, "o", ms=3.5, alpha=0.7, color=col, label=lab)
+        else:
+            sl = decimate(x.size)
+            ax.plot(x[sl], v[sl], color=col, label=lab)
+    if len(lines) > 1:
+        ax.legend(loc="best")
+    ax.set_xlabel(axis_label(entry.get("x_label", "x"), entry.get("x_unit")))
+    ax.set_ylabel(axis_label(entry.get("y_label", "y"), entry.get("y_unit")))
+    return fig

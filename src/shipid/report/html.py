@@ -1,0 +1,389 @@
+"""Assemble the self-contained HTML report of a :class:`~shipid.result.Result`.
+
+Layout: header (method, vessel, provenance) → warnings → data used → estimates
+(value, SE, 95 % CI, unit, status, note; correlation heat map) → diagnostics →
+the method's sections (defaults in :mod:`shipid.report.sections`, then any the
+method registered) → entries carrying a ``"paper"`` reference → every other
+``series`` entry under the generic convention → residual checks → provenance.
+No JavaScript, no external resources: CSS inline, figures as data URIs.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+import shipid
+from shipid.outputs import atomic_write_text
+from shipid.report.formatting import format_estimate, fmt_num
+from shipid.report.registry import load_method_sections, sections_for
+from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
+                                  residual_stats_table)
+from shipid.report import figures as F
+
+METHOD_TITLES = {
+    "mass-cm": ("Mass and centre of mass from IMU and rudder", "Linder et al. 2015 (seed 000)"),
+    "dp": ("DP low-frequency model, parallel EKF", "Fossen, Sagatun & Sørensen 1996 (seed 001)"),
+    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "Yoon & Rhee 2003 (seed 002)"),
+}
+
+GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
+GENERIC_TITLES = {
+    "overlays": "Measured and model", "residuals": "Residuals and innovations",
+    "histories": "Parameter histories", "signals": "Time histories", "contours": "Maps",
+    "matrices": "Matrices", "xy": "Other plots", "tables": "Further tables",
+}
+
+CSS = """
+:root{--ink:#1d2330;--muted:#5b6474;--line:#d9dde5;--soft:#f4f6f9;--accent:#1f6fb4;--bad:#b3261e;--ok:#1e7a46;}
+*{box-sizing:border-box}
+html{font-size:15px}
+body{margin:0;color:var(--ink);background:#fff;font-family:"Source Sans Pro","Segoe UI",Roboto,"Helvetica Neue",
+ Arial,sans-serif;line-height:1.45}
+main{max-width:1020px;margin:0 auto;padding:24px 28px 60px}
+header.top{border-bottom:3px solid var(--accent);padding-bottom:12px;margin-bottom:8px}
+header.top h1{font-size:1.65rem;margin:0 0 2px;font-weight:600;letter-spacing:-.01em}
+header.top .sub{color:var(--muted);font-size:.98rem}
+h2{font-size:1.22rem;margin:34px 0 10px;padding-bottom:4px;border-bottom:1px solid var(--line);font-weight:600}
+h3{font-size:1.02rem;margin:22px 0 8px;font-weight:600;color:#2b3445}
+p{margin:6px 0}
+.small{font-size:.86rem;color:var(--muted)}
+nav.toc{font-size:.88rem;color:var(--muted);margin:10px 0 4px}
+nav.toc a{color:var(--accent);text-decoration:none;margin-right:14px;white-space:nowrap}
+.badges{display:flex;flex-wrap:wrap;gap:8px;margin:14px 0 6px}
+.badge{border:1px solid var(--line);border-radius:6px;padding:6px 12px;background:var(--soft);font-size:.9rem}
+.badge b{display:block;font-size:1.05rem}
+.badge.ok b{color:var(--ok)} .badge.bad b{color:var(--bad)}
+.note{border-left:4px solid var(--accent);background:var(--soft);padding:8px 12px;margin:10px 0;font-size:.92rem}
+.note.bad{border-left-color:var(--bad);background:#fdf0ef}
+.warnings{border:1px solid #e3a9a4;background:#fdf0ef;border-left:5px solid var(--bad);padding:10px 14px;
+ margin:14px 0;border-radius:4px}
+.warnings h2{border:0;margin:0 0 4px;font-size:1.05rem;color:var(--bad);padding:0}
+.warnings ul{margin:4px 0 0 18px;padding:0}
+table{border-collapse:collapse;margin:10px 0 16px;font-size:.9rem;font-variant-numeric:tabular-nums}
+caption{caption-side:top;text-align:left;font-size:.88rem;color:var(--muted);padding:0 0 6px}
+table.est{width:100%}
+table.data{min-width:50%}
+td code{white-space:nowrap}
+th,td{padding:5px 9px;border-bottom:1px solid var(--line);vertical-align:top}
+thead th{text-align:left;background:var(--soft);border-bottom:2px solid #c4cad6;font-weight:600;white-space:nowrap}
+td.num,th.num{text-align:right;white-space:nowrap}
+td.flag{color:var(--bad);font-weight:600}
+table.kv th{text-align:left;font-weight:600;color:#39424f;width:34%;background:none}
+table.kv{min-width:55%}
+table.kv td.num{text-align:left}
+.unit{color:var(--muted);font-weight:400}
+.status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
+.status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
+tr.notid td{color:var(--bad)}
+figure{margin:14px 0 22px;padding:0}
+figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
+figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}
+code{font-family:"DejaVu Sans Mono",Menlo,Consolas,monospace;font-size:.84rem;background:var(--soft);
+ padding:1px 4px;border-radius:3px;word-break:break-all}
+footer{margin-top:40px;border-top:1px solid var(--line);padding-top:8px;font-size:.82rem;color:var(--muted)}
+@media print{main{max-width:none;padding:0} h2{break-after:avoid} figure{break-inside:avoid}}
+"""
+
+
+# -- small helpers --------------------------------------------------------------------------------------
+
+def _is_scalar(v: Any) -> bool:
+    return v is None or isinstance(v, (str, int, float, bool, np.integer, np.floating))
+
+
+def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
+    rows = []
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if _is_scalar(v):
+            rows.append((key, v))
+        elif isinstance(v, Mapping) and depth > 0:
+            rows.extend(_flatten(v, key + ".", depth - 1))
+        elif isinstance(v, (list, tuple)) and len(v) <= 8 and all(_is_scalar(x) for x in v):
+            rows.append((key, ", ".join(fmt_num(x) if not isinstance(x, str) else x for x in v)))
+        elif isinstance(v, (list, tuple)):
+            try:
+                a = np.asarray(v, dtype=float).ravel()
+                rows.append((key, f"{a.size} values, from {fmt_num(np.nanmin(a))} to {fmt_num(np.nanmax(a))}"
+                             if a.size else "empty"))
+            except (TypeError, ValueError):
+                rows.append((key, f"{len(v)} items"))
+        else:
+            rows.append((key, json.dumps(v, default=str)[:200]))
+    return rows
+
+
+def _fmt_duration(s: float) -> str:
+    if not np.isfinite(s):
+        return "—"
+    if s >= 3600:
+        return f"{s / 3600:.2f} h ({fmt_num(s)} s)"
+    if s >= 120:
+        return f"{s / 60:.1f} min ({fmt_num(s)} s)"
+    return f"{fmt_num(s)} s"
+
+
+# -- page sections --------------------------------------------------------------------------------------
+
+def _header(result) -> str:
+    title, source = METHOD_TITLES.get(result.method, (f"Identification result: {result.method}", ""))
+    model = result.model or {}
+    prov = result.provenance or {}
+    vessel = model.get("vessel") or prov.get("vessel")
+    bits = [f"method <b>{esc(result.method)}</b>"]
+    if source:
+        bits.append(esc(source))
+    if vessel:
+        bits.append(f"vessel <b>{esc(str(vessel))}</b>")
+    if prov.get("created"):
+        bits.append(f"created {esc(str(prov['created']))}")
+    return (f'<header class="top"><h1>{esc(title)}</h1><div class="sub">{" · ".join(bits)}</div></header>')
+
+
+def _badges(result) -> str:
+    d = result.diagnostics or {}
+    out = []
+    if "converged" in d:
+        ok = bool(d["converged"])
+        out.append(f'<div class="badge {"ok" if ok else "bad"}">converged<b>{"yes" if ok else "NO"}</b></div>')
+    if "iterations" in d:
+        out.append(f'<div class="badge">iterations<b>{esc(fmt_num(d["iterations"]))}</b></div>')
+    n_est = sum(1 for e in result.estimates.values() if e.status == "estimated")
+    out.append(f'<div class="badge">estimated parameters<b>{n_est}</b></div>')
+    n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
+    if n_notid:
+        out.append(f'<div class="badge bad">not identifiable<b>{n_notid}</b></div>')
+    ins = (result.provenance or {}).get("inputs") or []
+    if isinstance(ins, (list, tuple)):
+        out.append(f'<div class="badge">input trials<b>{len(ins)}</b></div>')
+    prov = result.provenance or {}
+    if "seed" in prov:
+        out.append(f'<div class="badge">seed<b>{esc(str(prov["seed"]))}</b></div>')
+    return f'<div class="badges">{"".join(out)}</div>'
+
+
+def _warnings(result, extra: list[str]) -> str:
+    d = result.diagnostics or {}
+    warns = d.get("warnings") or []
+    if isinstance(warns, str):
+        warns = [warns]
+    warns = [str(w) for w in warns]
+    if "converged" in d and not d["converged"]:
+        warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
+                        "must not be trusted.")
+    warns += [f"report: {p}" for p in extra]
+    if not warns:
+        return ""
+    items = "".join(f"<li>{esc(w)}</li>" for w in warns)
+    return f'<section class="warnings" id="warnings"><h2>Warnings ({len(warns)})</h2><ul>{items}</ul></section>'
+
+
+def _data_section(ctx: RenderContext, result) -> str:
+    prov = result.provenance or {}
+    ins = prov.get("inputs")
+    if ins is None:
+        ins = (result.model or {}).get("inputs")
+    if ins is None:
+        return '<h2 id="data">Data used</h2><p class="small">The result does not record its inputs.</p>'
+    if isinstance(ins, (str, Mapping)):
+        ins = [ins]
+    head = ("<tr><th>trial</th><th class='num'>samples</th><th class='num'>duration</th>"
+            "<th class='num'>sampling</th><th>channels [unit]</th><th>note</th></tr>")
+    rows = []
+    for item in ins:
+        if not isinstance(item, Mapping):
+            rows.append(f"<tr><td><code>{esc(str(item))}</code></td><td></td><td></td><td></td><td></td>"
+                        "<td></td></tr>")
+            continue
+        name = item.get("name") or item.get("file") or item.get("path") or "—"
+        n = item.get("n_samples")
+        dur = item.get("duration_s")
+        dt = item.get("dt_s")
+        if dt is None and item.get("rate_hz"):
+            dt = 1.0 / float(item["rate_hz"])
+        samp = "—"
+        if dt is not None and np.isfinite(float(dt)) and float(dt) > 0:
+            samp = f"{fmt_num(float(dt), 3)} s ({fmt_num(1.0 / float(dt), 3)} Hz)"
+        ch = item.get("channels")
+        if isinstance(ch, Mapping):
+            chs = ", ".join(f"{esc(str(k))} <span class='unit'>[{esc(str(u))}]</span>" for k, u in ch.items())
+        elif isinstance(ch, (list, tuple)):
+            chs = ", ".join(esc(str(c)) for c in ch)
+        else:
+            chs = "—" if ch is None else esc(str(ch))
+        note_bits = [f"{k}: {item[k]}" for k in ("vessel", "manoeuvre", "seed") if k in item]
+        if item.get("note"):
+            note_bits.append(str(item["note"]))
+        rows.append(f"<tr><td><code>{esc(str(name))}</code></td><td class='num'>{fmt_num(n) if n is not None else '—'}"
+                    f"</td><td class='num'>{_fmt_duration(float(dur)) if dur is not None else '—'}</td>"
+                    f"<td class='num'>{samp}</td><td>{chs}</td><td>{esc('; '.join(note_bits))}</td></tr>")
+    return (f'<h2 id="data">Data used</h2><table class="data">{ctx.table_caption("Trials the estimates come from.")}'
+            f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>")
+
+
+def _estimates_section(ctx: RenderContext, result) -> str:
+    head = ("<tr><th>parameter</th><th class='num'>estimate</th><th class='num'>standard error</th>"
+            "<th class='num'>95 % confidence interval</th><th class='num'>rel. SE</th><th>unit</th>"
+            "<th>status</th><th>note</th></tr>")
+    rows = []
+    for name, e in result.estimates.items():
+        f = format_estimate(e.value, e.std)
+        notid = math.isinf(float(e.std)) if e.std is not None else False
+        ci = "—" if f.ci_low == "—" else f"[{f.ci_low}, {f.ci_high}]"
+        scale = f' <span class="unit">{f.scale}</span>' if f.scale else ""
+        tr = '<tr class="notid">' if notid else "<tr>"
+        rows.append(
+            f"{tr}<td><b>{esc(name)}</b></td><td class='num'>{f.value}{scale}</td>"
+            f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
+            f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
+            f"<td>{esc(e.unit)}</td><td><span class='status {esc(e.status)}'>{esc(e.status)}</span></td>"
+            f"<td>{esc(e.note)}</td></tr>")
+    if not rows:
+        body = '<p class="small">No estimates.</p>'
+    else:
+        body = (f'<table class="est">{ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal approximation). Digits follow the SE.")}'
+                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>")
+    cov_html = ""
+    if result.covariance is not None and len(result.covariance_names) >= 2:
+        try:
+            entry = F.correlation_from_covariance(result.covariance, result.covariance_names)
+            r = np.asarray(entry["values"])
+            off = np.abs(r - np.diag(np.diag(r)))
+            high = [(result.covariance_names[i], result.covariance_names[j], r[i, j])
+                    for i in range(r.shape[0]) for j in range(i + 1, r.shape[1]) if off[i, j] > 0.95]
+            cov_html = ctx.figure(F.matrix_figure(entry), "Correlation of the estimates (from the covariance).")
+            if high:
+                pairs = ", ".join(f"{a}–{b} ({v:+.3f})" for a, b, v in high)
+                cov_html += (f'<div class="note bad">Strongly correlated estimates (|ρ| &gt; 0.95): {esc(pairs)}. '
+                             "They are hard to separate with these data.</div>")
+        except Exception as err:  # noqa: BLE001
+            cov_html = ctx.problem("the correlation matrix", err)
+    return f'<h2 id="estimates">Estimates</h2>{body}{cov_html}'
+
+
+def _diagnostics_section(ctx: RenderContext, result) -> str:
+    d = {k: v for k, v in (result.diagnostics or {}).items() if k != "warnings"}
+    if not d:
+        return ""
+    return f'<h2 id="diagnostics">Diagnostics</h2>{kv_table(ctx, _flatten(d), "Estimator diagnostics.")}'
+
+
+def _provenance_section(ctx: RenderContext, result) -> str:
+    prov = {k: v for k, v in (result.provenance or {}).items() if k != "inputs"}
+    model = result.model or {}
+    out = '<h2 id="provenance">Model and provenance</h2>'
+    if model:
+        out += kv_table(ctx, _flatten(model), "Model structure and vessel particulars.")
+    if prov:
+        out += kv_table(ctx, _flatten(prov), "Provenance.")
+    return out
+
+
+def _method_sections(ctx: RenderContext, result, load_problems: list[str]) -> str:
+    out = []
+    for title, fn in sections_for(result.method):
+        try:
+            frags = fn(result)
+        except Exception as err:  # noqa: BLE001 - a broken section must not lose the report
+            out.append(f"<h3>{esc(title)}</h3>" + ctx.problem(f"section '{title}'", err))
+            continue
+        body = ctx.fragments(frags, f"section '{title}'")
+        if body.strip():
+            out.append(f"<h3>{esc(title)}</h3>{body}")
+    # entries that name their place in the paper
+    papers = []
+    for kind in GENERIC_ORDER:
+        for name, entry in ctx.series(kind).items():
+            if isinstance(entry, Mapping) and entry.get("paper") and not ctx.is_claimed(kind, name):
+                papers.append((paper_sort_key(str(entry["paper"])), kind, name, entry))
+    papers.sort(key=lambda p: p[0])
+    for _, kind, name, entry in papers:
+        out.append(render_entry(ctx, kind, name, entry))
+    if not out:
+        return ""
+    return f'<h2 id="method">Figures and tables of the method</h2>{"".join(out)}{residual_stats_table(ctx)}'
+
+
+def _generic_sections(ctx: RenderContext, result) -> str:
+    out = []
+    known = set(GENERIC_ORDER)
+    for kind in GENERIC_ORDER:
+        items = [(n, e) for n, e in ctx.series(kind).items() if not ctx.is_claimed(kind, n)]
+        if not items:
+            continue
+        parts = []
+        if kind in ("histories", "signals") and all(isinstance(e, Mapping) for _, e in items) and len(items) > 1:
+            chunk = 12 if kind == "histories" else 6
+            for i in range(0, len(items), chunk):
+                part = items[i:i + chunk]
+                parts.append(render_group(ctx, kind, part, f"{GENERIC_TITLES[kind]}: "
+                                          f"{', '.join(e.get('label', n) for n, e in part)}"
+                                          + (" (±σ bands)." if kind == "histories" else ".")))
+        else:
+            # fit overlays first, validation after
+            if kind == "overlays":
+                items.sort(key=lambda ne: isinstance(ne[1], Mapping) and ne[1].get("kind") == "validation")
+            parts = [render_entry(ctx, kind, n, e) for n, e in items]
+        out.append(f"<h3>{GENERIC_TITLES[kind]}</h3>{''.join(parts)}")
+        if kind in ("overlays", "residuals"):
+            out.append(residual_stats_table(ctx))
+    unknown = [k for k in (result.series or {}) if k not in known]
+    if unknown:
+        out.append(f'<p class="small">Series not drawn (not part of the report convention): '
+                   f'{esc(", ".join(sorted(map(str, unknown))))}.</p>')
+    if not out:
+        return ""
+    return f'<h2 id="series">Time histories and checks</h2>{"".join(out)}'
+
+
+def build_report(result) -> str:
+    """The complete HTML document for ``result`` (a :class:`~shipid.result.Result`).
+
+    Never raises for odd ``series`` content: a figure that cannot be drawn is
+    replaced by a visible note and listed among the warnings.
+    """
+    ctx = RenderContext(result)
+    load_problems = load_method_sections(result.method)
+    ctx.problems.extend(load_problems)
+    parts = {
+        "data": _data_section(ctx, result),
+        "estimates": _estimates_section(ctx, result),
+        "diagnostics": _diagnostics_section(ctx, result),
+        "method": _method_sections(ctx, result, load_problems),
+        "series": _generic_sections(ctx, result),
+        "provenance": _provenance_section(ctx, result),
+    }
+    toc_names = {"warnings": "Warnings", "data": "Data", "estimates": "Estimates", "diagnostics": "Diagnostics",
+                 "method": "Method figures", "series": "Time histories", "provenance": "Provenance"}
+    warnings = _warnings(result, ctx.problems)
+    present = (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
+    toc = "".join(f'<a href="#{k}">{toc_names[k]}</a>' for k in present)
+    now = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    title = METHOD_TITLES.get(result.method, (result.method, ""))[0]
+    vessel = (result.model or {}).get("vessel")
+    doc_title = f"shipid report — {result.method}" + (f" — {vessel}" if vessel else "")
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+        f"<meta name=\"generator\" content=\"shipid {esc(shipid.__version__)}\">"
+        f"<title>{esc(doc_title)}</title><style>{CSS}</style></head>\n<body><main>\n"
+        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{warnings}\n"
+        + "\n".join(v for v in parts.values() if v)
+        + f"\n<footer>Report written by shipid {esc(shipid.__version__)} at {esc(now)} · {esc(title)} · "
+          "self-contained: no network needed to view.</footer>\n</main></body></html>\n"
+    )
+
+
+def write_report(result, path, *, force: bool = False) -> Path:
+    """Build the report and write it atomically to ``path`` (never clobbers without ``force``)."""
+    dest = Path(path)
+    if dest.exists() and not force:  # fail before the (slow) figure drawing
+        from shipid.errors import OutputExistsError
+        raise OutputExistsError(str(path))
+    return atomic_write_text(dest, build_report(result), force=force)

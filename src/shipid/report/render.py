@@ -1,0 +1,268 @@
+"""Turning convention entries and section fragments into HTML.
+
+:class:`RenderContext` numbers figures and tables, records which series entries
+have been drawn (:class:`~shipid.report.registry.Claim`) and collects problems
+(a figure that could not be drawn is replaced by a visible note, never a crash).
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from shipid.report import figures as F
+from shipid.report.formatting import fmt_num
+from shipid.report.registry import Claim, Entry, Group
+from shipid.report.stats import residual_stats
+
+esc = html.escape
+
+
+@dataclass
+class RenderContext:
+    """State shared while one report is built."""
+
+    result: Any
+    n_fig: int = 0
+    n_tab: int = 0
+    claimed: set = field(default_factory=set)
+    problems: list = field(default_factory=list)
+    residual_rows: list = field(default_factory=list)
+
+    # -- claims ------------------------------------------------------------------------------------
+    def claim(self, kind: str, name: str) -> None:
+        self.claimed.add((kind, name))
+
+    def is_claimed(self, kind: str, name: str) -> bool:
+        return (kind, name) in self.claimed
+
+    def series(self, kind: str) -> dict:
+        s = (self.result.series or {}).get(kind) or {}
+        return s if isinstance(s, Mapping) else {}
+
+    # -- primitives --------------------------------------------------------------------------------
+    def figure(self, fig: Figure, caption: str = "", *, alt: str | None = None) -> str:
+        """An inline PNG ``<figure>`` with a numbered caption (plain-text caption, escaped)."""
+        self.n_fig += 1
+        uri = F.to_data_uri(fig)
+        fig.clear()
+        cap = f"<b>Figure {self.n_fig}.</b> {esc(caption)}" if caption else f"<b>Figure {self.n_fig}.</b>"
+        return (f'<figure><img src="{uri}" alt="{esc(alt or caption or f"figure {self.n_fig}")}">'
+                f"<figcaption>{cap}</figcaption></figure>")
+
+    def table_caption(self, caption: str) -> str:
+        self.n_tab += 1
+        return f"<caption><b>Table {self.n_tab}.</b> {esc(caption)}</caption>" if caption else \
+            f"<caption><b>Table {self.n_tab}.</b></caption>"
+
+    def problem(self, what: str, err: BaseException | str) -> str:
+        msg = f"{what}: {type(err).__name__}: {err}" if isinstance(err, BaseException) else f"{what}: {err}"
+        msg = " ".join(msg.split())
+        self.problems.append(msg)
+        return f'<div class="note bad">Could not draw {esc(what)} — {esc(msg)}</div>'
+
+    def fragments(self, frags: Iterable, where: str) -> str:
+        """HTML of a section function's fragment list (see :mod:`shipid.report.registry`)."""
+        out = []
+        for fr in frags or []:
+            try:
+                if isinstance(fr, Claim):
+                    self.claim(fr.kind, fr.name)
+                elif isinstance(fr, Entry):
+                    entry = self.series(fr.kind).get(fr.name)
+                    if entry is None:
+                        out.append(self.problem(where, f"no series['{fr.kind}']['{fr.name}']"))
+                    else:
+                        out.append(render_entry(self, fr.kind, fr.name, entry, paper=fr.paper,
+                                                default_title=fr.title))
+                elif isinstance(fr, Group):
+                    s = self.series(fr.kind)
+                    items = [(n, s[n]) for n in fr.names if isinstance(s.get(n), Mapping)]
+                    if items:
+                        out.append(render_group(self, fr.kind, items, fr.caption))
+                elif fr == "residual-checks":
+                    out.append(residual_stats_table(self))
+                elif isinstance(fr, str):
+                    out.append(fr)
+                elif isinstance(fr, Figure):
+                    out.append(self.figure(fr))
+                elif isinstance(fr, tuple) and len(fr) == 2 and isinstance(fr[0], Figure):
+                    out.append(self.figure(fr[0], str(fr[1])))
+                else:
+                    out.append(self.problem(where, f"unknown fragment type {type(fr).__name__}"))
+            except Exception as err:  # noqa: BLE001 - one bad figure must not lose the report
+                out.append(self.problem(where, err))
+        return "\n".join(out)
+
+
+# -- captions ----------------------------------------------------------------------------------------
+
+def caption_of(name: str, entry: Mapping, default: str, paper: str | None = None) -> str:
+    paper = entry.get("paper") or paper  # the method's own reference wins over a default
+    title = entry.get("title") or default
+    return f"{paper} — {title}" if paper else title
+
+
+_PAPER_RE = re.compile(r"(fig|table)[a-z.]*\s*(\d+)", re.I)
+
+
+def paper_sort_key(ref: str) -> tuple:
+    """Sort "Fig. 4" < "Fig. 10" < "Table 1" (figures first, then tables, numerically)."""
+    m = _PAPER_RE.search(ref or "")
+    if not m:
+        return (2, math.inf, ref)
+    return (0 if m.group(1).lower().startswith("fig") else 1, int(m.group(2)), ref)
+
+
+# -- tables ------------------------------------------------------------------------------------------
+
+def _cell(v: Any) -> tuple[str, str]:
+    """(html, css class) of one table cell."""
+    if isinstance(v, bool):
+        return ("yes" if v else "no"), ""
+    if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+        return fmt_num(v), "num"
+    if v is None:
+        return "—", ""
+    if isinstance(v, (list, tuple)):
+        return esc(", ".join(str(x) for x in v)), ""
+    return esc(str(v)), ""
+
+
+def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
+    cols = [str(c) for c in entry.get("columns", [])]
+    units = list(entry.get("units") or [])
+    head = []
+    for j, c in enumerate(cols):
+        u = units[j] if j < len(units) else ""
+        head.append(f"<th>{esc(c)}" + (f' <span class="unit">[{esc(u)}]</span>' if u and u != "" else "")
+                    + "</th>")
+    body = []
+    for row in entry.get("rows", []):
+        tds = []
+        for v in row:
+            h, cls = _cell(v)
+            tds.append(f'<td class="{cls}">{h}</td>' if cls else f"<td>{h}</td>")
+        body.append("<tr>" + "".join(tds) + "</tr>")
+    note = f'<p class="small">{esc(entry["caption"])}</p>' if entry.get("caption") and \
+        entry.get("caption") != caption else ""
+    return (f'<table class="data">{ctx.table_caption(caption)}<thead><tr>{"".join(head)}</tr></thead>'
+            f'<tbody>{"".join(body)}</tbody></table>{note}')
+
+
+def kv_table(ctx: RenderContext | None, rows: Iterable[tuple[str, Any]], caption: str = "",
+             cls: str = "kv") -> str:
+    body = []
+    for k, v in rows:
+        h, c = _cell(v)
+        body.append(f'<tr><th scope="row">{esc(str(k))}</th><td class="{c}">{h}</td></tr>')
+    cap = ctx.table_caption(caption) if (ctx is not None and caption) else ""
+    return f'<table class="{cls}">{cap}<tbody>{"".join(body)}</tbody></table>'
+
+
+# -- residual statistics ------------------------------------------------------------------------------
+
+def _residual_row(ctx: RenderContext, name: str, unit: str, st) -> None:
+    ctx.residual_rows.append((name, unit, st))
+
+
+def residual_stats_table(ctx: RenderContext) -> str:
+    """Whiteness / consistency of every residual drawn (Box–Jenkins ACF bounds, Ljung–Box)."""
+    if not ctx.residual_rows:
+        return ""
+    head = ("<tr><th>residual</th><th>N</th><th>mean</th><th>RMS</th><th>unit</th>"
+            "<th>lags outside ±1.96/√N</th><th>Ljung–Box p</th><th>inside ±2σ</th></tr>")
+    body = []
+    for name, unit, st in ctx.residual_rows:
+        frac = st.frac_outside
+        white_bad = np.isfinite(frac) and frac > 0.10
+        lb_bad = np.isfinite(st.ljung_box_p) and st.ljung_box_p < 0.01
+        in2 = st.frac_in_2sigma
+        in2_bad = np.isfinite(in2) and in2 < 0.90
+        body.append(
+            f"<tr><td>{esc(name)}</td><td class='num'>{st.n}</td><td class='num'>{fmt_num(st.mean, 3)}</td>"
+            f"<td class='num'>{fmt_num(st.rms, 3)}</td><td>{esc(unit or '-')}</td>"
+            f"<td class='num{' flag' if white_bad else ''}'>"
+            f"{'—' if not np.isfinite(frac) else f'{100 * frac:.0f} % of {st.max_lag}'}</td>"
+            f"<td class='num{' flag' if lb_bad else ''}'>{fmt_num(st.ljung_box_p, 2)}</td>"
+            f"<td class='num{' flag' if in2_bad else ''}'>{'—' if not np.isfinite(in2) else f'{100 * in2:.1f} %'}"
+            "</td></tr>")
+    ctx.residual_rows = []
+    return (f'<table class="data">{ctx.table_caption("Residual checks. White residuals have about 5 % of lags outside the ±1.96/√N bounds and a Ljung–Box p above 0.01; innovations should lie inside their predicted ±2σ about 95 % of the time. Flagged cells in red.")}'
+            f"<thead>{head}</thead><tbody>{''.join(body)}</tbody></table>")
+
+
+# -- one convention entry -----------------------------------------------------------------------------
+
+def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, paper: str | None = None,
+                 default_title: str | None = None) -> str:
+    """HTML for ``result.series[kind][name]`` (marks it claimed). Errors become a visible note."""
+    ctx.claim(kind, name)
+    try:
+        if not isinstance(entry, Mapping):
+            raise TypeError(f"series['{kind}']['{name}'] is a {type(entry).__name__}, expected a dict")
+        label = entry.get("label", name)
+        if kind == "overlays":
+            t = np.asarray(entry["t"], float)
+            meas, mod = np.asarray(entry["measured"], float), np.asarray(entry["model"], float)
+            res_entry = ctx.series("residuals").get(name)
+            if isinstance(res_entry, Mapping) and len(res_entry.get("values", [])) == t.size:
+                resid = np.asarray(res_entry["values"], float)
+                std = res_entry.get("std")
+                ctx.claim("residuals", name)
+            else:
+                resid, std = meas - mod, None
+            st, r = residual_stats(resid, std)
+            _residual_row(ctx, label, entry.get("unit", ""), st)
+            what = "validation (not used for estimation)" if entry.get("kind") == "validation" else "fit"
+            cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
+                             f"{label}: measured and model ({what}); residual and its "
+                             f"autocorrelation with 95 % white-noise bounds.", paper)
+            return ctx.figure(F.overlay_figure(name, entry, resid, r, st.acf_bound), cap)
+        if kind == "residuals":
+            st, r = residual_stats(entry["values"], entry.get("std"))
+            _residual_row(ctx, label, entry.get("unit", ""), st)
+            cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
+                             f"{label}: residual" + (" with predicted ±2σ" if entry.get("std") else "")
+                             + " and its autocorrelation.", paper)
+            return ctx.figure(F.residual_figure(name, entry, r, st.acf_bound), cap)
+        if kind == "histories":
+            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper)
+            return ctx.figure(F.histories_figure([(name, entry)], ncols=1), cap)
+        if kind == "signals":
+            cap = caption_of(name, entry, default_title or f"{label} versus time.", paper)
+            return ctx.figure(F.signals_figure([(name, entry)]), cap)
+        if kind == "matrices":
+            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            return ctx.figure(F.matrix_figure(entry), cap)
+        if kind == "tables":
+            return data_table(ctx, entry, caption_of(name, entry, default_title or entry.get("caption") or
+                                                     name.replace("_", " "), paper))
+        if kind == "contours":
+            cap = caption_of(name, entry, default_title or
+                             f"{entry.get('z_label', name)} over ({entry.get('x_label', 'x')}, "
+                             f"{entry.get('y_label', 'y')}).", paper)
+            return ctx.figure(F.contour_figure(entry), cap)
+        if kind == "xy":
+            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            return ctx.figure(F.xy_figure(entry), cap)
+        raise ValueError(f"unknown series kind {kind!r}")
+    except Exception as err:  # noqa: BLE001
+        return ctx.problem(f"series['{kind}']['{name}']", err)
+
+
+def render_group(ctx: RenderContext, kind: str, items: list[tuple[str, Mapping]], caption: str) -> str:
+    """Several ``histories`` or ``signals`` entries in one figure (small multiples / stacked)."""
+    for name, _ in items:
+        ctx.claim(kind, name)
+    try:
+        fig = F.histories_figure(items) if kind == "histories" else F.signals_figure(items)
+        return ctx.figure(fig, caption)
+    except Exception as err:  # noqa: BLE001
+        return ctx.problem(f"{kind} ({', '.join(n for n, _ in items)})", err)

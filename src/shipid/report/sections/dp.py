@@ -1,0 +1,32 @@
+"""Default report section for ``dp`` (Fossen, Sagatun & Sørensen 1996, seed 001).
+
+Draws, when the result carries them: every parameter history with its ±σ band
+(``histories``, paper Fig. 8, as small multiples), then the innovation checks:
+each ``residuals`` entry whose name starts with ``innovation`` with its predicted
+±2σ band and autocorrelation, followed by the table of residual statistics.
+"""
+
+from __future__ import annotations
+
+from shipid.report.registry import Entry, Group, register_section
+from shipid.report.sections._util import entries
+
+
+def dp_section(result) -> list:
+    """Seed 001 (Fossen, Sagatun & Sørensen 1996): parameter histories and innovation checks"""
+    frags: list = []
+    hist = [n for n, e in entries(result, "histories", where=lambda n, e: not e.get("paper"))]
+    for i in range(0, len(hist), 12):
+        names = tuple(hist[i:i + 12])
+        frags.append(Group("histories", names,
+                           "Fig. 8 — parameter estimates versus time with ±σ bands (dashed: true value "
+                           "where known)" + (f", part {i // 12 + 1}." if len(hist) > 12 else ".")))
+    innov = entries(result, "residuals", prefixes=("innovation",))
+    for name, _ in innov:
+        frags.append(Entry("residuals", name, title="Innovation check:"))
+    if innov:
+        frags.append("residual-checks")
+    return frags
+
+
+register_section("dp", dp_section, default=True)

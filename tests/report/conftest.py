@@ -1,0 +1,210 @@
+"""Fixtures for the report tests: a headless Chromium driven over the DevTools Protocol.
+
+The browser is Debian's ``chromium`` (``.ci/run`` installs it). It is started with
+``--remote-debugging-port=0``; the port it picked is read from
+``<user-data-dir>/DevToolsActivePort`` and the page is driven over a websocket on
+127.0.0.1 with ``websocket-client`` (the ``test`` extra). Tests that need it skip
+cleanly when the ``chromium`` executable is absent.
+"""
+
+from __future__ import annotations
+
+import base64
+import itertools
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+ARTIFACTS = REPO / "test-artifacts"
+
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--disable-extensions", "--disable-default-apps", "--mute-audio", "--hide-scrollbars",
+         "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=0", "--remote-allow-origins=*"]
+
+
+def chromium_path() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        p = shutil.which(name)
+        if p:
+            return p
+    return None
+
+
+class Page:
+    """One browser tab driven over the Chrome DevTools Protocol (a tiny synchronous client)."""
+
+    def __init__(self, ws_url: str):
+        import websocket  # websocket-client
+
+        self.ws = websocket.create_connection(ws_url, timeout=60, suppress_origin=True)
+        self._ids = itertools.count(1)
+        self.events: list[dict] = []
+
+    def send(self, method: str, **params):
+        mid = next(self._ids)
+        self.ws.send(json.dumps({"id": mid, "method": method, "params": params}))
+        while True:
+            msg = json.loads(self.ws.recv())
+            if msg.get("id") == mid:
+                if "error" in msg:
+                    raise RuntimeError(f"CDP {method}: {msg['error']}")
+                return msg.get("result", {})
+            self.events.append(msg)
+
+    def wait_event(self, method: str, timeout: float = 60.0) -> dict:
+        for ev in self.events:
+            if ev.get("method") == method:
+                return ev
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            msg = json.loads(self.ws.recv())
+            if "method" in msg:
+                self.events.append(msg)
+                if msg["method"] == method:
+                    return msg
+        raise TimeoutError(method)
+
+    def evaluate(self, expr: str):
+        res = self.send("Runtime.evaluate", expression=expr, returnByValue=True, awaitPromise=True)
+        if "exceptionDetails" in res:
+            raise RuntimeError(f"JS error: {res['exceptionDetails']}")
+        return res["result"].get("value")
+
+    def errors(self) -> list[str]:
+        """Console errors, uncaught exceptions and error log entries (failed loads ...)."""
+        out = []
+        for ev in self.events:
+            m, p = ev.get("method"), ev.get("params", {})
+            if m == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
+                out.append("console: " + " ".join(str(a.get("value", a.get("description", "")))
+                                                  for a in p.get("args", [])))
+            elif m == "Runtime.exceptionThrown":
+                out.append("exception: " + json.dumps(p.get("exceptionDetails", {}))[:300])
+            elif m == "Log.entryAdded" and p.get("entry", {}).get("level") == "error":
+                e = p["entry"]
+                out.append(f"log: {e.get('source')}: {e.get('text')} {e.get('url', '')}")
+        return out
+
+    def close(self) -> None:
+        try:
+            self.ws.close()
+        except Exception:  # noqa: BLE001
+            pass
+
+
+class Browser:
+    def __init__(self, exe: str):
+        self.tmp = tempfile.mkdtemp(prefix="shipid-chromium-")
+        self.proc = subprocess.Popen([exe, *FLAGS, f"--user-data-dir={self.tmp}", "about:blank"],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        port_file = Path(self.tmp) / "DevToolsActivePort"
+        end = time.monotonic() + 60
+        while not (port_file.exists() and port_file.read_text().strip()):
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"chromium exited with status {self.proc.returncode}")
+            if time.monotonic() > end:
+                self.quit()
+                raise RuntimeError("chromium did not open its DevTools port within 60 s")
+            time.sleep(0.1)
+        self.port = int(port_file.read_text().split()[0])
+
+    def new_page(self) -> Page:
+        req = urllib.request.Request(f"http://127.0.0.1:{self.port}/json/new?about:blank", method="PUT")
+        with urllib.request.urlopen(req, timeout=30) as resp:
+            target = json.loads(resp.read())
+        page = Page(target["webSocketDebuggerUrl"])
+        for domain in ("Page", "Runtime", "Log"):
+            page.send(f"{domain}.enable")
+        return page
+
+    def check(self, html_path: Path, screenshot: Path, width: int = 1100) -> dict:
+        """See :func:`open_and_check`."""
+        return open_and_check(self, html_path, screenshot, width)
+
+    def quit(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def open_and_check(browser: Browser, html_path: Path, screenshot: Path, width: int = 1100) -> dict:
+    """Load ``html_path``; return errors, image states and a full-page screenshot path."""
+    page = browser.new_page()
+    try:
+        page.send("Emulation.setDeviceMetricsOverride", width=width, height=900, deviceScaleFactor=1,
+                  mobile=False)
+        page.events.clear()
+        page.send("Page.navigate", url=html_path.resolve().as_uri())
+        page.wait_event("Page.loadEventFired")
+        info = page.evaluate("""JSON.stringify({
+            title: document.title,
+            images: Array.from(document.images).map(i => ({complete: i.complete, w: i.naturalWidth,
+                                                            h: i.naturalHeight, src: i.src.slice(0, 30)})),
+            tables: document.querySelectorAll('table').length,
+            external: Array.from(document.querySelectorAll('[src],[href]')).map(e => e.getAttribute('src') ||
+                      e.getAttribute('href')).filter(u => /^(https?:)?\\/\\//.test(u)),
+            height: document.documentElement.scrollHeight})""")
+        info = json.loads(info)
+        height = min(int(info["height"]), 30000)
+        page.send("Emulation.setDeviceMetricsOverride", width=width, height=height, deviceScaleFactor=1,
+                  mobile=False)
+        shot = page.send("Page.captureScreenshot", format="png", captureBeyondViewport=True)
+        screenshot.parent.mkdir(parents=True, exist_ok=True)
+        screenshot.write_bytes(base64.b64decode(shot["data"]))
+        info["errors"] = page.errors()
+        info["screenshot"] = str(screenshot)
+        return info
+    finally:
+        page.close()
+
+
+@pytest.fixture(scope="session")
+def browser():
+    exe = os.environ.get("SHIPID_CHROMIUM") or chromium_path()
+    if not exe:
+        pytest.skip("chromium is not installed (apt-get install chromium); browser test skipped")
+    pytest.importorskip("websocket", reason="websocket-client not installed (pip install -e '.[test]')")
+    b = Browser(exe)
+    try:
+        yield b
+    finally:
+        b.quit()
+
+
+@pytest.fixture(scope="session")
+def artifacts() -> Path:
+    """``test-artifacts/`` at the repository root (git-ignored): screenshots are kept there."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    return ARTIFACTS
+
+
+@pytest.fixture(scope="session")
+def example_reports(tmp_path_factory):
+    """The HTML reports of the three example results, built once: method -> (Result, html, path)."""
+    from shipid.report import build_report
+    from shipid.report.examples import EXAMPLES
+    from shipid.result import Result
+
+    out = {}
+    d = tmp_path_factory.mktemp("reports")
+    for method, make in EXAMPLES.items():
+        r = Result.from_json(make().to_json())
+        html = build_report(r)
+        path = d / f"report-{method}.html"
+        path.write_text(html, encoding="utf-8")
+        out[method] = (r, html, path)
+    return out

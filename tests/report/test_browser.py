@@ -1,0 +1,38 @@
+"""The report renders in a real headless Chromium: no console errors, every image loads.
+
+Screenshots are kept under ``test-artifacts/`` (git-ignored) as test artefacts.
+Skips cleanly when the ``chromium`` executable is absent (see conftest.py).
+"""
+
+import re
+
+import pytest
+
+
+
+@pytest.mark.parametrize("method", ["mass-cm", "dp", "ebm"])
+def test_report_renders_in_chromium(browser, example_reports, artifacts, method):
+    result, html, path = example_reports[method]
+    info = browser.check(path, artifacts / f"report-{method}.png")
+    assert info["errors"] == []
+    n_img = html.count("<img")
+    assert n_img > 0 and len(info["images"]) == n_img
+    for im in info["images"]:
+        assert im["complete"] and im["w"] > 0 and im["h"] > 0, im
+        assert im["src"].startswith("data:image/png")
+    assert info["external"] == []
+    assert info["tables"] == len(re.findall(r"<table", html))
+    assert info["title"].startswith(f"shipid report — {method}")
+    png = (artifacts / f"report-{method}.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+
+
+def test_broken_image_would_be_detected(browser, tmp_path):
+    """The check itself can fail: a page with a broken image and a console error is caught."""
+    page = tmp_path / "broken.html"
+    page.write_text('<!DOCTYPE html><html><head><title>t</title></head><body>'
+                    '<img src="data:image/png;base64,AAAA"><img src="missing.png">'
+                    '<script>console.error("boom")</script></body></html>', encoding="utf-8")
+    info = browser.check(page, tmp_path / "broken.png")
+    assert any("boom" in e for e in info["errors"])
+    assert [im["w"] for im in info["images"]] == [0, 0]

@@ -1,0 +1,132 @@
+"""The HTML report of any Result: self-contained, tables and images for the three methods."""
+
+import base64
+import io
+import re
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from shipid.report import Claim, build_report, register_section
+from shipid.report.convention import overlay
+from shipid.result import Estimate, Result
+
+IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"')
+
+
+def _roundtrip(r: Result) -> Result:
+    return Result.from_json(r.to_json())
+
+
+def _images(html: str) -> list[Image.Image]:
+    out = []
+    for b64 in IMG.findall(html):
+        im = Image.open(io.BytesIO(base64.b64decode(b64)))
+        im.load()
+        out.append(im)
+    return out
+
+
+def _assert_self_contained(html: str) -> None:
+    assert html.startswith("<!DOCTYPE html>")
+    assert "<script" not in html.lower()
+    assert not re.search(r'(src|href)="(https?:)?//', html), "external resource referenced"
+    assert "<link" not in html.lower()
+    assert html.count("<img") == len(IMG.findall(html)), "every image must be an inline PNG"
+
+
+@pytest.mark.parametrize("method, captions, n_images", [
+    ("mass-cm", ["Fig. 4 — ", "Table 3 — "], 4),          # correlation, Fig. 4, spread scatter, overlay
+    ("dp", ["Fig. 8 — ", "Innovation check"], 5),         # Fig. 8 grid, 3 innovations, 1 overlay
+    ("ebm", ["Figs 4, 9 — ", "Tables 1–2 — ", "Table 4 — ", "Fig. 7 — ", "Figs 6, 10 — "], 6),
+])
+def test_report_has_tables_images_and_paper_figures(method, captions, n_images, example_reports):
+    r, html, _ = example_reports[method]
+    _assert_self_contained(html)
+    imgs = _images(html)
+    assert len(imgs) == n_images
+    for im in imgs:
+        assert im.format == "PNG" and im.size[0] > 300 and im.size[1] > 150
+        # not blank: a drawn figure has many distinct colours
+        assert len(im.convert("RGB").getcolors(maxcolors=1 << 20)) > 50
+    for cap in captions:
+        assert cap in html, cap
+    # estimates table: every estimate, with its unit, and the 95 % CI header
+    assert "95 % confidence interval" in html
+    for name, e in r.estimates.items():
+        assert f"<b>{name}</b>" in html
+    assert "Data used" in html and "samples" in html and "Hz" in html
+    assert "Residual checks" in html and "Ljung–Box p" in html
+    assert "Report written by shipid" in html
+    assert "Could not draw" not in html
+
+
+def test_estimate_row_rounding_and_units_in_table(example_reports):
+    r, html, _ = example_reports["mass-cm"]
+    m = r.estimates["m"]
+    # the row of m: value to the tens (SE 420 has 2 significant digits) and the unit
+    row = re.search(r"<td><b>m</b></td>(.*?)</tr>", html).group(1)
+    assert f"{round(m.value, -1):.0f}" in row and ">420<" in row and "<td>kg</td>" in row
+    assert "not identifiable" in html              # I_xx has std = inf
+    assert "fixed" in html                         # z_f is a known input
+
+
+def test_warnings_are_prominent(example_reports):
+    html = example_reports["ebm"][1]
+    assert 'class="warnings"' in html and "ridge parameter chosen at the edge" in html
+    r = Result("dp", {"a": Estimate(1.0, 0.5, "kg")}, diagnostics={"converged": False, "iterations": 50})
+    html = build_report(r)
+    assert "did NOT converge" in html and '<div class="badge bad">converged<b>NO</b>' in html
+
+
+def test_minimal_result_and_unknown_method():
+    r = Result("some-new-method", {"k": Estimate(2.0, 0.1, "N/m")})
+    html = build_report(_roundtrip(r))
+    _assert_self_contained(html)
+    assert "some-new-method" in html and "does not record its inputs" in html
+    assert "<img" not in html
+
+
+def test_broken_series_entry_is_reported_not_fatal():
+    r = Result("dp", {"a": Estimate(1.0, 0.5, "kg")}, series={
+        "overlays": {"bad": {"t": [0, 1, 2], "measured": [1, 2]}},  # no "model"
+        "matrices": {"flat": {"values": [1, 2, 3], "rows": ["a"]}},  # not 2-D
+        "mystery": {"x": 1}})
+    html = build_report(_roundtrip(r))
+    assert html.count("Could not draw") == 2
+    assert "series[&#x27;overlays&#x27;][&#x27;bad&#x27;]" in html
+    assert "not part of the report convention): mystery" in html
+    assert "report: series" in html  # listed among the warnings too
+
+
+def test_registered_section_runs_and_claims():
+    from shipid.report.figures import new_figure
+
+    calls = []
+
+    def extra(result):
+        """Extra figures for the test"""
+        calls.append(result.method)
+        fig = new_figure(height=2.0)
+        ax = fig.add_subplot()
+        ax.plot([0, 1], [0, 1])
+        ax.set_xlabel("t [s]")
+        return ["<p id='extra-marker'>hello</p>", (fig, "my caption"), Claim("overlays", "x")]
+
+    register_section("dp-test", extra)
+    t = np.arange(50.0)
+    r = Result("dp-test", {"a": Estimate(1.0, 0.5, "kg")},
+               series={"overlays": {"x": overlay(t, t, t + 1, "m", label="north position x")}})
+    html = build_report(r)
+    assert calls == ["dp-test"]
+    assert "id='extra-marker'" in html and "my caption" in html and "Extra figures for the test" in html
+    assert "north position x: measured and model" not in html  # claimed, so not drawn again
+
+
+def test_histories_without_std_and_huge_values_draw():
+    t = np.arange(100.0)
+    r = Result("dp", {"m": Estimate(1e9, 1e7, "kg")},
+               series={"histories": {"m": {"t": t.tolist(), "value": (1e9 + t).tolist(), "unit": "kg"}}})
+    html = build_report(r)
+    assert len(_images(html)) == 1 and "Could not draw" not in html
