@@ -6,6 +6,7 @@ diameter is 2U / |r| (kinematics ẋ = U cos ψ, ẏ = U sin ψ).
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from shipid.errors import ShipidError
 from shipid.simulate.actuators import RateLimitedActuator
@@ -214,3 +215,19 @@ def test_trial_contents_and_straight():
     assert tr.meta["vessel"] == "nomoto" and tr.meta["manoeuvre"] == "straight"
     with pytest.raises(ShipidError):
         run_manoeuvre(ship(), "straight", duration=0.05, dt=0.1)
+
+
+@settings(max_examples=60, deadline=None)
+@given(cmds=st.lists(st.floats(-100, 100), min_size=1, max_size=60),
+       rate=st.floats(0.01, 50), lim=st.floats(0.1, 60), dt=st.floats(0.001, 2))
+def test_actuator_never_exceeds_limits(cmds, rate, lim, dt):
+    a = RateLimitedActuator(dt=dt, rate_limit=rate, lo=-lim, hi=lim)
+    prev = 0.0
+    for c in cmds:
+        v = a.step(c)
+        assert abs(v - prev) <= rate * dt * (1 + 1e-12) + 1e-12
+        assert -lim <= v <= lim
+        # moves toward the (clipped) command and never past it
+        target = min(max(c, -lim), lim)
+        assert min(prev, target) - 1e-12 <= v <= max(prev, target) + 1e-12
+        prev = v
