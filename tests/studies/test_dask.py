@@ -56,7 +56,7 @@ def test_dask_cli_with_store_then_resume_is_noop(cluster, tmp_path, capsys):
 
 
 def test_unreachable_scheduler_is_one_line(monkeypatch):
-    monkeypatch.setattr("shipid.studies.engine.DASK_CONNECT_TIMEOUT_S", 1)
+    monkeypatch.setattr("shipid.studies.executors.DASK_CONNECT_TIMEOUT_S", 1)
     with pytest.raises(ShipidError, match="cannot reach the Dask scheduler"):
         run_campaign(TOY, 3, 0, executor="scheduler", scheduler_address="tcp://127.0.0.1:9", progress=False)
 

@@ -1,0 +1,326 @@
+"""Where a campaign's runs execute: in this process, a local process pool, or Dask.
+
+Each executor is a generator that takes the chunks of run indices and yields, as
+chunks finish, lists of row dicts (one per run: ``index``, ``seed``,
+``outputs_json``, ``status``, ``error``, ``wall_s``, ``worker``). The work done on a
+worker is :func:`run_chunk`, which never raises for a failing run: the exception is
+recorded with the run. See :mod:`shipid.studies.engine` for the behaviour on lost
+worker processes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import json
+import multiprocessing
+import os
+import socket
+import time
+import warnings
+from collections import deque
+from contextlib import nullcontext
+from pathlib import Path
+from typing import Any, Callable, Iterator, Sequence
+
+import numpy as np
+
+from shipid.errors import ShipidError
+from shipid.studies.seeding import run_entropy
+
+MAX_DASK_ATTEMPTS = 3    # Dask: tries per chunk when the cluster (not the task) fails it
+DASK_CONNECT_TIMEOUT_S = 15  # seconds to reach an existing scheduler
+
+
+# --------------------------------------------------------------------------------------
+# JSON helpers
+# --------------------------------------------------------------------------------------
+def _jsonable(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return dataclasses.asdict(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, (set, frozenset)):
+        return sorted(obj)
+    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")
+
+
+def to_json(obj, *, canonical: bool = False) -> str:
+    """JSON text of ``obj`` (floats written exactly; NumPy values converted)."""
+    if canonical:
+        return json.dumps(obj, default=_jsonable, sort_keys=True, separators=(",", ":"))
+    return json.dumps(obj, default=_jsonable)
+
+
+# --------------------------------------------------------------------------------------
+# Tasks
+# --------------------------------------------------------------------------------------
+def task_reference(task: str | Callable) -> str:
+    """The ``"module:function"`` reference of a task (a string is checked by importing it)."""
+    if isinstance(task, str):
+        resolve_task(task)
+        return task
+    if not callable(task):
+        raise ShipidError(f"task must be a 'module:function' string or a function, got {task!r}")
+    qual = getattr(task, "__qualname__", "")
+    mod = getattr(task, "__module__", None)
+    if not mod or not qual or "<" in qual:
+        raise ShipidError(f"task {task!r} must be a top-level function (picklable by reference)")
+    return f"{mod}:{qual}"
+
+
+def resolve_task(ref: str) -> Callable:
+    """Import and return the function named by ``"module:function"``."""
+    mod_name, sep, attr = ref.partition(":")
+    if not sep or not mod_name or not attr:
+        raise ShipidError(f"task '{ref}' is not of the form 'module:function'")
+    try:
+        obj = importlib.import_module(mod_name)
+    except ImportError as err:
+        raise ShipidError(f"task '{ref}': cannot import {mod_name} ({err})") from None
+    for part in attr.split("."):
+        obj = getattr(obj, part, None)
+        if obj is None:
+            raise ShipidError(f"task '{ref}': {mod_name} has no '{attr}'")
+    if not callable(obj):
+        raise ShipidError(f"task '{ref}' is not callable")
+    return obj
+
+
+# --------------------------------------------------------------------------------------
+# What runs on a worker
+# --------------------------------------------------------------------------------------
+_BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _worker_init() -> None:
+    """Process-pool initializer: one BLAS thread per worker, and exit with the main process.
+
+    BLAS libraries loaded later read the environment; those already loaded are limited
+    per chunk with threadpoolctl. ``concurrent.futures`` workers otherwise outlive a
+    main process killed with SIGKILL (they wait on their queue for ever), so a daemon
+    thread waits on the parent's sentinel and ends the worker when it goes.
+    """
+    for var in _BLAS_ENV:
+        os.environ[var] = "1"
+    parent = multiprocessing.parent_process()
+    if parent is not None:
+        import threading
+        from multiprocessing.connection import wait
+
+        def _watch(sentinel=parent.sentinel):
+            wait([sentinel])
+            os._exit(3)
+
+        threading.Thread(target=_watch, name="shipid-parent-watch", daemon=True).start()
+
+
+def _limit_threads() -> None:
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # optional at run time; the env vars still act on libraries loaded later
+        return
+    threadpool_limits(limits=1)
+
+
+def error_text(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ").strip()
+
+
+def run_chunk(task, seed: int, indices: Sequence[int], inputs: Sequence[Any] | None, kwargs: dict,
+               limit_threads: bool = True) -> list[dict]:
+    """Run the runs ``indices`` of a campaign and return one row dict per run (never raises for a run)."""
+    fn = resolve_task(task) if isinstance(task, str) else task
+    if limit_threads:
+        _limit_threads()
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    rows = []
+    for k, i in enumerate(indices):
+        inp = None if inputs is None else inputs[k]
+        entropy = run_entropy(seed, i)
+        t0 = time.perf_counter()
+        try:
+            call_kwargs = dict(kwargs)
+            if inp is not None:
+                call_kwargs.update(inp)
+            out = fn(int(i), np.random.SeedSequence(entropy), **call_kwargs)
+            if not isinstance(out, dict):
+                raise TypeError(f"task returned {type(out).__name__}, not a dict of outputs")
+            out_json, status, error = to_json(out), "ok", None
+        except Exception as exc:  # a failed run is data, not a crash
+            out_json, status, error = None, "failed", error_text(exc)
+        rows.append({"index": int(i), "seed": entropy, "outputs_json": out_json, "status": status,
+                     "error": error, "wall_s": time.perf_counter() - t0, "worker": worker})
+    return rows
+
+
+def failed_rows(seed: int, indices: Sequence[int], error: str) -> list[dict]:
+    return [{"index": int(i), "seed": run_entropy(seed, i), "outputs_json": None, "status": "failed",
+             "error": error, "wall_s": None, "worker": None} for i in indices]
+
+
+# --------------------------------------------------------------------------------------
+# Executors: each yields lists of finished rows
+# --------------------------------------------------------------------------------------
+def iter_inprocess(chunks, args) -> Iterator[list[dict]]:
+    for c in chunks:
+        yield run_chunk(*args(c), limit_threads=False)
+
+
+def iter_pool(chunks, workers: int, args, seed: int) -> Iterator[list[dict]]:
+    """Process pool with recovery from dead worker processes.
+
+    When a worker dies, every chunk in flight is lost (the pool breaks). Those chunks
+    become *suspects* and are re-run one at a time in a fresh pool; a suspect that
+    breaks the pool alone is split into single runs, and a single run that does so
+    is recorded as failed (``WorkerDied``).
+    """
+    import concurrent.futures as cf
+    from concurrent.futures.process import BrokenProcessPool
+
+    ctx = multiprocessing.get_context("forkserver")
+    normal, suspects = deque(chunks), deque()
+    inflight: dict = {}
+    pool = None
+    try:
+        while normal or suspects or inflight:
+            if pool is None:
+                pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
+            if suspects:
+                if not inflight:
+                    c = suspects.popleft()
+                    inflight[pool.submit(run_chunk, *args(c))] = (c, True)
+            else:
+                while normal and len(inflight) < 2 * workers:
+                    c = normal.popleft()
+                    inflight[pool.submit(run_chunk, *args(c))] = (c, False)
+            done, _ = cf.wait(list(inflight), return_when=cf.FIRST_COMPLETED)
+            if any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+                cf.wait(list(inflight))  # the rest of the pool's futures end now too
+                done = list(inflight)
+            broken = []
+            for f in done:
+                c, alone = inflight.pop(f)
+                exc = f.exception()
+                if exc is None:
+                    yield f.result()
+                elif isinstance(exc, BrokenProcessPool):
+                    broken.append((c, alone))
+                else:  # e.g. outputs that cannot be pickled back
+                    yield failed_rows(seed, c, error_text(exc))
+            if broken:
+                pool.shutdown(wait=True, cancel_futures=True)
+                pool = None
+                for c, alone in broken:
+                    if not alone:
+                        suspects.append(c)
+                    elif len(c) > 1:
+                        suspects.extendleft([[i] for i in reversed(c)])
+                    else:
+                        yield failed_rows(seed, c, "WorkerDied: the worker process died running this run")
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def iter_dask(client, chunks, args, seed: int) -> Iterator[list[dict]]:
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    futs = {}
+    ac = as_completed()
+
+    def submit(c, attempt=1):
+        f = client.submit(run_chunk, *args(c), pure=False, retries=0)
+        futs[f] = (c, attempt)
+        ac.add(f)
+
+    for c in chunks:
+        submit(c)
+    try:
+        for f in ac:
+            c, attempt = futs.pop(f)
+            try:
+                rows = f.result()
+            except KilledWorker:
+                if len(c) > 1:
+                    for i in c:
+                        submit([i])
+                else:
+                    yield failed_rows(seed, c, "WorkerDied: Dask workers died running this run")
+            except Exception as exc:  # noqa: BLE001
+                # run_chunk records every task exception itself, so this is the cluster
+                # (lost data, communication): try again, then record it with the runs.
+                if attempt < MAX_DASK_ATTEMPTS:
+                    submit(c, attempt + 1)
+                else:
+                    yield failed_rows(seed, c, error_text(exc))
+            else:
+                yield rows
+            f.release()
+    finally:
+        for f in list(futs):
+            f.cancel()
+
+
+# --------------------------------------------------------------------------------------
+# Context managers for the executors
+# --------------------------------------------------------------------------------------
+def threads_limited():
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover
+        return nullcontext()
+    return threadpool_limits(limits=1)
+
+
+def _import_distributed():
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise ShipidError("Dask executors need dask[distributed]: pip install 'shipid[dask]'") from None
+    return distributed
+
+
+class dask_local_client:
+    """A LocalCluster on loopback with ``n`` single-threaded worker processes, and its client."""
+
+    def __init__(self, n: int):
+        self.n = n
+
+    def __enter__(self):
+        distributed = _import_distributed()
+        with warnings.catch_warnings():
+            # no dashboard; the scheduler's small HTTP (health) server binds 127.0.0.1 and, when
+            # 8787 is taken by another cluster, moves to a free port with a warning that means nothing here
+            warnings.filterwarnings("ignore", message="Port .* is already in use")
+            self.cluster = distributed.LocalCluster(n_workers=self.n, threads_per_worker=1, processes=True,
+                                                    host="127.0.0.1", dashboard_address=None)
+        self.client = distributed.Client(self.cluster)
+        return self.client
+
+    def __exit__(self, *exc):
+        self.client.close()
+        self.cluster.close()
+
+
+class dask_remote_client:
+    """A client of an existing Dask scheduler."""
+
+    def __init__(self, address: str):
+        self.address = address
+
+    def __enter__(self):
+        distributed = _import_distributed()
+        try:
+            self.client = distributed.Client(self.address, timeout=DASK_CONNECT_TIMEOUT_S)
+        except Exception as err:  # noqa: BLE001 - OSError, TimeoutError, bad address ...: one line
+            raise ShipidError(f"cannot reach the Dask scheduler at {self.address} ({error_text(err)})") from None
+        return self.client
+
+    def __exit__(self, *exc):
+        self.client.close()
