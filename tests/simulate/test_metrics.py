@@ -67,3 +67,11 @@ def test_zigzag_metrics_on_simulation_and_errors():
         zigzag_metrics(run_manoeuvre(nomoto_model(), "straight", duration=20.0), 0.1)
     with pytest.raises(InputError):
         turning_metrics(run_manoeuvre(nomoto_model(), "straight", duration=20.0))
+
+
+def test_metrics_tolerate_wrapped_heading():
+    tr = run_manoeuvre(nomoto_model(), "turning-35", duration=300.0, dt=0.1)
+    wrapped = tr.with_channels(psi=np.angle(np.exp(1j * tr["psi"])))
+    a, b = turning_metrics(tr), turning_metrics(wrapped)
+    assert a.tactical_diameter == pytest.approx(b.tactical_diameter, rel=1e-12)
+    assert a.advance == pytest.approx(b.advance, rel=1e-12)

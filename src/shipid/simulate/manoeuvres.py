@@ -301,10 +301,15 @@ class ZigZagLaw(ManoeuvreLaw):
             return {"delta": self.delta_nom}
         if self.psi0 is None:
             self.psi0 = psi
-        elif self.d * (psi - self.psi0) >= self.psi_switch:
+        elif self.d * _wrap(psi - self.psi0) >= self.psi_switch:
             self.d = -self.d
             self.switch_samples.append(k)
         return {"delta": self.delta_nom + self.rudder_sign * self.d * self.delta}
+
+
+def _wrap(a: float) -> float:
+    """Angle to (-π, π] (unchanged, bit for bit, when already there): models may wrap ψ."""
+    return a if -np.pi < a <= np.pi else float(np.pi - (np.pi - a) % (2 * np.pi))
 
 
 def rudder_turn_sign(model: ShipModel, speed: float) -> float:

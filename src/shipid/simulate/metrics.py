@@ -69,7 +69,8 @@ def turning_metrics(trial: Trial) -> TurningMetrics:
         raise InputError("no rudder order found (constant rudder)", file=trial.meta.get("source"),
                          channel="delta_cmd" if "delta_cmd" in trial else "delta")
     k0 = int(ev[0])
-    t, psi = trial.t[k0:], trial["psi"][k0:] - trial["psi"][k0]
+    psi_all = np.unwrap(trial["psi"])          # tolerate models/recorders that wrap ψ
+    t, psi = trial.t[k0:], psi_all[k0:] - psi_all[k0]
     side = 1 if psi[-1] >= 0 else -1
     c, s = np.cos(trial["psi"][k0]), np.sin(trial["psi"][k0])
     dx, dy = trial["x"][k0:] - trial["x"][k0], trial["y"][k0:] - trial["y"][k0]
@@ -119,7 +120,8 @@ def zigzag_metrics(trial: Trial, switch_angle: float) -> ZigZagMetrics:
     if ev.size < 2:
         raise InputError("fewer than one rudder reversal after execute",
                          file=trial.meta.get("source"), channel="delta_cmd")
-    psi = trial["psi"] - trial["psi"][ev[0]]
+    psi_all = np.unwrap(trial["psi"])
+    psi = psi_all - psi_all[ev[0]]
     over, times = [], []
     for i, k in enumerate(ev[1:]):
         d = 1.0 if psi[k] > 0 else -1.0
