@@ -58,19 +58,33 @@ Long series are decimated for drawing only (≤ 4000 points); statistics use eve
 ## Adding your own figures
 ```python
 from shipid.report import register_section, Claim
+from shipid.report.registry import Entry, Group
+from shipid.report import figures as F
 def my_section(result):            # -> list of fragments
-    fig = ...                       # a matplotlib.figure.Figure (use shipid.report.figures.new_figure())
-    return ["<p>raw trusted HTML</p>", (fig, "caption"), fig, Claim("contours", "cost")]
-register_section("mass-cm", my_section)   # call at import of your module; sections render after the defaults
+    with F.style():                 # report look (fonts, grid); F.new_figure() gives an Agg-backed Figure
+        fig = F.new_figure(height=3.0); ax = fig.add_subplot(); ax.plot(...); ax.set_xlabel("t [s]")
+    return ["<p>raw trusted HTML</p>", (fig, "caption"), Claim("contours", "cost"),
+            Entry("contours", "cost", paper="Fig. 4", title="..."),       # draw a convention entry here
+            Group("histories", ("m11", "d11"), "Fig. 8 — ..."),           # several in one figure
+            "residual-checks"]                                              # stats table of residuals so far
+register_section("mass-cm", my_section)   # at import of your module; runs after the default section
 ```
 `Claim(kind, name)` tells the generic part that you have drawn that series entry (it is not drawn twice).
+The report imports `shipid.methods.<m>` and `shipid.methods.<m>.report` (m = method without "-", or with "_")
+before building, so a `register_section` call in those modules is always picked up (import errors are shown as
+a report warning, never a crash).
+
+## Try it
+`python -c "from shipid.report.examples import example; example('ebm').write_json('/tmp/e.json')"`
+then `shipid report /tmp/e.json --out /tmp/e.html`. `src/shipid/report/examples.py` holds a fully populated
+synthetic Result per method: copy its shape.
 """
 
 from __future__ import annotations
 
-from shipid.report.registry import Claim, register_section, sections_for
+from shipid.report.registry import Claim, Entry, Group, register_section, sections_for
 
-__all__ = ["build_report", "write_report", "register_section", "sections_for", "Claim"]
+__all__ = ["build_report", "write_report", "register_section", "sections_for", "Claim", "Entry", "Group"]
 
 
 def __getattr__(name: str):

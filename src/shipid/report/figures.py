@@ -109,11 +109,17 @@ def to_data_uri(fig: Figure, dpi: int = DPI) -> str:
 
 # -- helpers ---------------------------------------------------------------------------------------
 
-def axis_label(name: str, unit: str | None) -> str:
-    """``name [unit]`` (no brackets for dimensionless or missing units)."""
+def axis_label(name: str, unit: str | None, width: int = 26) -> str:
+    """``name [unit]`` (``[-]`` for dimensionless), wrapped onto two lines when long."""
     if unit and unit not in ("-", "1", ""):
-        return f"{name} [{unit}]"
-    return f"{name} [-]" if unit in ("-", "1") else name
+        text = f"{name} [{unit}]"
+    else:
+        text = f"{name} [-]" if unit in ("-", "1") else name
+    if len(text) > width and "$" not in text:
+        import textwrap
+
+        text = "\n".join(textwrap.wrap(text, width)[:3])
+    return text
 
 
 _SUP = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
