@@ -243,6 +243,29 @@ def _acf_axes(ax, r: np.ndarray, bound: float) -> None:
     ax.set_title("residual autocorrelation", loc="left")
 
 
+def _settled_ylim(t, v, s, true) -> tuple[float, float] | None:
+    """y-range that keeps the settled part readable when the start-up transient is much wider.
+
+    Returns limits from the last 90 % of the record (value ± σ, and the true value), padded by
+    25 %, when the full range is more than three times wider; otherwise ``None`` (autoscale).
+    """
+    if t.size < 10:
+        return None
+    band_lo = v - s if s is not None and s.shape == v.shape else v
+    band_hi = v + s if s is not None and s.shape == v.shape else v
+    full = np.nanmax(band_hi) - np.nanmin(band_lo)
+    late = t >= t[0] + 0.1 * (t[-1] - t[0])
+    vals = np.concatenate([band_lo[late], band_hi[late], [true] if np.isfinite(true) else []])
+    vals = vals[np.isfinite(vals)]
+    if not vals.size:
+        return None
+    lo, hi = float(vals.min()), float(vals.max())
+    span = hi - lo
+    if not np.isfinite(full) or span <= 0 or full <= 3 * span:
+        return None
+    return lo - 0.25 * span, hi + 0.25 * span
+
+
 @_styled
 def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> Figure:
     """Parameter histories with ±σ bands (seed 001 Fig. 8 style); dashed red line at the true value."""
@@ -263,7 +286,17 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
         ax.plot(t[sl], v[sl] / sc, color=C_MODEL, lw=1.1, label="estimate")
         if np.isfinite(true):
             ax.axhline(true / sc, color=C_TRUE, ls="--", lw=1.0, label="true")
-        ax.set_ylabel(axis_label(e.get("label", name), su))
+        lim = _settled_ylim(t, v, _arr(e["std"]) if e.get("std") is not None else None, true)
+        if lim is not None:
+            ax.set_ylim(lim[0] / sc, lim[1] / sc)
+        label = str(e.get("label", name))
+        if len(label) > 14 or ncols > 1:
+            import textwrap
+
+            ax.set_title("\n".join(textwrap.wrap(label, 44)[:2]), loc="left", fontsize=9.0)
+            ax.set_ylabel(f"[{su}]" if su else "")
+        else:
+            ax.set_ylabel(axis_label(label, su))
         ax.set_xlabel("t [s]")
         if k == 0:
             handles, labels = ax.get_legend_handles_labels()

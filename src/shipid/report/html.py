@@ -78,6 +78,8 @@ table.kv th{text-align:left;font-weight:600;color:#39424f;width:34%;background:n
 table.kv{min-width:55%}
 table.kv td.num{text-align:left}
 .unit{color:var(--muted);font-weight:400}
+table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
+table.mat td{border:0;padding:1px 8px;text-align:right}
 .status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
 .status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
 tr.notid td{color:var(--bad)}
@@ -97,6 +99,18 @@ def _is_scalar(v: Any) -> bool:
     return v is None or isinstance(v, (str, int, float, bool, np.integer, np.floating))
 
 
+class MatrixValue(list):
+    """A small 2-D numeric list shown as a matrix in key-value tables."""
+
+
+def _small_matrix(v) -> bool:
+    if not isinstance(v, (list, tuple)) or not v or not all(isinstance(r, (list, tuple)) for r in v):
+        return False
+    if len(v) > 10 or any(len(r) != len(v[0]) or len(r) > 10 for r in v):
+        return False
+    return all(isinstance(x, (int, float)) and not isinstance(x, bool) for r in v for x in r)
+
+
 def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
     rows = []
     for k, v in d.items():
@@ -105,6 +119,8 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             rows.append((key, v))
         elif isinstance(v, Mapping) and depth > 0:
             rows.extend(_flatten(v, key + ".", depth - 1))
+        elif _small_matrix(v):
+            rows.append((key, MatrixValue(v)))
         elif isinstance(v, (list, tuple)) and len(v) <= 8 and all(_is_scalar(x) for x in v):
             rows.append((key, ", ".join(fmt_num(x) if not isinstance(x, str) else x for x in v)))
         elif isinstance(v, (list, tuple)):

@@ -124,6 +124,9 @@ def paper_sort_key(ref: str) -> tuple:
 
 def _cell(v: Any) -> tuple[str, str]:
     """(html, css class) of one table cell."""
+    if type(v).__name__ == "MatrixValue":  # shipid.report.html.MatrixValue: a small matrix
+        body = "".join("<tr>" + "".join(f"<td>{fmt_num(x)}</td>" for x in row) + "</tr>" for row in v)
+        return f'<table class="mat"><tbody>{body}</tbody></table>', ""
     if isinstance(v, bool):
         return ("yes" if v else "no"), ""
     if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):

@@ -15,12 +15,16 @@ from shipid.report.sections._util import entries
 def dp_section(result) -> list:
     """Seed 001 (Fossen, Sagatun & Sørensen 1996): parameter histories and innovation checks"""
     frags: list = []
-    hist = [n for n, e in entries(result, "histories", where=lambda n, e: not e.get("paper"))]
-    for i in range(0, len(hist), 12):
-        names = tuple(hist[i:i + 12])
-        frags.append(Group("histories", names,
-                           "Fig. 8 — parameter estimates versus time with ±σ bands (dashed: true value "
-                           "where known)" + (f", part {i // 12 + 1}." if len(hist) > 12 else ".")))
+    # every history, grouped by its own paper reference (default Fig. 8), 12 panels per figure
+    groups: dict[str, list[str]] = {}
+    for n, e in entries(result, "histories", where=lambda n, e: True):
+        groups.setdefault(str(e.get("paper") or "Fig. 8"), []).append(n)
+    for ref, hist in groups.items():
+        for i in range(0, len(hist), 12):
+            names = tuple(hist[i:i + 12])
+            frags.append(Group("histories", names,
+                               f"{ref} — parameter estimates versus time with ±σ bands (dashed: true value "
+                               "where known)" + (f", part {i // 12 + 1}." if len(hist) > 12 else ".")))
     innov = entries(result, "residuals", prefixes=("innovation",))
     for name, _ in innov:
         frags.append(Entry("residuals", name, title="Innovation check:"))

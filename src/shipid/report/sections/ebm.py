@@ -17,11 +17,14 @@ from shipid.report.sections._util import entries
 def ebm_section(result) -> list:
     """Seed 002 (Yoon & Rhee 2003): EBM stages, collinearity and validation"""
     frags: list = []
-    sig = [n for n, e in entries(result, "signals", where=lambda n, e: not e.get("paper"))]
-    for i in range(0, len(sig), 6):
-        names = tuple(sig[i:i + 6])
-        frags.append(Group("signals", names, "Figs 4, 9 — smoothed motion, estimated forces and current "
-                                             "(shaded: ±2σ where given)."))
+    groups: dict[str, list[str]] = {}
+    for n, e in entries(result, "signals", where=lambda n, e: True):
+        groups.setdefault(str(e.get("paper") or "Figs 4, 9"), []).append(n)
+    for ref, sig in groups.items():
+        for i in range(0, len(sig), 6):
+            names = tuple(sig[i:i + 6])
+            frags.append(Group("signals", names, f"{ref} — smoothed motion, estimated forces and current "
+                                                 "(shaded: ±2σ where given)."))
     for name, _ in entries(result, "matrices", prefixes=("regressor_correlation",)):
         frags.append(Entry("matrices", name, paper="Tables 1–2",
                            title="Correlation of the regressors (|ρ| near 1: collinear, coefficients hard to "
