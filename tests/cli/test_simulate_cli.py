@@ -47,6 +47,8 @@ def test_refuses_to_clobber_without_force(tmp_path, capsys):
     (["nomoto", "zigzag"], "unknown manoeuvre"),
     (["nomoto", "dp-surge"], "drives p1"),
     (["nomoto", "zigzag-20", "--duration", "-5"], "duration"),
+    (["nomoto", "zigzag-20", "--duration", "1e9"], "limit"),
+    (["nomoto", "zigzag-20", "--dt", "0"], "time step"),
 ])
 def test_bad_arguments_one_line_exit_2(tmp_path, capsys, args, needle):
     out = tmp_path / "o.csv"

@@ -52,6 +52,8 @@ DEFAULT_DURATION: dict[str, float] = {"straight": 120.0, "turning": 900.0, "zigz
                                       "prbs": 900.0, "dp": 600.0}
 #: Straight approach before the rudder is ordered (s), for turning circles and zig-zags.
 T_EXECUTE = 10.0
+#: Largest record run_manoeuvre will make (samples), to refuse typos such as --duration 1e9.
+MAX_SAMPLES = 10_000_000
 #: Default PRBS clock (minimum) period (s).
 PRBS_MIN_PERIOD = 30.0
 #: Default actuator limits where the model gives none: pitch-ratio rate (1/s; 0 → 1 in 10 s),
@@ -432,6 +434,9 @@ def run_manoeuvre(model: ShipModel, name: str, duration: float | None = None, dt
     if not (duration > dt and np.isfinite(duration)):
         raise ShipidError(f"duration must exceed the time step, got {duration} s")
     n = int(round(duration / dt)) + 1
+    if n > MAX_SAMPLES:
+        raise ShipidError(f"{n} samples requested (duration {duration:g} s at dt {dt:g} s); "
+                          f"the limit is {MAX_SAMPLES}")
     t = np.arange(n) * dt
     speed = model.service_speed if speed is None else float(speed)
     rng = np.random.default_rng(seed)
