@@ -146,8 +146,9 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
         ``f(t, x)`` state derivative and its Jacobian ``F(t, x)``.
     h, H : callable
         ``h(t, x)`` measurement function and its Jacobian.
-    Q : ndarray (n, n)
-        Process-noise spectral density.
+    Q : ndarray (n, n) or (N−1, n, n)
+        Process-noise spectral density, constant or one per sample interval
+        (``Q[k]`` acts on ``[t_k, t_{k+1})``; e.g. larger while a known input moves).
     R : ndarray (m, m)
         Measurement-noise covariance.
     t : ndarray (N,)
@@ -177,11 +178,13 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     x = np.array(x0, dtype=float)
     P = symmetrize(np.array(P0, dtype=float))
     I = np.eye(n)
+    Q = np.asarray(Q, dtype=float)
+    Q_per_step = Q.ndim == 3
     for k in range(N):
         if k > 0:
             hk = t[k] - t[k - 1]
             Fk = F(t[k - 1], x)
-            Phi_k, Qd_k = taylor_discretise(Fk, Q, hk)
+            Phi_k, Qd_k = taylor_discretise(Fk, Q[k - 1] if Q_per_step else Q, hk)
             x = rk4_propagate(f, t[k - 1], x, hk, substeps)
             P = symmetrize(Phi_k @ P @ Phi_k.T + Qd_k)
             Phi[k - 1] = Phi_k

@@ -78,7 +78,8 @@ def add_measurements(truth: Trial, conds: dict, seed: int, *, noise: bool = True
 
 def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float | None = None,
                    current: tuple[float, float] | None = None, theta: ab.AbkowitzParams | None = None,
-                   noise: bool = True, vessel: str = "esso-osaka") -> Trial:
+                   noise: bool = True, vessel: str = "esso-osaka", oversample: int = 5,
+                   speed: float | None = None) -> Trial:
     """Simulate one measured ESSO OSAKA trial.
 
     Parameters
@@ -98,6 +99,15 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
         Coefficients to simulate with (default the true ones of Table 3).
     noise : bool
         Add the eq. 19 measurement noise.
+    oversample : int
+        The ship is simulated with a step ``dt / oversample`` (the rudder moves in
+        correspondingly small zero-order-hold steps, close to a continuous steering
+        gear) and recorded every ``oversample`` steps. With ``oversample = 1`` the
+        rudder jumps 2.3° at each 1-s sample while it moves, and the recorded force
+        (evaluated just after the jump) leads the force the ship felt over the
+        previous interval by half a sample — an artefact that biases step 2.
+    speed : float, optional
+        Approach speed through the water (m/s), default the vessel's U0.
     """
     from dataclasses import replace
 
@@ -112,7 +122,14 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
         th = theta.with_current(*current)
         model = replace(model, theta=th, f=ab.make_dynamics(th),
                         outputs=lambda t, X, U, _p=th: ab.outputs(t, X, U, _p))
-    truth = run_manoeuvre(model, manoeuvre, duration=duration, dt=dt, seed=seed)
+    ov = max(1, int(oversample))
+    fine = run_manoeuvre(model, manoeuvre, duration=duration, dt=dt / ov, seed=seed, speed=speed)
+    if ov > 1:
+        keep = np.arange(0, fine.t.size, ov)
+        truth = Trial(fine.t[keep], {k: v[keep] for k, v in fine.channels.items()}, fine.units,
+                      dict(fine.meta, dt=dt, oversample=ov))
+    else:
+        truth = fine
     out = add_measurements(truth, conds, seed + 1000, noise=noise)
     meta = dict(out.meta)
     meta.update({"current_speed": float(current[0]), "current_dir": float(current[1])})

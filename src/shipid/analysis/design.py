@@ -1,0 +1,107 @@
+"""D-optimal PRBS rudder input for EBM identification (seed 002, Yoon & Rhee 2003, §5.1.4, Figs. 7–8).
+
+The regression of step 2 is best conditioned when the unit-length-scaled regressor
+matrix W (eq. 16) has the largest ``|WᵀW|`` (D-optimality; ``WᵀW`` is the
+correlation matrix, so ``0 < |WᵀW| ≤ 1`` with 1 for orthogonal regressors). W is the
+ship's response to the rudder, so ``|WᵀW|`` is a function of the PRBS amplitude
+and clock period (Fig. 7) and of the current speed (Fig. 8). We evaluate it on the
+noise-free simulated response of the true model, for the surge and sway
+regressors (the yaw regressors are ``L`` times the sway ones, so their scaled W is
+identical), and report ``log10 |WᵀW|``, averaged over a few PRBS register seeds
+(one realisation of a PRBS is a noisy sample of the criterion).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from shipid.estimate.ridge import unit_length_scale
+from shipid.models import abkowitz as ab
+
+
+def log_det_criterion(H: np.ndarray) -> float:
+    """``log10 |WᵀW|`` of the unit-length-scaled regressors ``H`` (D-optimality)."""
+    sc = unit_length_scale(H, np.ones(H.shape[0]))
+    sign, logdet = np.linalg.slogdet(sc.correlation)
+    return float(logdet / np.log(10.0)) if sign > 0 else float("-inf")
+
+
+def prbs_criterion(amplitude_deg: float, period: float, *, duration: float = 1200.0, seed: int = 0,
+                   current_speed: float | None = None, current_dir: float | None = None,
+                   dt: float = 1.0, vessel: str = "esso-osaka") -> dict[str, float]:
+    """``log10 |WᵀW|`` of the surge and sway regressors for one PRBS run (noise-free truth)."""
+    from shipid.methods.ebm_trials import simulate_trial
+
+    tc = ab.trial_conditions(vessel)
+    cs = tc["current_speed"] if current_speed is None else float(current_speed)
+    cd = tc["current_dir"] if current_dir is None else float(current_dir)
+    name = f"prbs-{amplitude_deg:g}-{period:g}"
+    tr = simulate_trial(name, duration, seed=seed, dt=dt, current=(cs, cd), noise=False, vessel=vessel)
+    p = ab.params_from_vessel(vessel)
+    HX, HY, _ = ab.regressors(tr["true_u_r"], tr["true_v_r"], tr["true_r"], tr["delta"], tr["n"], p)
+    return {"surge": log_det_criterion(HX), "sway": log_det_criterion(HY)}
+
+
+@dataclass(frozen=True)
+class DesignGrid:
+    """``log10 |WᵀW|`` over amplitude × period (Fig. 7)."""
+
+    amplitudes: np.ndarray      # deg
+    periods: np.ndarray         # s
+    surge: np.ndarray           # (n_amp, n_per)
+    sway: np.ndarray
+    seeds: tuple[int, ...]
+    duration: float
+    current_speed: float
+
+    def optimum(self, mode: str = "sway") -> tuple[float, float, float]:
+        """(amplitude deg, period s, log10 |WᵀW|) of the best grid point for ``mode``
+        (``"sway"`` — also the yaw criterion — or ``"sum"`` of surge and sway)."""
+        G = self.sway if mode == "sway" else (self.surge + self.sway if mode == "sum" else self.surge)
+        i, j = np.unravel_index(int(np.nanargmax(G)), G.shape)
+        return float(self.amplitudes[i]), float(self.periods[j]), float(G[i, j])
+
+    def to_dict(self) -> dict:
+        a, T, v = self.optimum("sway")
+        return {"amplitudes_deg": self.amplitudes.tolist(), "periods_s": self.periods.tolist(),
+                "log10_det_surge": self.surge.tolist(), "log10_det_sway": self.sway.tolist(),
+                "seeds": list(self.seeds), "duration_s": self.duration, "current_speed_m_s": self.current_speed,
+                "optimum_sway": {"amplitude_deg": a, "period_s": T, "log10_det": v}}
+
+
+def prbs_grid(amplitudes=(5, 10, 15, 20, 25, 30, 35), periods=(15, 30, 45, 60, 75, 90, 105, 120, 150, 200),
+              *, duration: float = 1200.0, seeds=(0, 1, 2), current_speed: float | None = None,
+              dt: float = 1.0, vessel: str = "esso-osaka", progress=None) -> DesignGrid:
+    """Evaluate the D-criterion on an amplitude × period grid (Fig. 7)."""
+    A = np.asarray(amplitudes, dtype=float)
+    T = np.asarray(periods, dtype=float)
+    S = np.empty((A.size, T.size)); W = np.empty((A.size, T.size))
+    tc = ab.trial_conditions(vessel)
+    cs = tc["current_speed"] if current_speed is None else float(current_speed)
+    for i, a in enumerate(A):
+        for j, per in enumerate(T):
+            vals = [prbs_criterion(a, per, duration=duration, seed=s, current_speed=cs, dt=dt, vessel=vessel)
+                    for s in seeds]
+            S[i, j] = np.mean([v["surge"] for v in vals])
+            W[i, j] = np.mean([v["sway"] for v in vals])
+            if progress is not None:
+                progress()
+    return DesignGrid(A, T, S, W, tuple(int(s) for s in seeds), float(duration), cs)
+
+
+def current_sweep(amplitude_deg: float, period: float, speeds=(0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0), *,
+                  duration: float = 1200.0, seeds=(0, 1, 2), dt: float = 1.0,
+                  vessel: str = "esso-osaka") -> dict[str, list[float]]:
+    """The D-criterion versus current speed (knots) at a fixed PRBS (Fig. 8)."""
+    out = {"speeds_knot": [float(s) for s in speeds], "surge": [], "sway": []}
+    for s in speeds:
+        vals = [prbs_criterion(amplitude_deg, period, duration=duration, seed=k, dt=dt, vessel=vessel,
+                               current_speed=float(s) * ab.KNOT) for k in seeds]
+        out["surge"].append(float(np.mean([v["surge"] for v in vals])))
+        out["sway"].append(float(np.mean([v["sway"] for v in vals])))
+    return out
+
+
+__all__ = ["log_det_criterion", "prbs_criterion", "DesignGrid", "prbs_grid", "current_sweep"]
