@@ -130,3 +130,29 @@ def test_histories_without_std_and_huge_values_draw():
                series={"histories": {"m": {"t": t.tolist(), "value": (1e9 + t).tolist(), "unit": "kg"}}})
     html = build_report(r)
     assert len(_images(html)) == 1 and "Could not draw" not in html
+
+
+def test_series_outside_convention_are_drawn_against_t_with_guessed_units():
+    t = np.arange(0.0, 20.0, 0.5)
+    r = Result("ebm", {"a": Estimate(1.0, 0.5, "-", note="same"), "b": Estimate(2.0, 0.5, "-", note="same"),
+                       "c": Estimate(3.0, 0.5, "-", note="same")},
+               series={"t": t.tolist(), "u_r": np.cos(t).tolist(), "N": (1e8 * np.sin(t)).tolist(),
+                       "other": [1, 2]})
+    html = build_report(r)
+    assert len(_images(html)) == 1
+    assert "u_r, N versus t" in html
+    assert "not part of the report convention): other" in html
+    # a note shared by three rows is printed once under the table
+    assert html.count("same") == 1 and "<sup>(a)</sup>" in html
+
+
+def test_ebm_tables_fall_back_to_diagnostics():
+    corr = np.array([[1.0, 0.9], [0.9, 1.0]])
+    r = Result("ebm", {"Y_v": Estimate(-0.03, 0.001, "-"), "Y_r": Estimate(0.001, 0.0002, "-")},
+               diagnostics={"correlation": {"sway": corr.tolist()},
+                            "modes": {"sway": {"kappa": 812.0, "R2": 0.99, "Cp": 7.0}}})
+    html = build_report(r)
+    assert "Tables 1–2 — correlation of the sway regressors" in html and len(_images(html)) == 1
+    row = re.search(r"<td>sway</td>(.*?)</tr>", html).group(1)
+    assert ">812<" in row and ">0.99<" in row and ">7<" in row
+    assert "Table 4 — Collinearity diagnostics per mode" in html

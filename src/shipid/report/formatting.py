@@ -101,9 +101,7 @@ def format_estimate(value: float, std: float) -> FormattedEstimate:
     if math.isnan(s) or s <= 0:
         return FormattedEstimate(fmt_num(v), "—", "—", "—", "—", "")
     lo, hi = v - Z95 * s, v + Z95 * s
-    rel = f"{100 * s / abs(v):.2g} %" if v != 0 else "—"
-    if "e" in rel:
-        rel = f"{100 * s / abs(v):.1e} %"
+    rel = f"{fmt_num(100 * s / abs(v), 2)} %" if v != 0 else "—"
     big = max(abs(v), abs(lo), abs(hi))
     e_big = math.floor(math.log10(big)) if big > 0 else 0
     e_std = math.floor(math.log10(s))

@@ -169,7 +169,12 @@ def _badges(result) -> str:
         ok = bool(d["converged"])
         out.append(f'<div class="badge {"ok" if ok else "bad"}">converged<b>{"yes" if ok else "NO"}</b></div>')
     if "iterations" in d:
-        out.append(f'<div class="badge">iterations<b>{esc(fmt_num(d["iterations"]))}</b></div>')
+        it = d["iterations"]
+        if isinstance(it, Mapping):
+            it = ", ".join(f"{k} {fmt_num(v)}" for k, v in it.items())
+        else:
+            it = fmt_num(it)
+        out.append(f'<div class="badge">iterations<b>{esc(it)}</b></div>')
     n_est = sum(1 for e in result.estimates.values() if e.status == "estimated")
     out.append(f'<div class="badge">estimated parameters<b>{n_est}</b></div>')
     n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
@@ -248,6 +253,13 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             "<th class='num'>95 % confidence interval</th><th class='num'>rel. SE</th><th>unit</th>"
             "<th>status</th><th>note</th></tr>")
     rows = []
+    # a note repeated on many rows is shown once under the table, with a marker in the rows
+    counts: dict[str, int] = {}
+    for e in result.estimates.values():
+        if e.note:
+            counts[e.note] = counts.get(e.note, 0) + 1
+    common = [n for n, c in counts.items() if c >= 3]
+    marks = {n: "abcdefghijklmnopqrstuvwxyz"[i % 26] for i, n in enumerate(common)}
     for name, e in result.estimates.items():
         f = format_estimate(e.value, e.std)
         notid = math.isinf(float(e.std)) if e.std is not None else False
@@ -259,12 +271,13 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
             f"<td>{esc(e.unit)}</td><td><span class='status {esc(e.status)}'>{esc(e.status)}</span></td>"
-            f"<td>{esc(e.note)}</td></tr>")
+            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(e.note)}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
+        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(n)}</p>' for n, m in marks.items())
         body = (f'<table class="est">{ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal approximation). Digits follow the SE.")}'
-                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>")
+                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
     cov_html = ""
     if result.covariance is not None and len(result.covariance_names) >= 2:
         try:
@@ -350,12 +363,72 @@ def _generic_sections(ctx: RenderContext, result) -> str:
         if kind in ("overlays", "residuals"):
             out.append(residual_stats_table(ctx))
     unknown = [k for k in (result.series or {}) if k not in known]
+    loose_html, drawn = _loose_series(ctx, result, unknown)
+    if loose_html:
+        out.append(f"<h3>Other stored series</h3>{loose_html}")
+    unknown = [k for k in unknown if k not in drawn]
     if unknown:
         out.append(f'<p class="small">Series not drawn (not part of the report convention): '
                    f'{esc(", ".join(sorted(map(str, unknown))))}.</p>')
     if not out:
         return ""
     return f'<h2 id="series">Time histories and checks</h2>{"".join(out)}'
+
+
+def _guess_unit(name: str) -> str | None:
+    """SI unit of a standard channel name (``r``, ``u_r`` -> ``u``), else None."""
+    from shipid.data.trial import CHANNELS
+
+    for cand in (name, name.split("_")[0]):
+        if cand in CHANNELS and cand != "t":
+            return CHANNELS[cand]
+    return None
+
+
+LOOSE_X = ("t", "time", "t_s", "iteration", "iterations", "k")
+
+
+def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set]:
+    """Fallback for series stored outside the convention as flat lists beside an x vector.
+
+    When ``series`` has a top-level ``t`` (or ``time``, ``iteration`` ...) list, every other
+    top-level numeric list of the same length is drawn against it in stacked panels (no
+    units are known, so none are shown). Returns the HTML and the keys drawn.
+    """
+    series = result.series or {}
+    xkey = next((k for k in LOOSE_X if k in series and k in keys), None)
+    if xkey is None:
+        return "", set()
+    try:
+        x = np.asarray(series[xkey], dtype=float).ravel()
+    except (TypeError, ValueError):
+        return "", set()
+    cols = []
+    for k in keys:
+        if k == xkey:
+            continue
+        try:
+            v = np.asarray(series[k], dtype=float)
+        except (TypeError, ValueError):
+            continue
+        if v.ndim == 1 and v.size == x.size and x.size > 1:
+            cols.append((k, v))
+    if not cols:
+        return "", set()
+    xlabel = "t [s]" if xkey in ("t", "time", "t_s") else xkey
+    html_parts = []
+    for i in range(0, len(cols), 6):
+        part = cols[i:i + 6]
+        items = [(k, {"t": x, "lines": {k: v}, "label": k, "unit": _guess_unit(k)}) for k, v in part]
+        try:
+            fig = F.signals_figure(items)
+            fig.axes[-1].set_xlabel(xlabel)
+            html_parts.append(ctx.figure(fig, f"{', '.join(k for k, _ in part)} versus {xkey} "
+                                              "(stored outside the report convention; units, where shown, "
+                                              "assumed from the standard channel names)."))
+        except Exception as err:  # noqa: BLE001
+            html_parts.append(ctx.problem(f"series {', '.join(k for k, _ in part)}", err))
+    return "".join(html_parts), {xkey, *(k for k, _ in cols)}
 
 
 def build_report(result) -> str:

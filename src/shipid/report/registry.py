@@ -12,6 +12,8 @@ fragments, each one of
   here, in the standard way, with the given paper reference / caption (claims it);
 - :class:`Group` ``(kind, names, caption)``: several ``histories`` (small multiples)
   or ``signals`` (stacked, shared time axis) in one figure (claims them);
+- a dict following the ``tables`` convention (``columns``, ``rows``, ``units``,
+  ``caption``/``title``/``paper``): a numbered table;
 - ``"residual-checks"``: the table of residual statistics of the overlays and
   residuals drawn so far in this section.
 

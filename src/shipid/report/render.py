@@ -86,6 +86,8 @@ class RenderContext:
                     items = [(n, s[n]) for n in fr.names if isinstance(s.get(n), Mapping)]
                     if items:
                         out.append(render_group(self, fr.kind, items, fr.caption))
+                elif isinstance(fr, Mapping) and "columns" in fr and "rows" in fr:
+                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "")))
                 elif fr == "residual-checks":
                     out.append(residual_stats_table(self))
                 elif isinstance(fr, str):
