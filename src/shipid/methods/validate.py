@@ -1,0 +1,241 @@
+"""Open-loop validation of an identified model on a measured run.
+
+The model is simulated from the run's measured initial state with the run's
+measured inputs (rudder angle, propeller revolutions and, where recorded, the true
+wind), held over each sample (zero-order hold), and compared with the measured
+motion. Errors are reported as RMS and maximum over
+
+* the first 30 s and the first 60 s after the start, and the whole run (one
+  simulation from the first sample — errors grow without bound on long runs, so the
+  whole-run numbers say how fast the model drifts, not how good it is locally);
+* 60-s horizons restarted from the measured state every 60 s across the run
+  (``horizons``; all horizons simulated at once as one batch). These are the numbers
+  to compare models by: every part of the run counts, not one lucky window.
+
+Quantities: heading ψ (deg, wrapped to ±180°), yaw rate r (deg/s), surge u and
+sway v (m/s), position (m, distance between the measured and predicted midship
+positions).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError
+from shipid.models import mmg
+
+QUANTITIES = ("psi", "r", "u", "v", "pos")
+UNITS = {"psi": "deg", "r": "deg/s", "u": "m/s", "v": "m/s", "pos": "m"}
+
+
+# ----------------------------------------------------------------------------- models
+def model_from_result(d: Mapping[str, Any]) -> mmg.MmgModel:
+    """The MMG model of a MODEL.json dict (:meth:`shipid.result.Result.to_dict`)."""
+    model = d.get("model") if "model" in d else None
+    if not isinstance(model, Mapping) or model.get("family") != "mmg":
+        raise InputError("MODEL.json does not hold an MMG model ('model.family' is not 'mmg'); "
+                         "write it with 'shipid identify mmg --json' or 'shipid identify realdata --json'")
+    return mmg.MmgModel.from_dict(model)
+
+
+def load_model(spec: str | Path) -> mmg.MmgModel:
+    """A model from a MODEL.json path, or ``published:esso_osaka_3m`` / ``published:kvlcc2_L7``."""
+    s = str(spec)
+    if s.startswith("published:"):
+        return mmg.load_published(s.split(":", 1)[1])
+    p = Path(s)
+    if not p.is_file():
+        raise InputError("no such model file", file=s)
+    try:
+        d = json.loads(p.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise InputError(f"not a JSON model file ({err})", file=s) from None
+    try:
+        return model_from_result(d)
+    except InputError as err:
+        raise InputError(str(err.args[0]) if err.args else str(err), file=s) from None
+    except (KeyError, TypeError, ValueError) as err:
+        raise InputError(f"malformed MMG model ({type(err).__name__}: {err})", file=s) from None
+
+
+# ----------------------------------------------------------------------------- data
+def measured_states(trial: Trial) -> np.ndarray:
+    """``(n, 6)`` measured ``[x, y, ψ, u, v, r]``."""
+    trial.require(list(mmg.STATE_NAMES), method="validate")
+    return np.stack([trial[c] for c in mmg.STATE_NAMES], axis=-1)
+
+
+def trial_inputs(trial: Trial) -> np.ndarray:
+    """``(n, 4)`` inputs ``[δ, n, U_T, γ_T]``; no wind (zeros) when the run has none."""
+    trial.require(["delta", "n"], method="validate")
+    zero = np.zeros(trial.t.size)
+    ws = trial["wind_speed"] if "wind_speed" in trial else zero
+    wd = trial["wind_dir"] if "wind_dir" in trial else zero
+    return np.stack([trial["delta"], trial["n"], ws, wd], axis=-1)
+
+
+def _check_finite(trial: Trial, Z: np.ndarray, U: np.ndarray) -> None:
+    bad = ~np.isfinite(Z).all(axis=1) | ~np.isfinite(U).all(axis=1)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise InputError("missing values in the states or inputs (read the run with interpolate_gaps "
+                         "or trim_empty_rows)", file=trial.meta.get("source"), row=k + 1)
+
+
+# ----------------------------------------------------------------------------- metrics
+def _errors(pred: np.ndarray, meas: np.ndarray) -> dict[str, np.ndarray]:
+    dpsi = np.angle(np.exp(1j * (pred[..., 2] - meas[..., 2])))
+    return {"psi": np.degrees(dpsi), "r": np.degrees(pred[..., 5] - meas[..., 5]),
+            "u": pred[..., 3] - meas[..., 3], "v": pred[..., 4] - meas[..., 4],
+            "pos": np.hypot(pred[..., 0] - meas[..., 0], pred[..., 1] - meas[..., 1])}
+
+
+def _summary(err: Mapping[str, np.ndarray], mask: np.ndarray | None = None) -> dict[str, dict[str, float]]:
+    out = {}
+    for q in QUANTITIES:
+        e = np.asarray(err[q])
+        if mask is not None:
+            e = e[mask]
+        e = e.ravel()
+        if e.size == 0:
+            out[q] = {"rms": float("nan"), "max": float("nan"), "unit": UNITS[q]}
+            continue
+        if not np.all(np.isfinite(e)):     # a diverged prediction is an infinite error, not a skipped one
+            out[q] = {"rms": float("inf"), "max": float("inf"), "unit": UNITS[q]}
+            continue
+        out[q] = {"rms": float(np.sqrt(np.mean(e * e))), "max": float(np.max(np.abs(e))), "unit": UNITS[q]}
+    return out
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Result of :func:`validate`.
+
+    Attributes
+    ----------
+    windows : dict
+        ``{"first_30s" | "first_60s" | "whole": {quantity: {"rms", "max", "unit"}}}``.
+    horizons : dict
+        Same layout, pooled over the restarted horizons; plus ``"count"`` and ``"length_s"``.
+    t, measured, predicted : ndarray
+        The whole-run simulation (for plots).
+    """
+
+    windows: dict
+    horizons: dict
+    t: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    model_name: str
+    source: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"model": self.model_name, "trial": self.source, "duration_s": float(self.t[-1] - self.t[0]),
+                "windows": self.windows, "horizons": self.horizons}
+
+
+def horizon_starts(n: int, steps: int, stride: int, min_steps: int) -> np.ndarray:
+    """Start indices of restarted horizons: every ``stride`` samples while at least ``min_steps`` remain."""
+    starts = np.arange(0, max(n - 1, 0), stride)
+    return starts[(n - starts) >= min_steps]
+
+
+def validate(model: mmg.MmgModel, trial: Trial, *, horizon: float = 60.0, stride: float | None = None,
+             windows: tuple[float, ...] = (30.0, 60.0), whole: bool = True) -> Validation:
+    """Simulate ``model`` open loop on ``trial`` and compare (module docstring).
+
+    Parameters
+    ----------
+    horizon : float
+        Length of the restarted horizons, s.
+    stride : float, optional
+        Spacing of their starts, s (default: ``horizon``, i.e. back to back).
+    windows : tuple of float
+        Lengths of the windows from the start of the run, s.
+    whole : bool
+        Also simulate the whole run from the first sample.
+    """
+    t = np.asarray(trial.t, dtype=float)
+    Z = measured_states(trial)
+    U = trial_inputs(trial)
+    _check_finite(trial, Z, U)
+    dt = float(np.median(np.diff(t)))
+    nsteps = int(round(horizon / dt))
+    nstride = int(round((stride or horizon) / dt))
+    # whole run (windows are its first seconds)
+    n_whole = t.size if whole else min(t.size, int(round(max(windows) / dt)) + 1)
+    pred = mmg.simulate_batch(model, t[:n_whole], Z[0][None], U[:n_whole])[0]
+    err = _errors(pred, Z[:n_whole])
+    tt = t[:n_whole] - t[0]
+    win = {}
+    for w in windows:
+        win[f"first_{w:g}s"] = _summary(err, tt <= w + 1e-9)
+    if whole:
+        win["whole"] = _summary(err)
+    # restarted horizons, all in one batch
+    starts = horizon_starts(t.size, nsteps, nstride, min_steps=max(nsteps // 2, 2))
+    hz: dict[str, Any] = {"length_s": horizon, "stride_s": (stride or horizon), "count": int(starts.size)}
+    if starts.size:
+        L = nsteps + 1
+        idx = np.minimum(starts[:, None] + np.arange(L)[None, :], t.size - 1)
+        valid = (starts[:, None] + np.arange(L)[None, :]) <= t.size - 1
+        Ub = U[idx]
+        tg = t[0] + dt * np.arange(L)           # uniform grid (the data are uniform)
+        P = mmg.simulate_batch(model, tg, Z[starts], Ub)
+        E = _errors(P, Z[idx])
+        hz.update(_summary(E, valid))
+    return Validation(windows=win, horizons=hz, t=t[:n_whole], measured=Z[:n_whole], predicted=pred,
+                      model_name=model.name, source=str(trial.meta.get("source", "")))
+
+
+def format_table(v: Validation) -> str:
+    """Plain-text table of a :class:`Validation`."""
+    rows = list(v.windows.items()) + [(f"{v.horizons['length_s']:g}-s horizons (n={v.horizons['count']})",
+                                       v.horizons)]
+    head = f"{'window':<26}" + "".join(f"{q + ' [' + UNITS[q] + ']':>22}" for q in QUANTITIES)
+    lines = [f"model {v.model_name} on {v.source}", head,
+             f"{'':<26}" + "".join(f"{'rms / max':>22}" for _ in QUANTITIES)]
+    for name, s in rows:
+        if "psi" not in s:
+            continue
+        lines.append(f"{name:<26}" + "".join(f"{s[q]['rms']:>11.3g} /{s[q]['max']:>9.3g}" for q in QUANTITIES))
+    return "\n".join(lines)
+
+
+def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
+    """Overlay measured and predicted trajectory and time series; written atomically."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from shipid.outputs import atomic_write
+
+    fig = plt.figure(figsize=(11, 7))
+    ax = fig.add_subplot(1, 2, 1)
+    ax.plot(v.measured[:, 1], v.measured[:, 0], "k-", label="measured")
+    ax.plot(v.predicted[:, 1], v.predicted[:, 0], "r--", label="predicted")
+    ax.set_xlabel("y0 [m]"); ax.set_ylabel("x0 [m]"); ax.set_aspect("equal", "datalim"); ax.legend()
+    names = [("psi", 2, np.degrees, "ψ [deg]"), ("r", 5, np.degrees, "r [deg/s]"),
+             ("u", 3, lambda a: a, "u [m/s]"), ("v", 4, lambda a: a, "v [m/s]")]
+    for i, (_, j, f, lab) in enumerate(names):
+        a = fig.add_subplot(4, 2, 2 * i + 2)
+        a.plot(v.t, f(v.measured[:, j]), "k-", lw=0.8)
+        a.plot(v.t, f(v.predicted[:, j]), "r--", lw=0.8)
+        a.set_ylabel(lab)
+    a.set_xlabel("t [s]")
+    fig.suptitle(f"{v.model_name}: {Path(v.source).name}")
+    fig.tight_layout()
+    fmt = Path(path).suffix.lstrip(".") or "png"
+    try:
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=110), force=force)
+    finally:
+        plt.close(fig)
+
+
+__all__ = ["validate", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",
+           "format_table", "plot", "horizon_starts", "QUANTITIES", "UNITS"]

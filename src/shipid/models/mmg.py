@@ -1,0 +1,626 @@
+"""MMG-type 3-DOF manoeuvring model: hull, propeller and rudder forces apart (surge, sway, yaw).
+
+Two structures share the rigid-body equations and the state/input layout:
+
+``"esso-lowspeed"``
+    The low-speed MMG model of the 3 m Esso Osaka used by Miyauchi et al. (2022,
+    J Mar Sci Technol 27:1065, §2) and Wakita et al. (2022, J Mar Sci Technol 27:772),
+    as coded in NAOE-5thLab/mmg-1p1r-simulator (``python_module/subroutine``, commit
+    c54ef807): hull after Yoshimura (drag that blends between ahead and astern with
+    ``|β|/π``, linear terms plus a cross-flow drag integral), propeller thrust in four
+    quadrants (Hachii's model for ``n < 0``, Ueno's polynomial side force/moment),
+    Yoshimura's low-speed rudder inflow and Kitagawa's model for reversing, Fujii's
+    normal-force coefficient, Fujiwara's wind-force regression. Parameters are read at
+    run time from ``data_root()/params/esso_osaka_3m_mmg_*.csv`` (never copied).
+``"yasukawa2015"``
+    The MMG standard method (Yasukawa & Yoshimura 2015, J Mar Sci Technol 20:37,
+    eqs. 4–12, Table 3 for KVLCC2): 3rd-order polynomial hull forces in ``v'``, ``r'``,
+    propeller thrust with ``K_T(J)`` quadratic, rudder normal force with the
+    flow-straightening ``γ_R``. The KVLCC2 L7 set is read from
+    ``data_root()/params/kvlcc2_L7_mmg_shipmmg.yml``.
+
+Every force is written linear in its coefficients, ``F = H(x, u) θ + F_fixed(x, u)``
+(:func:`basis`): the simulator and the regression of :mod:`shipid.methods.realdata`
+use the same expression, so an identified coefficient means in simulation exactly
+what it meant in the regression.
+
+State ``x = [x0, y0, ψ, u, v_m, r]`` (earth-fixed midship position, heading, surge,
+sway at midship, yaw rate; SI); inputs ``u = [δ, n, U_T, γ_T]`` (rudder angle rad,
+propeller rev/s, true wind speed m/s and the direction it blows *from*, rad clockwise
+from the x0 axis; checked against the Esso data, whose relative wind the transform of
+:func:`apparent_wind` reproduces to 3e-5 rad). Equations of motion (Yasukawa &
+Yoshimura 2015, eq. 4, about midship)::
+
+    (m + m_x) u̇ − (m + m_y) v_m r − x_G m r² = X
+    (m + m_y) v̇_m + x_G m ṙ = Y − (m + m_x) u r
+    (I_zG + x_G² m + J_z) ṙ + x_G m v̇_m = N − x_G m u r
+
+Units: the Esso CSVs give masses and forces non-dimensionalised by ``0.5 ρ L² d`` and
+``0.5 ρ L d U²`` with the *engineering* density ρ/g (kgf s²/m⁴) of the Japanese
+code; as every term carries the same ρ, SI ρ = 998 kg/m³ gives the same motion in N.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from shipid.errors import InputError
+
+STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
+INPUT_NAMES = ("delta", "n", "wind_speed", "wind_dir")
+STRUCTURES = ("esso-lowspeed", "yasukawa2015")
+MODES = ("X", "Y", "N")
+
+# ----------------------------------------------------------------------------- coefficients
+#: Linear coefficients of each mode, by structure (the regression's unknowns).
+COEFS: dict[str, dict[str, tuple[str, ...]]] = {
+    "esso-lowspeed": {
+        "X": ("X_0F", "X_0A", "X_vr", "XP_k0", "XP_k1", "XP_k2", "XP_c0", "XP_c1", "XP_c2", "XR_gain"),
+        "Y": ("Y_v", "Y_r", "CD_Y", "YP_a0", "YP_a1", "YP_a2", "YP_a3", "YP_a4", "YP_a5", "YP_a6",
+              "YP_a7", "YR_gain"),
+        "N": ("N_v", "N_r", "CD_N", "NP_b0", "NP_b1", "NP_b2", "NP_b3", "NP_b4", "NP_b5", "NP_b6",
+              "NP_b7", "NR_arm"),
+    },
+    "yasukawa2015": {
+        "X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv", "XP_gain", "XR_gain"),
+        "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr", "YR_gain"),
+        "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr", "NR_arm"),
+    },
+}
+
+#: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
+COEF_UNITS = {"NR_arm": "m"}
+
+# Hachii's reverse-propeller side-force regimes (mmg-1p1r-simulator propellerforce.py).
+_JSYN, _JSYN0 = -0.35, -0.06
+
+
+@dataclass(frozen=True)
+class MmgModel:
+    """An MMG model: structure, vessel particulars (SI) and coefficients.
+
+    Attributes
+    ----------
+    structure : {"esso-lowspeed", "yasukawa2015"}
+    particulars : mapping of str to float
+        ``L, B, d, m, x_G, rho, m_x, m_y, J_z, I_zG`` (SI; ``I_zG`` may be folded into
+        ``J_z`` as the Esso set does, with ``I_zG = 0``) and the sub-model constants of
+        the structure (propeller, rudder, wind geometry).
+    coef : mapping of str to float
+        The linear coefficients :data:`COEFS` of the structure.
+    name : str
+    sources : mapping of str to str
+        Where the numbers come from.
+    """
+
+    structure: str
+    particulars: Mapping[str, float]
+    coef: Mapping[str, float]
+    name: str = "mmg"
+    sources: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.structure not in STRUCTURES:
+            raise InputError(f"unknown MMG structure '{self.structure}' (choose from {', '.join(STRUCTURES)})")
+        missing = [c for m in MODES for c in COEFS[self.structure][m] if c not in self.coef]
+        if missing:
+            raise InputError(f"MMG model '{self.name}': coefficient(s) missing: {', '.join(missing)}")
+
+    def with_coef(self, values: Mapping[str, float], name: str | None = None) -> "MmgModel":
+        c = dict(self.coef)
+        c.update({k: float(v) for k, v in values.items()})
+        return replace(self, coef=c, name=name or self.name)
+
+    def theta(self, mode: str) -> np.ndarray:
+        return np.array([self.coef[c] for c in COEFS[self.structure][mode]], dtype=float)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"family": "mmg", "structure": self.structure, "name": self.name,
+                "state": list(STATE_NAMES), "inputs": list(INPUT_NAMES),
+                "particulars": {k: float(v) for k, v in self.particulars.items()},
+                "coefficients": {k: float(v) for k, v in self.coef.items()},
+                "sources": dict(self.sources)}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "MmgModel":
+        if d.get("family", "mmg") != "mmg":
+            raise InputError(f"not an MMG model (family '{d.get('family')}')")
+        return cls(structure=d["structure"], particulars=dict(d["particulars"]),
+                   coef=dict(d["coefficients"]), name=d.get("name", "mmg"),
+                   sources=dict(d.get("sources", {})))
+
+
+# ----------------------------------------------------------------------------- wind
+def apparent_wind(U_T, gamma_T, psi, u, v):
+    """Relative wind speed and direction (from, clockwise from the bow) at midship.
+
+    ``U_T, γ_T``: true wind speed and the earth-fixed direction it blows from
+    (clockwise from x0). The air velocity is ``−U_T (cos γ_T, sin γ_T)`` in earth
+    axes; in body axes minus the ship's velocity ``(u, v)`` it gives the apparent wind.
+    """
+    wx, wy = -U_T * np.cos(gamma_T), -U_T * np.sin(gamma_T)
+    c, s = np.cos(psi), np.sin(psi)
+    au = c * wx + s * wy - u
+    av = -s * wx + c * wy - v
+    return np.hypot(au, av), np.mod(np.arctan2(-av, -au), 2 * np.pi)
+
+
+def fujiwara_coefficients(p: Mapping[str, float]) -> dict[str, float]:
+    """Fujiwara et al. (1998) wind-force regression coefficients ``XX0 … NN3`` from hull geometry.
+
+    Constants as coded in mmg-1p1r-simulator ``wind.py`` (``windCoeff``); ``p`` holds
+    ``L, A_T, A_L, AOD, LCW, LCBR, HBR, HC, SBW``.
+    """
+    L, AT, AL, AOD = p["L"], p["A_T"], p["A_L"], p["AOD"]
+    LCW, LCBR, HBR, HC, SBW = p["LCW"], p["LCBR"], p["HBR"], p["HC"], p["SBW"]
+    XX0 = -0.330 + 0.293 * (SBW * HBR / AT) + 0.0193 * (LCW / HC) + 0.6820 * (AOD / L / L)
+    XX1 = (-1.353 + 1.700 * (AL / L / SBW) + 2.8700 * (L * HC / AL) - 0.4630 * (L * HBR / AL)
+           - 0.570 * (AOD / AL) - 6.640 * (AT / L / SBW) - 0.0123 * (L * L / AT) + 0.0202 * (L / HC))
+    XX3 = (0.830 - 0.413 * (AL / L / HBR) - 0.0827 * (AL / AT) - 0.5630 * (L * HC / AL)
+           + 0.804 * (AOD / AL) - 5.670 * (AOD / L / L) + 0.0401 * (LCW / HC) - 0.1320 * (LCBR / L))
+    XX5 = 0.0372 - 0.0075 * (AL / AOD) - 0.1030 * (LCBR / L) + 0.0921 * (AL / L / SBW)
+    YY1 = (0.684 + 0.717 * (LCBR / L) - 3.2200 * (LCW / L) + 0.0281 * (AL / AOD) + 0.0661 * (LCW / HC)
+           + 0.2980 * (AT / (SBW * HBR)))
+    YY3 = (-0.400 + 0.282 * (AL / (L * SBW)) + 0.3070 * (L * HC / AL) + 0.0519 * (LCBR / L)
+           + 0.0526 * (SBW / HBR) - 0.0814 * (AOD / AL) + 0.0582 * (AT / (SBW * HBR)))
+    YY5 = (0.122 - 0.166 * (AL / (L * SBW)) - 0.0054 * (L / HBR) - 0.0481 * (LCBR / L)
+           - 0.0136 * (SBW ** 2 / AT) + 0.0864 * (LCW / L) - 0.0297 * (LCW * HC / AL))
+    NN1 = (0.2990 + 1.710 * (LCW / L) + 0.183 * (L * HC / AL) - 1.09 * (AT / AL) - 0.0442 * (LCW / HC)
+           - 0.289 * (AL / (L * SBW)) + 4.24 * (AT / L ** 2) - 0.0646 * (SBW ** 2 / AT) + 0.0306 * (LCBR / L))
+    NN2 = (0.1170 + 0.123 * (LCBR / L) - 0.323 * (LCW / L) + 0.0041 * (AL / AOD) - 0.166 * (AT / SBW ** 2)
+           - 0.0109 * (L / HBR) + 0.174 * (AT / (SBW * HBR)) + 0.214 * (AL / (L * SBW)) - 1.06 * (AL / L ** 2))
+    NN3 = 0.0230 + 0.0385 * (LCBR / L) - 0.0339 * (AT / (SBW * HBR)) + 0.0023 * (AL / AT)
+    return dict(XX0=XX0, XX1=XX1, XX3=XX3, XX5=XX5, YY1=YY1, YY3=YY3, YY5=YY5, NN1=NN1, NN2=NN2, NN3=NN3)
+
+
+def wind_forces(p: Mapping[str, float], U_A, gamma_A):
+    """Wind forces (N, N m) from the relative wind after Fujiwara's regression.
+
+    Angle of attack ``AOA = 2π − γ_A`` (counter-clockwise), as in mmg-1p1r-simulator.
+    Returns zeros when the particulars have no wind geometry.
+    """
+    if "A_T" not in p or "XX0" not in p:
+        z = np.zeros_like(np.asarray(U_A, dtype=float))
+        return z, z, z
+    a = 2 * np.pi - gamma_A
+    q = 0.5 * p["rho_air"] * U_A ** 2
+    CX = p["XX0"] + p["XX1"] * np.cos(a) + p["XX3"] * np.cos(3 * a) + p["XX5"] * np.cos(5 * a)
+    CY = p["YY1"] * np.sin(a) + p["YY3"] * np.sin(3 * a) + p["YY5"] * np.sin(5 * a)
+    CN = p["NN1"] * np.sin(a) + p["NN2"] * np.sin(2 * a) + p["NN3"] * np.sin(3 * a)
+    return CX * q * p["A_T"], CY * q * p["A_L"], CN * q * p["L"] * p["A_L"]
+
+
+# ----------------------------------------------------------------------------- hull helpers
+def crossflow_integrals(v, r, L, C_Y, C_N):
+    """Cross-flow drag integrals of the low-speed hull model (Yoshimura; exact).
+
+    ``I_Y = (1/L) ∫ |v + C_Y r x| (v + C_Y r x) dx`` and
+    ``I_N = (1/L²) ∫ |v + C_N r x| (v + C_N r x) x dx`` over ``x ∈ [−L/2, L/2]``
+    (mmg-1p1r-simulator integrates them by Simpson's rule on 100 points; here in
+    closed form with the antiderivatives ``|s| s²/3`` and ``|s| s³/4``).
+    """
+    def parts(a, b):
+        h = 0.5 * L
+        nochange = np.abs(a) >= np.abs(b) * h        # no sign change along the hull
+        bs = np.where(nochange, 1.0, b)             # safe divisor
+        s1, s0 = a + bs * h, a - bs * h
+        F2 = lambda s: np.abs(s) * s * s / 3.0     # noqa: E731  ∫|s|s ds
+        F3 = lambda s: np.abs(s) * s ** 3 / 4.0    # noqa: E731  ∫|s|s² ds
+        iy = np.where(nochange, np.sign(a) * (a * a * L + b * b * L ** 3 / 12.0), (F2(s1) - F2(s0)) / bs)
+        i_n = np.where(nochange, np.sign(a) * a * b * L ** 3 / 6.0,
+                       ((F3(s1) - F3(s0)) - a * (F2(s1) - F2(s0))) / (bs * bs))
+        return iy, i_n
+    iy, _ = parts(v, C_Y * r)
+    _, i_n = parts(v, C_N * r)
+    return iy / L, i_n / L ** 2
+
+
+# ----------------------------------------------------------------------------- basis
+def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
+    """Regressors and fixed parts of the three modes.
+
+    Parameters
+    ----------
+    model : MmgModel
+        Supplies the particulars and the fixed sub-model constants.
+    u, v, r, delta, n : array_like, same shape (...)
+        Surge, midship sway, yaw rate, rudder angle, propeller revolutions.
+    U_A, gamma_A : array_like
+        Relative wind speed and direction (from :func:`apparent_wind`).
+
+    Returns
+    -------
+    dict
+        ``{"X": (H, F0), "Y": (H, F0), "N": (H, F0)}`` with ``H`` shape (..., p) whose
+        columns follow :data:`COEFS` and the fixed part ``F0`` shape (...); the force
+        is ``H @ θ + F0``. Also ``"aux"``: intermediate quantities (``U_R``,
+        ``alpha_R``, ``J``, ``F_N_unit``...).
+    """
+    u, v, r, delta, n = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (u, v, r, delta, n)))
+    p = model.particulars
+    if model.structure == "esso-lowspeed":
+        out = _basis_esso(p, u, v, r, delta, n)
+    else:
+        out = _basis_yasukawa(p, u, v, r, delta, n)
+    XA, YA, NA = wind_forces(p, np.asarray(U_A, float), np.asarray(gamma_A, float))
+    for m, F in zip(MODES, (XA, YA, NA)):
+        H, F0 = out[m]
+        out[m] = (H, F0 + F)
+    return out
+
+
+def _basis_esso(p, u, v, r, delta, n):
+    L, d, rho, D = p["L"], p["d"], p["rho"], p["D_p"]
+    U = np.sqrt(u * u + v * v)
+    small = U < 1e-5
+    Us = np.where(small, 1.0, U)
+    v_nd = np.where(small, 1e-7, v / Us)
+    r_nd = np.where(small, 1e-7, r * L / Us)
+    U = np.where(small, 1e-7, U)
+    beta = np.arctan2(v, u)
+    qX = 0.5 * rho * L * d
+    qN = 0.5 * rho * L * L * d
+    # --- hull (hullForceYoshimuraSimpson)
+    ab = np.abs(beta) / np.pi
+    iy, i_n = crossflow_integrals(v, r, L, p["C_rY"], p["C_rN"])
+    # --- propeller (get_propellerforce, switch_prop_x = 1, switch_prop_y = switch_prop_n = 1)
+    s = v_nd + p["x_P"] * r_nd
+    wP = p["w_P0"] - p["tau_P"] * np.abs(s) - p["C_P"] * s * s
+    omw = np.where(u > 0, 1.0 - wP, 1.0)
+    omw = np.clip(omw, np.finfo(float).eps, 1.0)
+    eps = np.finfo(float).eps
+    n_safe = np.where(np.abs(n) < eps, 1.0, n)
+    Js = np.where(np.abs(n) < eps, np.sign(u) * 1e4,
+                  np.where(np.abs(u) < eps, eps, u / (D * n_safe)))
+    J = np.where(u >= 0, Js * omw, Js)
+    T4 = rho * D ** 4 * n * n
+    pos = n >= 0
+    neg = ~pos
+    hi = Js >= p["XP_c3"]
+    # thrust coefficient of the open-water curve (fixed: drives the rudder slipstream)
+    KT_fixed = p["k_0"] + p["k_1"] * J + p["k_2"] * J * J
+    XP_nominal = np.where(pos, T4 * (1 - p["t_P"]) * KT_fixed,
+                          np.where(hi, T4 * (p["c_1"] + p["c_2"] * Js), T4 * p["c_0"]))
+    qYP = 0.5 * rho * L * d
+    qNP = 0.5 * rho * L * L * d
+    nP2 = (n * D * p["pitch_ratio"]) ** 2
+    nD2 = (n * D) ** 2
+    astern_ahead = pos & (u < 0)
+    r1 = neg & (Js < _JSYN)
+    r2 = neg & ~(Js < _JSYN) & (Js > _JSYN0)
+    r0 = neg & ~(Js < _JSYN) & ~(Js > _JSYN0)
+    side = [r0 * nD2, r0 * nD2 * Js, r1 * nD2, r1 * nD2 * Js, r2 * nD2,
+            astern_ahead * nP2 * Js * Js, astern_ahead * nP2 * Js, astern_ahead * nP2]
+    # --- rudder (get_rudderforce, switch_rudder = 1, switch_fn = 1 Fujii, switch_ur = 1)
+    h_R = math.sqrt(p["A_R"] * p["lambda_R"])
+    eta = D / h_R
+    lR = p["l_R"] * L
+    kappa = p["kx_R"] / p["eps_R"]
+    omwR = p["eps_R"] * omw
+    uprop = u * omw
+    T4s = np.where(np.abs(n) > eps, T4, 1.0)
+    KT = np.where(n > eps, XP_nominal / (T4s * (1 - p["t_P"])),
+                  np.where(np.abs(n) > eps, XP_nominal / T4s, 0.0))
+    urpr1 = u * omwR + n * D * p["kx_R_reverse"] * np.sqrt(8 * np.abs(KT) / np.pi)
+    urpr2 = u * omwR
+    ursq = eta * np.sign(urpr1) * urpr1 ** 2 + (1 - eta) * urpr2 ** 2 + p["C_PR"] * u * u
+    slip = np.sqrt(np.maximum(uprop ** 2 + 8 * KT * n * n * D * D / np.pi, 0.0))
+    uR_ahead = p["eps_R"] * np.sqrt(eta * (uprop + kappa * (slip - uprop)) ** 2 + (1 - eta) * uprop ** 2)
+    uR = np.where((n >= 0) & (KT > 0), uR_ahead,
+                  np.where(u >= 0, np.sign(ursq) * np.sqrt(np.abs(ursq)), u))
+    vR = np.where(v + p["x_R"] * r >= 0, -p["gamma_R_plus"] * (v + lR * r), -p["gamma_R_minus"] * (v + lR * r))
+    UR2 = uR * uR + vR * vR
+    aR = delta - np.arctan2(vR, uR)
+    f_alpha = 6.13 * p["lambda_R"] / (2.25 + p["lambda_R"])
+    FN = 0.5 * rho * p["A_R"] * UR2 * f_alpha * np.sin(aR)
+    HX = np.stack([qX * u * U * (1 - ab), qX * u * U * ab, qX * v * r * L,
+                   pos * T4, pos * T4 * J, pos * T4 * J * J,
+                   neg * ~hi * T4, neg * hi * T4, neg * hi * T4 * Js,
+                   -FN * np.sin(delta)], axis=-1)
+    HY = np.stack([qX * v * np.abs(u), qX * r * L * u, -qX * iy] + [qYP * c for c in side]
+                  + [-FN * np.cos(delta)], axis=-1)
+    HN = np.stack([qN * v * u, qN * r * L * np.abs(u), -qN * i_n] + [qNP * c for c in side]
+                  + [-FN * np.cos(delta)], axis=-1)
+    zero = np.zeros_like(u)
+    aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta}
+    return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
+
+
+def _basis_yasukawa(p, u, v, r, delta, n):
+    L, d, rho, D = p["L"], p["d"], p["rho"], p["D_p"]
+    U = np.sqrt(u * u + v * v)
+    small = U < 1e-6
+    Us = np.where(small, 1.0, U)
+    vp = np.where(small, 0.0, v / Us)
+    rp = np.where(small, 0.0, r * L / Us)
+    beta = np.arctan2(-v, u)
+    qX = 0.5 * rho * L * d * U * U
+    qN = qX * L
+    # propeller (eqs. 9-10); wake after Yasukawa & Yoshimura 2015 eq. 15
+    beta_P = beta - p["x_P"] * rp
+    C2 = np.where(beta_P > 0, p["C_2_plus"], p["C_2_minus"])
+    omw = (1 - p["w_P0"]) * (1 + (1 - np.exp(-p["C_1"] * np.abs(beta_P))) * (C2 - 1))
+    n_safe = np.where(np.abs(n) < 1e-9, 1.0, n)
+    J = np.where(np.abs(n) < 1e-9, 0.0, u * omw / (n_safe * D))
+    KT = p["k_0"] + p["k_1"] * J + p["k_2"] * J * J
+    T = rho * n * n * D ** 4 * KT
+    # rudder (eqs. 11-12, 23-28)
+    eta = D / p["H_R"]
+    Jsafe = np.where(np.abs(J) < 1e-9, 1e-9, J)
+    uP = u * omw
+    slip = np.sqrt(np.maximum(1 + 8 * KT / (np.pi * Jsafe * Jsafe), 0.0))
+    uR = p["eps_R"] * uP * np.sqrt(eta * (1 + p["kappa_R"] * (slip - 1)) ** 2 + (1 - eta))
+    beta_R = beta - p["l_R"] * rp
+    gam = np.where(beta_R < 0, p["gamma_R_minus"], p["gamma_R_plus"])
+    vR = U * gam * beta_R
+    UR2 = uR * uR + vR * vR
+    aR = delta - np.arctan2(vR, uR)
+    FN = 0.5 * rho * p["A_R"] * UR2 * p["f_alpha"] * np.sin(aR)
+    HX = np.stack([-qX, qX * vp * vp, qX * vp * rp, qX * rp * rp, qX * vp ** 4, T, -FN * np.sin(delta)], axis=-1)
+    hull = [vp, rp, vp ** 3, vp * vp * rp, vp * rp * rp, rp ** 3]
+    HY = np.stack([qX * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
+    HN = np.stack([qN * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
+    zero = np.zeros_like(u)
+    aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta}
+    return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
+
+
+# ----------------------------------------------------------------------------- dynamics
+def mass_terms(model: MmgModel) -> tuple[float, float, float, float, float]:
+    """``(m + m_x, m + m_y, I_zG + x_G² m + J_z, x_G m, m)``."""
+    p = model.particulars
+    m, xG = p["m"], p["x_G"]
+    return m + p["m_x"], m + p["m_y"], p["I_zG"] + xG * xG * m + p["J_z"], xG * m, m
+
+
+def forces(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
+    """Total forces ``(X, Y, N)`` (N, N m) of the model at the given motions and inputs."""
+    b = basis(model, u, v, r, delta, n, U_A, gamma_A)
+    out = []
+    for m in MODES:
+        H, F0 = b[m]
+        out.append(H @ model.theta(m) + F0)
+    return tuple(out)
+
+
+def accelerations(model: MmgModel, u, v, r, X, Y, N):
+    """``(u̇, v̇_m, ṙ)`` from the forces by the equations of motion (module docstring)."""
+    mx, my, Iz, xGm, m = mass_terms(model)
+    du = (X + my * v * r + xGm * r * r) / mx
+    A = Y - mx * u * r
+    B = N - xGm * u * r
+    det = my * Iz - xGm * xGm
+    dv = (A * Iz - xGm * B) / det
+    dr = (my * B - xGm * A) / det
+    return du, dv, dr
+
+
+def rigid_body_forces(model: MmgModel, u, v, r, du, dv, dr):
+    """Forces that produce the accelerations ``(u̇, v̇, ṙ)`` (inverse of :func:`accelerations`)."""
+    mx, my, Iz, xGm, m = mass_terms(model)
+    X = mx * du - my * v * r - xGm * r * r
+    Y = my * dv + xGm * dr + mx * u * r
+    N = Iz * dr + xGm * dv + xGm * u * r
+    return X, Y, N
+
+
+def dynamics(t, x, u, model: MmgModel):
+    """``f(t, x, u, θ)``: state derivative; ``x`` (..., 6), ``u`` (..., 4), batch-capable."""
+    x = np.asarray(x, dtype=float)
+    u_in = np.asarray(u, dtype=float)
+    psi, uu, vv, rr = x[..., 2], x[..., 3], x[..., 4], x[..., 5]
+    delta, n = u_in[..., 0], u_in[..., 1]
+    if u_in.shape[-1] >= 4:
+        UA, gA = apparent_wind(u_in[..., 2], u_in[..., 3], psi, uu, vv)
+    else:
+        UA, gA = np.zeros_like(uu), np.zeros_like(uu)
+    X, Y, N = forces(model, uu, vv, rr, delta, n, UA, gA)
+    du, dv, dr = accelerations(model, uu, vv, rr, X, Y, N)
+    c, s = np.cos(psi), np.sin(psi)
+    return np.stack([uu * c - vv * s, uu * s + vv * c, rr, du, dv, dr], axis=-1)
+
+
+def simulate_batch(model: MmgModel, t: np.ndarray, x0: np.ndarray, U: np.ndarray, *,
+                   substeps: int = 1) -> np.ndarray:
+    """RK4 simulation of many initial states at once with zero-order-hold inputs.
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        Time grid (uniform or not).
+    x0 : ndarray (B, 6)
+    U : ndarray (B, n, 4) or (n, 4)
+        Inputs on the grid, held over each step (as :func:`shipid.simulate.integrate.simulate`).
+
+    Returns
+    -------
+    ndarray (B, n, 6)
+        Non-finite states (a diverging model) stay NaN from the step they appear.
+    """
+    x = np.array(x0, dtype=float, ndmin=2)
+    B, nt = x.shape[0], t.size
+    U = np.asarray(U, dtype=float)
+    if U.ndim == 2:
+        U = np.broadcast_to(U, (B,) + U.shape)
+    out = np.empty((B, nt, x.shape[1]))
+    out[:, 0] = x
+    with np.errstate(all="ignore"):
+        for k in range(nt - 1):
+            uk = U[:, k]
+            h = (t[k + 1] - t[k]) / substeps
+            for _ in range(substeps):
+                k1 = dynamics(0.0, x, uk, model)
+                k2 = dynamics(0.0, x + 0.5 * h * k1, uk, model)
+                k3 = dynamics(0.0, x + 0.5 * h * k2, uk, model)
+                k4 = dynamics(0.0, x + h * k3, uk, model)
+                x = x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+            # a state that blows up is reported as NaN, never silently clipped
+            x = np.where(np.abs(x) < 1e6, x, np.nan)
+            out[:, k + 1] = x
+    return out
+
+
+# ----------------------------------------------------------------------------- published sets
+def _read_csv_table(path: Path, key: str, val: str) -> dict[str, float]:
+    with open(path, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    out = {}
+    for row in rows:
+        row = {k.strip(): (v or "").strip() for k, v in row.items() if k is not None}
+        out[row[key]] = float(row[val])
+    return out
+
+
+def _params_dir(root: Path | None) -> Path:
+    from shipid.data.paths import data_root
+    root = data_root() if root is None else Path(root)
+    if root is None or not (root / "params").is_dir():
+        raise InputError("the shared data folder with params/ was not found (set SHIPID_DATA)")
+    return root / "params"
+
+
+def load_esso_osaka_published(root: Path | None = None) -> MmgModel:
+    """The published MMG set of the 3 m Esso Osaka (mmg-1p1r-simulator, commit c54ef807).
+
+    Read from ``params/esso_osaka_3m_mmg_{principal_particulars,MMG_params,model_switch}.csv``
+    under :func:`shipid.data.data_root` (or ``root``). Only the model switches of the
+    published file (all 1: Hachii thrust, Ueno side force, rudder force when reversing,
+    Fujii normal force, Yoshimura inflow, uniform true wind) are implemented; other
+    switch values raise :class:`InputError`.
+    """
+    d = _params_dir(root)
+    pp = _read_csv_table(d / "esso_osaka_3m_mmg_principal_particulars.csv", "parameter", "value")
+    pr = _read_csv_table(d / "esso_osaka_3m_mmg_MMG_params.csv", "parameter", "params_init")
+    sw = _read_csv_table(d / "esso_osaka_3m_mmg_model_switch.csv", "model", "value")
+    want = {"switch_prop_x": 1, "switch_prop_y": 1, "switch_prop_n": 1, "switch_rudder": 1,
+            "switch_fn": 1, "switch_ur": 1}
+    for k, v in want.items():
+        if int(sw.get(k, v)) != v:
+            raise InputError(f"model switch {k} = {sw[k]:g} is not implemented (only {v})")
+    L, d_, rho = pp["lpp"], pp["draft"], pp["rho_fresh"]
+    qM, qI = 0.5 * rho * L * L * d_, 0.5 * rho * L ** 4 * d_
+    part = {
+        "L": L, "B": pp["breadth"], "d": d_, "rho": rho,
+        "m": pp["mass_nd"] * qM, "x_G": pp["x_lcg"] * L,
+        "m_x": pr["massx_nd"] * qM, "m_y": pr["massy_nd"] * qM, "J_z": pr["IzzJzz_nd"] * qI, "I_zG": 0.0,
+        "D_p": pp["dia_prop"], "pitch_ratio": pp["pitchr"],
+        "A_R": pp["area_rudder"], "lambda_R": pp["lambda_rudder"], "x_R": pp["x_location_rudder"],
+        "C_rY": pr["cry_cross_flow"], "C_rN": pr["crn_cross_flow"],
+        "t_P": pr["t_prop"], "w_P0": pr["w_prop_zero"], "tau_P": pr["tau_prop"], "C_P": pr["coeff_cp_prop"],
+        "x_P": pr["xp_prop_nd"], "k_0": pr["kt_coeff0"], "k_1": pr["kt_coeff1"], "k_2": pr["kt_coeff2"],
+        "c_0": pr["ci_coeff_prop0"], "c_1": pr["ci_coeff_prop1"], "c_2": pr["ci_coeff_prop2"],
+        "XP_c3": pr["ci_coeff_prop3"],
+        "l_R": pr["lr_rudder_nd"], "kx_R": pr["kx_rudder"], "kx_R_reverse": pr["kx_rudder_reverse"],
+        "eps_R": pr["epsilon_rudder"], "C_PR": pr["cpr_rudder"],
+        "gamma_R_minus": pr["gammaN_rudder"], "gamma_R_plus": pr["gammaP_rudder"],
+        "t_R": pr["t_rudder"], "a_H": pr["ah_rudder"], "x_H": pr["xh_rudder_nd"] * L,
+        "rho_air": pp["rho_air"], "A_T": pp["area_projected_trans"], "A_L": pp["area_projected_lateral"],
+        "AOD": pp["AOD"], "LCW": pp["LCW"], "LCBR": pp["LCBR"], "HBR": pp["HBR"], "HC": pp["HC"], "SBW": pp["SBW"],
+    }
+    if int(sw.get("switch_wind", 1)) == 1:
+        part.update(fujiwara_coefficients(part))
+    else:
+        for k in ("A_T",):
+            part.pop(k)
+    coef = {"X_0F": pr["xuu_nd"], "X_0A": pr["coeff_drag_aft"], "X_vr": pr["xvr_nd"],
+            "XP_k0": (1 - pr["t_prop"]) * pr["kt_coeff0"], "XP_k1": (1 - pr["t_prop"]) * pr["kt_coeff1"],
+            "XP_k2": (1 - pr["t_prop"]) * pr["kt_coeff2"],
+            "XP_c0": pr["ci_coeff_prop0"], "XP_c1": pr["ci_coeff_prop1"], "XP_c2": pr["ci_coeff_prop2"],
+            "XR_gain": 1 - pr["t_rudder"],
+            "Y_v": pr["yv_nd"], "Y_r": pr["yr_nd"], "CD_Y": pr["coeff_drag_sway"],
+            "N_v": pr["nv_nd"], "N_r": pr["nr_nd"], "CD_N": pr["coeff_drag_sway"],
+            "YR_gain": 1 + pr["ah_rudder"],
+            "NR_arm": pp["x_location_rudder"] + pr["ah_rudder"] * pr["xh_rudder_nd"] * L}
+    for i in range(8):
+        coef[f"YP_a{i}"] = pr[f"ai_coeff_prop{i}"]
+        coef[f"NP_b{i}"] = pr[f"bi_coeff_prop{i}"]
+    src = "NAOE-5thLab/mmg-1p1r-simulator python_module/input_csv @ c54ef807 (Miyauchi et al. 2022)"
+    return MmgModel("esso-lowspeed", part, coef, name="esso-osaka-3m-published",
+                    sources={"all": src, "equations": "mmg-1p1r-simulator subroutine/*.py; Yoshimura low-speed MMG"})
+
+
+def _read_flat_yml(path: Path) -> dict[str, float]:
+    """Numbers of a one-level YAML mapping (``key: value  # comment``) under one top key."""
+    out: dict[str, float] = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        line = line.split("#", 1)[0].rstrip()
+        if not line.strip() or ":" not in line or not line.startswith((" ", "\t")):
+            continue
+        k, v = (s.strip() for s in line.split(":", 1))
+        try:
+            out[k] = float(v)
+        except ValueError:
+            continue
+    return out
+
+
+def load_kvlcc2_published(root: Path | None = None) -> MmgModel:
+    """KVLCC2 L7 MMG set (Yasukawa & Yoshimura 2015, Table 3) from ``params/kvlcc2_L7_mmg_shipmmg.yml``.
+
+    ``m = ρ ∇``, ``I_zG = m (0.25 L)²`` as the shipmmg tests set them; the wake change
+    with β_P uses Yasukawa & Yoshimura's eq. 15 with ``C_1 = 2.0``, ``C_2 = 1.6`` (β_P > 0)
+    and 1.1 (β_P < 0) (their Table 3, KVLCC2).
+    """
+    y = _read_flat_yml(_params_dir(root) / "kvlcc2_L7_mmg_shipmmg.yml")
+    rho, L, d = y["ρ"], y["L_pp"], y["d"]
+    m = rho * y["nabla"]
+    qM, qI = 0.5 * rho * L * L * d, 0.5 * rho * L ** 4 * d
+    part = {"L": L, "B": y["B"], "d": d, "rho": rho, "m": m, "x_G": y["x_G"],
+            "m_x": y["m_x_dash"] * qM, "m_y": y["m_y_dash"] * qM, "J_z": y["J_z_dash"] * qI,
+            "I_zG": m * (0.25 * L) ** 2, "D_p": y["D_p"], "H_R": y["H_R"], "A_R": y["A_R"],
+            "w_P0": y["w_P0"], "t_P": y["t_P"], "x_P": y["x_P_dash"], "k_0": y["k_0"], "k_1": y["k_1"],
+            "k_2": y["k_2"], "C_1": 2.0, "C_2_plus": 1.6, "C_2_minus": 1.1,
+            "eps_R": y["ϵ"], "kappa_R": y["κ"], "f_alpha": y["f_α"], "l_R": y["l_r_dash"],
+            "gamma_R_minus": y["γ_R_minus"], "gamma_R_plus": y["γ_R_plus"],
+            "t_R": y["t_R"], "a_H": y["a_H"], "x_H": y["x_H_dash"] * L, "x_R": y["x_R_dash"] * L}
+    coef = {"R_0": y["R_0_dash"], "X_vv": y["X_vv_dash"], "X_vr": y["X_vr_dash"], "X_rr": y["X_rr_dash"],
+            "X_vvvv": y["X_vvvv_dash"], "XP_gain": 1 - y["t_P"], "XR_gain": 1 - y["t_R"],
+            "YR_gain": 1 + y["a_H"], "NR_arm": part["x_R"] + y["a_H"] * part["x_H"]}
+    for m_ in ("Y", "N"):
+        for s in ("v", "r", "vvv", "vvr", "vrr", "rrr"):
+            coef[f"{m_}_{s}"] = y[f"{m_}_{s}_dash"]
+    return MmgModel("yasukawa2015", part, coef, name="kvlcc2-L7-published",
+                    sources={"all": "params/kvlcc2_L7_mmg_shipmmg.yml (ShipMMG/shipmmg tests, MIT)",
+                             "equations": "Yasukawa & Yoshimura 2015 eqs. 4-12, 15"})
+
+
+PUBLISHED = {"esso_osaka_3m": load_esso_osaka_published, "kvlcc2_L7": load_kvlcc2_published}
+
+
+def load_published(name: str, root: Path | None = None) -> MmgModel:
+    """A published MMG set by name: ``esso_osaka_3m`` or ``kvlcc2_L7`` (``-`` or ``_``)."""
+    key = name.replace("-", "_")
+    for k, fn in PUBLISHED.items():
+        if k.lower() == key.lower():
+            return fn(root)
+    raise InputError(f"unknown published MMG set '{name}' (choose from {', '.join(PUBLISHED)})")
+
+
+def ship_model(model: MmgModel):
+    """The :class:`shipid.simulate.model.ShipModel` of an MMG model (for the generic simulator)."""
+    from shipid.simulate.model import ShipModel
+
+    def x0(speed: float) -> np.ndarray:
+        return np.array([0.0, 0.0, 0.0, speed, 0.0, 0.0])
+
+    def outputs(t, X, U):
+        return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
+                "delta": U[:, 0], "n": U[:, 1]}
+
+    n0 = 10.0 if model.structure == "esso-lowspeed" else 10.23
+    U0 = 0.5 if model.structure == "esso-lowspeed" else 1.179
+    return ShipModel(name=model.name, f=dynamics, theta=model, state_names=STATE_NAMES,
+                     input_names=INPUT_NAMES, x0=x0, outputs=outputs, service_speed=U0, heading_index=2,
+                     u0=lambda speed: np.array([0.0, n0 * speed / U0, 0.0, 0.0]))
+
+
+__all__ = ["MmgModel", "COEFS", "STATE_NAMES", "INPUT_NAMES", "STRUCTURES", "basis", "forces",
+           "accelerations", "rigid_body_forces", "dynamics", "simulate_batch", "apparent_wind",
+           "crossflow_integrals", "wind_forces", "fujiwara_coefficients", "load_published",
+           "load_esso_osaka_published", "load_kvlcc2_published", "ship_model", "mass_terms"]
