@@ -80,6 +80,9 @@ table.kv td.num{text-align:left}
 .unit{color:var(--muted);font-weight:400}
 table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
 table.mat td{border:0;padding:1px 8px;text-align:right}
+table.rec{margin:0;font-size:.82rem}
+table.rec th{background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
+table.rec td{padding:1px 8px;border:0}
 .status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
 .status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
 tr.notid td{color:var(--bad)}
@@ -103,6 +106,19 @@ class MatrixValue(list):
     """A small 2-D numeric list shown as a matrix in key-value tables."""
 
 
+class RecordsValue(list):
+    """A short list of flat dicts shown as a nested table in key-value tables."""
+
+
+def _records(v) -> bool:
+    if not isinstance(v, (list, tuple)) or not v or len(v) > 30:
+        return False
+    if not all(isinstance(r, Mapping) for r in v):
+        return False
+    return all(_is_scalar(x) or (isinstance(x, (list, tuple)) and len(x) <= 6 and all(_is_scalar(y) for y in x))
+               for r in v for x in r.values())
+
+
 def _small_matrix(v) -> bool:
     if not isinstance(v, (list, tuple)) or not v or not all(isinstance(r, (list, tuple)) for r in v):
         return False
@@ -119,8 +135,12 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             rows.append((key, v))
         elif isinstance(v, Mapping) and depth > 0:
             rows.extend(_flatten(v, key + ".", depth - 1))
+        elif isinstance(v, (list, tuple)) and not v:
+            rows.append((key, "none"))
         elif _small_matrix(v):
             rows.append((key, MatrixValue(v)))
+        elif _records(v):
+            rows.append((key, RecordsValue(v)))
         elif isinstance(v, (list, tuple)) and len(v) <= 8 and all(_is_scalar(x) for x in v):
             rows.append((key, ", ".join(fmt_num(x) if not isinstance(x, str) else x for x in v)))
         elif isinstance(v, (list, tuple)):
