@@ -32,7 +32,7 @@ def test_in_process_matches_direct_calls(reference):
 
 def test_two_local_workers_equal_one_bit_for_bit(reference):
     # a short sleep per run (no effect on outputs) makes both processes take chunks
-    res = run_campaign(TOY, 300, 11, kwargs={"n": 50, "fail_every": 97, "sleep": 0.002}, workers=2,
+    res = run_campaign(TOY, 300, 11, kwargs={"n": 50, "fail_every": 97, "sleep": 0.01}, workers=2,
                        progress=False)
     assert res.executor == "local" and res.workers == 2
     assert len({r.worker for r in res.records}) == 2  # really two processes

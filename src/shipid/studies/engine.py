@@ -332,7 +332,7 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
                         memory[r["index"]] = RunRecord(
                             r["index"], r["seed"], json.loads(r["inputs_json"]),
                             None if r["outputs_json"] is None else json.loads(r["outputs_json"]),
-                            r["status"], r["error"], r["wall_s"], r["worker"])
+                            r["status"], r["error"], r["wall_s"], r["worker"], r["cpu_s"])
                 advance(len(rows))
         finally:
             stream.close()

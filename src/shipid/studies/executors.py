@@ -2,7 +2,7 @@
 
 Each executor is a generator that takes the chunks of run indices and yields, as
 chunks finish, lists of row dicts (one per run: ``index``, ``seed``,
-``outputs_json``, ``status``, ``error``, ``wall_s``, ``worker``). The work done on a
+``outputs_json``, ``status``, ``error``, ``wall_s``, ``cpu_s``, ``worker``). The work done on a
 worker is :func:`run_chunk`, which never raises for a failing run: the exception is
 recorded with the run. See :mod:`shipid.studies.engine` for the behaviour on lost
 worker processes.
@@ -142,7 +142,7 @@ def run_chunk(task, seed: int, indices: Sequence[int], inputs: Sequence[Any] | N
     for k, i in enumerate(indices):
         inp = None if inputs is None else inputs[k]
         entropy = run_entropy(seed, i)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         try:
             call_kwargs = dict(kwargs)
             if inp is not None:
@@ -154,13 +154,14 @@ def run_chunk(task, seed: int, indices: Sequence[int], inputs: Sequence[Any] | N
         except Exception as exc:  # a failed run is data, not a crash
             out_json, status, error = None, "failed", error_text(exc)
         rows.append({"index": int(i), "seed": entropy, "outputs_json": out_json, "status": status,
-                     "error": error, "wall_s": time.perf_counter() - t0, "worker": worker})
+                     "error": error, "wall_s": time.perf_counter() - t0, "worker": worker,
+                     "cpu_s": time.process_time() - c0})
     return rows
 
 
 def failed_rows(seed: int, indices: Sequence[int], error: str) -> list[dict]:
     return [{"index": int(i), "seed": run_entropy(seed, i), "outputs_json": None, "status": "failed",
-             "error": error, "wall_s": None, "worker": None} for i in indices]
+             "error": error, "wall_s": None, "worker": None, "cpu_s": None} for i in indices]
 
 
 # --------------------------------------------------------------------------------------

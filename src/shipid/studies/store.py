@@ -9,8 +9,9 @@ Tables
 ``runs``
     One row per finished run, primary key ``(campaign, run)``: the run's seed entropy
     ``[seed, i]`` (JSON), its inputs (JSON), outputs (JSON, ``NULL`` when it failed),
-    ``status`` (``"ok"`` or ``"failed"``), ``error`` (``"Type: message"``), wall time
-    of the run in seconds, and the worker (``host:pid``) that ran it.
+    ``status`` (``"ok"`` or ``"failed"``), ``error`` (``"Type: message"``), wall and CPU
+    time of the run in seconds (``wall_s``, ``cpu_s``: the process's CPU time, so a loaded
+    machine shows as wall >> CPU), and the worker (``host:pid``) that ran it.
 
 Durability: the engine writes each finished chunk of runs in one transaction
 (``synchronous=FULL``), so a process killed at any moment (SIGKILL included) leaves
@@ -51,6 +52,7 @@ CREATE TABLE IF NOT EXISTS runs (
     error TEXT,
     wall_s REAL,
     worker TEXT,
+    cpu_s REAL,
     PRIMARY KEY (campaign, run)
 );
 """
@@ -71,6 +73,7 @@ class RunRecord:
     error: str | None = None
     wall_s: float | None = None
     worker: str | None = None
+    cpu_s: float | None = None
 
     def same_result(self, other: "RunRecord") -> bool:
         """True when index, seed, inputs, outputs, status and error agree (timing and worker ignored)."""
@@ -178,20 +181,20 @@ class CampaignStore:
         transaction is rolled back: a run is never stored twice.
         """
         data = [(name, r["index"], json.dumps(r["seed"]), r["inputs_json"], r["outputs_json"],
-                 r["status"], r["error"], r["wall_s"], r["worker"]) for r in rows]
+                 r["status"], r["error"], r["wall_s"], r["worker"], r.get("cpu_s")) for r in rows]
         with self._transaction():
             self._con.executemany(
-                "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
+                "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
 
     def records(self, name: str) -> list[RunRecord]:
         """All stored runs of ``name`` in run order."""
         cur = self._con.execute(
-            "SELECT run, seed, inputs, outputs, status, error, wall_s, worker FROM runs "
+            "SELECT run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s FROM runs "
             "WHERE campaign = ? ORDER BY run", (name,))
         return [RunRecord(run, json.loads(seed), json.loads(inputs),
-                          None if outputs is None else json.loads(outputs), status, error, wall_s, worker)
-                for run, seed, inputs, outputs, status, error, wall_s, worker in cur]
+                          None if outputs is None else json.loads(outputs), status, error, wall_s, worker, cpu_s)
+                for run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s in cur]
 
     def _transaction(self):
         con = self._con
@@ -228,7 +231,7 @@ def records_frame(records: list[RunRecord], campaign: str | None = None):
     rows = []
     for r in records:
         row = {"campaign": campaign, "run": r.index, "seed": json.dumps(r.seed), "status": r.status,
-               "error": r.error, "wall_s": r.wall_s, "worker": r.worker,
+               "error": r.error, "wall_s": r.wall_s, "cpu_s": r.cpu_s, "worker": r.worker,
                "inputs": json.dumps(r.inputs), "outputs": None if r.outputs is None else json.dumps(r.outputs)}
         if r.outputs is not None:
             flat("out", r.outputs, row)
