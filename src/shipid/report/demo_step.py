@@ -1,0 +1,123 @@
+"""The last ``shipid demo`` step: an HTML report for every result the demo produced (issue 8).
+
+Results are collected from the demo context, in this order:
+
+1. ``ctx.results`` (a dict name -> :class:`~shipid.result.Result`) when a step set it;
+2. every ``*.json`` file in ``ctx.files`` that reads as a shipid result (method steps
+   write their result JSON into ``ctx.out_dir`` and append the path to ``ctx.files``);
+3. for a method of the three papers that produced no result in this run, a small
+   built-in run on simulated data through the method's Python API (seeded with
+   ``ctx.seed``); if that API is missing or fails, the method is listed as skipped with
+   the reason, never silently.
+
+Each report is written as ``report-<name>.html`` next to the other demo files.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Callable
+
+from shipid.demo import DemoContext, demo_step
+
+#: The methods of the three papers, each with a fallback runner on simulated data.
+METHODS = ("mass-cm", "dp", "ebm")
+
+
+def _fallback_mass_cm(seed: int):
+    """Linder et al. (2015): the three simulated datasets of the fishing vessel, z_f known."""
+    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.models.roll_reduced import KnownParams
+    from shipid.models.roll_sim import simulate_datasets
+    from shipid.vessels import load_vessel
+
+    d = simulate_datasets("fishing-vessel", seed=seed)
+    known = KnownParams.from_vessel("fishing-vessel")
+    z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
+    res = estimate_mass_cm(list(d.items()), known, z_f=z_f)
+    res.provenance.setdefault("seed", seed)
+    res.provenance.setdefault("command", "shipid demo (report step: simulated fishing-vessel datasets)")
+    return res
+
+
+def _fallback_dp(seed: int):
+    """Fossen et al. (1996): the six simulated supply-vessel trials, shortened to 400 s."""
+    from shipid.methods.dp import identify_dp
+    from shipid.methods.dp_trials import TrialNoise, simulate_dp_trials
+    from shipid.models.dp import dp_vessel
+    from shipid.vessels import load_vessel
+
+    v = dp_vessel(load_vessel("supply"))
+    trials = simulate_dp_trials(v, seed, duration=400.0, n_per_kind=2, noise=TrialNoise())
+    return identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta,
+                       provenance={"seed": seed, "command": "shipid demo (report step: simulated DP trials, 400 s)"})
+
+
+def _fallback_ebm(seed: int):
+    """Yoon & Rhee (2003): a simulated 20/20 zig-zag and a 35 deg turn of ESSO OSAKA."""
+    from shipid.methods import ebm, ebm_trials
+
+    trials = [ebm_trials.simulate_trial("zigzag-20", 600.0, seed=seed + 1),
+              ebm_trials.simulate_trial("turning-35", 600.0, seed=seed + 2)]
+    res = ebm.identify(trials)
+    res.provenance.setdefault("seed", seed)
+    res.provenance.setdefault("command", "shipid demo (report step: simulated ESSO OSAKA trials)")
+    return res
+
+
+FALLBACKS: dict[str, Callable] = {"mass-cm": _fallback_mass_cm, "dp": _fallback_dp, "ebm": _fallback_ebm}
+
+
+def collect_results(ctx: DemoContext) -> dict[str, object]:
+    """Results produced by earlier steps: ``ctx.results`` and result JSON files in ``ctx.files``."""
+    from shipid.result import Result
+
+    found: dict[str, object] = {}
+    for name, res in (getattr(ctx, "results", None) or {}).items():
+        if isinstance(res, Result):
+            found[str(name)] = res
+    for path in list(ctx.files):
+        p = Path(path)
+        if p.suffix.lower() != ".json" or not p.is_file():
+            continue
+        try:
+            data = json.loads(p.read_text(encoding="utf-8"))
+            if isinstance(data, dict) and "method" in data and isinstance(data.get("estimates"), dict):
+                found.setdefault(p.stem, Result.from_dict(data))
+        except (OSError, ValueError, TypeError, KeyError):
+            continue
+    return found
+
+
+@demo_step("report", order=900, description="an HTML report for each method's result")
+def report_step(ctx: DemoContext) -> list[dict]:
+    """Write ``report-<name>.html`` for every result of this demo run (and the three methods)."""
+    from shipid.report.html import write_report
+
+    results = collect_results(ctx)
+    rows: list[dict] = []
+    have = {getattr(r, "method", None) for r in results.values()}
+    for method in METHODS:
+        if method in have:
+            continue
+        try:
+            res = FALLBACKS[method](ctx.seed)
+        except Exception as err:  # noqa: BLE001 - a method in progress must not stop the demo
+            rows.append({"result": method, "method": method,
+                         "report": f"skipped: {type(err).__name__}: {' '.join(str(err).split())[:120]}"})
+            continue
+        json_path = ctx.out_dir / f"result-{method}.json"
+        res.write_json(json_path, force=ctx.force)
+        ctx.files.append(json_path)
+        results[f"result-{method}"] = res
+    for name, res in results.items():
+        stem = name[len("result-"):] if name.startswith("result-") else name
+        path = ctx.out_dir / f"report-{stem}.html"
+        write_report(res, path, force=ctx.force)
+        ctx.files.append(path)
+        d = res.diagnostics or {}
+        rows.append({"result": name, "method": res.method, "estimates": str(len(res.estimates)),
+                     "converged": {True: "yes", False: "NO"}.get(d.get("converged"), "-"),
+                     "report": str(path)})
+    return rows
