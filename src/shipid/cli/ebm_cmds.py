@@ -1,0 +1,161 @@
+"""EBM commands (seed 002, Yoon & Rhee 2003).
+
+* ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--json]``
+* ``shipid study ebm-esso-osaka --input standard|optimal-prbs [--seed S] [--json]``
+* ``shipid design prbs --vessel esso-osaka [--json]``
+"""
+
+from __future__ import annotations
+
+import json
+
+import click
+import numpy as np
+
+from shipid.cli import CONTEXT, design, identify, study
+from shipid.errors import ShipidError
+
+
+def _config(paper: bool):
+    from shipid.methods.ebm import EbmConfig
+
+    # --paper: the paper's constant-Q Gauss–Markov force model (no rudder-aware noise)
+    return EbmConfig(rudder_q_gain=0.0) if paper else EbmConfig()
+
+
+def _check_vessel(vessel: str) -> str:
+    from shipid.vessels import load_vessel
+
+    v = load_vessel(vessel)
+    if v.name != "esso-osaka":
+        raise ShipidError(f"EBM needs the modified Abkowitz model; vessel {v.name!r} has none (use esso-osaka)")
+    return v.name
+
+
+def _print_coefficients(res) -> None:
+    from shipid.models import abkowitz as ab
+
+    click.echo(f"{'coefficient':<12}{'estimate':>13}{'std':>12}")
+    for name in ab.THETA_X_NAMES + ab.THETA_Y_NAMES + ab.THETA_N_NAMES:
+        e = res.estimates[name]
+        click.echo(f"{name:<12}{e.value:>13.4e}{e.std:>12.2e}")
+    cs, cd = res.estimates["current_speed"], res.estimates["current_direction"]
+    click.echo(f"current: {cs.value:.4f} ± {cs.std:.4f} m/s towards {np.rad2deg(cd.value):.2f} ± "
+               f"{np.rad2deg(cd.std):.2f} deg")
+    click.echo(f"{'mode':<8}{'kappa':>12}{'R^2':>9}{'Cp':>8}{'p':>4}{'k':>11}")
+    for m, d in res.diagnostics["modes"].items():
+        click.echo(f"{m:<8}{d['kappa']:>12.4e}{d['R2']:>9.4f}{d['Cp']:>8.3f}{d['p']:>4d}{d['k']:>11.3e}")
+    c = res.diagnostics["combined_eq21"]
+    click.echo(f"alpha (eq. 20) = {res.diagnostics['alpha']:.4f};  eq. 21: Y'v+Y'r/alpha = "
+               f"{c['Yv+Yr/alpha']:.4e},  N'v alpha+N'r = {c['Nv*alpha+Nr']:.4e}")
+
+
+@identify.command("ebm", context_settings=CONTEXT)
+@click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="Trial file (CSV or Parquet) with x, y, x_dot, y_dot, psi, U, delta, n; repeatable.")
+@click.option("--vessel", default="esso-osaka", show_default=True, help="Packaged vessel.")
+@click.option("--json", "as_json", is_flag=True, help="Print the Result as JSON.")
+@click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper (no rudder-aware noise).")
+@click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
+def identify_ebm(trials, vessel, as_json, paper, yaw_variant):
+    """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
+    from dataclasses import replace
+
+    from shipid.data.io import read_trial
+    from shipid.methods import ebm
+    from shipid.progress import progress_bar
+
+    vessel = _check_vessel(vessel)
+    data = [read_trial(p, required=list(ebm.REQUIRED), method="ebm", vessel=vessel) for p in trials]
+    cfg = replace(_config(paper), yaw_rudder_variant=yaw_variant)
+    with progress_bar(len(data), "EBM step 1 (EKF + smoother)") as advance:
+        res = ebm.identify(data, vessel, config=cfg, progress=advance)
+    if as_json:
+        click.echo(res.to_json())
+    else:
+        _print_coefficients(res)
+
+
+@study.command("ebm-esso-osaka", context_settings=CONTEXT)
+@click.option("--input", "kind", type=click.Choice(["standard", "optimal-prbs"]), default="standard",
+              show_default=True, help="Standard manoeuvres (Table 3) or the D-optimal PRBS (Table 5).")
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--scale", default=1.0, show_default=True, type=click.FloatRange(0.1, 10.0),
+              help="Scale the trial durations (quick runs < 1).")
+@click.option("--json", "as_json", is_flag=True)
+@click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
+def study_ebm(kind, seed, scale, as_json, paper):
+    """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
+    from shipid.methods.ebm_study import make_trials, study as run_study
+    from shipid.progress import progress_bar
+
+    n = 3 if kind == "standard" else 1
+    with progress_bar(n, f"EBM study ({kind})") as advance:
+        res = run_study(kind, seed, scale=scale, config=_config(paper), progress=advance)
+    if as_json:
+        click.echo(res.to_json())
+        return
+    d = res.diagnostics
+    click.echo(f"EBM study, ESSO OSAKA, input {kind}, seed {seed} ({d['paper_table']})")
+    click.echo(f"{'coefficient':<12}{'true':>12}{'estimated':>12}{'std':>11}{'error %':>9}")
+    for row in d["table"]:
+        click.echo(f"{row['coefficient']:<12}{row['true']:>12.3e}{row['estimated']:>12.3e}{row['se']:>11.2e}"
+                   f"{100 * row['rel_error']:>9.1f}")
+    for m, md in d["modes"].items():
+        click.echo(f"{m:<8} kappa {md['kappa']:.4e}  R^2 {md['R2']:.4f}  Cp {md['Cp']:.3f} (p = {md['p']})")
+    ce = d["combined_eq21_rel_error"]
+    click.echo(f"eq. 21 combined coefficients (alpha = {d['alpha']:.4f}): errors "
+               f"{100 * ce['Yv+Yr/alpha']:.2f} % and {100 * ce['Nv*alpha+Nr']:.2f} %")
+    click.echo(f"largest error of a linear coefficient: {100 * d['linear_max_rel_error']:.1f} %")
+    for tr in d["tracking_rms"]:
+        click.echo(f"step 1 {tr['manoeuvre']}: RMS(v_r) {tr['v_r']:.4f} m/s, RMS(r) {np.rad2deg(tr['r']):.2e} deg/s")
+    v = d.get("validation", {})
+    if v.get("diverged"):
+        click.echo(f"validation: simulation with identified coefficients failed ({v.get('error')})")
+    elif v:
+        click.echo(f"validation (held-out ±10 deg PRBS): RMS psi {np.rad2deg(v['psi']):.3f} deg, "
+                   f"RMS r {np.rad2deg(v['r']):.2e} deg/s, max position error {v['max_position_error_m']:.1f} m")
+    cs = res.estimates["current_speed"]
+    click.echo(f"current: {cs.value:.4f} m/s (true {np.hypot(*d['current_true']):.4f})")
+
+
+@design.command("prbs", context_settings=CONTEXT)
+@click.option("--vessel", default="esso-osaka", show_default=True)
+@click.option("--amplitudes", default="5,10,15,20,25,30,35", show_default=True, help="deg, comma-separated")
+@click.option("--periods", default="15,30,60,105,150,200", show_default=True, help="s, comma-separated")
+@click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000))
+@click.option("--seeds", default=2, show_default=True, type=click.IntRange(1, 50),
+              help="PRBS realisations averaged per grid point.")
+@click.option("--currents", default="", help="Also sweep the current speed (knots, comma-separated) at the optimum (Fig. 8).")
+@click.option("--json", "as_json", is_flag=True)
+def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, as_json):
+    """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7)."""
+    from shipid.analysis.design import current_sweep, prbs_grid
+    from shipid.progress import progress_bar
+
+    vessel = _check_vessel(vessel)
+    try:
+        A = [float(a) for a in amplitudes.split(",") if a.strip()]
+        T = [float(a) for a in periods.split(",") if a.strip()]
+        C = [float(a) for a in currents.split(",") if a.strip()]
+    except ValueError:
+        raise ShipidError("amplitudes, periods and currents must be comma-separated numbers") from None
+    if not A or not T or min(A) <= 0 or min(T) <= 0 or max(A) > 35:
+        raise ShipidError("need amplitudes in (0, 35] deg and positive periods")
+    with progress_bar(len(A) * len(T), "D-optimality grid") as advance:
+        g = prbs_grid(A, T, duration=duration, seeds=tuple(range(seeds)), vessel=vessel, progress=advance)
+    out = g.to_dict()
+    a, per, val = g.optimum("sway")
+    if C:
+        out["current_sweep"] = current_sweep(a, per, C, duration=duration, seeds=tuple(range(seeds)), vessel=vessel)
+    if as_json:
+        click.echo(json.dumps(out, indent=2))
+        return
+    click.echo("log10 |W'W| of the sway (= yaw) regressors; rows amplitude (deg), columns period (s)")
+    click.echo(" " * 8 + "".join(f"{p:>9g}" for p in g.periods))
+    for i, amp in enumerate(g.amplitudes):
+        click.echo(f"{amp:>8g}" + "".join(f"{v:>9.2f}" for v in g.sway[i]))
+    click.echo(f"optimum: amplitude {a:g} deg, period {per:g} s (log10 |W'W| = {val:.2f})")
+    if C:
+        cs = out["current_sweep"]
+        click.echo("current (kn): " + ", ".join(f"{s:g}: {v:.2f}" for s, v in zip(cs["speeds_knot"], cs["sway"])))

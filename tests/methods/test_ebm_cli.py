@@ -1,0 +1,68 @@
+"""CLI of the EBM method: identify ebm, study ebm-esso-osaka, design prbs."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from shipid.cli import main
+from shipid.data.io import write_trial
+from shipid.methods.ebm_trials import simulate_trial
+
+
+@pytest.fixture(scope="module")
+def trial_files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ebm")
+    paths = []
+    for i, (m, dur) in enumerate([("turning-35", 300.0), ("zigzag-20", 400.0)]):
+        p = d / f"t{i}.csv"
+        write_trial(simulate_trial(m, dur, seed=i), p)
+        paths.append(str(p))
+    return paths
+
+
+def test_identify_ebm_json(trial_files, capsys, monkeypatch):
+    monkeypatch.setenv("SHIPID_NO_PROGRESS", "1")
+    argv = ["identify", "ebm", "--vessel", "esso-osaka", "--json"]
+    for p in trial_files:
+        argv += ["--trial", p]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "ebm"
+    for k in ("Y_v", "N_r", "eta_CR", "current_speed", "current_direction"):
+        assert k in out["estimates"] and np.isfinite(out["estimates"][k]["std"])
+    assert set(out["diagnostics"]["modes"]) == {"surge", "sway", "yaw"}
+    for m in out["diagnostics"]["modes"].values():
+        assert {"kappa", "R2", "Cp"} <= set(m)
+    # current of §5.1: 2 kn = 1.029 m/s towards 45°
+    assert out["estimates"]["current_speed"]["value"] == pytest.approx(1.029, abs=0.02)
+    assert np.rad2deg(out["estimates"]["current_direction"]["value"]) == pytest.approx(45.0, abs=2.0)
+
+
+def test_identify_ebm_missing_channel_is_one_line_exit_2(tmp_path, capsys):
+    p = tmp_path / "bad.csv"
+    p.write_text("t [s],x [m],y [m]\n0,0,0\n1,1,1\n2,2,2\n")
+    assert main(["identify", "ebm", "--trial", str(p)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "x_dot" in err
+
+
+def test_identify_ebm_wrong_vessel(trial_files, capsys):
+    assert main(["identify", "ebm", "--trial", trial_files[0], "--vessel", "supply"]) == 2
+
+
+def test_design_prbs_subprocess():
+    r = subprocess.run([sys.executable, "-m", "shipid", "design", "prbs", "--amplitudes", "10,35",
+                        "--periods", "105", "--duration", "400", "--seeds", "1", "--json"],
+                       capture_output=True, text=True, timeout=300, env={**__import__("os").environ,
+                                                                         "SHIPID_NO_PROGRESS": "1"})
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["optimum_sway"]["amplitude_deg"] == 35.0  # larger rudder, better conditioned (Fig. 7)
+    assert len(out["log10_det_sway"]) == 2
+
+
+def test_design_prbs_bad_grid(capsys):
+    assert main(["design", "prbs", "--amplitudes", "50"]) == 2
