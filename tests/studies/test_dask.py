@@ -77,7 +77,25 @@ def test_killed_worker_mid_campaign_still_equals_local(cluster, local_reference,
     assert dead_pid not in set(client.run(lambda: __import__("os").getpid()).values())
 
 
-def test_dask_local_executor_starts_its_own_cluster(local_reference):
-    res = run_campaign(TOY, 400, 21, kwargs=KW, executor="dask-local", workers=2, progress=False)
-    assert res.executor == "dask-local" and res.workers == 2
-    assert _key(res) == _key(local_reference)
+def test_dask_local_cli_into_store_equals_local(local_reference, tmp_path):
+    """`shipid study toy --dask-local 2 --store F` starts its own LocalCluster; the store equals the local run."""
+    from shipid.studies.store import CampaignStore
+
+    store = str(tmp_path / "dl.sqlite")
+    assert main(["study", "toy", "--runs", "400", "--seed", "21", "--points", "50", "--fail-every", "61",
+                 "--dask-local", "2", "--store", store, "--json"]) == 0
+    with CampaignStore(store) as st:
+        recs = st.records("toy")
+    assert [(r.index, r.seed, r.outputs, r.status, r.error) for r in recs] == \
+        [(r.index, r.seed, r.outputs, r.status, r.error) for r in local_reference.records]
+
+
+def test_run_that_always_kills_its_dask_worker_is_recorded_failed(local_reference):
+    """Dask gives up on the chunk (KilledWorker); the engine splits it and records only the guilty run."""
+    dask = pytest.importorskip("dask")
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):   # fewer worker restarts: faster test
+        res = run_campaign(TOY, 400, 21, kwargs={**KW, "die_at": 77}, executor="dask-local", workers=2,
+                           progress=False)
+    assert [r.index for r in res.failed if r.error.startswith("WorkerDied")] == [77]
+    others = [k for k in range(400) if k != 77]
+    assert [res.records[k].outputs for k in others] == [local_reference.records[k].outputs for k in others]
