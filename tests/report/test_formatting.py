@@ -47,3 +47,36 @@ def test_fmt_num(x, text):
 
 def test_no_negative_zero():
     assert fmt_fixed(-0.0001, 2) == "0.00"
+
+
+_SUP_BACK = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+
+
+def _parse(text: str, scale: str) -> tuple[float, float]:
+    """(number, half of its last digit) of a formatted cell, shared power of ten applied."""
+    s = text.replace("−", "-")
+    k = 10.0 ** int(scale.replace("×10", "").translate(_SUP_BACK)) if scale else 1.0
+    decimals = len(s.split(".")[1]) if "." in s else 0
+    trailing = 0 if "." in s else len(s) - len(s.rstrip("0"))
+    half = 0.5 * 10.0 ** (-decimals) if "." in s else 0.5 * 10.0 ** trailing
+    return float(s) * k, half * k
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-1e9, 1e9, allow_nan=False).filter(lambda v: v == 0 or abs(v) > 1e-9),
+       st.floats(1e-7, 1e8, allow_nan=False))
+def test_rounding_is_faithful_and_keeps_two_se_digits(value, std):
+    if abs(value) > 1e12 * std:  # beyond what float64 can show with two SE digits
+        return
+    f = format_estimate(value, std)
+    unit = 10.0 ** (math.floor(math.log10(std)) - 1)   # second significant digit of the SE
+    for text, true in ((f.value, value), (f.std, std)):
+        shown, half = _parse(text, f.scale)
+        # rounded at the SE's second significant digit: faithful to half that unit ...
+        assert abs(shown - true) <= 0.5 * unit * (1 + 1e-6) + 1e-12 * abs(true)
+        # ... and a decimal string shows exactly down to that digit
+        if "." in text:
+            assert math.isclose(half, 0.5 * unit, rel_tol=1e-6)

@@ -113,6 +113,6 @@ def format_estimate(value: float, std: float) -> FormattedEstimate:
     E = e_big
     k = 10.0 ** E
     d = max(1 - (e_std - E), 0)
-    d = min(d, 12)
+    d = min(d, 15)  # float64 carries ~16 significant digits
     return FormattedEstimate(fmt_fixed(v / k, d), fmt_fixed(s / k, d), fmt_fixed(lo / k, d),
                              fmt_fixed(hi / k, d), rel, _pow10(E))

@@ -179,6 +179,8 @@ def _header(result) -> str:
         bits.append(f"vessel <b>{esc(str(vessel))}</b>")
     if prov.get("created"):
         bits.append(f"created {esc(str(prov['created']))}")
+    if prov.get("shipid_version"):
+        bits.append(f"shipid {esc(str(prov['shipid_version']))}")
     return (f'<header class="top"><h1>{esc(title)}</h1><div class="sub">{" · ".join(bits)}</div></header>')
 
 
