@@ -28,6 +28,8 @@ import scipy.linalg as sla
 
 from shipid.estimate.linalg import check_positive_definite, symmetrize
 
+LOG2PI = float(np.log(2.0 * np.pi))
+
 
 @dataclass(frozen=True)
 class FilterResult:
@@ -105,19 +107,20 @@ def taylor_discretise(F: np.ndarray, Q: np.ndarray, h: float, *, tol: float = 1e
     """
     n = F.shape[0]
     Fh = F * h
-    Phi = np.eye(n)
-    term = np.eye(n)
-    C = Q * h
-    Qd = C.copy()
-    nphi = 1.0
-    nq = float(np.max(np.abs(Qd))) or 1.0
-    for k in range(1, max_terms):
-        term = (term @ Fh) / k
+    FhT = Fh.T
+    Phi = np.eye(n) + Fh
+    term = Fh
+    C = (Fh @ Q + Q @ FhT) * (0.5 * h)
+    Qd = Q * h + C
+    qscale = float(np.abs(Qd).max()) or 1.0
+    for k in range(2, max_terms):
+        term = (term @ Fh) * (1.0 / k)
+        C = (Fh @ C + C @ FhT) * (1.0 / (k + 1))
         Phi += term
-        C = (Fh @ C + C @ Fh.T) / (k + 1)
         Qd += C
-        if (np.max(np.abs(term)) <= tol * nphi) and (np.max(np.abs(C)) <= tol * nq):
-            return Phi, symmetrize(Qd)
+        # convergence: both new terms negligible (Φ has unit diagonal)
+        if np.abs(term).max() <= tol and np.abs(C).max() <= tol * qscale:
+            return Phi, 0.5 * (Qd + Qd.T)
     return van_loan(F, Q, h)
 
 
@@ -186,7 +189,8 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
             Fk = F(t[k - 1], x)
             Phi_k, Qd_k = taylor_discretise(Fk, Q[k - 1] if Q_per_step else Q, hk)
             x = rk4_propagate(f, t[k - 1], x, hk, substeps)
-            P = symmetrize(Phi_k @ P @ Phi_k.T + Qd_k)
+            P = Phi_k @ P @ Phi_k.T + Qd_k
+            P = 0.5 * (P + P.T)
             Phi[k - 1] = Phi_k
             Qd[k - 1] = Qd_k
         x_pred[k] = x
@@ -195,28 +199,43 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
         ok = np.isfinite(zk)
         Hk = H(t[k], x)
         H_all[k] = Hk
-        if ok.any():
-            Hm = Hk[ok]
-            Rm = R[np.ix_(ok, ok)]
-            nu = zk[ok] - h(t[k], x)[ok]
-            S = symmetrize(Hm @ P @ Hm.T + Rm)
-            cf = sla.cho_factor(S, lower=True, check_finite=False)
-            K = sla.cho_solve(cf, Hm @ P, check_finite=False).T
+        all_ok = bool(ok.all())
+        if all_ok or ok.any():
+            if all_ok:  # fast path: no indexing
+                Hm, Rm = Hk, R
+                nu = zk - h(t[k], x)
+            else:
+                Hm = Hk[ok]
+                Rm = R[np.ix_(ok, ok)]
+                nu = zk[ok] - h(t[k], x)[ok]
+            HP = Hm @ P
+            S = HP @ Hm.T + Rm
+            S = 0.5 * (S + S.T)
+            # one Cholesky and one triangular-solve pair for [S⁻¹H | S⁻¹ν]
+            L = np.linalg.cholesky(S)
+            SiB = sla.cho_solve((L, True), np.column_stack([Hm, nu]), check_finite=False)
+            SiH = SiB[:, :-1]
+            Sinv_nu = SiB[:, -1]
+            K = (SiH @ P).T  # P Hᵀ S⁻¹ (P symmetric)
             x = x + K @ nu
             ikh = I - K @ Hm
             # Joseph form: stays symmetric positive semi-definite under rounding
-            P = symmetrize(ikh @ P @ ikh.T + K @ Rm @ K.T)
-            Sinv_nu = sla.cho_solve(cf, nu, check_finite=False)
+            P = ikh @ P @ ikh.T + K @ Rm @ K.T
+            P = 0.5 * (P + P.T)
             HSn[k] = Hm.T @ Sinv_nu
-            HSH[k] = Hm.T @ sla.cho_solve(cf, Hm, check_finite=False)
+            HSH[k] = Hm.T @ SiH
             nis[k] = float(nu @ Sinv_nu)
-            logdet = 2.0 * np.sum(np.log(np.diag(cf[0])))
-            loglik += -0.5 * (nis[k] + logdet + ok.sum() * np.log(2 * np.pi))
-            innov[k, ok] = nu
-            S_all[k][np.ix_(ok, ok)] = S
-            K_all[k][:, ok] = K
-            if not ok.all():  # record the Jacobian with missing rows zeroed for the smoother
-                H_all[k][~ok] = 0.0
+            logdet = 2.0 * float(np.sum(np.log(np.diag(L))))
+            loglik += -0.5 * (nis[k] + logdet + nu.size * LOG2PI)
+            if all_ok:
+                innov[k] = nu
+                S_all[k] = S
+                K_all[k] = K
+            else:
+                innov[k, ok] = nu
+                S_all[k][np.ix_(ok, ok)] = S
+                K_all[k][:, ok] = K
+                H_all[k][~ok] = 0.0  # missing rows zeroed for the smoother
         else:
             H_all[k][:] = 0.0
         if check_pd and (k % 50 == 0 or k == N - 1):
