@@ -23,6 +23,7 @@ CHANNELS: dict[str, str] = {
     "p": "rad/s", "phi": "rad",                # roll rate and roll angle
     "x_dot": "m/s", "y_dot": "m/s",            # earth-fixed velocities (DGPS, seed 002 eq. 8)
     "U": "m/s",                                # speed (log)
+    "u_r": "m/s", "v_r": "m/s",                # velocities relative to the water (seed 002 eq. 2)
     "delta": "rad", "n": "1/s",                # rudder angle, propeller revolutions
     "a_s": "m/s^2",                            # IMU tangential acceleration (seed 000 eq. 8)
     "p1": "-", "p2": "-", "p3": "-", "p4": "-", "p5": "-", "p6": "-",  # thruster pitch ratios
