@@ -180,3 +180,13 @@ def test_not_a_store_is_one_line(tmp_path, capsys):
     assert main(["study", "toy", "--runs", "3", "--store", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "not a usable campaign store" in err
+
+
+def test_two_campaign_processes_never_share_a_store(tmp_path):
+    store = tmp_path / "s.sqlite"
+    with CampaignStore(store, writer=True):
+        with pytest.raises(ShipidError, match="in use by another running campaign"):
+            run_campaign(TOY, 3, 0, workers=1, store=store, progress=False)
+        with CampaignStore(store) as reader:   # readers are never locked out
+            assert reader.campaign_names() == []
+    assert run_campaign(TOY, 3, 0, workers=1, store=store, progress=False).n_ok == 3

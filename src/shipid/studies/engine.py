@@ -267,7 +267,7 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         done: set[int] = set()
         memory: dict[int, RunRecord] = {}
         if store is not None:
-            st = stack.enter_context(CampaignStore(store))
+            st = stack.enter_context(CampaignStore(store, writer=True))
             old = st.definition(name)
             if old is None:
                 st.create(definition)

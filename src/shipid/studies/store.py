@@ -110,12 +110,20 @@ class CampaignStore:
     ----------
     path : path-like
         The SQLite file.
+    writer : bool
+        Open it to run a campaign into: takes an exclusive lock (``flock`` on
+        ``<path>.lock``, released when the process ends, even by SIGKILL) so that two
+        campaign processes never write one store at once. Readers (export, info) need
+        no lock: WAL lets them read while a campaign writes.
     """
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, *, writer: bool = False):
         self.path = Path(path)
+        self._lock = None
         if self.path.exists() and self.path.is_dir():
             raise ShipidError(f"{path}: store is a directory, not a file")
+        if writer:
+            self._lock = _exclusive_lock(self.path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._con = sqlite3.connect(str(self.path), timeout=60.0, isolation_level=None)
@@ -123,12 +131,19 @@ class CampaignStore:
             self._con.execute("PRAGMA synchronous=FULL")
             self._con.executescript(SCHEMA)
         except sqlite3.DatabaseError as err:
+            self._release()
             raise ShipidError(f"{path}: not a usable campaign store ({err})") from None
 
     # -- life cycle ---------------------------------------------------------------
     def close(self) -> None:
-        """Close the connection (the file stays)."""
+        """Close the connection and release the writer lock (the file stays)."""
         self._con.close()
+        self._release()
+
+    def _release(self) -> None:
+        if self._lock is not None:
+            self._lock.close()   # closing the descriptor releases the flock
+            self._lock = None
 
     def __enter__(self) -> "CampaignStore":
         return self
@@ -182,10 +197,16 @@ class CampaignStore:
         """
         data = [(name, r["index"], json.dumps(r["seed"]), r["inputs_json"], r["outputs_json"],
                  r["status"], r["error"], r["wall_s"], r["worker"], r.get("cpu_s")) for r in rows]
-        with self._transaction():
-            self._con.executemany(
-                "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s) "
-                "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
+        try:
+            with self._transaction():
+                self._con.executemany(
+                    "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
+        except sqlite3.IntegrityError:
+            raise
+        except sqlite3.Error as err:  # disk full, I/O error ...: one line; committed chunks stay
+            raise ShipidError(f"{self.path}: cannot write runs ({err}); finished chunks are kept, "
+                              "--resume continues") from None
 
     def records(self, name: str) -> list[RunRecord]:
         """All stored runs of ``name`` in run order."""
@@ -208,6 +229,23 @@ class CampaignStore:
                 return False
 
         return _Tx()
+
+
+def _exclusive_lock(path: Path):
+    """Open ``<path>.lock`` and take a non-blocking exclusive ``flock`` on it, or raise one line."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no cross-process guard
+        return None
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fh = open(f"{path}.lock", "a+")
+    try:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.close()
+        raise ShipidError(f"{path}: store is in use by another running campaign; "
+                          "wait for it to finish (or use another --store)") from None
+    return fh
 
 
 def records_frame(records: list[RunRecord], campaign: str | None = None):
