@@ -183,6 +183,13 @@ def _residual_row(ctx: RenderContext, name: str, unit: str, st) -> None:
     ctx.residual_rows.append((name, unit, st))
 
 
+def _pvalue(p: float) -> str:
+    """A p-value with 2 significant digits; below 10⁻¹⁰ shown as a bound (the χ² tail underflows)."""
+    if not np.isfinite(p):
+        return "—"
+    return "&lt; 10⁻¹⁰" if p < 1e-10 else fmt_num(p, 2)
+
+
 def residual_stats_table(ctx: RenderContext) -> str:
     """Whiteness / consistency of every residual drawn (Box–Jenkins ACF bounds, Ljung–Box)."""
     if not ctx.residual_rows:
@@ -201,7 +208,7 @@ def residual_stats_table(ctx: RenderContext) -> str:
             f"<td class='num'>{fmt_num(st.rms, 3)}</td><td>{esc(unit or '-')}</td>"
             f"<td class='num{' flag' if white_bad else ''}'>"
             f"{'—' if not np.isfinite(frac) else f'{100 * frac:.0f} % of {st.max_lag}'}</td>"
-            f"<td class='num{' flag' if lb_bad else ''}'>{fmt_num(st.ljung_box_p, 2)}</td>"
+            f"<td class='num{' flag' if lb_bad else ''}'>{_pvalue(st.ljung_box_p)}</td>"
             f"<td class='num{' flag' if in2_bad else ''}'>{'—' if not np.isfinite(in2) else f'{100 * in2:.1f} %'}"
             "</td></tr>")
     ctx.residual_rows = []
@@ -231,7 +238,8 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
                 resid, std = meas - mod, None
             st, r = residual_stats(resid, std)
             _residual_row(ctx, label, entry.get("unit", ""), st)
-            what = "validation (not used for estimation)" if entry.get("kind") == "validation" else "fit"
+            what = "validation data, not used for estimation" if entry.get("kind") == "validation" else \
+                "data used for estimation"
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: measured and model ({what}); residual and its "
                              f"autocorrelation with 95 % white-noise bounds.", paper)
