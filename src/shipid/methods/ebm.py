@@ -108,6 +108,8 @@ class StateEstimate:
     current: np.ndarray          # (c_x, c_y) from the smoothed initial state
     current_std: np.ndarray
     passes: int
+    model: EbmModel | None = None
+    first_pass_current: np.ndarray | None = None
 
     def series(self, name: str) -> np.ndarray:
         from shipid.models.ebm_state import STATE_NAMES
@@ -150,6 +152,7 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
     Q = process_noise(model, np.asarray(trial["delta"], dtype=float), config)
     smooth_fn = mbf_smoother if config.smoother == "mbf" else rts_smoother
     current = np.zeros(2)
+    first = None
     x0 = initial_state(z[0], model)
     P0 = _prior_cov(False)
     fr = sm = None
@@ -172,9 +175,26 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
             raise ShipidError(f"EBM step 1 failed on {trial.meta.get('source', 'trial')}: {err}") from None
         sm = smooth_fn(fr)
         current = sm.x[0, 15:17].copy()
+        if first is None:
+            first = current.copy()
     cstd = sm.std[0, 15:17]
     return StateEstimate(trial=trial, filt=fr, smooth=sm, current=current, current_std=cstd,
-                         passes=max(1, config.passes))
+                         passes=max(1, config.passes), model=model, first_pass_current=first)
+
+
+def observability_report(state: StateEstimate, points: int = 20) -> dict:
+    """Eq. 11 rank along the smoothed trajectory, relative and absolute position (§3.2)."""
+    from shipid.analysis.observability import ebm_observability
+
+    conds = ab.trial_conditions()
+    std = np.array([conds["sigma_xy"], conds["sigma_xy"], conds["sigma_xy_dot"], conds["sigma_xy_dot"],
+                    conds["sigma_psi"], conds["sigma_u_log"]])
+    every = max(1, state.smooth.t.size // points)
+    o = ebm_observability(state.model, state.smooth.t, state.smooth.x, std, every=every)
+    return {k: {"n": v.n, "min_rank": int(v.rank.min()), "max_rank": int(v.rank.max()),
+                "full_rank_fraction": v.full_rank_fraction,
+                "smallest_relative_singular_value": float(v.min_rel_sv.min()), "points": int(v.rank.size)}
+            for k, v in o.items()}
 
 
 @dataclass(frozen=True)
@@ -294,7 +314,10 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
                           "packaged_true": {"Yv+Yr/alpha": comb_true[0], "Nv*alpha+Nr": comb_true[1]}},
         "trials": [{"source": s.trial.meta.get("source", ""), "manoeuvre": s.trial.meta.get("manoeuvre", ""),
                     "n": int(s.trial.t.size), "mean_nis": float(np.nanmean(s.filt.nis)),
-                    "current": s.current.tolist(), "passes": s.passes} for s in states],
+                    "current": s.current.tolist(), "passes": s.passes,
+                    "first_pass_current": None if s.first_pass_current is None else s.first_pass_current.tolist(),
+                    "observability_eq11": observability_report(s) if s.model is not None else None}
+                   for s in states],
     }
     st0 = states[0]
     series = {"t": st0.smooth.t[::5], "u_r": st0.smooth.x[::5, 0], "v_r": st0.smooth.x[::5, 1],
