@@ -189,7 +189,7 @@ def _as_callable(a: Any) -> Callable[[int], np.ndarray]:
 def augmented_ekf(model: AugmentedModel, x0: np.ndarray, theta0: np.ndarray, P0: np.ndarray,
                   Q: np.ndarray | Callable[[int], np.ndarray], R: np.ndarray | Callable[[int], np.ndarray],
                   measurements: np.ndarray, inputs: np.ndarray | None = None, *,
-                  store_covariances: bool = False) -> AugmentedEKFResult:
+                  store_covariances: bool = False, consider: Sequence[int] | None = None) -> AugmentedEKFResult:
     """State-augmented discrete EKF of Table 1 (eqs. 15–19).
 
     Parameters
@@ -211,6 +211,12 @@ def augmented_ekf(model: AugmentedModel, x0: np.ndarray, theta0: np.ndarray, P0:
         ``u(k)``, applied over the step k → k+1.
     store_covariances : bool
         Keep every filtered covariance in the result (memory n · nξ²).
+    consider : sequence of int, optional
+        Indices of ξ that are *considered* but not estimated (Schmidt–Kalman consider
+        filter): their rows of the gain are zero, so their estimates stay where they
+        are, while their uncertainty still enters the covariances of everything else.
+        The Joseph form is exact for such a suboptimal gain. This is how a parameter
+        "frozen" from an earlier identification keeps its uncertainty.
 
     Returns
     -------
@@ -236,6 +242,7 @@ def augmented_ekf(model: AugmentedModel, x0: np.ndarray, theta0: np.ndarray, P0:
     check_positive_definite(P, "P0")
     Qf, Rf = _as_callable(Q), _as_callable(R)
     resid = model.residual or (lambda z, zp: z - zp)
+    cons = None if consider is None or len(consider) == 0 else np.asarray(consider, dtype=int)
 
     def fjac(k, x, u, th):
         if model.f_jac is not None:
@@ -279,6 +286,8 @@ def augmented_ekf(model: AugmentedModel, x0: np.ndarray, theta0: np.ndarray, P0:
                 H, Rm, nu = Hfull[ok], Rk[np.ix_(ok, ok)], resid(z, zp)[ok]
             try:
                 Kg, S = kalman_gain(P, H, Rm)
+                if cons is not None:
+                    Kg[cons] = 0.0
                 xi = xi + Kg @ nu
                 P = joseph_update(P, Kg, H, Rm)
                 check_positive_definite(P, f"P at step {k}")
@@ -368,7 +377,8 @@ def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], thet
                            Qx: Sequence[np.ndarray] | np.ndarray, Qtheta: np.ndarray,
                            R: Sequence[np.ndarray] | np.ndarray, measurements: Sequence[np.ndarray],
                            inputs: Sequence[np.ndarray] | None = None, *,
-                           models: Sequence[AugmentedModel] | None = None) -> ParallelEKFResult:
+                           models: Sequence[AugmentedModel] | None = None,
+                           consider_theta: Sequence[int] | None = None) -> ParallelEKFResult:
     """Parallel augmented EKF over N ≥ 1 trials sharing one parameter vector (eqs. 20–25).
 
     The trials are stacked as ``ξ = [x1; …; xN; θ]`` with ``𝓕 = [f(x1,u1,θ); …; f(xN,uN,θ); θ]``
@@ -396,6 +406,9 @@ def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], thet
     inputs : sequence of ndarray (n_i, nu) or None
     models : sequence of AugmentedModel, optional
         Per-trial models (e.g. different sampling intervals); default ``[model] * N``.
+    consider_theta : sequence of int, optional
+        Indices of θ that are considered, not estimated (see ``consider`` of
+        :func:`augmented_ekf`).
 
     Returns
     -------
@@ -490,8 +503,9 @@ def parallel_augmented_ekf(model: AugmentedModel, x0: Sequence[np.ndarray], thet
         P0[sx[i], sx[i]] = P0xs[i]
     P0[N * nx:, N * nx:] = np.asarray(P0theta, dtype=float)
     big = AugmentedModel(f=f, h=h, nx=N * nx, ntheta=p, f_jac=fjac, h_jac=hjac, residual=residual)
+    cons = None if not consider_theta else [N * nx + int(i) for i in consider_theta]
     res = augmented_ekf(big, np.concatenate([np.asarray(x, dtype=float) for x in x0]), theta0, P0, Q, Rbig,
-                        Zpad, Upad)
+                        Zpad, Upad, consider=cons)
     xs = [res.x[:lens[i], sx[i]] for i in range(N)]
     xv = [res.P_diag[:lens[i], sx[i]] for i in range(N)]
     inn = [res.innovations[:lens[i], i * nz:(i + 1) * nz] for i in range(N)]

@@ -19,9 +19,11 @@ along the ship's x axis. It is computed from the position fixes as
 which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ + ẏ sin ψ = u``).
 
 The reported standard deviations are the EKF's (square roots of the diagonal of P̂ at
-the end); the parameters frozen from an earlier scheme are treated as exact in the later
-ones, so cross-scheme correlations are not represented (the covariance is block
-diagonal by scheme).
+the end). The parameters frozen from an earlier scheme keep their values (as in the
+paper) but are *considered* in the later schemes (Schmidt–Kalman consider states: in the
+augmented state with their covariance, zero gain), so their uncertainty is carried into
+the later standard deviations and the reported 9 × 9 covariance holds the cross-scheme
+correlations.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from shipid.errors import ConvergenceError, InputError
 from shipid.estimate.ekf_augmented import AugmentedModel, ParallelEKFResult, parallel_augmented_ekf, rk4_map
 from shipid.models import dp
 from shipid.models.thrusters import control_vector
+from shipid.report.convention import history, table
 from shipid.result import Estimate, Result
 
 #: Free parameters (0-based indices into θ1..θ9) of each scheme, Fig. 4 / eqs. 46–47.
@@ -64,6 +67,11 @@ class DPOptions:
         Intensity of the momentum process noise w_h (eq. 35), bis force² × bis time.
     q_b : float
         Intensity of the bias random walk w_b (eq. 37), bis force² per bis time.
+        For ``q_h``, ``q_b`` and ``b0_std`` the yaw component is scaled by ``yaw_arm``
+        (a moment arm in units of L: environmental moments are forces times a lever
+        much shorter than L).
+    yaw_arm : float
+        That lever, in L.
     q_theta : float
         Intensity of the parameter random walk w_θ (eq. 38) relative to the prior
         variance, per bis time (0: constant parameters).
@@ -72,12 +80,18 @@ class DPOptions:
     h0_std : float
         Prior std of the initial momentum (bis).
     b0_std : float
-        Prior std of the initial bias (bis force).
+        Prior std of the initial bias (bis force); 1e-3 m g ≈ 60 kN for the supply vessel,
+        a generous bound on the mean environmental force in DP-trial weather. A much wider
+        prior (3e-3 was tried) lets the early EKF steps trade thrust for bias and biases
+        the sway-yaw estimates (measured: error/σ up to 7 on single seeds).
     current_states : bool
         SI2/SI3: keep the current of eq. 8 as two earth-fixed states (see
         :func:`shipid.models.dp.momentum_current_rhs`) besides the body bias b_h of eq. 35.
-        Without them a current turning in the body frame with the heading must be followed by
-        b_h alone, and the large bias random walk needed for that absorbs thrust information.
+        Off by default (the paper's model). Measured on simulated trials with a 0.3 m/s
+        current: without them b_h cannot follow the current force as the heading turns and
+        SI2 is biased; with them the product A_h·ν_c makes the EKF fragile (biased in about
+        half of the seeds tried). Neither is reliable with a strong current; prefer trials
+        in slack water.
     current0_std : float
         Prior std of each current component, m/s.
     q_c : float
@@ -93,12 +107,13 @@ class DPOptions:
     sigma_psi: float = float(np.deg2rad(0.25))
     q_h: float = 1e-8
     q_b: float = 1e-10
+    yaw_arm: float = 0.1
     q_theta: float = 0.0
     theta0: tuple = tuple(THETA_START)
     theta0_std: tuple = tuple(THETA_START_STD)
     h0_std: float = 0.05
-    b0_std: float = 3e-3
-    current_states: bool = True
+    b0_std: float = 1e-3
+    current_states: bool = False
     current0_std: float = 0.5
     q_c: float = 1e-7
     passes: int = 2
@@ -118,6 +133,17 @@ class StageResult:
     theta_full: np.ndarray
     seconds: float
     diagnostics: dict = field(default_factory=dict)
+    est: tuple[int, ...] = ()
+    theta_cov: np.ndarray | None = None
+
+    @property
+    def free_theta(self) -> np.ndarray:
+        """History of the free parameters, ``(n, len(free))``."""
+        return self.ekf.theta[:, [self.est.index(i) for i in self.free]]
+
+    @property
+    def free_std(self) -> np.ndarray:
+        return self.ekf.theta_std[:, [self.est.index(i) for i in self.free]]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -248,7 +274,8 @@ def _momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int
 # One scheme
 # ---------------------------------------------------------------------------------------------
 def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_full: np.ndarray,
-              options: DPOptions = DPOptions(), *, free: Sequence[int] | None = None) -> StageResult:
+              options: DPOptions = DPOptions(), *, free: Sequence[int] | None = None,
+              theta_cov: np.ndarray | None = None) -> StageResult:
     """Run one identification scheme (SI1, SI2 or SI3) as a parallel augmented EKF over ``trials``.
 
     Parameters
@@ -264,6 +291,11 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     options : DPOptions
     free : sequence of int, optional
         Free parameter indices (default :data:`STAGES`\\[name]).
+    theta_cov : ndarray (9, 9), optional
+        Covariance of the parameters found by earlier schemes (zero rows for the others).
+        Those parameters are frozen at their values as the paper does, but *considered*
+        (Schmidt–Kalman, see :func:`shipid.estimate.ekf_augmented.augmented_ekf`): their
+        uncertainty is carried into the standard deviations of this scheme's parameters.
     """
     if not trials:
         raise InputError(f"{name} needs at least one {STAGE_KIND[name]} trial")
@@ -271,11 +303,20 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     kind = STAGE_KIND[name]
     b = vessel.bis
     data = [_prepare(tr, vessel, kind) for tr in trials]
-    th0 = np.asarray(theta_full, dtype=float)[list(free)]
+    relevant = (0, 5, 8) if kind == "surge" else tuple(range(9))
+    cov_prev = np.zeros((9, 9)) if theta_cov is None else np.asarray(theta_cov, dtype=float)
+    consider = [i for i in relevant if i not in free and cov_prev[i, i] > 0]
+    est = sorted(set(free) | set(consider))
+    fpos = [est.index(i) for i in free]
+    cpos = [est.index(i) for i in consider]
+    th0 = np.asarray(theta_full, dtype=float)[est]
     std0 = np.asarray(options.theta0_std, dtype=float)[list(free)]
-    P0t = np.diag(std0 ** 2)
+    P0t = cov_prev[np.ix_(est, est)].copy()
+    P0t[fpos, :] = 0.0
+    P0t[:, fpos] = 0.0
+    P0t[fpos, fpos] = std0 ** 2
     if kind == "surge":
-        models = [_surge_model(vessel, np.asarray(theta_full, float), free, d["t"]) for d in data]
+        models = [_surge_model(vessel, np.asarray(theta_full, float), est, d["t"]) for d in data]
         x0 = [np.array([0.0, d["Z"][0, 0], 0.0]) for d in data]
         sp = options.sigma_pos / b.L
         P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
@@ -285,47 +326,55 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
             return lambda k: np.diag([options.q_h * dt[k], 0.0, options.q_b * dt[k]])
     else:
         cur = options.current_states
-        models = [_momentum_model(vessel, np.asarray(theta_full, float), free, d["t"], cur) for d in data]
+        models = [_momentum_model(vessel, np.asarray(theta_full, float), est, d["t"], cur) for d in data]
         nc = 2 if cur else 0
         x0 = [np.concatenate([np.zeros(3), d["Z"][0], np.zeros(3 + nc)]) for d in data]
         sp = options.sigma_pos / b.L
         c0 = options.current0_std / b.speed
         qc = options.q_c / b.speed ** 2 * b.time  # (m/s)²/s → bis speed² per bis time
-        P0x = np.diag([options.h0_std ** 2] * 3 + [sp ** 2, sp ** 2, options.sigma_psi ** 2]
-                      + [options.b0_std ** 2] * 3 + [c0 ** 2] * nc)
+        a2 = np.array([1.0, 1.0, options.yaw_arm ** 2])
+        P0x = np.diag(np.concatenate([[options.h0_std ** 2] * 3, [sp ** 2, sp ** 2, options.sigma_psi ** 2],
+                                      options.b0_std ** 2 * a2, [c0 ** 2] * nc]))
         R = np.diag([sp ** 2, sp ** 2, options.sigma_psi ** 2])
 
         def make_Q(dt):
-            return lambda k: np.diag([options.q_h * dt[k]] * 3 + [0.0] * 3 + [options.q_b * dt[k]] * 3
-                                     + [qc * dt[k]] * nc)
+            return lambda k: np.diag(np.concatenate([options.q_h * dt[k] * a2, np.zeros(3),
+                                                     options.q_b * dt[k] * a2, [qc * dt[k]] * nc]))
     Qx = [make_Q(np.diff(d["t"])) for d in data]
     # parameter random walk, eq. 38 (per step, with the mean bis step of the first trial)
     dtm = float(np.mean(np.diff(data[0]["t"])))
-    Qt = np.diag(options.q_theta * std0 ** 2 * dtm)
+    Qt = np.zeros((len(est), len(est)))
+    Qt[fpos, fpos] = options.q_theta * std0 ** 2 * dtm
     t0 = time.perf_counter()
     history = []
     for j in range(max(1, options.passes)):
         try:
             ekf = parallel_augmented_ekf(models[0], x0, th0, P0x, P0t, Qx, Qt, R, [d["Z"] for d in data],
-                                         [d["U"] for d in data], models=models)
+                                         [d["U"] for d in data], models=models, consider_theta=cpos)
         except ConvergenceError as err:
             raise ConvergenceError(f"{name} (pass {j + 1}): {err}") from None
-        history.append(ekf.theta_final.tolist())
+        history.append(ekf.theta_final[fpos].tolist())
         th0 = ekf.theta_final.copy()
     secs = time.perf_counter() - t0
     longest = int(np.argmax([d["t"].size for d in data]))
     t_si = b.t_from_bis(data[longest]["t"])
     full = np.asarray(theta_full, dtype=float).copy()
-    full[list(free)] = ekf.theta_final
-    diag = _stage_diagnostics(ekf, std0, [d["Z"].shape[1] for d in data])
+    full[list(free)] = ekf.theta_final[fpos]
+    cov = cov_prev.copy()
+    cov[np.ix_(est, est)] = ekf.theta_cov[-1]
+    diag = _stage_diagnostics(ekf.theta[:, fpos], ekf.theta_std[:, fpos], ekf, std0,
+                              [d["Z"].shape[1] for d in data])
+    diag["considered"] = [dp.THETA_NAMES[i] for i in consider]
     diag["trials"] = [d["source"] for d in data]
     diag["samples"] = [int(d["t"].size) for d in data]
     diag["seconds"] = secs
     diag["passes"] = history
-    return StageResult(name=name, free=free, ekf=ekf, t=t_si, theta_full=full, seconds=secs, diagnostics=diag)
+    return StageResult(name=name, free=free, ekf=ekf, t=t_si, theta_full=full, seconds=secs, diagnostics=diag,
+                       est=tuple(est), theta_cov=cov)
 
 
-def _stage_diagnostics(ekf: ParallelEKFResult, std0: np.ndarray, nz: list[int]) -> dict:
+def _stage_diagnostics(th: np.ndarray, sd: np.ndarray, ekf: ParallelEKFResult, std0: np.ndarray,
+                       nz: list[int]) -> dict:
     """Convergence and consistency checks of one scheme.
 
     *settled*: over the last quarter of the run no estimate strayed more than 2 σ (its σ
@@ -333,7 +382,6 @@ def _stage_diagnostics(ekf: ParallelEKFResult, std0: np.ndarray, nz: list[int]) 
     prior σ. ``converged`` requires both. NIS means should be near the number of
     measured channels (χ² consistency); reported, not gated.
     """
-    th, sd = ekf.theta, ekf.theta_std
     n = th.shape[0]
     q = int(0.75 * n)
     dev = np.max(np.abs(th[q:] - th[-1]) / sd[q:], axis=0)
@@ -372,26 +420,21 @@ def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequ
         ``diagnostics``: per-scheme convergence, NIS, log-likelihood, run times.
     """
     theta = np.asarray(options.theta0, dtype=float).copy()
+    cov = np.zeros((9, 9))
     stages: list[StageResult] = []
     for name, trials in (("SI1", surge), ("SI2", sway_yaw), ("SI3", azimuth)):
-        st = run_stage(name, trials, vessel, theta, options)
-        theta = st.theta_full
+        st = run_stage(name, trials, vessel, theta, options, theta_cov=cov)
+        theta, cov = st.theta_full, st.theta_cov
         stages.append(st)
     return _result(stages, vessel, options, theta_true, provenance or {})
 
 
 def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, theta_true, provenance) -> Result:
     theta = stages[-1].theta_full
-    std = np.full(9, np.nan)
-    cov = np.zeros((9, 9))
-    where = {}
-    for st in stages:
-        idx = list(st.free)
-        P = st.ekf.theta_cov[-1]
-        cov[np.ix_(idx, idx)] = P
-        std[idx] = np.sqrt(np.diag(P))
-        for i in idx:
-            where[i] = st.name
+    cov = stages[-1].theta_cov
+    std = np.sqrt(np.diag(cov))
+    std[std == 0] = np.nan
+    where = {i: st.name for st in stages for i in st.free}
     estimates = {}
     for i, nm in enumerate(dp.THETA_NAMES):
         estimates[nm] = Estimate(value=float(theta[i]), std=float(std[i]), unit="- (bis)",
@@ -405,6 +448,7 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
         "theta_names": list(dp.THETA_NAMES),
         "A_h": A_h, "K": K, "A": dp.derived_A(vessel.M, A_h), "B": dp.derived_B(vessel.M, T, K),
         "M": vessel.M, "T": T, "D": -A_h @ vessel.M,
+        "theta": theta, "theta_std": std,
     }
     diagnostics = {"converged": all(st.diagnostics["converged"] for st in stages),
                    "iterations": int(sum(st.diagnostics["iterations"] for st in stages)),
@@ -421,10 +465,21 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
         diagnostics["error"] = theta - tt
         diagnostics["error_sigma"] = (theta - tt) / std
         diagnostics["relative_error"] = (theta - tt) / np.abs(tt)
-    series = {}
+    hist = {}
     for st in stages:
-        series[st.name] = {"t": st.t, "free": [dp.THETA_NAMES[i] for i in st.free],
-                           "theta": st.ekf.theta, "std": st.ekf.theta_std}
+        for j, i in enumerate(st.free):
+            nm = dp.THETA_NAMES[i]
+            hist[nm] = history(st.t, st.free_theta[:, j], st.free_std[:, j], "- (bis)",
+                               true=None if theta_true is None else float(theta_true[i]),
+                               label=f"θ{i + 1}'' = {dp.THETA_MEANING[nm]} ({st.name})", paper="Fig. 8")
+    series = {"histories": hist}
+    if theta_true is not None:
+        rows = [[nm, float(theta_true[i]), float(theta[i]), float(std[i]),
+                 float(100 * (theta[i] - theta_true[i]) / abs(theta_true[i])),
+                 float((theta[i] - theta_true[i]) / std[i])] for i, nm in enumerate(dp.THETA_NAMES)]
+        series["tables"] = {"true_vs_estimated": table(
+            ["parameter", "true", "estimate", "std", "error %", "error / std"], rows,
+            caption="simulated trials: true θ (eqs. 48-49) vs estimated")}
     prov = {"options": options.as_dict()}
     prov.update(provenance)
     return Result(method="dp", estimates=estimates, model=model, covariance=cov,

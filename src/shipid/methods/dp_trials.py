@@ -11,9 +11,10 @@ Three decoupled manoeuvres, each run (at least) twice (§4.2, Figs. 5–7):
 The truth is the dimensional LF model of eq. 8 (:func:`shipid.models.dp.lf_dynamics`),
 driven by the thrusters (eqs. 1–7) and a generalised disturbance force made of
 
-* an earth-fixed current ``V_c`` entering as ``D J(ψ)ᵀ V_c`` (the ``D ν_c`` term of eq. 8),
-* a drifting bias: a random walk with intensity ``q_b`` (bis force² per bis time), the
-  slowly varying ``b_h`` of eq. 37,
+* a drifting bias: a random walk with intensity ``q_b`` (bis force² per bis time) from a
+  random initial value (std ``b0``), the slowly varying ``b_h`` of eq. 37 (body frame),
+* optionally an earth-fixed current ``V_c`` entering as ``D J(ψ)ᵀ V_c`` (the ``D ν_c`` term
+  of eq. 8; off by default),
 * white process noise with intensity ``q_h`` (bis force² · bis time), ``w`` of eq. 8, held
   constant over each sample,
 
@@ -32,6 +33,10 @@ from shipid.data.trial import Trial
 from shipid.models import dp
 from shipid.models.thrusters import pitch_from_control
 from shipid.simulate.integrate import rk4_step
+
+#: Moment arm (in L) of the environmental yaw moment relative to the environmental forces.
+YAW_ARM = 0.1
+_COMP = np.array([1.0, 1.0, YAW_ARM])
 
 #: The channels of a DP trial file (the CLI's contract).
 DP_CHANNELS = ("x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6")
@@ -53,15 +58,24 @@ class TrialNoise:
     q_b : float
         Intensity of the bias random walk b_h, bis force² per bis time; 1e-10 drifts by
         ≈ 2e-4 m g (≈ 12 kN) over a 20-minute trial.
+    b0 : float
+        Standard deviation of the initial bias, bis force; 3e-4 m g ≈ 18 kN, a mean
+        environmental force. The yaw component (and the yaw intensity of ``q_b``, ``q_h``)
+        is scaled by :data:`YAW_ARM` (a moment arm of 0.1 L), so the bias moment stays
+        within what the bow thruster can hold in the surge trials.
     current_speed : float
-        Earth-fixed current speed, m/s (direction drawn at random per trial).
+        Earth-fixed current speed, m/s (direction drawn at random per trial). Default 0:
+        the paper's estimator model (eqs. 35–38) has only the body-fixed bias b_h, which
+        cannot follow a current force that turns with the heading in the sway-yaw and
+        azimuth trials; see :class:`shipid.methods.dp.DPOptions.current_states`.
     """
 
     sigma_pos: float = 0.5
     sigma_psi: float = float(np.deg2rad(0.25))
     q_h: float = 1e-8
     q_b: float = 1e-10
-    current_speed: float = 0.3
+    b0: float = 3e-4
+    current_speed: float = 0.0
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -81,8 +95,13 @@ def _steps(rng, n: int, dt: float, dur: tuple[float, float], draw) -> np.ndarray
 
 
 def simulate_dp_trial(vessel: dp.DPVessel, kind: str, duration: float, seed: int, *, dt: float = 1.0,
-                      noise: TrialNoise = TrialNoise(), substeps: int = 2) -> Trial:
+                      noise: TrialNoise = TrialNoise(), substeps: int = 2, pattern: str = "random") -> Trial:
     """Simulate one trial of §4.2 (``kind`` = ``"surge"``, ``"sway-yaw"`` or ``"azimuth"``).
+
+    ``pattern`` (sway-yaw only): ``"random"`` (p3, p4, p5 in independent steps), ``"sway"``
+    (p3 = p4 = p5: all tunnel thrusters push the same way, mostly sway force) or ``"yaw"``
+    (p3 = p4 = −p5: aft and bow push opposite ways, mostly yaw moment). The two single-signal
+    patterns are the "different excitation sequences" of §3.2.
 
     Returns a :class:`Trial` with the channels :data:`DP_CHANNELS` (SI) and, in ``meta``,
     the seed, kind, noise levels, current and true θ.
@@ -98,9 +117,13 @@ def simulate_dp_trial(vessel: dp.DPVessel, kind: str, duration: float, seed: int
     if kind == "surge":
         lev = _steps(rng, n, dt, (80.0, 160.0), lambda i: sign * (-1) ** i * rng.uniform(0.2, 0.45))
         P[:, 0] = P[:, 1] = lev
-    elif kind == "sway-yaw":
+    elif kind == "sway-yaw" and pattern == "random":
         for j in (2, 3, 4):
             P[:, j] = _steps(rng, n, dt, (60.0, 150.0), lambda i: rng.uniform(-0.7, 0.7))
+    elif kind == "sway-yaw" and pattern in ("sway", "yaw"):
+        sgl = _steps(rng, n, dt, (60.0, 150.0), lambda i: rng.uniform(-0.7, 0.7))
+        P[:, 2] = P[:, 3] = sgl if pattern == "sway" else -sgl
+        P[:, 4] = sgl
     elif kind == "azimuth":
         P[:, 5] = _steps(rng, n, dt, (80.0, 160.0), lambda i: rng.choice([-1, 1]) * rng.uniform(0.3, 0.8))
         alpha = _steps(rng, n, dt, (80.0, 160.0), lambda i: rng.uniform(-np.pi, np.pi))
@@ -110,7 +133,7 @@ def simulate_dp_trial(vessel: dp.DPVessel, kind: str, duration: float, seed: int
     beta = rng.uniform(-np.pi, np.pi)
     Vc = noise.current_speed * np.array([np.cos(beta), np.sin(beta), 0.0])
     dtb = dt / b.time  # sample interval in bis time
-    bias = np.zeros(3)
+    bias = rng.normal(scale=noise.b0, size=3) * _COMP
     x = np.zeros(9)
     x[2] = psi0
     X = np.empty((n, 9))
@@ -125,23 +148,25 @@ def simulate_dp_trial(vessel: dp.DPVessel, kind: str, duration: float, seed: int
             r_b = x[5] / b.rate
             N_cmd = -kp * np.arctan2(np.sin(x[2] - psi0), np.cos(x[2] - psi0)) - kd * r_b
             P[k, 4] = np.clip(pitch_from_control(N_cmd / (vessel.K[4] * vessel.arms[4])), -1.0, 1.0)
-        w_bis = bias + rng.normal(scale=np.sqrt(noise.q_h / dtb), size=3)
+        w_bis = bias + rng.normal(scale=np.sqrt(noise.q_h / dtb), size=3) * _COMP
         tau_c = par.D @ (dp.rotation(x[2]).T @ Vc)
         u = np.concatenate([P[k], [alpha[k]], tau_c + b.tau_from_bis(w_bis)])
         h = dt / substeps
         for s in range(substeps):
             x = rk4_step(dp.lf_dynamics, t[k] + s * h, x, u, par, h)
-        bias = bias + rng.normal(scale=np.sqrt(noise.q_b * dtb), size=3)
+        bias = bias + rng.normal(scale=np.sqrt(noise.q_b * dtb), size=3) * _COMP
     if kind == "surge":
         P[-1, 4] = P[-2, 4]
+    saturated = float(np.mean(np.abs(P[:, 4]) >= 1.0)) if kind == "surge" else 0.0
     chans = {"x": X[:, 0] + rng.normal(scale=noise.sigma_pos, size=n),
              "y": X[:, 1] + rng.normal(scale=noise.sigma_pos, size=n),
              "psi": X[:, 2] + rng.normal(scale=noise.sigma_psi, size=n)}
     for j in range(6):
         chans[f"p{j + 1}"] = P[:, j]
     chans["alpha6"] = alpha
-    meta = {"vessel": vessel.name, "manoeuvre": f"dp-{kind}", "seed": seed, "simulated": True,
-            "noise": noise.as_dict(), "current": Vc[:2].tolist(), "theta_true": vessel.theta.tolist(),
+    meta = {"vessel": vessel.name, "manoeuvre": f"dp-{kind}", "seed": seed, "simulated": True, "pattern": pattern,
+            "noise": noise.as_dict(), "current": Vc[:2].tolist(),
+            "heading_control_saturated_fraction": saturated, "theta_true": vessel.theta.tolist(),
             "source": f"simulated dp {kind} trial (seed {seed})"}
     return Trial(t, chans, meta=meta)
 
