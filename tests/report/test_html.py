@@ -156,3 +156,31 @@ def test_ebm_tables_fall_back_to_diagnostics():
     row = re.search(r"<td>sway</td>(.*?)</tr>", html).group(1)
     assert ">812<" in row and ">0.99<" in row and ">7<" in row
     assert "Table 4 — Collinearity diagnostics per mode" in html
+
+
+def test_degenerate_series_do_not_break_the_report():
+    import warnings
+
+    from shipid.report.convention import contour, history, matrix, signal, table, xy
+
+    nan = float("nan")
+    z = np.ones((3, 4))
+    z[1, 1] = nan
+    r = Result("mass-cm", {"m": Estimate(nan, nan, "kg"), "x": Estimate(0.0, 0.0, "m"),
+                           "y": Estimate(1.0, float("inf"), "-")},
+               covariance=np.array([[1.0, 0.0], [0.0, 0.0]]), covariance_names=["m", "x"],
+               series={"contours": {"cost": contour([0, 1, 2, 3], [0, 1, 2], z, x_label="m", x_unit="kg",
+                                                    y_label="z", y_unit="m", log=True)},
+                       "overlays": {"a": overlay([0, 1], [nan, nan], [nan, nan], "m"),
+                                    "b": overlay([], [], [], "m"), "c": overlay([0], [1], [1], "m")},
+                       "histories": {"h": history([0, 1, 2], [nan, 1, 2], [nan, nan, nan], "kg")},
+                       "signals": {"s": signal([0, 1], {}, "m")},
+                       "matrices": {"m": matrix([[nan]], ["a"])},
+                       "tables": {"t": table([], [])},
+                       "xy": {"q": xy([], {}, x_label="a", x_unit="-", y_label="b", y_unit="-")}})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning (all-NaN slices ...) escapes either
+        html = build_report(_roundtrip(r))
+    _assert_self_contained(html)
+    assert "Could not draw" not in html
+    assert html.count("<img") == 9   # correlation + contour + 3 overlays + history + signal + matrix + xy
