@@ -115,7 +115,7 @@ def test_resume_of_a_complete_campaign_computes_nothing(tmp_path):
     store = tmp_path / "s.sqlite"
     first = run_campaign(TOY, 30, 2, workers=1, store=store, progress=False)
     again = run_campaign(TOY, 30, 2, workers=1, store=store, resume=True, progress=False)
-    assert again.reused == 30
+    assert again.reused == 30 and again.workers == 0
     assert _same(first.records, again.records)
 
 

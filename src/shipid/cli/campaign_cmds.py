@@ -78,9 +78,10 @@ def echo_campaign_summary(res: CampaignResult) -> None:
     """Print a one-paragraph human summary of a campaign to stderr (keeps --json stdout clean)."""
     where = f", store {res.store}" if res.store else ""
     reused = f", {res.reused} resumed from the store" if res.reused else ""
+    how = ("nothing left to run" if res.workers == 0 else
+           f"on {res.executor} ({res.workers} worker{'s' if res.workers != 1 else ''})")
     click.echo(f"{res.name}: {res.n_runs} runs ({res.n_ok} ok, {res.n_failed} failed{reused}) in "
-               f"{res.wall_s:.2f} s on {res.executor} ({res.workers} worker{'s' if res.workers != 1 else ''})"
-               f"{where}", err=True)
+               f"{res.wall_s:.2f} s, {how}{where}", err=True)
     for r in res.failed[:3]:
         click.echo(f"  run {r.index} failed: {r.error}", err=True)
     if res.n_failed > 3:

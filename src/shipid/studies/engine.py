@@ -100,9 +100,10 @@ class CampaignResult:
     records : list of RunRecord
         One per run, in run order (``records[i].index == i``).
     executor : str
-        ``"in-process"``, ``"local"``, ``"dask-local"`` or ``"scheduler"``.
+        ``"in-process"``, ``"local"``, ``"dask-local"``, ``"scheduler"``, or
+        ``"none (all runs in the store)"`` when a resume found nothing left to do.
     workers : int
-        Number of worker processes used (Dask: workers in the cluster at the start).
+        Number of worker processes used (Dask: workers in the cluster at the start; 0: none).
     wall_s : float
         Wall time of this call.
     reused : int
@@ -284,9 +285,11 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
             done = st.done_indices(name)
         todo = [i for i in range(n_runs) if i not in done]
 
-        # executor set-up
+        # executor set-up (nothing to start when a resumed campaign is already complete)
         client = None
-        if executor == "local":
+        if not todo:
+            n_workers = 0
+        elif executor == "local":
             n_workers = workers or available_cpus()
         elif executor == "dask-local":
             n_workers = workers or available_cpus()
@@ -303,7 +306,9 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
             inp = None if inputs_by_index is None else [inputs_by_index[i] for i in c]
             return (task_arg, seed, c, inp, kwargs)
 
-        if client is not None:
+        if not todo:
+            label, stream = "none (all runs in the store)", iter(())
+        elif client is not None:
             label = executor
             stream = iter_dask(client, chunks, args, seed)
         elif n_workers == 1 or len(chunks) <= 1:
@@ -335,7 +340,8 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
                             r["status"], r["error"], r["wall_s"], r["worker"], r["cpu_s"])
                 advance(len(rows))
         finally:
-            stream.close()
+            if hasattr(stream, "close"):
+                stream.close()
         records = st.records(name) if st is not None else [memory[i] for i in sorted(memory)]
     if len(records) != n_runs or any(r.index != k for k, r in enumerate(records)):
         raise ShipidError(f"campaign '{name}': {len(records)} of {n_runs} runs came back (engine bug)")
