@@ -155,3 +155,24 @@ def test_rk4_map_jacobian_is_exact_derivative():
     Jt = numerical_jacobian(lambda s: rk4_map(fc, jc, x, u, s, dt)[0], th, 1e-6)
     np.testing.assert_allclose(Px, Jx, atol=1e-8)
     np.testing.assert_allclose(Pt, Jt, atol=1e-8)
+
+
+def test_consider_states_keep_their_estimate_and_inflate_the_others():
+    """Schmidt–Kalman consider parameter: its estimate is not updated, its uncertainty is carried."""
+    model = _param_model()
+    theta = np.array([-0.3, 0.8])
+    u, Z = _simulate_param(model, theta, 300, seed=7)
+    from scipy.linalg import block_diag
+    P0x, Qx, R = np.diag([0.1, 0.1]), np.diag([0.0, 1e-4]), np.array([[0.0025]])
+    th0 = np.array([-0.1, 0.8])  # θ2 "frozen" at its value from an earlier identification
+    P_known = block_diag(P0x, np.diag([0.1, 1e-12]))
+    P_uncertain = block_diag(P0x, np.diag([0.1, 0.05 ** 2]))
+    Q = block_diag(Qx, np.zeros((2, 2)))
+    fixed = augmented_ekf(model, np.zeros(2), th0, P_known, Q, R, Z, u, consider=[3])
+    cons = augmented_ekf(model, np.zeros(2), th0, P_uncertain, Q, R, Z, u, consider=[3])
+    assert np.all(cons.theta[:, 1] == 0.8)                     # not estimated
+    assert cons.theta_cov[-1, 1, 1] == pytest.approx(0.05 ** 2)  # its variance is untouched
+    assert cons.theta_std[-1, 0] > 1.2 * fixed.theta_std[-1, 0]  # θ1 carries θ2's uncertainty
+    # and a free θ2 would have been moved by the data
+    free = augmented_ekf(model, np.zeros(2), th0, P_uncertain, Q, R, Z, u)
+    assert free.theta[-1, 1] != 0.8
