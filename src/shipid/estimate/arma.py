@@ -1,0 +1,103 @@
+"""ARMA noise models by the Hannan–Rissanen method, and the inverse-noise prefilter.
+
+``A(q) x_t = C(q) e_t`` with ``A = 1 + a_1 q^-1 + ... + a_na q^-na``, ``C = 1 + c_1 q^-1 + ...``.
+Hannan & Rissanen (1982): (1) a long AR model by least squares estimates the innovations; (2) a
+linear least-squares regression of ``x_t`` on its own past and the past estimated innovations gives
+``A`` and ``C``. Linear algebra only, so it is fast enough for the prefilters of the iterative IV
+method (Linder et al. 2015, eqs. 42–43), which are re-estimated at every iteration of every
+Monte Carlo run. Benchmarked against ``statsmodels`` ARIMA (maximum likelihood) in
+``benchmarks/bench_masscm_arma.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+
+@dataclass(frozen=True)
+class ARMA:
+    """``A(q) x = C(q) e``, ``var(e) = lam``."""
+
+    a: np.ndarray
+    c: np.ndarray
+    lam: float
+
+    def prefilter(self, x: np.ndarray) -> np.ndarray:
+        """Apply ``L = H^-1 = A/C`` (eq. 43) along axis 0."""
+        return lfilter(self.a, self.c, x, axis=0)
+
+
+def _lagged(x: np.ndarray, lags: int, start: int) -> np.ndarray:
+    """Columns x_{t-1} ... x_{t-lags} for rows t = start .. n-1."""
+    n = x.size
+    return np.column_stack([x[start - k: n - k] for k in range(1, lags + 1)]) if lags else np.empty((n - start, 0))
+
+
+def _stabilise(p: np.ndarray) -> np.ndarray:
+    """Reflect roots of a monic polynomial in q^-1 to inside the unit circle (same spectrum shape)."""
+    if p.size <= 1:
+        return p
+    roots = np.roots(p)
+    bad = np.abs(roots) >= 1.0
+    if not bad.any():
+        return p
+    roots[bad] = 1.0 / np.conj(roots[bad])
+    roots = roots / np.maximum(1.0, np.abs(roots) / 0.999)
+    return np.real(np.poly(roots))
+
+
+def _ls(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares by the normal equations (well conditioned here: lagged, scaled data), lstsq fallback."""
+    if X.shape[1] == 0:
+        return np.zeros(0)
+    G = X.T @ X
+    try:
+        c = np.linalg.cholesky(G + 1e-12 * np.trace(G) / G.shape[0] * np.eye(G.shape[0]))
+        return np.linalg.solve(c.T, np.linalg.solve(c, X.T @ y))
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(X, y, rcond=None)[0]
+
+
+def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None = None) -> ARMA:
+    """Fit an ARMA(na, nc) model to ``x`` (mean removed) by the two-stage Hannan–Rissanen method.
+
+    Parameters
+    ----------
+    x : ndarray (n,)
+    na, nc : int
+        Orders of A and C.
+    n_long : int, optional
+        Order of the first-stage AR model (default ``max(20, 2 (na + nc))``, at most n/5).
+
+    Returns
+    -------
+    ARMA
+        With A and C reflected to be stable / minimum phase, so that the prefilter ``A/C`` is stable.
+    """
+    x = np.asarray(x, dtype=float)
+    x = x - x.mean()
+    n = x.size
+    scale = np.std(x)
+    if not np.isfinite(scale) or scale == 0.0:
+        return ARMA(np.ones(1), np.ones(1), 0.0)
+    xs = x / scale
+    nl = n_long if n_long is not None else max(20, 2 * (na + nc))
+    nl = int(min(nl, max(1, n // 5)))
+    X = _lagged(xs, nl, nl)
+    ar = _ls(X, xs[nl:])
+    e = np.zeros(n)
+    e[nl:] = xs[nl:] - X @ ar
+    start = nl + max(na, nc)
+    R = np.column_stack([-_lagged(xs, na, start), _lagged(e, nc, start)])
+    th = _ls(R, xs[start:])
+    a = _stabilise(np.concatenate([[1.0], th[:na]]))
+    c = _stabilise(np.concatenate([[1.0], th[na:]]))
+    eps = lfilter(a, c, xs)[start:]
+    lam = float(np.mean(eps**2)) * scale**2
+    return ARMA(a, c, lam)
+
+
+__all__ = ["ARMA", "hannan_rissanen"]

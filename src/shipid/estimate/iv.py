@@ -1,0 +1,104 @@
+"""Building blocks of extended instrumental-variable estimators (Söderström & Stoica 1989, ch. 8).
+
+Pure functions: lag matrices, black-box ARX models for instruments, and the weighted IV moment
+compression used by Linder et al. (2015) eqs. (39)–(41).
+
+With instruments ``Z`` (N × n_z), prefiltered output ``y`` (N) and regressors ``Phi`` (N × n_g), the
+extended IV criterion with weighting ``Q = (Z^T Z / N)^-1`` is
+
+    V(g) = || Z^T (y - Phi g) / N ||_Q^2 = || Qz^T (y - Phi g) ||^2 / N,   Z = Qz Rz (thin QR)
+
+i.e. the least-squares fit of the projections of ``y`` and ``Phi`` on the instrument space (two-stage
+least squares). :func:`iv_compress` reduces it further to an ``n_g × n_g`` triangular system so that a
+nonlinear search over physical parameters costs almost nothing per evaluation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import lfilter
+
+
+def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
+    """Columns ``x_t, x_{t-1}, ..., x_{t-n_lags+1}`` for rows ``t = start, ..., n-1``."""
+    x = np.asarray(x, dtype=float)
+    n = x.size
+    if n_lags > start + 1:
+        raise ValueError("start must be at least n_lags - 1")
+    return np.column_stack([x[start - k: n - k] for k in range(n_lags)]) if n_lags else np.empty((n - start, 0))
+
+
+def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares ARX model ``A(q) y = B(q) u`` with ``B = b_0 + ... + b_{nb-1} q^{-nb+1}``.
+
+    Used as the black-box model from the rudder to each measured signal in the initialising iteration
+    of Algorithm 1 (Linder et al. 2015, step A(b)(i)). Returns ``(b, a)`` for ``lfilter``; ``a`` is
+    reflected to be stable so that the simulated instrument cannot diverge.
+    """
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    s = max(na, nb - 1)
+    R = np.column_stack([-lag_matrix(y, na + 1, s)[:, 1:], lag_matrix(u, nb, s)])
+    th, *_ = np.linalg.lstsq(R, y[s:], rcond=None)
+    a = np.concatenate([[1.0], th[:na]])
+    roots = np.roots(a)
+    if np.any(np.abs(roots) >= 1.0):
+        roots = np.where(np.abs(roots) >= 1.0, 0.999 / np.conj(roots), roots)
+        a = np.real(np.poly(roots))
+    return th[na:], a
+
+
+def arx_simulate(b: np.ndarray, a: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Noise-free simulation ``y = B/A u``."""
+    return lfilter(b, a, u)
+
+
+@dataclass(frozen=True)
+class IVMoments:
+    """Compressed IV criterion of one dataset: ``V(g) = ||R g - r||^2 + rss0`` (scaled by 1/N elsewhere).
+
+    Attributes
+    ----------
+    R : ndarray (n_g, n_g)
+        Upper-triangular factor of the projected regressors.
+    r : ndarray (n_g,)
+    rss0 : float
+        Residual part orthogonal to the regressors (the minimum of the unweighted criterion).
+    n : int
+        Number of samples used.
+    rank_ok : bool
+        False when the instrument matrix is rank deficient (not informative).
+    """
+
+    R: np.ndarray
+    r: np.ndarray
+    rss0: float
+    n: int
+    rank_ok: bool
+
+
+def iv_compress(Z: np.ndarray, y: np.ndarray, Phi: np.ndarray, rtol: float = 1e-12) -> IVMoments:
+    """Compress the extended-IV criterion with ``Q = (Z^T Z/N)^-1`` (eqs. 40–41) to a small triangle.
+
+    Works from the moment matrices ``Z^T Z`` and ``Z^T [Phi, y]`` (one pass over the data): with the
+    eigen-decomposition ``Z^T Z = V S V^T`` the projections are ``S^-1/2 V^T Z^T [Phi, y]`` (equal to
+    ``Qz^T [Phi, y]`` up to an orthogonal rotation, which leaves the criterion unchanged). Instrument
+    directions with eigenvalues below ``rtol`` times the largest are dropped instead of inverting a
+    singular Q (lagged instruments of smooth signals are strongly collinear).
+    """
+    ZtZ = Z.T @ Z
+    ZtP = Z.T @ np.column_stack([Phi, y])
+    s, V = np.linalg.eigh(ZtZ)
+    keep = s > rtol * max(s[-1], 1e-300)
+    P = (V[:, keep].T @ ZtP) / np.sqrt(s[keep])[:, None]
+    Rf = np.linalg.qr(P, mode="r")
+    ng = Phi.shape[1]
+    R = Rf[:ng, :ng]
+    r = Rf[:ng, ng]
+    rss0 = float(Rf[ng, ng] ** 2) if Rf.shape[0] > ng else 0.0
+    return IVMoments(R=R, r=r, rss0=rss0, n=y.size, rank_ok=bool(keep.sum() >= ng))
+
+
+__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress"]

@@ -1,0 +1,643 @@
+"""Mass and centre of mass from IMU and rudder data: Algorithm 1 of Linder et al. (2015).
+
+The iterative joint instrumental-variable method over the nominal, calibration and loaded datasets
+(eqs. 38–47). Each dataset obeys the discretised roll model (35)
+
+    y_t = phi_t^T g(theta; m_i, zbar_i) + noise,   i = nominal, calibration, loaded (and extras)
+
+with the physical map ``g`` of (33) (:func:`shipid.models.roll_reduced.discrete_coeffs`).
+
+Algorithm (our concrete choices where the paper leaves freedom are marked *):
+
+A. Initialise: prefilter ``L = 1``; black-box ARX(4, 5)* models from the rudder to ``y, a_s, r``
+   (44, step A(b)(i)); instruments (45) from their noise-free simulations.
+B. Iterate ``j = 1, 2, ...``:
+   (a) ``theta_j = argmin sum_i (N_i/lam_i) ||Y^i - Phi^i g_i(theta)||^2_{Q_i}`` (40)–(41), solved by
+       Levenberg–Marquardt (MINPACK) from ``theta_{j-1}``; ``Q_i = (Z_i^T Z_i/N_i)^-1``* (the
+       two-stage-least-squares weighting, which makes the extended IV approach the optimal IV when
+       the instruments span the noise-free regressors) and ``lam_i`` the ARMA innovation variance*
+       of dataset i (1 in the first iteration);
+   (b) residuals (42), ARMA(4, 4)* noise models by Hannan–Rissanen, prefilters ``L = A/C`` (43);
+   (c) instruments re-simulated in closed loop from the rudder with the current model (46)–(47)
+       and the iteration-0 black-box yaw-rate model; prefiltered lag vectors (45) with
+       ``n_y = n_as = n_r = 16``, ``n_delta = 2`` of ``y_hat`` and of the differences ``mu_hat``;
+   (d) stop when the largest relative change of the identifiable discrete coefficients ``g_i``
+       (and of the identifiable physical parameters) is below ``tol``*; the ``converged`` flag is
+       False when ``max_iter`` is reached first.
+
+Identifiability (our analysis, :mod:`shipid.analysis.identifiability_masscm`): the datasets
+determine ``zm_bar`` and ``rho = m z_m / (m_c z_c)`` but not ``z_f``; for every ``z_f`` there is an
+exact fit, with ``m = rho m_c (zc_bar + z_f)/(zm_bar + z_f)``. The estimator therefore takes
+``z_f`` as a known input, a Gaussian prior, or (paper reproduction) leaves it free, in which case
+the reported ``m`` is conditional on the ``z_f`` where the search stopped and says so.
+
+Standard errors come from the asymptotic covariance of the weighted IV estimate,
+``Cov = (sum_i G_i^T R_i^T R_i G_i / lam_i)^-1`` with ``G_i = dg_i/dtheta`` (exact, complex step),
+valid when the prefiltered residuals are white (checked in the diagnostics).
+
+Channels per dataset (a :class:`shipid.data.trial.Trial`): ``p`` roll rate (y of 9a), ``a_s``
+tangential acceleration (9b), ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta`` rudder.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+from threadpoolctl import threadpool_limits
+from scipy.signal import lfilter
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError
+from shipid.estimate.arma import hannan_rissanen
+from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, lag_matrix
+from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, THETA_NAMES, THETA_UNITS,
+                                        KnownParams, bilinear_tf, discrete_coeffs, from_moment, roll_terms,
+                                        to_moment)
+from shipid.result import Estimate, Result
+
+REQUIRED = ("p", "a_s", "r", "delta")
+I_ZF, I_M, I_ZM = THETA_NAMES.index("z_f"), THETA_NAMES.index("m"), THETA_NAMES.index("zm_bar")
+
+#: Default initial values (a rough, physically plausible guess; Table 3 shows the method tolerates much worse).
+DEFAULT_THETA0 = np.array([10.0, 0.1, 0.2, -0.5, 0.1, -0.4, 0.0, 0.3, -0.15])
+
+
+@dataclass(frozen=True)
+class MassCMOptions:
+    """Tuning of Algorithm 1 (defaults: §5 of the paper where it says, our choice otherwise)."""
+
+    n_y: int = 16
+    n_as: int = 16
+    n_r: int = 16
+    n_delta: int = 2
+    arx_na: int = 4
+    arx_nb: int = 5
+    arma_na: int = 4
+    arma_nc: int = 4
+    prefilter: bool = True          # False: plain iterative IV without the ARMA prefilters (comparison)
+    max_iter: int = 50
+    min_iter: int = 2
+    tol: float = 1e-5
+    zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
+    initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
+
+
+@dataclass
+class Dataset:
+    """One dataset ready for Algorithm 1 (signals mean-removed; see :func:`prepare`)."""
+
+    condition: str
+    T: float
+    y: np.ndarray
+    a_s: np.ndarray
+    r: np.ndarray
+    delta: np.ndarray
+    Phi: np.ndarray = field(repr=False, default=None)       # regressors (35), full length
+    r_hat0: np.ndarray = field(repr=False, default=None)    # black-box r simulation (44)
+    y_hat0: np.ndarray = field(repr=False, default=None)
+    a_hat0: np.ndarray = field(repr=False, default=None)
+
+
+def _diff2(x: np.ndarray) -> np.ndarray:
+    d = np.zeros_like(x)
+    d[2:] = x[2:] - x[:-2]
+    return d
+
+
+def prepare(datasets: Sequence[tuple[str, Trial]], options: MassCMOptions = MassCMOptions()) -> list[Dataset]:
+    """Check and condition the datasets; build regressors (35) and the black-box instruments (A).
+
+    Sensor biases (9): the differences in ``mu`` (34) remove the biases of ``a_s`` and ``r``; a gyro
+    bias ``b_1`` on ``y`` leaves a constant ``(1 + alpha1 + alpha2) b_1`` in the equation error, which is
+    orthogonal to the (mean-removed) instruments. ``y`` itself is NOT mean-removed: the mean roll rate
+    of a record is not zero (phi_end != phi_0), and removing it would put a constant into the equation.
+    """
+    if not datasets:
+        raise InputError("mass-cm needs datasets")
+    conds = [c for c, _ in datasets]
+    for need in (NOMINAL, CALIBRATION, LOADED):
+        if need not in conds:
+            raise InputError(f"mass-cm needs at least one {need} dataset (has: {', '.join(conds)})")
+    out = []
+    for cond, tr in datasets:
+        tr.require(list(REQUIRED), method="mass-cm") if hasattr(tr, "require") else None
+        t = np.asarray(tr.t, dtype=float)
+        dt = np.diff(t)
+        if t.size < 200:
+            raise InputError(f"{cond} dataset has only {t.size} samples (need >= 200)", file=tr.meta.get("source"))
+        if np.ptp(dt) > 1e-6 * np.mean(dt):
+            raise InputError(f"{cond} dataset is not uniformly sampled (resample first)", file=tr.meta.get("source"))
+        sig = {k: np.asarray(tr[k], dtype=float) for k in REQUIRED}
+        for k, v in sig.items():
+            bad = np.flatnonzero(~np.isfinite(v))
+            if bad.size:
+                raise InputError("non-finite value", file=tr.meta.get("source"), channel=k, row=int(bad[0]))
+        if np.std(sig["delta"]) == 0:
+            raise InputError(f"{cond} dataset has a constant rudder: no excitation (§3.1)",
+                             file=tr.meta.get("source"), channel="delta")
+        y = sig["p"]
+        ds = Dataset(condition=cond, T=float(np.mean(dt)), y=y, a_s=sig["a_s"], r=sig["r"],
+                     delta=sig["delta"] - sig["delta"].mean())
+        ylag1 = np.concatenate([[0.0], y[:-1]])
+        ylag2 = np.concatenate([[0.0, 0.0], y[:-2]])
+        ds.Phi = np.column_stack([-ylag1, -ylag2, _diff2(ds.a_s), _diff2(ds.r), _diff2(ds.delta)])   # (37)
+        sims = {}
+        for name, sgl in (("y", y - y.mean()), ("a_s", ds.a_s - ds.a_s.mean()), ("r", ds.r - ds.r.mean())):
+            b, a = arx_fit(sgl, ds.delta, options.arx_na, options.arx_nb)
+            sims[name] = arx_simulate(b, a, ds.delta)
+        ds.y_hat0, ds.a_hat0, ds.r_hat0 = sims["y"], sims["a_s"], sims["r"]
+        out.append(ds)
+    return out
+
+
+def _start(options: MassCMOptions) -> int:
+    return max(options.n_y, options.n_as, options.n_r, options.n_delta, 3) + 1
+
+
+def _instruments(ds: Dataset, y_hat, a_hat, r_hat, L, options: MassCMOptions) -> np.ndarray:
+    """Instrument matrix (45): prefiltered lags of ``y_hat`` and of ``mu_hat`` (differences)."""
+    base = np.column_stack([y_hat, _diff2(a_hat), _diff2(r_hat), _diff2(ds.delta)])
+    base = base - base.mean(axis=0)
+    if L is not None:
+        base = L.prefilter(base)
+    s = _start(options)
+    return np.column_stack([lag_matrix(base[:, 0], options.n_y, s), lag_matrix(base[:, 1], options.n_as, s),
+                            lag_matrix(base[:, 2], options.n_r, s), lag_matrix(base[:, 3], options.n_delta, s)])
+
+
+def _closed_loop_sim(ds: Dataset, terms: dict, i: int, known: KnownParams) -> tuple[np.ndarray, np.ndarray] | None:
+    """Noise-free instrument signals (46)–(47) for dataset i, or None if the model is unstable.
+
+    With ``v'`` neglected in (20), ``a_s = z_s p' + g phi - U r`` and (18) gives
+    ``(A1 s^2 + d s + k1) phi = (K_r + U B) r + K_delta delta``; ``r`` is the iteration-0 black-box
+    simulation. This is (46)–(47) written with physical coefficients (``G/(1 - G F_y)``, ``F_y = z_s s + g/s``).
+    """
+    A1, d, k1 = terms["A1"][i], terms["d"][i], terms["k1"][i]
+    if not (A1 > 0 and d > 0 and k1 > 0):
+        return None
+    u = terms["Kyaw"][i] * ds.r_hat0 + terms["K_delta"][i] * ds.delta
+    b, a = bilinear_tf([1.0, 0.0], [A1, d, k1], ds.T)
+    y_hat = lfilter(b, a, u)
+    b2, a2 = bilinear_tf([terms["z_s"][i], 0.0, known.g], [A1, d, k1], ds.T)
+    a_hat = lfilter(b2, a2, u) - known.U * ds.r_hat0
+    return y_hat, a_hat
+
+
+@dataclass
+class _State:
+    moments: list
+    lam: np.ndarray
+    L: list
+    Ts: np.ndarray
+    conds: list
+
+
+def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
+    s = _start(options)
+    mom = []
+    for ds, Li, yh, ah in zip(prep, L, y_hats, a_hats):
+        Z = _instruments(ds, yh, ah, ds.r_hat0, Li, options)
+        if Li is not None:
+            yf = Li.prefilter(ds.y)[s:]
+            Pf = Li.prefilter(ds.Phi)[s:]
+        else:
+            yf, Pf = ds.y[s:], ds.Phi[s:]
+        mom.append(iv_compress(Z, yf, Pf))
+    return mom
+
+
+def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fixed: np.ndarray, prior):
+    w = 1.0 / np.sqrt(state.lam)
+
+    def full(x):
+        th = theta_fixed.astype(x.dtype if np.iscomplexobj(x) else float).copy()
+        th[free] = x
+        return th
+
+    def fun(x):
+        th = full(x)
+        G = discrete_coeffs(th, known, state.conds, state.Ts, moment=True)
+        res = [w[i] * (mo.R @ G[i] - mo.r) for i, mo in enumerate(state.moments)]
+        if prior is not None:
+            res.append(np.atleast_1d((th[I_ZF] - prior[0]) / prior[1]))
+        return np.concatenate(res)
+
+    return fun, full
+
+
+def _jac_cs(fun, x):
+    J = np.empty((fun(x).size, x.size))
+    for j in range(x.size):
+        xc = x.astype(complex)
+        xc[j] += 1e-30j
+        J[:, j] = fun(xc).imag / 1e-30
+    return J
+
+
+def linear_initial(state: "_State", known: KnownParams, z_f: float) -> np.ndarray:
+    """Initial-value-free starting point: the multiplied-out (equation-error) form of (40), which is linear.
+
+    With ``g_i = num_i / den_i`` (33), ``R_i g_i = r_i`` is multiplied by ``den_i`` to
+    ``R_i num_i - r_i den_i = 0``. For a fixed ``z_f`` both ``num_i`` and ``den_i`` are linear in
+    ``p = [k, A_x, d, K_r, K_vdot, K_delta, q, w]`` with the load moment ``q = m z_m`` and ``w = q zm_bar``
+    (A2 of the loaded dataset contains ``q (zm_bar - zs_bar) = w - q zs_bar``), so one linear least-squares
+    solve gives all of them (a Steiglitz–McBride-type first step). Returns theta in the moment
+    parameterisation with ``zm_bar = w / q``.
+    """
+    rows, rhs = [], []
+    kn = known
+    zg, zs = kn.zg_bar + z_f, kn.zs_bar + z_f
+    for i, (mo, cond, T) in enumerate(zip(state.moments, state.conds, state.Ts)):
+        # express A2, B, kp, d, K_r, K_delta as (coefficient row over p, constant)
+        def lin(coef, const=0.0):
+            return np.asarray(coef, dtype=float), float(const)
+        qc = kn.m_c * (kn.zc_bar + z_f)
+        base_A2 = kn.M * zg * (kn.zg_bar - kn.zs_bar)
+        if cond == NOMINAL:
+            A2 = lin([0, 1, 0, 0, -zs, 0, 0, 0], base_A2)
+            B = lin([0, 0, 0, 0, 1, 0, 0, 0], kn.M * zg)
+        elif cond == CALIBRATION:
+            A2 = lin([0, 1, 0, 0, -zs, 0, 0, 0], base_A2 + qc * (kn.zc_bar - kn.zs_bar))
+            B = lin([0, 0, 0, 0, 1, 0, 0, 0], kn.M * zg + qc)
+        else:
+            A2 = lin([0, 1, 0, 0, -zs, 0, -kn.zs_bar, 1], base_A2)
+            B = lin([0, 0, 0, 0, 1, 0, 1, 0], kn.M * zg)
+        kp = lin([1, 0, 0, 0, -kn.g, 0, 0, 0])
+        d = lin([0, 0, 1, 0, 0, 0, 0, 0])
+        Kr = lin([0, 0, 0, 1, 0, 0, 0, 0])
+        Kd = lin([0, 0, 0, 0, 0, 1, 0, 0])
+
+        def comb(*terms):
+            c = sum(a * t[0] for a, t in terms)
+            k = sum(a * t[1] for a, t in terms)
+            return c, k
+        num = [comb((2 * T * T, kp), (-8, A2)), comb((-2 * T, d), (T * T, kp), (4, A2)),
+               comb((-2 * T, B)), comb((2 * T, Kr)), comb((2 * T, Kd))]
+        den = comb((2 * T, d), (T * T, kp), (4, A2))
+        Nc = np.array([n[0] for n in num]); Nk = np.array([n[1] for n in num])
+        w = 1.0 / np.sqrt(state.lam[i])
+        rows.append(w * (mo.R @ Nc - np.outer(mo.r, den[0])))
+        rhs.append(-w * (mo.R @ Nk - mo.r * den[1]))
+    A = np.vstack(rows)
+    b = np.concatenate(rhs)
+    sc = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+    p, *_ = np.linalg.lstsq(A / sc, b, rcond=None)
+    p = p / sc
+    k, A_x, d, K_r, K_v, K_d, q, w_ = p
+    zm = w_ / q if q != 0 else 0.0
+    return np.array([k, A_x, d, K_r, K_v, K_d, z_f, q, zm])
+
+
+def _initial_prefilter(options: MassCMOptions):
+    """Prefilter of the first iteration (step A(a)).
+
+    The paper sets ``L = 1``. Our choice (*): ``L = 1/(1 - c q^-2)`` with ``c = options.initial_c``
+    (0.99 by default; 0 gives the paper's ``L = 1``). Reason: the disturbance and the noise on
+    ``a_s``, ``r`` enter (35) through the same ``(1 - q^-2)`` factor as the inputs (bilinear transform
+    of a moment entering (23)), so the equation error has almost no power at low frequencies where the
+    rudder response lives. With ``L = 1`` the first criterion is dominated by high-frequency wave noise
+    and can prefer the trivial "smooth signal" relation ``y_t ~ 2 y_{t-1} - y_{t-2}``, from which the
+    ARMA iterations never recover; this prefilter approximates the final ARMA prefilter instead.
+    """
+    from shipid.estimate.arma import ARMA
+    if not options.prefilter or options.initial_c == 0:
+        return None
+    return ARMA(np.ones(1), np.array([1.0, 0.0, -options.initial_c]), 1.0)
+
+
+def _noise_model(eps: np.ndarray, options: MassCMOptions):
+    """ARMA noise model of the residuals (42) and its inverse as prefilter (43).
+
+    (*) The disturbance and the a_s / r noise reach the equation error through ``(1 - q^-2)``
+    (zeros on the unit circle, which a Hannan–Rissanen fit cannot invert). We therefore fit the
+    ARMA(na, nc) model to ``eps / (1 - c q^-2)`` (``c = options.initial_c``) and use
+    ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
+    """
+    from shipid.estimate.arma import ARMA
+    c = options.initial_c
+    if c == 0:
+        return hannan_rissanen(eps, options.arma_na, options.arma_nc)
+    den = np.array([1.0, 0.0, -c])
+    e2 = lfilter([1.0], den, eps)
+    m = hannan_rissanen(e2, options.arma_na, options.arma_nc)
+    return ARMA(m.a, np.convolve(m.c, den), m.lam)
+
+
+def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f: float | None = None,
+            z_f_prior: tuple[float, float] | None = None, init: str = "given",
+            options: MassCMOptions = MassCMOptions()) -> dict:
+    """Run Algorithm 1 step B on prepared datasets; the core shared by :func:`estimate_mass_cm` and the study.
+
+    The search runs in the load-moment parameterisation ``q = m z_m`` (:data:`THETA_Q_NAMES`), in
+    which the model is polynomial; ``theta0`` and the returned ``theta`` are physical (with ``m``),
+    ``theta_q`` and ``J`` (Jacobian of the weighted residuals w.r.t. the free entries of ``theta_q``)
+    are internal. Returns a plain dict so that Monte Carlo runs stay cheap; :func:`estimate_mass_cm`
+    turns it into a :class:`Result`.
+    """
+    theta = np.asarray(theta0, dtype=float).copy()
+    if z_f is not None:
+        theta[I_ZF] = float(z_f)
+    theta = to_moment(theta)
+    free = np.ones(theta.size, dtype=bool)
+    if z_f is not None:
+        free[I_ZF] = False
+    prior = None
+    if z_f_prior is not None and z_f is None:
+        prior = (float(z_f_prior[0]), float(z_f_prior[1]))
+    conds = [ds.condition for ds in prep]
+    Ts = np.array([ds.T for ds in prep])
+    warn: list[str] = []
+    L = [_initial_prefilter(options)] * len(prep)
+    y_hats = [ds.y_hat0 for ds in prep]
+    a_hats = [ds.a_hat0 for ds in prep]
+    state = _State(_build_moments(prep, L, y_hats, a_hats, options), np.ones(len(prep)), L, Ts, conds)
+    if init == "linear":
+        lin = linear_initial(state, known, float(theta[I_ZF]))
+        if np.all(np.isfinite(lin)):
+            theta = lin
+    elif init != "given":
+        raise ValueError("init must be 'given' or 'linear'")
+    g_prev = None
+    th_prev = None
+    converged = False
+    history = []
+    dgs: list[float] = []
+    j = 0
+    fun = None
+    for j in range(1, options.max_iter + 1):
+        fun, full = _residual_fun(state, known, free, theta, prior)
+        # (*) trust-region search with the load's centre kept inside |zm_bar| <= zm_bound: outside it the
+        # moment parameterisation degenerates (q -> 0 with q*zm_bar finite fits like an extra free A2)
+        lo = np.full(int(free.sum()), -np.inf)
+        hi = np.full(int(free.sum()), np.inf)
+        izm = int(np.sum(free[:I_ZM]))
+        lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
+        x0 = np.clip(theta[free], lo + 1e-12, hi - 1e-12)
+        sol = least_squares(fun, x0, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                            max_nfev=2000, x_scale="jac")
+        theta = full(sol.x)
+        G = discrete_coeffs(theta, known, conds, Ts, moment=True)
+        history.append(from_moment(theta))
+        if not np.all(np.isfinite(theta)):
+            warn.append(f"iteration {j}: non-finite estimate")
+            break
+        # identifiable quantities: the discrete coefficients of every dataset
+        if g_prev is not None:
+            dg = np.max(np.abs(G - g_prev) / np.maximum(np.abs(g_prev), 1e-8))
+            dgs.append(float(dg))
+            if j >= options.min_iter and dg < options.tol:
+                converged = True
+                break
+        g_prev = G
+        th_prev = theta
+        # (b) residuals (42) and prefilters (43); (c) closed-loop instruments (46)-(47)
+        terms = roll_terms(theta, known, conds, moment=True)
+        newL, lam = [], []
+        for i, ds in enumerate(prep):
+            eps = ds.y - ds.Phi @ G[i]
+            s = _start(options)
+            if options.prefilter:
+                arma = _noise_model(eps[s:], options)
+                newL.append(arma)
+                lam.append(arma.lam)
+            else:
+                newL.append(None)
+                lam.append(float(np.mean(eps[s:] ** 2)))
+            sim = _closed_loop_sim(ds, terms, i, known)
+            if sim is None:
+                warn.append(f"iteration {j}: model of dataset {i} ({ds.condition}) unstable; instruments kept")
+            else:
+                y_hats[i], a_hats[i] = sim
+        lam = np.asarray(lam)
+        lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
+        state = _State(_build_moments(prep, newL, y_hats, a_hats, options), lam, newL, Ts, conds)
+    J = _jac_cs(fun, theta[free]) if fun is not None and np.all(np.isfinite(theta)) else None
+    return {"theta": from_moment(theta), "theta_q": theta, "free": free, "J": J, "converged": converged, "iterations": j,
+            "history": np.array(history), "dg": dgs, "state": state, "warnings": warn, "prior": prior}
+
+
+# ---------------------------------------------------------------------------------------------------
+# turning the core output into a Result
+
+
+def implausible_reasons(theta: np.ndarray, known: KnownParams, conds=(NOMINAL, CALIBRATION, LOADED)) -> list[str]:
+    """The documented rule for an implausible (physically impossible) solution.
+
+    Flagged when any of: ``m <= 1e-6 M`` (no load); ``|zm_bar| > 10 m`` (degenerate, load moment ~ 0); ``A_x <= 0``; ``d <= 0`` (no roll damping); ``k - K_vdot g <= 0``
+    (the reduced model (26) has no restoring, alpha2 <= 0); ``A2 <= 0`` or ``A1 <= 0`` in any dataset
+    (22), (16); any non-finite value.
+    """
+    why = []
+    if not np.all(np.isfinite(theta)):
+        return ["non-finite estimate"]
+    k, A_x, d, K_r, K_v, K_d, z_f, m, zm = theta
+    if m <= 1e-6 * known.M:
+        why.append("m <= 0 (or vanishing)")
+    if abs(zm) > 10.0:
+        why.append("|zm_bar| > 10 m")
+    if A_x <= 0:
+        why.append("A_x <= 0")
+    if d <= 0:
+        why.append("d <= 0")
+    if k - K_v * known.g <= 0:
+        why.append("k - K_vdot g <= 0")
+    t = roll_terms(theta, known, list(conds))
+    if np.any(t["A2"] <= 0):
+        why.append("A2 <= 0")
+    if np.any(t["A1"] <= 0):
+        why.append("A1 <= 0")
+    return why
+
+
+def rho_of(theta: np.ndarray, known: KnownParams) -> float:
+    """Moment ratio ``rho = m z_m / (m_c z_c)`` with z measured from the centre of rotation (24)."""
+    z_f, m, zm = theta[I_ZF], theta[I_M], theta[I_ZM]
+    return m * (zm + z_f) / (known.m_c * (known.zc_bar + z_f))
+
+
+def dm_dzf(theta: np.ndarray, known: KnownParams) -> float:
+    """Slope of the exact-fit family ``m(z_f) = rho m_c (zc_bar + z_f)/(zm_bar + z_f)`` at the estimate."""
+    z_f, zm = theta[I_ZF], theta[I_ZM]
+    rho = rho_of(theta, known)
+    return rho * known.m_c * (zm - known.zc_bar) / (zm + z_f) ** 2
+
+
+def _covariance(core: dict) -> tuple[np.ndarray, list[str], bool]:
+    """Covariance of the free physical parameters (m, not q); conditional on z_f when it is free without prior.
+
+    ``Cov_q = (J^T J)^-1`` in the internal parameterisation, mapped to ``m = q/(zm_bar + z_f)`` by the
+    delta method.
+    """
+    J = core["J"]
+    free = core["free"].copy()
+    conditional = bool(free[I_ZF] and core["prior"] is None)
+    if conditional:
+        free[I_ZF] = False
+    idx = np.flatnonzero(free)
+    names = [THETA_NAMES[i] for i in idx]
+    if J is None:
+        return np.full((idx.size, idx.size), np.nan), names, conditional
+    cols = np.flatnonzero(core["free"])
+    J = J[:, [list(cols).index(i) for i in idx]]
+    try:
+        cov_q = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        return np.full((idx.size, idx.size), np.inf), names, conditional
+    tq = core["theta_q"]
+    D = np.zeros((idx.size, idx.size))
+    for a, i in enumerate(idx):
+        for b, k in enumerate(idx):
+            h = 1e-30
+            tc = tq.astype(complex)
+            tc[k] += 1j * h
+            D[a, b] = from_moment(tc)[i].imag / h
+    cov = D @ cov_q @ D.T
+    return 0.5 * (cov + cov.T), names, conditional
+
+
+def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
+                     theta0: Sequence[float] | None = None, z_f: float | None = None,
+                     z_f_prior: tuple[float, float] | None = None, init: str | None = None,
+                     options: MassCMOptions = MassCMOptions()) -> Result:
+    """Estimate the load mass ``m`` and its centre ``zm_bar`` (and the nuisance parameters) by Algorithm 1.
+
+    Parameters
+    ----------
+    datasets : sequence of (condition, Trial)
+        ``condition`` in ``{"nominal", "calibration", "loaded"}``; at least one of each, any number of
+        extra datasets per condition (§4.1, last paragraph). Trials carry ``p, a_s, r, delta``.
+    known : KnownParams
+        ``U, M, zg_bar, m_c, zc_bar, zs_bar, g`` (§4.3).
+    theta0 : sequence of 9 floats, optional
+        Initial ``[k, A_x, d, K_r, K_vdot, K_delta, z_f, m, zm_bar]`` (30).
+    z_f : float, optional
+        Known centre of rotation (m, user frame). Recommended: without it ``m`` is not identifiable.
+    z_f_prior : (mean, std), optional
+        Gaussian prior on ``z_f`` instead of a known value; its uncertainty propagates to ``m``.
+    init : {"linear", "given"}, optional
+        Starting point of the first search: ``"linear"`` (default without ``theta0``) solves the
+        multiplied-out, linear form of (40) (:func:`linear_initial`), independent of initial values;
+        ``"given"`` (default with ``theta0``) starts from ``theta0`` as in the paper's §5.
+
+    Returns
+    -------
+    Result
+        Estimates of the 9 parameters, ``rho`` and ``dm_dzf``; ``diagnostics`` holds ``converged``,
+        ``iterations``, ``implausible`` (+ reasons), residual whiteness, ``identifiability``, warnings.
+    """
+    t0 = time.perf_counter()
+    prep = prepare(datasets, options)
+    th0 = DEFAULT_THETA0 if theta0 is None else np.asarray(theta0, dtype=float)
+    if th0.size != len(THETA_NAMES):
+        raise InputError(f"theta0 needs {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})")
+    with warnings.catch_warnings(), threadpool_limits(1):     # small matrices: BLAS threads only cost here
+        warnings.simplefilter("ignore", RuntimeWarning)
+        core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options,
+                       init=init or ("linear" if theta0 is None else "given"))
+    return _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+
+
+def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
+    theta = core["theta"]
+    cov, names, conditional = _covariance(core)
+    std = {n: float(np.sqrt(max(cov[i, i], 0.0))) if np.isfinite(cov[i, i]) else float("inf")
+           for i, n in enumerate(names)}
+    # delta method for rho (invariant along the unidentifiable direction, so the conditional cov suffices)
+    def rho_fun(th):
+        return rho_of(th, known)
+    grad = np.zeros(len(names))
+    for i, n in enumerate(names):
+        k = THETA_NAMES.index(n)
+        h = 1e-7 * max(1.0, abs(theta[k]))
+        tp, tm = theta.copy(), theta.copy()
+        tp[k] += h; tm[k] -= h
+        grad[i] = (rho_fun(tp) - rho_fun(tm)) / (2 * h)
+    rho = rho_fun(theta)
+    rho_std = float(np.sqrt(max(grad @ cov @ grad, 0.0))) if np.all(np.isfinite(cov)) else float("inf")
+    slope = dm_dzf(theta, known)
+    if z_f is not None:
+        zf_mode, m_note = "known", f"z_f known ({z_f:g} m); dm/dz_f = {slope:.4g} kg/m"
+    elif z_f_prior is not None:
+        zf_mode = "prior"
+        m_note = (f"z_f from prior N({z_f_prior[0]:g}, {z_f_prior[1]:g}^2) m; its uncertainty is in the std; "
+                  f"dm/dz_f = {slope:.4g} kg/m")
+    else:
+        zf_mode = "free"
+        m_note = ("NOT identifiable on its own: set by where the search left z_f "
+                  f"(dm/dz_f = {slope:.4g} kg/m); std is conditional on z_f. Supply z_f or a prior.")
+    est: dict[str, Estimate] = {}
+    for k, n in enumerate(THETA_NAMES):
+        if n == "z_f" and zf_mode == "known":
+            est[n] = Estimate(float(theta[k]), 0.0, THETA_UNITS[n], "fixed", "known input")
+            continue
+        s = std.get(n, float("inf"))
+        note = ""
+        if n == "m":
+            note = m_note
+        elif n == "z_f" and zf_mode == "free":
+            note = "not structurally identifiable (any z_f fits exactly); value is where the search stopped"
+            s = float("inf")
+        elif n in ("k", "A_x", "K_vdot", "K_r") and zf_mode == "free":
+            note = "depends on the unidentified z_f; std conditional on z_f"
+        est[n] = Estimate(float(theta[k]), s, THETA_UNITS[n], "estimated", note)
+    est["rho"] = Estimate(float(rho), rho_std, "-", "derived",
+                          "rho = m z_m/(m_c z_c), identifiable (invariant along the z_f family)")
+    est["dm_dzf"] = Estimate(float(slope), float("nan"), "kg/m", "derived",
+                             "slope of the exact-fit family m(z_f) = rho m_c (zc_bar+z_f)/(zm_bar+z_f)")
+    conds = [ds.condition for ds in prep]
+    reasons = implausible_reasons(theta, known, conds)
+    warn = list(core["warnings"])
+    if not core["converged"]:
+        warn.append(f"not converged after {core['iterations']} iterations (tol {options.tol:g} on g)")
+    m_val, m_std = theta[I_M], std.get("m", float("inf"))
+    if zf_mode != "free" and (not np.isfinite(m_std) or m_std > 0.3 * abs(m_val)):
+        warn.append(f"m is poorly determined by these data (std {m_std:.3g} kg vs m = {m_val:.3g} kg): "
+                    "record longer or excite more")
+    if zf_mode == "free":
+        warn.append("z_f not given: m is not identifiable from the three datasets (only zm_bar and rho are)")
+    if reasons:
+        warn.append("implausible solution: " + ", ".join(reasons))
+    st = core["state"]
+    resid = []
+    for i, ds in enumerate(prep):
+        G = discrete_coeffs(core["theta_q"], known, conds, np.array([d.T for d in prep]), moment=True)[i]
+        eps = ds.y - ds.Phi @ G
+        s = _start(options)
+        ef = st.L[i].prefilter(eps)[s:] if st.L[i] is not None else eps[s:]
+        ef = ef - ef.mean()
+        ac = np.array([np.dot(ef[:-k], ef[k:]) for k in range(1, 21)]) / max(np.dot(ef, ef), 1e-300)
+        resid.append({"condition": ds.condition, "n": int(ds.y.size), "T": ds.T,
+                      "rms_equation_error": float(np.sqrt(np.mean(eps[s:] ** 2))),
+                      "innovation_variance": float(st.lam[i]),
+                      "max_abs_autocorr_1_20": float(np.max(np.abs(ac))),
+                      "whiteness_bound_95": float(1.96 / np.sqrt(ef.size))})
+    hist = core["history"]
+    series = {"iteration": list(range(1, len(hist) + 1)),
+              **{n: hist[:, k].tolist() for k, n in enumerate(THETA_NAMES)}} if len(hist) else {}
+    return Result(
+        method="mass-cm",
+        estimates=est,
+        model={"structure": "reduced roll model (23)-(26), bilinear discretisation (32)-(37)",
+               "known": known.__dict__, "conditions": conds, "theta_names": list(THETA_NAMES),
+               "paper": "Linder et al. 2015 (seed 000)"},
+        covariance=cov, covariance_names=names,
+        diagnostics={"converged": bool(core["converged"]), "iterations": int(core["iterations"]),
+                     "z_f_mode": zf_mode, "covariance_conditional_on_z_f": conditional,
+                     "implausible": bool(reasons), "implausible_reasons": reasons,
+                     "identifiability": ("zm_bar and rho are identifiable from nominal+calibration+loaded data; "
+                                         "z_f is not, and m = rho m_c (zc_bar+z_f)/(zm_bar+z_f) follows only "
+                                         "once z_f is pinned (shipid.analysis.identifiability_masscm)"),
+                     "residuals": resid, "warnings": warn, "options": options.__dict__,
+                     "wall_s": wall},
+        series=series,
+        provenance={"inputs": [ds.condition for ds in prep]},
+    )
+
+
+__all__ = ["MassCMOptions", "Dataset", "prepare", "iterate", "estimate_mass_cm", "implausible_reasons",
+           "rho_of", "dm_dzf", "DEFAULT_THETA0", "REQUIRED"]
