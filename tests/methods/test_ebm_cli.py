@@ -66,3 +66,10 @@ def test_design_prbs_subprocess():
 
 def test_design_prbs_bad_grid(capsys):
     assert main(["design", "prbs", "--amplitudes", "50"]) == 2
+
+
+def test_study_cli_quick(capsys, monkeypatch):
+    monkeypatch.setenv("SHIPID_NO_PROGRESS", "1")
+    assert main(["study", "ebm-esso-osaka", "--input", "standard", "--seed", "3", "--scale", "0.3"]) == 0
+    out = capsys.readouterr().out
+    assert "Table 2 analogue" in out and "eq. 21 combined coefficients" in out and "Y_delta" in out

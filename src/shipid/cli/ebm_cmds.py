@@ -103,6 +103,14 @@ def study_ebm(kind, seed, scale, as_json, paper):
                    f"{100 * row['rel_error']:>9.1f}")
     for m, md in d["modes"].items():
         click.echo(f"{m:<8} kappa {md['kappa']:.4e}  R^2 {md['R2']:.4f}  Cp {md['Cp']:.3f} (p = {md['p']})")
+    from shipid.models import abkowitz as ab
+
+    for mode, names, tab in (("surge", ab.THETA_X_NAMES, "Table 1"), ("sway", ab.THETA_Y_NAMES, "Table 2")):
+        C = np.asarray(d["correlation"][mode])
+        click.echo(f"correlation of the {mode} regressors ({tab} analogue)")
+        click.echo(" " * 9 + "".join(f"{n:>9}" for n in names))
+        for i, n in enumerate(names):
+            click.echo(f"{n:<9}" + " " * (9 * i) + "".join(f"{C[i, j]:>9.2f}" for j in range(i, len(names))))
     ce = d["combined_eq21_rel_error"]
     click.echo(f"eq. 21 combined coefficients (alpha = {d['alpha']:.4f}): errors "
                f"{100 * ce['Yv+Yr/alpha']:.2f} % and {100 * ce['Nv*alpha+Nr']:.2f} %")
