@@ -103,7 +103,8 @@ def test_demo_writes_and_does_not_clobber(tmp_path, capsys):
     assert "nomoto_turning-35.csv" in files
     assert "demo done" in out and "skipped" not in out
     for f in files:
-        assert len(read_trial(d / f)) > 100
+        if f.endswith(".csv"):  # the demo also writes result JSON and HTML reports (issue 8)
+            assert len(read_trial(d / f)) > 100
     assert main(["demo", "--out-dir", str(d)]) == 2
     assert main(["demo", "--out-dir", str(d), "--force"]) == 0
 
