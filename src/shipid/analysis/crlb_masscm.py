@@ -49,7 +49,7 @@ def true_theta(vessel="fishing-vessel") -> np.ndarray:
 
 
 def noise_models(vessel="fishing-vessel", *, fs: float = 50.0, noise: NoiseSpec, seed=0,
-                 duration: float = 1200.0, ar_order: int = 40) -> list:
+                 duration: float = 600.0, ar_order: int = 40) -> list:
     """AR models ``(a, lam)`` of the equation error of each dataset from the noise alone (rudder 0)."""
     th = true_theta(vessel)
     known = KnownParams.from_vessel(vessel)
