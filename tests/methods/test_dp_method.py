@@ -150,3 +150,22 @@ def test_full_length_study(supply):
     assert np.all(np.abs(d["error_sigma"]) < 3.0)
     rel = np.abs(np.asarray(d["relative_error"]))
     assert np.all(rel[[0, 1, 4, 5, 6, 7, 8]] < 0.05)
+
+
+def test_measurement_gaps_are_skipped_and_input_gaps_refused(supply):
+    from shipid.errors import InputError
+
+    tr = simulate_dp_trial(supply, "sway-yaw", 200.0, 31)
+    x = tr["x"].copy()
+    x[50:60] = np.nan
+    psi = tr["psi"].copy()
+    psi[0] = np.nan
+    gappy = tr.with_channels(x=x, psi=psi)
+    theta = supply.theta.copy()
+    st = run_stage("SI2", [gappy], supply, theta, DPOptions(passes=1))
+    assert np.all(np.isfinite(st.free_theta[-1]))
+    assert np.isnan(st.ekf.nis[0][55]) and np.isfinite(st.ekf.nis[0][70])
+    p3 = tr["p3"].copy()
+    p3[7] = np.nan
+    with pytest.raises(InputError, match="p3.*row 8"):
+        run_stage("SI2", [tr.with_channels(p3=p3)], supply, theta)

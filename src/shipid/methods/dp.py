@@ -158,19 +158,33 @@ def _prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
     if t.size < 10:
         raise InputError(f"too short for identification ({t.size} samples)", file=trial.meta.get("source"))
     tb = b.t_to_bis(t - t[0])
+    src = trial.meta.get("source")
     P = trial.stack([f"p{i}" for i in range(1, 7)])
     alpha = trial["alpha6"] if "alpha6" in trial else np.full(t.size, np.pi / 2)
+    for j, col in enumerate(list(P.T) + [alpha]):
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:  # inputs drive the model: no gaps allowed (measurements may have gaps)
+            name = f"p{j + 1}" if j < 6 else "alpha6"
+            raise InputError("missing input value (fill or trim the gap first)", file=src, channel=name,
+                             row=int(bad[0]) + 1)
     U = np.column_stack([control_vector(P, vessel.p0), alpha])
     x, y, psi = trial["x"], trial["y"], trial["psi"]
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+    if ok.sum() < 10:
+        raise InputError(f"too few position/heading fixes ({int(ok.sum())})", file=src)
+    idx = np.flatnonzero(ok)
     if kind == "surge":
-        c = 0.5 * (psi[:-1] + psi[1:])
-        # mean of two headings across the ±π cut
-        c = psi[:-1] + 0.5 * np.arctan2(np.sin(psi[1:] - psi[:-1]), np.cos(psi[1:] - psi[:-1]))
-        s = np.concatenate([[0.0], np.cumsum(np.diff(x) * np.cos(c) + np.diff(y) * np.sin(c))])
-        Z = (s / b.L)[:, None]
+        # distance run along the heading between consecutive fixes (gaps are bridged):
+        # mean of two headings taken across the ±π cut
+        pk = psi[idx]
+        c = pk[:-1] + 0.5 * np.arctan2(np.sin(pk[1:] - pk[:-1]), np.cos(pk[1:] - pk[:-1]))
+        sk = np.concatenate([[0.0], np.cumsum(np.diff(x[idx]) * np.cos(c) + np.diff(y[idx]) * np.sin(c))])
+        Z = np.full((t.size, 1), np.nan)
+        Z[idx, 0] = sk / b.L
     else:
-        Z = np.column_stack([x / b.L, y / b.L, np.unwrap(psi)])
-    return {"t": tb, "Z": Z, "U": U, "source": trial.meta.get("source")}
+        Z = np.full((t.size, 3), np.nan)
+        Z[idx] = np.column_stack([x[idx] / b.L, y[idx] / b.L, np.unwrap(psi[idx])])
+    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0])}
 
 
 class _RK4Discrete:
@@ -317,7 +331,7 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     P0t[fpos, fpos] = std0 ** 2
     if kind == "surge":
         models = [_surge_model(vessel, np.asarray(theta_full, float), est, d["t"]) for d in data]
-        x0 = [np.array([0.0, d["Z"][0, 0], 0.0]) for d in data]
+        x0 = [np.array([0.0, d["Z"][d["first"], 0], 0.0]) for d in data]
         sp = options.sigma_pos / b.L
         P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
         R = np.array([[sp ** 2]])
@@ -328,7 +342,7 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
         cur = options.current_states
         models = [_momentum_model(vessel, np.asarray(theta_full, float), est, d["t"], cur) for d in data]
         nc = 2 if cur else 0
-        x0 = [np.concatenate([np.zeros(3), d["Z"][0], np.zeros(3 + nc)]) for d in data]
+        x0 = [np.concatenate([np.zeros(3), d["Z"][d["first"]], np.zeros(3 + nc)]) for d in data]
         sp = options.sigma_pos / b.L
         c0 = options.current0_std / b.speed
         qc = options.q_c / b.speed ** 2 * b.time  # (m/s)²/s → bis speed² per bis time
