@@ -101,14 +101,25 @@ class DPVessel:
 
 
 def dp_vessel(vessel) -> DPVessel:
-    """Build a :class:`DPVessel` from a packaged vessel (``load_vessel("supply")``)."""
-    part = vessel.values("particulars")
-    b = vessel.values("bis")
-    ident = vessel.values("identified")
-    return DPVessel(M=np.asarray(b["M"]), A_h=np.asarray(ident["A_h"]), K=np.asarray(ident["K"]),
-                    arms=np.asarray(b["arms"]), p0=np.asarray(b["p0"]),
-                    bis=Bis(L=float(part["L"]), m=float(part["m"]), g=float(part["g"])),
-                    name=vessel.name)
+    """Build a :class:`DPVessel` from a packaged vessel (``load_vessel("supply")``).
+
+    Needs ``[particulars]`` L, m, g and ``[bis]`` M, arms, p0; ``[identified]`` A_h and K are
+    optional (NaN when absent: a vessel still to be identified).
+    """
+    from shipid.errors import ShipidError
+
+    try:
+        part = vessel.values("particulars")
+        b = vessel.values("bis")
+        ident = vessel.values("identified") if "identified" in vessel.sections else {}
+        return DPVessel(M=np.asarray(b["M"]), A_h=np.asarray(ident.get("A_h", np.full((3, 3), np.nan))),
+                        K=np.asarray(ident.get("K", np.full(6, np.nan))),
+                        arms=np.asarray(b["arms"]), p0=np.asarray(b["p0"]),
+                        bis=Bis(L=float(part["L"]), m=float(part["m"]), g=float(part["g"])),
+                        name=vessel.name)
+    except KeyError as err:
+        raise ShipidError(f"vessel {vessel.name!r} has no DP model ({err.args[0]}; needs [particulars] L, m, g "
+                          "and [bis] M, arms, p0)") from None
 
 
 def matrices_from_theta(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
