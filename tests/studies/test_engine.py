@@ -119,4 +119,4 @@ def test_campaign_options_validation():
         CampaignOptions(resume=True)
     opts = CampaignOptions(seed=4, dask_local=3, store="s.sqlite")
     assert opts.engine_kwargs() == {"executor": "dask-local", "workers": 3, "store": "s.sqlite",
-                                    "resume": False, "progress": True}
+                                    "resume": False, "retry_failed": False, "progress": True}

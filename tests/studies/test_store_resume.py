@@ -190,3 +190,35 @@ def test_two_campaign_processes_never_share_a_store(tmp_path):
         with CampaignStore(store) as reader:   # readers are never locked out
             assert reader.campaign_names() == []
     assert run_campaign(TOY, 3, 0, workers=1, store=store, progress=False).n_ok == 3
+
+
+def test_retry_failed_reruns_only_failed_runs(tmp_path):
+    """A resume skips failed runs; --retry-failed runs them again and leaves the ok rows alone."""
+    store = tmp_path / "s.sqlite"
+    marker = tmp_path / "died"
+    kw = {"n": 30, "die_at": 5, "marker": str(marker)}
+    with CampaignStore(store, writer=True) as st:   # simulate a campaign whose run 5 was lost to a dead worker
+        from shipid.studies.store import CampaignDefinition
+        from shipid.studies.engine import to_json
+        import shipid
+        st.create(CampaignDefinition("toy_run", TOY, 2, 12, to_json(kw, canonical=True), None, shipid.__version__))
+        st.write("toy_run", [{"index": 5, "seed": [2, 5], "inputs_json": "{}", "outputs_json": None,
+                              "status": "failed", "error": "WorkerDied: test", "wall_s": None, "worker": None}])
+    marker.write_text("already died once")   # the run will now succeed
+    res = run_campaign(TOY, 12, 2, kwargs=kw, workers=1, store=store, resume=True, progress=False)
+    assert res.records[5].error == "WorkerDied: test"             # plain resume: not repeated
+    before = {r.index: (r.worker, r.wall_s) for r in res.records}
+    res2 = run_campaign(TOY, 12, 2, kwargs=kw, workers=1, store=store, resume=True, retry_failed=True,
+                        progress=False)
+    assert res2.n_failed == 0 and res2.reused == 11
+    assert all((r.worker, r.wall_s) == before[r.index] for r in res2.records if r.index != 5)
+    clean = run_campaign(TOY, 12, 2, kwargs=kw, workers=1, progress=False)
+    assert _same(res2.records, clean.records)
+
+
+def test_resume_with_other_inputs_is_refused(tmp_path):
+    store = tmp_path / "s.sqlite"
+    run_campaign(TOY, None, 1, inputs=[{"slope": 1.0}, {"slope": 2.0}], workers=1, store=store, progress=False)
+    with pytest.raises(ShipidError, match="inputs_sha256"):
+        run_campaign(TOY, None, 1, inputs=[{"slope": 1.0}, {"slope": 3.0}], workers=1, store=store, resume=True,
+                     progress=False)

@@ -17,7 +17,7 @@ and take its execution options from :func:`campaign_options`::
         ...  # res.outputs (run order, None where failed), res.failed, res.wall_s
 
 The decorator adds ``--seed S`` (default 0), ``--workers W``, ``--dask-local N``,
-``--scheduler tcp://HOST:PORT``, ``--store FILE`` and ``--resume``, and hands the
+``--scheduler tcp://HOST:PORT``, ``--store FILE``, ``--resume`` and ``--retry-failed``, and hands the
 command one keyword argument ``campaign``, a
 :class:`shipid.studies.engine.CampaignOptions` (``campaign.seed``,
 ``campaign.run(...)``, ``campaign.engine_kwargs()``). Use
@@ -48,9 +48,10 @@ def campaign_options(f=None, *, seed_default: int = 0):
 
     def decorate(func):
         @functools.wraps(func)
-        def wrapper(*args, seed, workers, dask_local, scheduler, store, resume, **kw):
+        def wrapper(*args, seed, workers, dask_local, scheduler, store, resume, retry_failed, **kw):
             kw["campaign"] = CampaignOptions(seed=seed, workers=workers, dask_local=dask_local,
-                                             scheduler=scheduler, store=store, resume=resume)
+                                             scheduler=scheduler, store=store, resume=resume,
+                                             retry_failed=retry_failed)
             return func(*args, **kw)
 
         opts = [
@@ -66,6 +67,8 @@ def campaign_options(f=None, *, seed_default: int = 0):
                          help="SQLite store: one row per run, committed as chunks finish."),
             click.option("--resume", is_flag=True,
                          help="Continue the campaign in --store (same definition), skipping finished runs."),
+            click.option("--retry-failed", "retry_failed", is_flag=True,
+                         help="With --resume: run the stored failed runs again."),
         ]
         for opt in reversed(opts):
             wrapper = opt(wrapper)

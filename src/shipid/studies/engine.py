@@ -186,8 +186,8 @@ def _short(value, width: int = 60) -> str:
 def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0, *,
                  inputs: Sequence[dict] | None = None, kwargs: dict | None = None, name: str | None = None,
                  executor: str = "local", workers: int | None = None, scheduler_address: str | None = None,
-                 store: str | os.PathLike | None = None, resume: bool = False, progress: bool = True,
-                 chunk_size: int | None = None) -> CampaignResult:
+                 store: str | os.PathLike | None = None, resume: bool = False, retry_failed: bool = False,
+                 progress: bool = True, chunk_size: int | None = None) -> CampaignResult:
     """Run ``task`` for runs ``0 .. n_runs-1`` and return every run's outputs in run order.
 
     Parameters
@@ -215,6 +215,9 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         SQLite store file; every finished chunk is committed to it.
     resume : bool
         Continue the campaign ``name`` found in ``store``.
+    retry_failed : bool
+        With ``resume``: run the stored failed runs again (e.g. after ``WorkerDied``);
+        their old rows are replaced. Runs that succeeded are never repeated.
     progress : bool
         Show a progress bar (on an interactive stderr only).
     chunk_size : int, optional
@@ -253,6 +256,8 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         raise ShipidError("executor 'scheduler' needs a scheduler address (tcp://HOST:PORT)")
     if resume and store is None:
         raise ShipidError("--resume needs --store FILE")
+    if retry_failed and not resume:
+        raise ShipidError("--retry-failed needs --resume (and --store)")
     name = name or ref.rpartition(":")[2]
     try:
         kwargs_json = to_json(kwargs, canonical=True)
@@ -282,6 +287,8 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
                     now = ", ".join(f"{f}={_short(getattr(definition, f))}" for f in diff)
                     raise ShipidError(f"{store}: campaign '{name}' was defined with {was}, not {now}: "
                                       "refusing to resume (use another --store)")
+                if retry_failed:
+                    st.delete_failed(name)
             done = st.done_indices(name)
         todo = [i for i in range(n_runs) if i not in done]
 
@@ -371,6 +378,8 @@ class CampaignOptions:
         SQLite store (``--store FILE``).
     resume : bool
         Continue the campaign in ``store`` (``--resume``).
+    retry_failed : bool
+        With ``resume``, run the stored failed runs again (``--retry-failed``).
     progress : bool
         Show the progress bar.
     """
@@ -381,6 +390,7 @@ class CampaignOptions:
     scheduler: str | None = None
     store: str | None = None
     resume: bool = False
+    retry_failed: bool = False
     progress: bool = True
 
     def __post_init__(self):
@@ -395,6 +405,8 @@ class CampaignOptions:
                 raise ShipidError(f"{label} must be at least 1, got {v}")
         if self.resume and self.store is None:
             raise ShipidError("--resume needs --store FILE")
+        if self.retry_failed and not self.resume:
+            raise ShipidError("--retry-failed needs --resume (and --store)")
 
     def engine_kwargs(self) -> dict:
         """Keyword arguments for :func:`run_campaign` (everything but task, runs and seed)."""
@@ -404,7 +416,8 @@ class CampaignOptions:
             ex = {"executor": "dask-local", "workers": self.dask_local}
         else:
             ex = {"executor": "local", "workers": self.workers}
-        return {**ex, "store": self.store, "resume": self.resume, "progress": self.progress}
+        return {**ex, "store": self.store, "resume": self.resume, "retry_failed": self.retry_failed,
+                "progress": self.progress}
 
     def run(self, task: str | Callable, n_runs: int | None = None, *, inputs=None, kwargs=None,
             name: str | None = None, chunk_size: int | None = None) -> CampaignResult:

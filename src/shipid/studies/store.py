@@ -185,6 +185,12 @@ class CampaignStore:
         """Indices of the runs of ``name`` already stored (ok or failed)."""
         return {r[0] for r in self._con.execute("SELECT run FROM runs WHERE campaign = ?", (name,))}
 
+    def delete_failed(self, name: str) -> int:
+        """Remove the failed runs of ``name`` (so that a resume runs them again); return how many."""
+        with self._transaction():
+            cur = self._con.execute("DELETE FROM runs WHERE campaign = ? AND status != 'ok'", (name,))
+        return cur.rowcount
+
     def count(self, name: str) -> int:
         """Number of stored runs of ``name``."""
         return self._con.execute("SELECT COUNT(*) FROM runs WHERE campaign = ?", (name,)).fetchone()[0]
