@@ -109,9 +109,11 @@ def test_parallel_two_trials_beat_one_trial_of_same_total_length(supply):
     and a 300-s "yaw" trial (aft and bow thrusters opposed), processed together. Single: one
     600-s "sway" trial, the same total length with one excitation sequence. The single trial
     leaves the yaw side (θ4, θ5) poorly determined: its σ is more than twice the parallel
-    one and its estimate does not settle, while the parallel filter's errors stay within 3σ.
-    (With two equally rich random trials a single trial of double length does as well: the
-    gain comes from the different excitation, which is what §3.2 asks for.)
+    one and its estimate does not settle. (With two equally rich random trials a single trial
+    of double length does as well: the gain comes from the different excitation, which is
+    what §3.2 asks for.) The parallel filter's errors are within 3σ for this seed; on such
+    short single-signal trials that is not guaranteed (|error|/σ up to 4.6 was seen on
+    another seed), which is why the pipeline tests use 600-s random trials.
     """
     opt = DPOptions()
     theta = np.array(opt.theta0)
