@@ -97,12 +97,16 @@ def study_ebm(kind, seed, scale, as_json, paper):
         return
     d = res.diagnostics
     click.echo(f"EBM study, ESSO OSAKA, input {kind}, seed {seed} ({d['paper_table']})")
-    click.echo(f"{'coefficient':<12}{'true':>12}{'estimated':>12}{'std':>11}{'error %':>9}")
+    click.echo(f"{'coefficient':<12}{'true':>12}{'estimated':>12}{'std':>11}{'error %':>9}"
+               f"{'paper':>12}{'paper err %':>12}")
     for row in d["table"]:
         click.echo(f"{row['coefficient']:<12}{row['true']:>12.3e}{row['estimated']:>12.3e}{row['se']:>11.2e}"
-                   f"{100 * row['rel_error']:>9.1f}")
+                   f"{100 * row['rel_error']:>9.1f}{row['paper_estimated']:>12.3e}"
+                   f"{100 * row['paper_rel_error']:>12.1f}")
     for m, md in d["modes"].items():
-        click.echo(f"{m:<8} kappa {md['kappa']:.4e}  R^2 {md['R2']:.4f}  Cp {md['Cp']:.3f} (p = {md['p']})")
+        pk, pr, pc = d["paper_table4"][m]
+        click.echo(f"{m:<8} kappa {md['kappa']:.4e}  R^2 {md['R2']:.4f}  Cp {md['Cp']:.3f} (p = {md['p']})"
+                   f"   [paper Table 4, standard input: kappa {pk:.4e}, R {pr:.4f}, Cp {pc:.4f}]")
     from shipid.models import abkowitz as ab
 
     for mode, names, tab in (("surge", ab.THETA_X_NAMES, "Table 1"), ("sway", ab.THETA_Y_NAMES, "Table 2")):
