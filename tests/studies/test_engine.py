@@ -92,7 +92,11 @@ def test_chunk_indices_cover_everything_once():
     chunks = chunk_indices(idx, 2)
     assert [i for c in chunks for i in c] == idx
     assert max(len(c) for c in chunks) <= 100
-    assert len(chunk_indices(list(range(10_000)), 2)) == 100   # not 10 000 round trips
+    assert [len(c) for c in chunks] == sorted((len(c) for c in chunks), reverse=True)   # shrinking
+    big = chunk_indices(list(range(10_000)), 2)
+    assert 100 <= len(big) <= 200                              # not 10 000 round trips
+    assert len(big[0]) == 100 and len(big[-1]) == 1
+    assert [len(c) for c in chunk_indices(idx, 2, chunk_size=500)] == [500, 500, 3]
 
 
 def test_bad_definitions_are_one_line_errors():
