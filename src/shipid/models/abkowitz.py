@@ -201,15 +201,15 @@ def make_dynamics(p: AbkowitzParams):
     ``theta`` passed at call time is used (an :class:`AbkowitzParams`); ``M⁻¹`` is cached
     per parameter object.
     """
-    cache: dict[int, np.ndarray] = {}
+    # the cache holds the parameter object itself, so an identity test is safe
+    cache: dict[str, object] = {"theta": None, "Minv": None}
 
     def f(t, x, u, theta):
         th = p if theta is None else theta
-        Minv = cache.get(id(th))
-        if Minv is None:
-            Minv = np.linalg.inv(th.mass_matrix)
-            cache.clear()
-            cache[id(th)] = Minv
+        if cache["theta"] is not th:
+            cache["theta"] = th
+            cache["Minv"] = np.linalg.inv(th.mass_matrix)
+        Minv = cache["Minv"]
         ur, vr, r, _, _, psi = x
         delta = u[0]
         n = u[1] if len(u) > 1 else th.n0
