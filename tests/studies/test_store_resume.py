@@ -222,3 +222,19 @@ def test_resume_with_other_inputs_is_refused(tmp_path):
     with pytest.raises(ShipidError, match="inputs_sha256"):
         run_campaign(TOY, None, 1, inputs=[{"slope": 1.0}, {"slope": 3.0}], workers=1, store=store, resume=True,
                      progress=False)
+
+
+def test_export_of_nested_and_mixed_outputs(tmp_path):
+    """Lists, nested dicts and an output whose type varies between runs all survive a Parquet export."""
+    from shipid.studies.store import RunRecord, records_frame
+    recs = [RunRecord(0, [1, 0], {}, {"m": 0.4, "reasons": [], "fit": {"rmse": 0.1}, "note": "x"}, "ok"),
+            RunRecord(1, [1, 1], {}, {"m": 1, "reasons": ["A1 <= 0"], "fit": {"rmse": 0.2}, "note": 3.5}, "ok"),
+            RunRecord(2, [1, 2], {}, None, "failed", "ValueError: boom")]
+    frame = records_frame(recs, "c")
+    assert list(frame["out.fit.rmse"][:2]) == [0.1, 0.2]
+    assert json.loads(frame["out.reasons"][1]) == ["A1 <= 0"]
+    out = tmp_path / "x.parquet"
+    frame.to_parquet(out, index=False)
+    back = pd.read_parquet(out)
+    assert list(back["out.note"][:2]) == ['"x"', "3.5"]
+    assert back["error"][2] == "ValueError: boom"

@@ -280,7 +280,13 @@ def records_frame(records: list[RunRecord], campaign: str | None = None):
         if r.outputs is not None:
             flat("out", r.outputs, row)
         rows.append(row)
-    return pd.DataFrame(rows)
+    frame = pd.DataFrame(rows)
+    for col in frame.columns:   # an output whose type varies between runs: keep it as JSON text (Parquet-safe)
+        if col.startswith("out.") and frame[col].dtype == object:
+            kinds = {type(v) for v in frame[col] if v is not None and v == v}
+            if len(kinds) > 1 and not kinds <= {int, float}:
+                frame[col] = [None if v is None else json.dumps(v) for v in frame[col]]
+    return frame
 
 
 def export_store(store_path: str | os.PathLike, out: str | os.PathLike, *, campaign: str | None = None,
