@@ -83,6 +83,9 @@ class MassCMOptions:
     max_iter: int = 50
     min_iter: int = 2
     tol: float = 1e-5
+    instruments: str = "lags"       # "lags": (45) with n_y, n_as, n_r, n_delta; "regressors": noise-free (37)
+    transient_tol: float = 0.01      # prefilter start-up: drop samples until the slowest pole decays to this
+    transient_max: float = 0.2       # ... but at most this fraction of the record
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
 
@@ -166,6 +169,9 @@ def _instruments(ds: Dataset, y_hat, a_hat, r_hat, L, options: MassCMOptions) ->
     if L is not None:
         base = L.prefilter(base)
     s = _start(options)
+    if options.instruments == "regressors":
+        # Young's refined / optimal IV: the prefiltered noise-free regressors (37) themselves
+        return np.column_stack([-base[s - 1:-1, 0], -base[s - 2:-2, 0], base[s:, 1], base[s:, 2], base[s:, 3]])
     return np.column_stack([lag_matrix(base[:, 0], options.n_y, s), lag_matrix(base[:, 1], options.n_as, s),
                             lag_matrix(base[:, 2], options.n_r, s), lag_matrix(base[:, 3], options.n_delta, s)])
 
@@ -207,8 +213,27 @@ def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCM
             Pf = Li.prefilter(ds.Phi)[s:]
         else:
             yf, Pf = ds.y[s:], ds.Phi[s:]
-        mom.append(iv_compress(Z, yf, Pf))
+        k = _transient(Li, yf.size, options)
+        mom.append(iv_compress(Z[k:], yf[k:], Pf[k:]))
     return mom
+
+
+def _transient(L, n: int, options: MassCMOptions) -> int:
+    """Samples to drop while the prefilter's start-up transient decays (*).
+
+    ``lfilter`` starts from rest; the slowly decaying response to the signals' offsets (the record's
+    mean roll rate, the constant of a gyro bias) is not orthogonal to the slow instruments and biases
+    the estimate when the prefilter has poles near 1 (as ``1/(1 - c q^-2)`` and wave-noise models do).
+    We drop the samples until the slowest pole has decayed to ``options.transient_tol``, at most
+    ``options.transient_max`` of the record.
+    """
+    if L is None or L.c.size <= 1:
+        return 0
+    r = float(np.max(np.abs(np.roots(L.c))))
+    if r <= 0:
+        return 0
+    k = int(np.ceil(np.log(options.transient_tol) / np.log(min(r, 1 - 1e-9))))
+    return int(min(k, options.transient_max * n))
 
 
 def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fixed: np.ndarray, prior):
