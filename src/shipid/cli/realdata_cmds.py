@@ -62,3 +62,145 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, as_json, plot_path, 
         click.echo(V.format_table(v))
         if plot_path:
             click.echo(f"plot written to {plot_path}")
+
+
+# ----------------------------------------------------------------------------- identify
+def _prior(spec: str | None, fmt: str | None):
+    from shipid.methods import validate as V
+    from shipid.models import mmg
+
+    if spec is None:
+        spec = "kvlcc2_hsva" if fmt == "kvlcc2" else "esso_osaka_3m"
+    if spec.endswith(".json"):
+        return V.load_model(spec)
+    return mmg.load_published(spec.replace("published:", ""))
+
+
+def _print_result(res) -> None:
+    click.echo(f"structure {res.model['structure']} / candidate '{res.model.get('structure_candidate')}'"
+               f" (fixed constants from {res.model.get('fixed_from')})")
+    sel = res.diagnostics.get("structure_selection")
+    if sel:
+        click.echo(f"chosen by {sel['method']}:")
+        for c, row in sel["table"].items():
+            click.echo(f"  {c:<40} score {row['score']:.3f}")
+    click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10} {'unit':>5}  status")
+    for k, e in res.estimates.items():
+        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g} {e.unit:>5}  {e.status}")
+    for m, d in res.diagnostics.get("ridge", {}).items():
+        click.echo(f"mode {m}: R2 {d['R2']:.3f}, k {d['k']:.3g}, kappa {d['kappa']:.3g}, n {d['n']}")
+
+
+def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    from shipid.methods import realdata as R
+
+    if not paths:
+        raise ShipidError("no training runs given")
+    if rudder_sign not in (1, -1):
+        raise ShipidError("--rudder-sign must be 1 or -1")
+    trials = []
+    for p in paths:
+        tr = _read_run(p, fmt, channels)
+        if rudder_sign == -1 and "delta" in tr:
+            tr = tr.with_channels(delta=-tr["delta"])
+            tr.meta["rudder_sign_flipped"] = True
+        trials.append(tr)
+    pm = _prior(prior, fmt)
+    st = None if structure in (None, "auto") else structure
+    res = R.identify(trials, pm, structure=st, select=st is None, folds=folds,
+                     extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
+    if output:
+        res.write_json(output, force=force)
+    if as_json:
+        click.echo(res.to_json())
+    else:
+        _print_result(res)
+        if output:
+            click.echo(f"model written to {output}")
+
+
+_ID_OPTS = [
+    click.option("--format", "fmt", default=None, help="Trial format: csv, parquet, esso, kvlcc2."),
+    click.option("--channels", default=None,
+                 help="Column map for own column names, e.g. 'x=x_position_mid,u=u_velo,psi=hdg[deg]'."),
+    click.option("--prior", default=None,
+                 help="Structure and fixed constants: esso_osaka_3m (default), kvlcc2_hsva, kvlcc2_L7 or MODEL.json."),
+    click.option("--structure", default="auto", show_default=True,
+                 help="Free-coefficient set (see shipid.methods.realdata.CANDIDATES) or 'auto' (cross-validated)."),
+    click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
+    click.option("--rudder-sign", default=1, type=int, show_default=True,
+                 help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard)."),
+    click.option("--json", "as_json", is_flag=True, help="Print the Result (MODEL.json) to stdout."),
+    click.option("--output", "-o", default=None, type=click.Path(dir_okay=False), help="Write MODEL.json here."),
+    click.option("--force", is_flag=True, help="Overwrite --output."),
+]
+
+
+def _with_id_opts(f):
+    for opt in reversed(_ID_OPTS):
+        f = opt(f)
+    return f
+
+
+@identify.command("mmg", context_settings=CONTEXT)
+@click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="A training run (repeat for several).")
+@_with_id_opts
+def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode).
+
+    The structure (which coefficients are free) is chosen by cross-validation over the
+    given runs unless --structure names one. The result is a self-describing MODEL.json
+    for 'shipid validate'.
+    """
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+
+
+from shipid.cli.dp_cmds import _ManyValues  # noqa: E402  (an option taking several files)
+
+
+@identify.command("realdata", context_settings=CONTEXT)
+@click.option("--train", "train", cls=_ManyValues, required=True, type=click.Path(dir_okay=False),
+              help="Training runs: --train A.csv B.csv ...")
+@_with_id_opts
+def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+
+
+# ----------------------------------------------------------------------------- studies
+@study.command("esso-osaka-heldout", context_settings=CONTEXT)
+@click.option("--split", type=click.Choice(["miyauchi2022", "wakita2022", "both"]), default="both",
+              show_default=True, help="Training/test split of the data set's README.")
+@click.option("--folds", default=3, show_default=True, type=int,
+              help="CV folds within the training runs for the structure choice (0: leave one out).")
+@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+def esso_heldout_cmd(split, folds, as_json):
+    """Held-out error table of the identified MMG model and the published MMG set (Esso Osaka 3 m)."""
+    from shipid.studies import realdata_study as S
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    splits = ["miyauchi2022", "wakita2022"] if split == "both" else [split]
+    out = {}
+    for sp in splits:
+        out[sp] = S.esso_heldout(sp, folds=folds or None, progress=say)
+        if not as_json:
+            click.echo(S.format_esso(out[sp]))
+    if as_json:
+        click.echo(json.dumps(out, indent=1, allow_nan=True))
+
+
+@study.command("kvlcc2-zigzag", context_settings=CONTEXT)
+@click.option("--folds", default=5, show_default=True, type=int,
+              help="CV folds within the training zig-zags (0: leave one out).")
+@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+def kvlcc2_cmd(folds, as_json):
+    """Identify from ten HSVA KVLCC2 zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
+    from shipid.studies import realdata_study as S
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    st = S.kvlcc2_zigzag(folds=folds or None, progress=say)
+    if as_json:
+        click.echo(json.dumps(st, indent=1, allow_nan=True))
+    else:
+        click.echo(S.format_kvlcc2(st))

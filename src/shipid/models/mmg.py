@@ -590,11 +590,52 @@ def load_kvlcc2_published(root: Path | None = None) -> MmgModel:
                              "equations": "Yasukawa & Yoshimura 2015 eqs. 4-12, 15"})
 
 
-PUBLISHED = {"esso_osaka_3m": load_esso_osaka_published, "kvlcc2_L7": load_kvlcc2_published}
+def load_kvlcc2_hsva_prior(root: Path | None = None) -> MmgModel:
+    """The KVLCC2 L7 coefficients on the particulars of the HSVA KVLCC2 model (SIMMAN 2008).
+
+    Particulars from ``kvlcc2_hsva/ship_data_from_repo.yml`` (L 7.0 m, B 1.2688 m,
+    T 0.455 m, m 3272 kg, x_G 0.2436 m, I_z 9908.6 kg m², ρ 1000, propeller D 0.204 m,
+    A_R, H_R, w_P0, C_1, C_2); every coefficient and the other sub-model constants from
+    :func:`load_kvlcc2_published`. Used as the prior/fixed part when identifying from the
+    HSVA zig-zags, and as the "published coefficients" baseline on those runs.
+    """
+    base = load_kvlcc2_published(root)
+    from shipid.data.paths import data_root
+    r = data_root() if root is None else Path(root)
+    path = None if r is None else r / "kvlcc2_hsva" / "ship_data_from_repo.yml"
+    if path is None or not path.is_file():
+        raise InputError("kvlcc2_hsva/ship_data_from_repo.yml not found in the shared data folder")
+    y = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        line = line.split("#", 1)[0]
+        if ":" in line:
+            k, v = (s_.strip() for s_ in line.split(":", 1))
+            try:
+                y[k] = float(v)
+            except ValueError:
+                pass
+    p = dict(base.particulars)
+    L, d, rho = y["L"], y["T"], y["rho"]
+    scale = (rho * L * L * d) / (base.particulars["rho"] * base.particulars["L"] ** 2 * base.particulars["d"])
+    p.update(L=L, B=y["B"], d=d, rho=rho, m=y["m"], x_G=y["x_G"], I_zG=y["I_z"], D_p=y["D"], A_R=y["A_R"],
+             H_R=y["H_R"], w_P0=y["w_p0"], C_1=y["C_1"], C_2_plus=y["C_2_beta_p_pos"],
+             C_2_minus=y["C_2_beta_p_neg"], t_P=y["tdf"],
+             m_x=base.particulars["m_x"] * scale, m_y=base.particulars["m_y"] * scale,
+             J_z=base.particulars["J_z"] * scale)
+    coef = dict(base.coef)
+    coef["XP_gain"] = 1 - y["tdf"]
+    return MmgModel("yasukawa2015", p, coef, name="kvlcc2-L7-coefficients-on-HSVA-particulars",
+                    sources={"coefficients": base.sources["all"],
+                             "particulars": "kvlcc2_hsva/ship_data_from_repo.yml",
+                             "equations": base.sources["equations"]})
+
+
+PUBLISHED = {"esso_osaka_3m": load_esso_osaka_published, "kvlcc2_L7": load_kvlcc2_published,
+             "kvlcc2_hsva": load_kvlcc2_hsva_prior}
 
 
 def load_published(name: str, root: Path | None = None) -> MmgModel:
-    """A published MMG set by name: ``esso_osaka_3m`` or ``kvlcc2_L7`` (``-`` or ``_``)."""
+    """A published MMG set by name: ``esso_osaka_3m``, ``kvlcc2_L7`` or ``kvlcc2_hsva`` (``-`` or ``_``)."""
     key = name.replace("-", "_")
     for k, fn in PUBLISHED.items():
         if k.lower() == key.lower():
@@ -623,4 +664,4 @@ def ship_model(model: MmgModel):
 __all__ = ["MmgModel", "COEFS", "STATE_NAMES", "INPUT_NAMES", "STRUCTURES", "basis", "forces",
            "accelerations", "rigid_body_forces", "dynamics", "simulate_batch", "apparent_wind",
            "crossflow_integrals", "wind_forces", "fujiwara_coefficients", "load_published",
-           "load_esso_osaka_published", "load_kvlcc2_published", "ship_model", "mass_terms"]
+           "load_esso_osaka_published", "load_kvlcc2_published", "load_kvlcc2_hsva_prior", "ship_model", "mass_terms"]
