@@ -33,7 +33,7 @@ def test_overshoots_of_a_constructed_heading():
 
 def test_reversal_delay_of_a_constructed_autopilot():
     t = np.arange(0, 40, 0.05)
-    psi = np.deg2rad(np.interp(t, [0, 10, 15, 25, 40], [0, 12, 14, -12, -14]))
+    psi = np.deg2rad(np.interp(t, [0, 1, 10, 15, 25, 40], [0, 0, 12, 14, -12, -14]))   # psi = 0 at execute
     k_cross = np.flatnonzero(np.degrees(psi) >= 10)[0]
     delta = np.where(t < 1, 0.0, np.deg2rad(20))
     delta = np.where(t >= t[k_cross] + 0.3, np.deg2rad(-20), delta)
