@@ -131,3 +131,24 @@ def test_cli_identify_with_channel_map_then_validate(tmp_path, capsys):
     # the output is never clobbered without --force
     assert main(["identify", "mmg", "--trial", str(files[0]), "--channels", cmap,
                  "--structure", "hull+rudder+thrust", "-o", str(model)]) == 2
+
+
+def test_identify_realdata_subprocess_json(tmp_path):
+    """``shipid identify realdata --train A B --json`` in a fresh interpreter prints a MODEL.json."""
+    need_params()
+    import subprocess
+    import sys
+
+    truth = mmg.load_published("esso_osaka_3m")
+    files = []
+    for s in (21, 22):
+        p = tmp_path / f"run{s}.csv"
+        write_trial(_sim_trial(truth, s, seconds=60.0, noise=1.0), p)
+        files.append(str(p))
+    r = subprocess.run([sys.executable, "-m", "shipid", "identify", "realdata", "--train", *files,
+                        "--structure", "hull-only", "--json"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert d["method"] == "mmg-ebm" and d["model"]["structure_candidate"] == "hull-only"
+    assert [x["file"] for x in d["provenance"]["training_runs"]] == files
+    assert V.model_from_result(d).coef["YR_gain"] == truth.coef["YR_gain"]    # not free in hull-only

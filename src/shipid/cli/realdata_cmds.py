@@ -32,11 +32,13 @@ def _read_run(path, fmt=None, channels=None):
 @click.option("--format", "fmt", default=None, help="Trial format (csv, parquet, esso, kvlcc2).")
 @click.option("--channels", default=None, help="Column map 'x=COL,u=COL,...' for own column names.")
 @click.option("--horizon", default=60.0, show_default=True, help="Length of restarted horizons, s.")
+@click.option("--rudder-sign", default=1, type=int, show_default=True,
+              help="-1 if the log's rudder is positive to port (HSVA KVLCC2); MMG: positive turns to starboard.")
 @click.option("--json", "as_json", is_flag=True, help="Print the error table as JSON.")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
               help="Write a figure of measured vs predicted motion (PNG/PDF/SVG).")
 @click.option("--force", is_flag=True, help="Overwrite the plot file.")
-def validate_cmd(model, trial_path, fmt, channels, horizon, as_json, plot_path, force):
+def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, force):
     """Simulate MODEL open loop on a measured run and report RMS/max errors.
 
     MODEL is a JSON file written by 'shipid identify mmg --json' (or 'identify
@@ -51,8 +53,12 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, as_json, plot_path, 
 
     if horizon <= 0:
         raise ShipidError("--horizon must be positive")
+    if rudder_sign not in (1, -1):
+        raise ShipidError("--rudder-sign must be 1 or -1")
     m = V.load_model(model)
     tr = _read_run(trial_path, fmt, channels)
+    if rudder_sign == -1 and "delta" in tr:
+        tr = tr.with_channels(delta=-tr["delta"])
     v = V.validate(m, tr, horizon=horizon)
     if plot_path:
         V.plot(v, plot_path, force=force)
