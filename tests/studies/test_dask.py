@@ -99,3 +99,48 @@ def test_run_that_always_kills_its_dask_worker_is_recorded_failed(local_referenc
     assert [r.index for r in res.failed if r.error.startswith("WorkerDied")] == [77]
     others = [k for k in range(400) if k != 77]
     assert [res.records[k].outputs for k in others] == [local_reference.records[k].outputs for k in others]
+
+
+def test_external_scheduler_and_worker_processes(tmp_path, local_reference):
+    """`--scheduler` against a cluster started by the `dask` CLI in separate processes (loopback only)."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    dask_cli = [sys.executable, "-m", "dask"]
+    sched_file = tmp_path / "scheduler.json"
+    common = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "start_new_session": True}
+    procs = [subprocess.Popen(dask_cli + ["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                          "--scheduler-file", str(sched_file)], **common)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists():
+            assert time.monotonic() < deadline and procs[0].poll() is None, "scheduler did not start"
+            time.sleep(0.1)
+        time.sleep(0.2)   # the file is written in one go, but let the writer finish
+        address = json.loads(sched_file.read_text())["address"]
+        procs.append(subprocess.Popen(dask_cli + ["worker", address, "--nworkers", "2", "--nthreads", "1",
+                                                  "--host", "127.0.0.1", "--no-dashboard"], **common))
+        with distributed.Client(address, timeout=30) as c:
+            c.wait_for_workers(2, timeout=60)
+        store = str(tmp_path / "ext.sqlite")
+        assert main(["study", "toy", "--runs", "400", "--seed", "21", "--points", "50", "--fail-every", "61",
+                     "--scheduler", address, "--store", store]) == 0
+        from shipid.studies.store import CampaignStore
+        with CampaignStore(store) as st:
+            recs = st.records("toy")
+        assert [(r.index, r.outputs, r.status, r.error) for r in recs] == \
+            [(r.index, r.outputs, r.status, r.error) for r in local_reference.records]
+        assert len({r.worker for r in recs}) >= 1
+    finally:
+        for p in reversed(procs):   # only the process groups this test started
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+        for p in procs:
+            try:
+                p.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
