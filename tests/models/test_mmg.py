@@ -124,3 +124,19 @@ def test_batch_simulation_equals_single_runs():
     from shipid.simulate.integrate import simulate
     ref = simulate(mmg.dynamics, t, x0[1], U[1], m)
     np.testing.assert_allclose(both[1], ref.x, rtol=1e-10, atol=1e-12)
+
+
+def test_cubic_hull_structure_uses_the_standard_mmg_hull():
+    """esso-cubic-hull: hull columns of Yasukawa & Yoshimura (2015) eq. 8, Esso propeller/rudder columns."""
+    m = _toy_model()
+    coef = {c: 0.1 for md in mmg.MODES for c in mmg.COEFS["esso-cubic-hull"][md]}
+    cm = mmg.MmgModel("esso-cubic-hull", m.particulars, coef)
+    u, v, r = np.array([0.4, 0.1]), np.array([0.05, -0.08]), np.array([0.02, 0.1])
+    b = mmg.basis(cm, u, v, r, 0.1, 8.0)
+    be = mmg.basis(m, u, v, r, 0.1, 8.0)
+    U = np.hypot(u, v)
+    q = 0.5 * m.particulars["rho"] * m.particulars["L"] * m.particulars["d"] * U ** 2
+    np.testing.assert_allclose(b["Y"][0][:, 0], q * v / U)                      # Y'_v v'
+    np.testing.assert_allclose(b["N"][0][:, 1], q * m.particulars["L"] * r * m.particulars["L"] / U)  # N'_r r'
+    np.testing.assert_allclose(b["X"][0][:, 0], -q)                             # -R'_0
+    np.testing.assert_allclose(b["Y"][0][:, 6:], be["Y"][0][:, 3:])             # propeller/rudder unchanged

@@ -178,6 +178,14 @@ CANDIDATES: dict[str, dict[str, dict[str, tuple[str, ...]]]] = {
             "Y": ("Y_v", "Y_r", "CD_Y"),
             "N": ("N_v", "N_r", "CD_N"),
         },
+        # the hull as a cubic expansion about steady forward motion (standard MMG, Abkowitz-like),
+        # same propeller/rudder/wind: the structure the low-speed hull is compared against
+        "cubic-hull+rudder+thrust": {
+            "structure": "esso-cubic-hull",
+            "X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv", "XP_k0", "XP_k1", "XP_k2", "XR_gain"),
+            "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr", "YR_gain"),
+            "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr", "NR_arm"),
+        },
     },
     "yasukawa2015": {
         "full": {m: mmg.COEFS["yasukawa2015"][m] for m in mmg.MODES},
@@ -205,6 +213,13 @@ for _name in list(CANDIDATES["yasukawa2015"]):
 def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, dict[str, tuple[str, ...]]]:
     """The prior with a candidate's particular overrides applied, and its free coefficients per mode."""
     free = {m: tuple(cand[m]) for m in mmg.MODES}
+    from dataclasses import replace as _replace
+    st = cand.get("structure")
+    if st and st != prior.structure:
+        # change of hull structure: every hull coefficient of the new one is free; the values
+        # needed to build the model are zeros until the regression sets them
+        coef = {c: prior.coef.get(c, 0.0) for m in mmg.MODES for c in mmg.COEFS[st][m]}
+        prior = _replace(prior, structure=st, coef=coef, name=f"{prior.name} ({st})")
     over = cand.get("particulars") or {}
     if not over:
         return prior, free
@@ -215,7 +230,6 @@ def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, d
             p["gamma_R_minus"] = p["gamma_R_plus"] = g
         else:
             p[k] = float(v)
-    from dataclasses import replace as _replace
     return _replace(prior, particulars=p), free
 
 

@@ -54,7 +54,7 @@ from shipid.errors import InputError
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 INPUT_NAMES = ("delta", "n", "wind_speed", "wind_dir")
-STRUCTURES = ("esso-lowspeed", "yasukawa2015")
+STRUCTURES = ("esso-lowspeed", "yasukawa2015", "esso-cubic-hull")
 MODES = ("X", "Y", "N")
 
 # ----------------------------------------------------------------------------- coefficients
@@ -73,6 +73,13 @@ COEFS: dict[str, dict[str, tuple[str, ...]]] = {
         "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr", "NR_arm"),
     },
 }
+# The Esso propeller/rudder sub-models with the hull of the standard MMG (a cubic
+# expansion in v' = v/U, r' = rL/U about steady forward motion, forces ∝ U²): the
+# "service-speed expansion" the low-speed structure is compared against.
+_HULL_CUBIC = {"X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv"),
+               "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr"),
+               "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr")}
+COEFS["esso-cubic-hull"] = {m: _HULL_CUBIC[m] + COEFS["esso-lowspeed"][m][3:] for m in MODES}
 
 #: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
 COEF_UNITS = {"NR_arm": "m"}
@@ -246,6 +253,10 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
     p = model.particulars
     if model.structure == "esso-lowspeed":
         out = _basis_esso(p, u, v, r, delta, n)
+    elif model.structure == "esso-cubic-hull":
+        out = _basis_esso(p, u, v, r, delta, n)
+        for m, H in zip(MODES, _cubic_hull(p, u, v, r)):
+            out[m] = (np.concatenate([H, out[m][0][..., 3:]], axis=-1), out[m][1])
     else:
         out = _basis_yasukawa(p, u, v, r, delta, n)
     XA, YA, NA = wind_forces(p, np.asarray(U_A, float), np.asarray(gamma_A, float))
@@ -330,6 +341,22 @@ def _basis_esso(p, u, v, r, delta, n):
     zero = np.zeros_like(u)
     aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta}
     return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
+
+
+def _cubic_hull(p, u, v, r):
+    """Hull regressors of Yasukawa & Yoshimura (2015) eqs. 8: X, Y, N columns (forces ∝ U²)."""
+    L, d, rho = p["L"], p["d"], p["rho"]
+    U = np.sqrt(u * u + v * v)
+    small = U < 1e-6
+    Us = np.where(small, 1.0, U)
+    vp = np.where(small, 0.0, v / Us)
+    rp = np.where(small, 0.0, r * L / Us)
+    qX = 0.5 * rho * L * d * U * U
+    HX = np.stack([-qX, qX * vp * vp, qX * vp * rp, qX * rp * rp, qX * vp ** 4], axis=-1)
+    hull = [vp, rp, vp ** 3, vp * vp * rp, vp * rp * rp, rp ** 3]
+    HY = np.stack([qX * h for h in hull], axis=-1)
+    HN = np.stack([qX * L * h for h in hull], axis=-1)
+    return HX, HY, HN
 
 
 def _basis_yasukawa(p, u, v, r, delta, n):
