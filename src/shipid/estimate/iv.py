@@ -27,7 +27,10 @@ def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
     n = x.size
     if n_lags > start + 1:
         raise ValueError("start must be at least n_lags - 1")
-    return np.column_stack([x[start - k: n - k] for k in range(n_lags)]) if n_lags else np.empty((n - start, 0))
+    if not n_lags:
+        return np.empty((n - start, 0))
+    w = np.lib.stride_tricks.sliding_window_view(x[start - n_lags + 1:], n_lags)   # rows: x_{t-n+1} .. x_t
+    return w[:, ::-1]
 
 
 def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.ndarray, np.ndarray]:
