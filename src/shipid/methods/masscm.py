@@ -86,6 +86,8 @@ class MassCMOptions:
     instruments: str = "lags"       # "lags": (45) with n_y, n_as, n_r, n_delta; "regressors": noise-free (37)
     transient_tol: float = 0.01      # prefilter start-up: drop samples until the slowest pole decays to this
     transient_max: float = 0.2       # ... but at most this fraction of the record
+    noise_model: str = "ar"          # "ar": AR(ar_order) of the residuals, prefilter = FIR A(q); "arma": structured ARMA
+    ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
 
@@ -344,6 +346,8 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
     """
     from shipid.estimate.arma import ARMA
+    if options.noise_model == "ar":
+        return hannan_rissanen(eps, options.ar_order, 0, n_long=options.ar_order)
     c = options.initial_c
     if c == 0:
         return hannan_rissanen(eps, options.arma_na, options.arma_nc)
@@ -419,12 +423,16 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
                 converged = True
                 break
         g_prev = G
+        # (b) residuals (42) and prefilters (43); (c) closed-loop instruments (46)-(47).
+        # (*) Relaxation: from the second iteration on they are built at the mean of the last two
+        # iterates, which damps the period-2 cycles that the prefilter feedback can otherwise sustain.
+        th_mid = theta if th_prev is None else 0.5 * (theta + th_prev)
         th_prev = theta
-        # (b) residuals (42) and prefilters (43); (c) closed-loop instruments (46)-(47)
-        terms = roll_terms(theta, known, conds, moment=True)
+        G_mid = discrete_coeffs(th_mid, known, conds, Ts, moment=True)
+        terms = roll_terms(th_mid, known, conds, moment=True)
         newL, lam = [], []
         for i, ds in enumerate(prep):
-            eps = ds.y - ds.Phi @ G[i]
+            eps = ds.y - ds.Phi @ G_mid[i]
             s = _start(options)
             if options.prefilter:
                 arma = _noise_model(eps[s:], options)
