@@ -157,7 +157,8 @@ def open_and_check(browser: Browser, html_path: Path, screenshot: Path, width: i
             tables: document.querySelectorAll('table').length,
             external: Array.from(document.querySelectorAll('[src],[href]')).map(e => e.getAttribute('src') ||
                       e.getAttribute('href')).filter(u => /^(https?:)?\\/\\//.test(u)),
-            height: document.documentElement.scrollHeight})""")
+            height: document.documentElement.scrollHeight,
+            width: document.documentElement.scrollWidth, viewport: window.innerWidth})""")
         info = json.loads(info)
         height = min(int(info["height"]), 30000)
         page.send("Emulation.setDeviceMetricsOverride", width=width, height=height, deviceScaleFactor=1,

@@ -21,6 +21,7 @@ def test_report_renders_in_chromium(browser, example_reports, artifacts, method)
         assert im["complete"] and im["w"] > 0 and im["h"] > 0, im
         assert im["src"].startswith("data:image/png")
     assert info["external"] == []
+    assert info["width"] <= info["viewport"], "the page must not scroll sideways"
     assert info["tables"] == len(re.findall(r"<table", html))
     assert info["title"].startswith(f"shipid report — {method}")
     png = (artifacts / f"report-{method}.png").read_bytes()

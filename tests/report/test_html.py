@@ -184,3 +184,14 @@ def test_degenerate_series_do_not_break_the_report():
     _assert_self_contained(html)
     assert "Could not draw" not in html
     assert html.count("<img") == 9   # correlation + contour + 3 overlays + history + signal + matrix + xy
+
+
+def test_inputs_under_other_names_and_per_mode_diagnostics_as_tables():
+    r = Result("mmg-ebm", {"N_r": Estimate(-0.054, 0.0015, "-")},
+               model={"inputs": ["delta", "n"]},  # the model's input signals, not trial files
+               diagnostics={"ridge": {"X": {"k": 2.7e-5, "kappa": 7529.0}, "N": {"k": 1.8e-5, "kappa": 218.0}}},
+               provenance={"training_runs": [{"file": "runs/zz_10_10.dat", "sha256_16": "abc"}]})
+    html = build_report(r)
+    assert "<code>runs/zz_10_10.dat</code>" in html and "<code>delta</code>" not in html
+    assert '<table class="rec">' in html and ">7529<" in html
+    assert "Table 4 — Collinearity diagnostics per mode" in html   # EBM default section, from diagnostics

@@ -30,6 +30,8 @@ METHOD_TITLES = {
     "mass-cm": ("Mass and centre of mass from IMU and rudder", "Linder et al. 2015 (seed 000)"),
     "dp": ("DP low-frequency model, parallel EKF", "Fossen, Sagatun & Sørensen 1996 (seed 001)"),
     "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "Yoon & Rhee 2003 (seed 002)"),
+    "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
+                "Yoon & Rhee 2003 (seed 002) adapted to the MMG model"),
 }
 
 GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
@@ -75,7 +77,6 @@ thead th{text-align:left;background:var(--soft);border-bottom:2px solid #c4cad6;
 td.num,th.num{text-align:right;white-space:nowrap}
 td.flag{color:var(--bad);font-weight:600}
 table.kv th{text-align:left;font-weight:600;color:#39424f;width:34%;background:none}
-table.kv{min-width:55%}
 table.kv td.num{text-align:left}
 .unit{color:var(--muted);font-weight:400}
 table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
@@ -83,6 +84,13 @@ table.mat td{border:0;padding:1px 8px;text-align:right}
 table.rec{margin:0;font-size:.82rem}
 table.rec th{background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
 table.rec td{padding:1px 8px;border:0}
+table.rec td:first-child{max-width:280px;overflow-wrap:anywhere}
+.scroll{overflow-x:auto;max-width:100%}
+table.kv th{overflow-wrap:anywhere}
+table.kv td{overflow-wrap:anywhere}
+table.kv{table-layout:fixed;width:100%}
+table.kv th{width:30%}
+main{overflow-wrap:break-word}
 .status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
 .status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
 tr.notid td{color:var(--bad)}
@@ -119,6 +127,13 @@ def _records(v) -> bool:
                for r in v for x in r.values())
 
 
+def _records_map(v) -> bool:
+    """A dict of flat dicts ({mode: {kappa, R2, ...}}): shown as one table, a row per key."""
+    if not isinstance(v, Mapping) or not v or len(v) > 30:
+        return False
+    return _records(list(v.values())) and len({k for r in v.values() for k in r}) > 1
+
+
 def _small_matrix(v) -> bool:
     if not isinstance(v, (list, tuple)) or not v or not all(isinstance(r, (list, tuple)) for r in v):
         return False
@@ -133,6 +148,8 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
         key = f"{prefix}{k}"
         if _is_scalar(v):
             rows.append((key, v))
+        elif _records_map(v):
+            rows.append((key, RecordsValue([{"": str(n), **r} for n, r in v.items()])))
         elif isinstance(v, Mapping) and depth > 0:
             rows.extend(_flatten(v, key + ".", depth - 1))
         elif isinstance(v, (list, tuple)) and not v:
@@ -202,7 +219,8 @@ def _badges(result) -> str:
     n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
     if n_notid:
         out.append(f'<div class="badge bad">not identifiable<b>{n_notid}</b></div>')
-    ins = (result.provenance or {}).get("inputs") or []
+    prov0 = result.provenance or {}
+    ins = prov0.get("inputs") or prov0.get("training_runs") or prov0.get("trials") or []
     if isinstance(ins, (list, tuple)):
         out.append(f'<div class="badge">input trials<b>{len(ins)}</b></div>')
     prov = result.provenance or {}
@@ -230,8 +248,13 @@ def _warnings(result, extra: list[str]) -> str:
 def _data_section(ctx: RenderContext, result) -> str:
     prov = result.provenance or {}
     ins = prov.get("inputs")
-    if ins is None:
-        ins = (result.model or {}).get("inputs")
+    for alt in ("training_runs", "trials", "files"):  # other names methods use for their inputs
+        if ins is None and isinstance(prov.get(alt), (list, tuple)):
+            ins = prov[alt]
+    if ins is None:  # model["inputs"] often names the model's input signals: only trial records count
+        m_in = (result.model or {}).get("inputs")
+        if isinstance(m_in, (list, tuple)) and m_in and all(isinstance(x, Mapping) for x in m_in):
+            ins = m_in
     if ins is None:
         return '<h2 id="data">Data used</h2><p class="small">The result does not record its inputs.</p>'
     if isinstance(ins, (str, Mapping)):

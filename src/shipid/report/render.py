@@ -131,7 +131,8 @@ def _cell(v: Any) -> tuple[str, str]:
         head = "".join(f"<th>{esc(str(k))}</th>" for k in keys)
         body = "".join("<tr>" + "".join(f"<td class='{_cell(r.get(k))[1]}'>{_cell(r.get(k))[0]}</td>"
                                         for k in keys) + "</tr>" for r in v)
-        return f'<table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>', ""
+        return (f'<div class="scroll"><table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody>'
+                f'</table></div>'), ""
     if type(v).__name__ == "MatrixValue":  # shipid.report.html.MatrixValue: a small matrix
         body = "".join("<tr>" + "".join(f"<td>{fmt_num(x)}</td>" for x in row) + "</tr>" for row in v)
         return f'<table class="mat"><tbody>{body}</tbody></table>', ""

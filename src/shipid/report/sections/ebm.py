@@ -82,7 +82,8 @@ def _regressor_names(result, mode: str, n: int) -> list[str]:
 
 def _conditioning_from_diagnostics(result) -> list:
     """Table 4 from ``diagnostics["modes"]`` = {mode: {kappa, R2, Cp, k, ...}} when no table entry exists."""
-    modes = (result.diagnostics or {}).get("modes")
+    d = result.diagnostics or {}
+    modes = d.get("modes") if isinstance(d.get("modes"), Mapping) else d.get("ridge")
     if not isinstance(modes, Mapping) or not modes:
         return []
     keys = [("kappa", "κ"), ("R2", "R²"), ("Cp", "Cp"), ("p", "p"), ("k", "ridge k"), ("n", "n")]
@@ -97,3 +98,4 @@ def _conditioning_from_diagnostics(result) -> list:
 
 
 register_section("ebm", ebm_section, default=True)
+register_section("mmg-ebm", ebm_section, default=True)  # real-data EBM with the MMG model (issue 6)
