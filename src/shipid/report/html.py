@@ -82,12 +82,12 @@ table.kv td.num{text-align:left}
 table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
 table.mat td{border:0;padding:1px 8px;text-align:right}
 table.rec{margin:0;font-size:.82rem}
-table.rec th{background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
+table.rec th{white-space:normal;overflow-wrap:anywhere;background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
 table.rec td{padding:1px 8px;border:0}
-table.rec td:first-child{max-width:280px;overflow-wrap:anywhere}
+table.rec td:first-child{max-width:280px;overflow-wrap:break-word}
 .scroll{overflow-x:auto;max-width:100%}
-table.kv th{overflow-wrap:anywhere}
-table.kv td{overflow-wrap:anywhere}
+table.kv th{overflow-wrap:break-word}
+table.kv td{overflow-wrap:break-word}
 table.kv{table-layout:fixed;width:100%}
 table.kv th{width:30%}
 main{overflow-wrap:break-word}
