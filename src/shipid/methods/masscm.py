@@ -406,7 +406,16 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         hi = np.full(int(free.sum()), np.inf)
         izm = int(np.sum(free[:I_ZM]))
         lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
-        x0 = np.clip(theta[free], lo + 1e-12, hi - 1e-12)
+        if free[I_ZF] and prior is None:
+            # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
+            # negative) on both sides (see identifiability_masscm); keep the search inside it
+            lo[:3] = 0.0
+            lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
+        lo_in, hi_in = lo.copy(), hi.copy()
+        fl, fh = np.isfinite(lo), np.isfinite(hi)
+        lo_in[fl] += 1e-6 * np.maximum(1.0, np.abs(lo[fl]))
+        hi_in[fh] -= 1e-6 * np.maximum(1.0, np.abs(hi[fh]))
+        x0 = np.clip(theta[free], lo_in, hi_in)
         sol = least_squares(fun, x0, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10, gtol=1e-10,
                             max_nfev=2000, x_scale="jac")
         theta = full(sol.x)
