@@ -152,3 +152,12 @@ def test_identify_realdata_subprocess_json(tmp_path):
     assert d["method"] == "mmg-ebm" and d["model"]["structure_candidate"] == "hull-only"
     assert [x["file"] for x in d["provenance"]["training_runs"]] == files
     assert V.model_from_result(d).coef["YR_gain"] == truth.coef["YR_gain"]    # not free in hull-only
+
+
+def test_row_weights():
+    u, v, r = np.array([0.0, 0.5]), np.array([0.0, 0.0]), np.array([0.0, 0.0])
+    cfg = R.FitConfig(weighting="nondimensional", U_ref=0.1)
+    np.testing.assert_allclose(R.row_weights(u, v, r, 3.0, cfg), [1 / 0.01, 1 / 0.26])
+    np.testing.assert_array_equal(R.row_weights(u, v, r, 3.0, R.FitConfig()), [1.0, 1.0])
+    with pytest.raises(Exception, match="unknown weighting"):
+        R.row_weights(u, v, r, 3.0, R.FitConfig(weighting="bogus"))
