@@ -9,21 +9,32 @@ with the physical map ``g`` of (33) (:func:`shipid.models.roll_reduced.discrete_
 
 Algorithm (our concrete choices where the paper leaves freedom are marked *):
 
-A. Initialise: prefilter ``L = 1``; black-box ARX(4, 5)* models from the rudder to ``y, a_s, r``
-   (44, step A(b)(i)); instruments (45) from their noise-free simulations.
+A. Initialise: black-box ARX(4, 5)* models from the rudder to ``y, a_s, r`` (44, step A(b)(i));
+   instruments (45) from their noise-free simulations; first prefilter ``L = 1/(1 - 0.99 q^-2)``*
+   (the paper: ``L = 1``; see :func:`_initial_prefilter` for why); initial values either given
+   (the paper's §5 protocol) or ``init="linear"``*: the multiplied-out, linear form of (40)
+   (:func:`linear_initial`), which needs no initial values.
 B. Iterate ``j = 1, 2, ...``:
-   (a) ``theta_j = argmin sum_i (N_i/lam_i) ||Y^i - Phi^i g_i(theta)||^2_{Q_i}`` (40)–(41), solved by
-       Levenberg–Marquardt (MINPACK) from ``theta_{j-1}``; ``Q_i = (Z_i^T Z_i/N_i)^-1``* (the
-       two-stage-least-squares weighting, which makes the extended IV approach the optimal IV when
-       the instruments span the noise-free regressors) and ``lam_i`` the ARMA innovation variance*
-       of dataset i (1 in the first iteration);
-   (b) residuals (42), ARMA(4, 4)* noise models by Hannan–Rissanen, prefilters ``L = A/C`` (43);
+   (a) ``theta_j = argmin sum_i ||Y^i - Phi^i g_i(theta)||^2_{Q_i} / lam_i`` (40)–(41) from
+       ``theta_{j-1}``, by a bounded trust-region search* (scipy ``least_squares``, ``trf``) in the
+       load-moment parameterisation ``q = m z_m``* (polynomial, no division by z_m);
+       ``Q_i = (Z_i^T Z_i)^-1``* (two-stage least squares: the extended IV then approaches the optimal
+       IV) and ``lam_i`` the innovation variance of dataset i's noise model* (1 in the first iteration);
+   (b) residuals (42) and noise models: AR(40)* by least squares (``noise_model="ar"``; the
+       structured ARMA of :func:`_noise_model` is the alternative), prefilter ``L = A`` (43);
+       built at the mean of the last two iterates* (relaxation against period-2 cycles);
+       the prefilter start-up transient is dropped* (:func:`_transient`);
    (c) instruments re-simulated in closed loop from the rudder with the current model (46)–(47)
        and the iteration-0 black-box yaw-rate model; prefiltered lag vectors (45) with
        ``n_y = n_as = n_r = 16``, ``n_delta = 2`` of ``y_hat`` and of the differences ``mu_hat``;
-   (d) stop when the largest relative change of the identifiable discrete coefficients ``g_i``
-       (and of the identifiable physical parameters) is below ``tol``*; the ``converged`` flag is
-       False when ``max_iter`` is reached first.
+   (d) convergence rule*: the largest relative change of the identifiable discrete coefficients
+       ``g_i`` of all datasets between two iterations is below ``tol`` (1e-5), after at least two
+       iterations; ``converged`` is False when ``max_iter`` (50) is reached first.
+
+Measured: noise-free Table-3 study (z_f known) m 0.39978, zm_bar -0.18209 from every initial draw;
+with gyro / accelerometer noise, biases and 0.5 deg wave roll (300-s datasets, 100 realisations)
+the spread of m, zm_bar, rho is 0.82–0.89 of the bound of :mod:`shipid.analysis.crlb_masscm`, the
+plain IV (``prefilter=False``) 2.1–2.7 of it.
 
 Identifiability (our analysis, :mod:`shipid.analysis.identifiability_masscm`): the datasets
 determine ``zm_bar`` and ``rho = m z_m / (m_c z_c)`` but not ``z_f``; for every ``z_f`` there is an
