@@ -59,3 +59,11 @@ def test_hannan_rissanen_stabilises():
     x = np.cumsum(rng.standard_normal(3000))               # a random walk: the AR part must be made stable
     m = hannan_rissanen(x, na=2, nc=2)
     assert np.all(np.abs(np.roots(m.a)) < 1) and np.all(np.abs(np.roots(m.c)) < 1)
+
+
+def test_pure_ar_fit():
+    rng = np.random.default_rng(4)
+    a_true = np.array([1.0, -1.6, 0.8])
+    x = lfilter([1.0], a_true, rng.standard_normal(30000))
+    m = hannan_rissanen(x, na=2, nc=0)
+    assert np.allclose(m.a, a_true, atol=0.02) and m.c.size == 1 and np.isclose(m.lam, 1.0, rtol=0.05)

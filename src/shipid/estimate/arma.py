@@ -33,7 +33,10 @@ class ARMA:
 def _lagged(x: np.ndarray, lags: int, start: int) -> np.ndarray:
     """Columns x_{t-1} ... x_{t-lags} for rows t = start .. n-1."""
     n = x.size
-    return np.column_stack([x[start - k: n - k] for k in range(1, lags + 1)]) if lags else np.empty((n - start, 0))
+    if not lags:
+        return np.empty((n - start, 0))
+    # strided view, no copy: row t holds x_{t-lags} .. x_{t-1}; reversed to x_{t-1} .. x_{t-lags}
+    return np.lib.stride_tricks.sliding_window_view(x[start - lags: n - 1], lags)[:, ::-1]
 
 
 def _stabilise(p: np.ndarray) -> np.ndarray:
@@ -84,6 +87,13 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     if not np.isfinite(scale) or scale == 0.0:
         return ARMA(np.ones(1), np.ones(1), 0.0)
     xs = x / scale
+    if nc == 0:                                   # pure AR: one least-squares fit is the whole method
+        start = na
+        X = _lagged(xs, na, start)
+        th = _ls(X, xs[start:]) if na else np.zeros(0)
+        a = _stabilise(np.concatenate([[1.0], -th]))
+        eps = xs[start:] - (X @ th if na else 0.0)
+        return ARMA(a, np.ones(1), float(np.mean(eps**2)) * scale**2)
     nl = n_long if n_long is not None else max(20, 2 * (na + nc))
     nl = int(min(nl, max(1, n // 5)))
     X = _lagged(xs, nl, nl)
