@@ -25,7 +25,7 @@ def test_ar1_lag_one_correlation():
     r = acf(x, 3)
     # theory: rho_k = rho**k (AR(1)); standard error of the estimate ~ sqrt((1-rho^2)/n) ~ 0.003
     np.testing.assert_allclose(r[1:], rho ** np.arange(1, 4), atol=0.02)
-    st, _ = residual_stats(x)
+    st, _ = residual_stats(x, max_lag=50)
     assert st.ljung_box_p < 1e-6
     # 0.9**k exceeds the bound 1.96/sqrt(20000) = 0.0139 for k <= 40, i.e. 40 of the 50 lags
     assert 0.7 <= st.frac_outside <= 0.9
@@ -46,3 +46,12 @@ def test_nan_samples_are_dropped_and_constant_is_safe():
     v = np.array([1.0, np.nan, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
     st, r = residual_stats(v)
     assert st.n == 8 and r[0] == 1.0 and np.all(r[1:] == 0.0)
+
+
+def test_default_lags_span_a_tenth_of_long_records():
+    from shipid.report.stats import default_max_lag
+
+    assert default_max_lag(100) == 25          # n/4 for short records
+    assert default_max_lag(400) == 50
+    assert default_max_lag(3800) == 380        # 20 Hz, 190 s: 19 s of lags
+    assert default_max_lag(10 ** 6) == 500

@@ -166,6 +166,24 @@ def decimate(n: int, max_points: int = MAX_POINTS) -> slice:
     return slice(None, None, step)
 
 
+def _dt(t: np.ndarray) -> float | None:
+    """Median sample interval when the record is (nearly) uniform, else None (lags stay in samples)."""
+    if t.size < 3:
+        return None
+    d = np.diff(t)
+    med = float(np.median(d))
+    if not np.isfinite(med) or med <= 0 or np.max(np.abs(d - med)) > 0.01 * med:
+        return None
+    return med
+
+
+def _short(label: str) -> str:
+    """Axis label without a trailing parenthetical (the caption carries it)."""
+    import re
+
+    return re.sub(r"\s*\(.*\)\s*$", "", label) or label
+
+
 def _grid(n: int, ncols: int) -> tuple[int, int]:
     ncols = max(1, min(ncols, n))
     return int(math.ceil(n / ncols)), ncols
@@ -189,7 +207,7 @@ def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.nd
     ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
     ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(label, su))
+    ax.set_ylabel(axis_label(_short(label), su))
     ax.legend(loc="upper right", ncols=2)
     ax.set_title(f"{label}: measured and model", loc="left")
     ax_r = fig.add_subplot(gs[1, :2])
@@ -199,7 +217,7 @@ def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.nd
     ax_r.set_xlabel("t [s]")
     ax_r.set_ylabel(axis_label("residual", sur))
     ax_r.set_title("residual = measured − model", loc="left")
-    _acf_axes(fig.add_subplot(gs[1, 2]), acf_vals, bound)
+    _acf_axes(fig.add_subplot(gs[1, 2]), acf_vals, bound, _dt(t))
     return fig
 
 
@@ -223,21 +241,24 @@ def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: floa
     ax.plot(t[sl], v[sl] / k, color=C_MODEL, lw=0.8)
     ax.axhline(0.0, color="#888888", lw=0.7)
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(label, su))
+    ax.set_ylabel(axis_label(_short(label), su))
     ax.set_title(f"{label}", loc="left")
-    _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound)
+    _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound, _dt(t))
     return fig
 
 
-def _acf_axes(ax, r: np.ndarray, bound: float) -> None:
-    lags = np.arange(r.size)
-    ax.vlines(lags, 0.0, r, color=C_MODEL, lw=1.2)
-    ax.plot(lags, r, "o", ms=2.2, color=C_MODEL)
+def _acf_axes(ax, r: np.ndarray, bound: float, dt: float | None = None) -> None:
+    lags = np.arange(r.size) * (dt if dt else 1.0)
+    if r.size <= 80:
+        ax.vlines(lags, 0.0, r, color=C_MODEL, lw=1.2)
+        ax.plot(lags, r, "o", ms=2.2, color=C_MODEL)
+    else:  # many lags: a line reads better than a forest of stems
+        ax.plot(lags, r, color=C_MODEL, lw=1.2)
     if np.isfinite(bound):
         ax.axhspan(-bound, bound, color=C_BAND, alpha=0.35, lw=0, label="±1.96/√N")
         ax.legend(loc="upper right")
     ax.axhline(0.0, color="#888888", lw=0.7)
-    ax.set_xlabel("lag [samples]")
+    ax.set_xlabel("lag [s]" if dt else "lag [samples]")
     ax.set_ylabel("autocorrelation [-]")
     ax.set_ylim(min(-0.3, float(np.nanmin(r)) - 0.05), 1.05)
     ax.set_title("residual autocorrelation", loc="left")

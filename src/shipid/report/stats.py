@@ -18,6 +18,17 @@ from scipy import stats as _st
 Z95 = 1.959963984540054
 
 
+def default_max_lag(n: int) -> int:
+    """Lags shown and tested: 50, or a tenth of the record when longer (at most 500, at most n/4).
+
+    Densely sampled records (20 Hz model tests) need lags spanning seconds, not 50 samples,
+    for the autocorrelation to say anything about the residual's time scale.
+    """
+    if n < 8:
+        return max(n - 1, 0)
+    return int(min(n // 4, max(50, n // 10), 500))
+
+
 def acf(x, max_lag: int | None = None) -> np.ndarray:
     """Sample autocorrelation ρ_0..ρ_max_lag of ``x`` (NaNs dropped, mean removed, biased estimator).
 
@@ -29,7 +40,7 @@ def acf(x, max_lag: int | None = None) -> np.ndarray:
     if n < 2:
         return np.array([1.0])
     if max_lag is None:
-        max_lag = min(50, n // 4 if n >= 8 else n - 1)
+        max_lag = default_max_lag(n)
     max_lag = int(min(max_lag, n - 1))
     x = x - x.mean()
     denom = float(np.dot(x, x))
