@@ -48,9 +48,10 @@ hull expanded in ``v' = v/U``, ``r' = rL/U`` about forward motion (Abkowitz, or 
 standard MMG) scales every force with U² and has no term for the cross-flow drag of a
 ship moving sideways; the low-speed hull (drag blending with |β|, cross-flow
 integrals) holds at any drift angle. The cross-validation shows it: on the Miyauchi
-training runs the cubic hull scores 2.77 against 2.11 for the low-speed hull with
-the same propeller and rudder (``shipid study esso-osaka-heldout --json`` prints the
-table).
+training runs (3-fold) the cubic hull scores 2.77 against 2.11 for the low-speed hull
+with the same propeller and rudder, and 2.37 against 1.77 when both regress
+non-dimensional forces; on the Wakita training runs 2.64 vs 2.43 and 2.13 vs 1.94
+(``shipid study esso-osaka-heldout`` prints the table).
 """
 
 from __future__ import annotations
