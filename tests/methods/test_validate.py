@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root, read_trial
+from shipid.data import data_root
 from shipid.data.trial import Trial
 from shipid.methods import validate as V
 from shipid.models import mmg

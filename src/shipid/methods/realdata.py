@@ -57,7 +57,7 @@ non-dimensional forces; on the Wakita training runs 2.64 vs 2.43 and 2.13 vs 1.9
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -65,7 +65,6 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.cd_ekf import cd_ekf
-from shipid.estimate.linalg import NotPositiveDefiniteError  # noqa: F401  (re-raised as ShipidError)
 from shipid.estimate.ridge import RidgeFit, ridge
 from shipid.estimate.smoothers import rts_smoother
 from shipid.models import mmg
