@@ -118,3 +118,13 @@ def test_short_wavy_record_returns_finite_or_warns(kn):
     assert ok or r.diagnostics["warnings"]
     if ok and not r.diagnostics["implausible"]:
         assert r.std("m") > 0.05 * M_TRUE or r.diagnostics["warnings"]
+
+
+def test_fast_inner_map_equals_reference(kn):
+    from shipid.methods.masscm import _fast_g
+    from shipid.models.roll_reduced import discrete_coeffs, to_moment
+    th = to_moment(np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182]))
+    conds = ["nominal", "calibration", "loaded", "loaded"]
+    Ts = np.array([0.02, 0.02, 0.02, 0.01])
+    assert np.allclose(_fast_g(th, kn, np.array([0, 1, 2, 2]), Ts),
+                       discrete_coeffs(th, kn, conds, Ts, moment=True), rtol=1e-14, atol=0)

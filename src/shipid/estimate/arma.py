@@ -91,7 +91,7 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
         start = na
         X = _lagged(xs, na, start)
         th = _ls(X, xs[start:]) if na else np.zeros(0)
-        a = _stabilise(np.concatenate([[1.0], -th]))
+        a = np.concatenate([[1.0], -th])           # the prefilter A(q) is FIR: stable whatever its roots
         eps = xs[start:] - (X @ th if na else 0.0)
         return ARMA(a, np.ones(1), float(np.mean(eps**2)) * scale**2)
     nl = n_long if n_long is not None else max(20, 2 * (na + nc))

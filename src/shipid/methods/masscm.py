@@ -249,8 +249,35 @@ def _transient(L, n: int, options: MassCMOptions) -> int:
     return int(min(k, options.transient_max * n))
 
 
+def _fast_g(th, known: KnownParams, code: np.ndarray, Ts: np.ndarray) -> np.ndarray:
+    """``discrete_coeffs(th, ..., moment=True)`` for condition codes (0 nominal, 1 calibration, 2 loaded).
+
+    The same formulas (22), (33) as :mod:`shipid.models.roll_reduced`, vectorised over the datasets for
+    the inner loop of the search (checked against it in the tests).
+    """
+    k, A_x, d, K_r, K_v, K_d, z_f, q, zm = th
+    zg = known.zg_bar + z_f
+    zs = known.zs_bar + z_f
+    qi = np.where(code == 0, 0.0 * q, np.where(code == 1, known.m_c * (known.zc_bar + z_f), q))
+    zb = np.where(code == 0, 0.0 * zm, np.where(code == 1, known.zc_bar + 0.0 * zm, zm))
+    A2 = A_x + known.M * zg * (known.zg_bar - known.zs_bar) + qi * (zb - known.zs_bar) - K_v * zs
+    B = K_v + known.M * zg + qi
+    kp = k - K_v * known.g
+    T = Ts
+    den = 2 * d * T + kp * T * T + 4 * A2
+    return np.stack([(2 * kp * T * T - 8 * A2) / den, (-2 * d * T + kp * T * T + 4 * A2) / den,
+                     -2 * T * B / den, 2 * T * K_r / den + 0.0 * A2, 2 * T * K_d / den + 0.0 * A2], axis=-1)
+
+
+_CODES = {NOMINAL: 0, CALIBRATION: 1, LOADED: 2}
+
+
 def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fixed: np.ndarray, prior):
     w = 1.0 / np.sqrt(state.lam)
+    Rs = np.stack([mo.R for mo in state.moments]) * w[:, None, None]     # (n, 5, 5), weighted
+    rs = np.stack([mo.r for mo in state.moments]) * w[:, None]
+    code = np.array([_CODES[c] for c in state.conds])
+    Ts = np.asarray(state.Ts, dtype=float)
 
     def full(x):
         th = theta_fixed.astype(x.dtype if np.iscomplexobj(x) else float).copy()
@@ -259,11 +286,11 @@ def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fix
 
     def fun(x):
         th = full(x)
-        G = discrete_coeffs(th, known, state.conds, state.Ts, moment=True)
-        res = [w[i] * (mo.R @ G[i] - mo.r) for i, mo in enumerate(state.moments)]
+        G = _fast_g(th, known, code, Ts)
+        res = (np.einsum("nij,nj->ni", Rs, G) - rs).ravel()
         if prior is not None:
-            res.append(np.atleast_1d((th[I_ZF] - prior[0]) / prior[1]))
-        return np.concatenate(res)
+            res = np.concatenate([res, np.atleast_1d((th[I_ZF] - prior[0]) / prior[1])])
+        return res
 
     return fun, full
 
