@@ -92,3 +92,13 @@ def test_kvlcc2_overshoots_close_to_measured():
     assert sum(abs(e) <= 2.0 for e in errs) >= 4
     p = st["heldout"]["pooled"]
     assert p["identified"]["psi"]["rms"] < p["published"]["psi"]["rms"]
+
+
+def test_study_cli_bad_split_and_missing_data_are_one_line(tmp_path, monkeypatch, capsys):
+    from shipid.cli import main
+
+    assert main(["study", "esso-osaka-heldout", "--split", "bogus"]) == 2
+    monkeypatch.setenv("SHIPID_DATA", str(tmp_path))          # a folder without the data sets
+    assert main(["study", "kvlcc2-zigzag"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("shipid: error:") and "SHIPID_DATA" in err[-1]
