@@ -17,6 +17,16 @@ Implausible-solution rule (counted apart, not in the means): :func:`shipid.metho
 (m <= 1e-6 M, |zm_bar| > 10 m, A_x <= 0, d <= 0, k - K_vdot g <= 0, A1 or A2 <= 0 in any dataset, non-finite), or a run
 that did not converge.
 
+Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --json``):
+
+* z_f known, initial values from the Table 3 bounds, 1000 runs: 0 flagged; m 0.399779 (std 2e-8),
+  zm_bar -0.182094 (std 9e-9); every run reaches the same solution (the 0.05 % offsets are the
+  bilinear-discretisation error of (32)). Table 3: m 0.4007 ± 0.0018, zm_bar -0.1821 ± 0.0004.
+* z_f free (paper setting), ``--init linear``, 400 runs: 58 flagged; m 0.4014 ± 0.0032,
+  zm_bar -0.18207 ± 0.00002, z_f -0.052 ± 0.033, k 16.0 ± 7.9, K_vdot 0.56 ± 0.65 — the Table 3
+  pattern (tight m and zm_bar, wide k, K_vdot, z_f), explained by the exact-fit family in z_f.
+* z_f free, ``--init given`` (random start), 200 runs: 106 flagged; m 0.4028 ± 0.0013 over the rest.
+
 :func:`run_one` is the per-run task, with the campaign-engine signature
 ``run_one(i, seedseq, **kwargs) -> dict`` (:mod:`shipid.studies.engine`).
 """
