@@ -86,3 +86,26 @@ def test_zero_column_is_an_error():
     H[:, 2] = 0.0
     with pytest.raises(ValueError, match="identically zero"):
         ridge(H, y)
+
+
+def test_runaway_hoerl_kennard_falls_back_to_one_step_k():
+    """On a response unrelated to the regressors the k iteration runs away (k grows, b
+    shrinks, until bᵀb underflows); the fit must say so and use the one-step
+    Hoerl–Kennard–Baldwin k = p σ̂² / b_OLSᵀ b_OLS, not raise or return k = inf."""
+    import warnings
+
+    from shipid.estimate.ridge import ridge, unit_length_scale
+
+    rng = np.random.default_rng(0)
+    H = rng.normal(size=(50, 3))
+    y = rng.normal(size=50)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = ridge(H, y)
+    assert not fit.converged
+    assert any("did not converge" in str(w.message) for w in caught)
+    sc = unit_length_scale(H, y)
+    b_ols = np.linalg.solve(sc.W.T @ sc.W, sc.W.T @ sc.y)
+    sigma2 = float(np.sum((sc.y - sc.W @ b_ols) ** 2)) / (50 - 3)
+    assert fit.k == pytest.approx(3 * sigma2 / float(b_ols @ b_ols), rel=1e-12)
+    assert np.all(np.isfinite(fit.theta)) and np.all(np.isfinite(fit.se))

@@ -120,13 +120,27 @@ def hoerl_kennard_k(C: np.ndarray, g: np.ndarray, sigma2: float, *, tol: float =
     """Hoerl–Kennard iterative biasing parameter for scaled normal equations ``C b = g``.
 
     Returns ``(k, iterations, converged)``.
+
+    On weak data the iteration can run away: each larger ``k`` shrinks ``b``, which
+    makes the next ``k`` larger still, until ``bᵀb`` underflows to zero. That breakdown
+    is reported as not converged and the one-step Hoerl–Kennard–Baldwin value
+    ``k₀ = p σ̂² / b_OLSᵀ b_OLS`` (the first iterate) is returned instead of an
+    infinite ``k``.
     """
     p = C.shape[0]
     b = _solve(C, g, 0.0)
-    k = p * sigma2 / float(b @ b)
+    bb = float(b @ b)
+    if not bb > 0.0 or not np.isfinite(bb):
+        return 0.0, 0, False  # zero OLS solution: no shrinkage can help
+    k0 = k = p * sigma2 / bb
     for it in range(1, max_iter + 1):
         b = _solve(C, g, k)
-        k_new = p * sigma2 / float(b @ b)
+        bb = float(b @ b)
+        if not bb > 0.0 or not np.isfinite(bb):
+            return k0, it, False  # runaway k (see above)
+        k_new = p * sigma2 / bb
+        if not np.isfinite(k_new):
+            return k0, it, False
         if abs(k_new - k) <= tol * max(k, 1e-300):
             return k_new, it, True
         k = k_new
@@ -164,8 +178,8 @@ def ridge(H: np.ndarray, y: np.ndarray, k: float | None = None, *, tol: float = 
     if k is None:
         k, iters, conv = hoerl_kennard_k(C, g, sigma2, tol=tol, max_iter=max_iter)
         if not conv:
-            warnings.warn(f"Hoerl–Kennard iteration for k did not converge in {max_iter} steps "
-                          f"(last k = {k:.3g})", RuntimeWarning, stacklevel=2)
+            warnings.warn(f"Hoerl–Kennard iteration for k did not converge after {iters} steps "
+                          f"(using k = {k:.3g})", RuntimeWarning, stacklevel=2)
     else:
         k, iters, conv = float(k), 0, True
     A = C + k * np.eye(p)

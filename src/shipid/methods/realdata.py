@@ -344,22 +344,17 @@ def regression_data(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapp
 
 
 def _ridge_safe(H: np.ndarray, y: np.ndarray, k: float | None, mode: str) -> RidgeFit:
-    """Ridge with Hoerl–Kennard's k; when that iteration breaks down (k → ∞ on weak data),
-    fall back to the Hoerl–Kennard–Baldwin one-step ``k = p σ̂² / b_OLSᵀ b_OLS`` and say so
-    (``converged`` False, a RuntimeWarning), never silently."""
+    """Ridge with Hoerl–Kennard's k for one mode; any warning of the fit (a runaway k
+    iteration falls back to the one-step k with ``converged`` False, see
+    :func:`shipid.estimate.ridge.hoerl_kennard_k`) is re-issued naming the mode."""
     import warnings
-    from dataclasses import replace as _replace
 
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", RuntimeWarning)
-            return ridge(H, y, k)
-    except (ZeroDivisionError, FloatingPointError, RuntimeWarning, np.linalg.LinAlgError) as err:
-        ols_fit = ridge(H, y, 0.0)
-        k0 = ols_fit.p * ols_fit.sigma2 / float(ols_fit.b @ ols_fit.b)
-        warnings.warn(f"mode {mode}: Hoerl–Kennard iteration failed ({type(err).__name__}: {err}); "
-                      f"using the one-step k = {k0:.3g}", RuntimeWarning, stacklevel=3)
-        return _replace(ridge(H, y, k0), converged=False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = ridge(H, y, k)
+    for w in caught:
+        warnings.warn(f"mode {mode}: {w.message}", w.category, stacklevel=3)
+    return fit
 
 
 @dataclass(frozen=True)
