@@ -128,3 +128,15 @@ def test_fast_inner_map_equals_reference(kn):
     Ts = np.array([0.02, 0.02, 0.02, 0.01])
     assert np.allclose(_fast_g(th, kn, np.array([0, 1, 2, 2]), Ts),
                        discrete_coeffs(th, kn, conds, Ts, moment=True), rtol=1e-14, atol=0)
+
+
+def test_analytic_jacobian_equals_complex_step(kn):
+    """The search's exact Jacobian of g(theta) (33) against complex-step differentiation."""
+    from shipid.methods.masscm import _fast_g, _fast_g_jac
+    from shipid.models.roll_reduced import jacobian_complex_step, to_moment
+    th = to_moment(np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182]))
+    code, Ts = np.array([0, 1, 2, 2]), np.array([0.02, 0.02, 0.02, 0.01])
+    J = _fast_g_jac(th, kn, code, Ts)
+    Jc = jacobian_complex_step(lambda t: _fast_g(t, kn, code, Ts), th)
+    assert J.shape == (4, 5, 9)
+    assert np.allclose(J, Jc, rtol=1e-12, atol=1e-14 * np.max(np.abs(Jc)))
