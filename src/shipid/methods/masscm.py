@@ -448,16 +448,31 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     return ARMA(m.a, np.convolve(m.c, den), m.lam)
 
 
+def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions()) -> "_State":
+    """IV moments of the first iteration (step A): black-box instruments and the initial prefilter.
+
+    They depend on the data and the options only, not on the initial values, so a Monte Carlo study
+    over initial values builds them once (:mod:`shipid.methods.masscm_study`) and passes them to
+    :func:`iterate` as ``state0``.
+    """
+    L = [_initial_prefilter(options)] * len(prep)
+    y_hats = [ds.y_hat0 for ds in prep]
+    a_hats = [ds.a_hat0 for ds in prep]
+    return _State(_build_moments(prep, L, y_hats, a_hats, options), np.ones(len(prep)), L,
+                  np.array([ds.T for ds in prep]), [ds.condition for ds in prep])
+
+
 def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f: float | None = None,
             z_f_prior: tuple[float, float] | None = None, init: str = "given",
-            options: MassCMOptions = MassCMOptions()) -> dict:
+            options: MassCMOptions = MassCMOptions(), state0: "_State | None" = None) -> dict:
     """Run Algorithm 1 step B on prepared datasets; the core shared by :func:`estimate_mass_cm` and the study.
 
     The search runs in the load-moment parameterisation ``q = m z_m`` (:data:`THETA_Q_NAMES`), in
     which the model is polynomial; ``theta0`` and the returned ``theta`` are physical (with ``m``),
     ``theta_q`` and ``J`` (Jacobian of the weighted residuals w.r.t. the free entries of ``theta_q``)
     are internal. Returns a plain dict so that Monte Carlo runs stay cheap; :func:`estimate_mass_cm`
-    turns it into a :class:`Result`.
+    turns it into a :class:`Result`. ``state0``: the result of :func:`initial_state` for the same
+    ``prep`` and ``options`` (built here when not given).
     """
     theta = np.asarray(theta0, dtype=float).copy()
     if z_f is not None:
@@ -472,10 +487,9 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     conds = [ds.condition for ds in prep]
     Ts = np.array([ds.T for ds in prep])
     warn: list[str] = []
-    L = [_initial_prefilter(options)] * len(prep)
     y_hats = [ds.y_hat0 for ds in prep]
     a_hats = [ds.a_hat0 for ds in prep]
-    state = _State(_build_moments(prep, L, y_hats, a_hats, options), np.ones(len(prep)), L, Ts, conds)
+    state = initial_state(prep, options) if state0 is None else state0
     if init == "linear":
         lin = linear_initial(state, known, float(theta[I_ZF]))
         if np.all(np.isfinite(lin)):

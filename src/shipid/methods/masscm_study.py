@@ -40,7 +40,7 @@ import warnings
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from shipid.methods.masscm import MassCMOptions, implausible_reasons, iterate, prepare
+from shipid.methods.masscm import MassCMOptions, implausible_reasons, initial_state, iterate, prepare
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import simulate_datasets
 from shipid.vessels import load_vessel
@@ -71,8 +71,15 @@ def _prepared(data_seed: int, vessel: str, options: MassCMOptions):
     if key not in _CACHE:
         d = simulate_datasets(vessel, seed=data_seed)
         _CACHE.clear()
-        _CACHE[key] = (prepare(list(d.items()), options), KnownParams.from_vessel(vessel))
-    return _CACHE[key]
+        prep = prepare(list(d.items()), options)
+        _CACHE[key] = (prep, KnownParams.from_vessel(vessel), initial_state(prep, options))
+    return _CACHE[key][:2]
+
+
+def _state0(data_seed: int, vessel: str, options: MassCMOptions):
+    """First-iteration IV moments of the cached datasets (independent of the initial values)."""
+    _prepared(data_seed, vessel, options)
+    return _CACHE[(data_seed, vessel, options)][2]
 
 
 def draw_initial(rng: np.random.Generator, vessel: str = "fishing-vessel") -> np.ndarray:
@@ -98,7 +105,8 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
     with warnings.catch_warnings(), threadpool_limits(1):      # small matrices: threads only cost here
         warnings.simplefilter("ignore")
         try:
-            core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init)
+            core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init,
+                           state0=_state0(data_seed, vessel, options))
             theta = core["theta"]
             conv, its = bool(core["converged"]), int(core["iterations"])
         except (np.linalg.LinAlgError, ValueError) as err:     # recorded as implausible, never a crash
