@@ -89,7 +89,7 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     xs = x / scale
     if nc == 0:                                   # pure AR: one least-squares fit is the whole method
         start = na
-        X = _lagged(xs, na, start)
+        X = np.ascontiguousarray(_lagged(xs, na, start))   # one copy; BLAS would copy the strided view per product
         th = _ls(X, xs[start:]) if na else np.zeros(0)
         a = np.concatenate([[1.0], -th])           # the prefilter A(q) is FIR: stable whatever its roots
         eps = xs[start:] - (X @ th if na else 0.0)
