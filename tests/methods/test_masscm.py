@@ -140,3 +140,24 @@ def test_analytic_jacobian_equals_complex_step(kn):
     Jc = jacobian_complex_step(lambda t: _fast_g(t, kn, code, Ts), th)
     assert J.shape == (4, 5, 9)
     assert np.allclose(J, Jc, rtol=1e-12, atol=1e-14 * np.max(np.abs(Jc)))
+
+
+def test_fir_fast_moments_equal_general_path(clean):
+    """The FIR-prefilter fast path of the IV moments (45), (39)-(41) equals instruments + lfilter + iv_compress."""
+    from shipid.estimate.arma import hannan_rissanen
+    from shipid.estimate.iv import iv_compress
+    from shipid.methods.masscm import _fir_moments, _instruments, _start, prepare
+    opt = MassCMOptions()
+    ds = prepare(clean, opt)[2]
+    rng = np.random.default_rng(5)
+    L = hannan_rissanen(rng.standard_normal(ds.y.size), opt.ar_order, 0, n_long=opt.ar_order)
+    y_hat = ds.y_hat0 + 1e-3 * rng.standard_normal(ds.y.size)
+    s = _start(opt)
+    ref = iv_compress(_instruments(ds, y_hat, ds.a_hat0, ds.r_hat0, L, opt), L.prefilter(ds.y)[s:],
+                      L.prefilter(ds.Phi)[s:])
+    new = _fir_moments(ds, L.a, y_hat, ds.a_hat0, opt)
+    # R is unique up to the signs of its rows: compare R^T R, R^T r and the residual part
+    assert new.n == ref.n and new.rank_ok == ref.rank_ok
+    assert np.allclose(new.R.T @ new.R, ref.R.T @ ref.R, rtol=1e-10, atol=1e-12 * np.abs(ref.R).max() ** 2)
+    assert np.allclose(new.R.T @ new.r, ref.R.T @ ref.r, rtol=1e-10, atol=1e-12 * np.abs(ref.R.T @ ref.r).max())
+    assert np.isclose(new.rss0, ref.rss0, rtol=1e-8)

@@ -91,17 +91,23 @@ def iv_compress(Z: np.ndarray, y: np.ndarray, Phi: np.ndarray, rtol: float = 1e-
     directions with eigenvalues below ``rtol`` times the largest are dropped instead of inverting a
     singular Q (lagged instruments of smooth signals are strongly collinear).
     """
-    ZtZ = Z.T @ Z
-    ZtP = Z.T @ np.column_stack([Phi, y])
+    return iv_compress_products(Z.T @ Z, Z.T @ np.column_stack([Phi, y]), y.size, rtol)
+
+
+def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float = 1e-12) -> IVMoments:
+    """:func:`iv_compress` from the moment matrices ``Z^T Z`` and ``Z^T [Phi, y]`` (``n`` samples).
+
+    For callers that form the products themselves (e.g. from a transposed, contiguous instrument matrix).
+    """
     s, V = np.linalg.eigh(ZtZ)
     keep = s > rtol * max(s[-1], 1e-300)
     P = (V[:, keep].T @ ZtP) / np.sqrt(s[keep])[:, None]
     Rf = np.linalg.qr(P, mode="r")
-    ng = Phi.shape[1]
+    ng = ZtP.shape[1] - 1
     R = Rf[:ng, :ng]
     r = Rf[:ng, ng]
     rss0 = float(Rf[ng, ng] ** 2) if Rf.shape[0] > ng else 0.0
-    return IVMoments(R=R, r=r, rss0=rss0, n=y.size, rank_ok=bool(keep.sum() >= ng))
+    return IVMoments(R=R, r=r, rss0=rss0, n=n, rank_ok=bool(keep.sum() >= ng))
 
 
-__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress"]
+__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products"]

@@ -65,7 +65,7 @@ from scipy.signal import lfilter
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.arma import hannan_rissanen
-from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, lag_matrix
+from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, iv_compress_products, lag_matrix
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, THETA_NAMES, THETA_UNITS,
                                         KnownParams, bilinear_tf, discrete_coeffs, from_moment, roll_terms,
                                         to_moment)
@@ -117,6 +117,7 @@ class Dataset:
     r_hat0: np.ndarray = field(repr=False, default=None)    # black-box r simulation (44)
     y_hat0: np.ndarray = field(repr=False, default=None)
     a_hat0: np.ndarray = field(repr=False, default=None)
+    cache: dict = field(repr=False, compare=False, default_factory=dict)   # iterate-independent products
 
 
 def _diff2(x: np.ndarray) -> np.ndarray:
@@ -216,10 +217,43 @@ class _State:
     conds: list
 
 
+def _fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for a FIR prefilter ``L = A(q)`` (the AR noise model), lag instruments.
+
+    The same quantities as the general path of :func:`_build_moments` (``_instruments`` + prefilter +
+    :func:`iv_compress`), arranged for speed: the iterate-independent columns are kept per dataset,
+    each of the ten signals is filtered once by ``np.convolve`` (what ``lfilter`` does for a FIR
+    filter), and the instrument matrix is built transposed and contiguous (one ``Z^T Z`` product).
+    """
+    s = _start(options)
+    n = ds.y.size
+    c = ds.cache
+    if "dr0" not in c:
+        c["dr0"], c["dd"] = _diff2(ds.r_hat0), _diff2(ds.delta)
+        c["PhiT"] = np.ascontiguousarray(ds.Phi.T)
+    base = np.column_stack([y_hat, _diff2(a_hat), c["dr0"], c["dd"]])
+    base = base - base.mean(axis=0)
+    sig = [base[:, 0], base[:, 1], base[:, 2], base[:, 3], *c["PhiT"], ds.y]
+    filt = np.empty((len(sig), n))
+    for k, x in enumerate(sig):
+        filt[k] = np.convolve(a, x)[:n]
+    m = n - s
+    blocks = []
+    for k, nl in enumerate((options.n_y, options.n_as, options.n_r, options.n_delta)):
+        if nl:
+            blocks.append(np.lib.stride_tricks.sliding_window_view(filt[k, s - nl + 1:], m)[::-1])
+    ZT = np.concatenate(blocks, axis=0)                       # (n_z, m): row j = lag of one signal
+    P = filt[4:, s:]                                          # Phi columns then y, prefiltered
+    return iv_compress_products(ZT @ ZT.T, ZT @ P.T, m)
+
+
 def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
     s = _start(options)
     mom = []
     for ds, Li, yh, ah in zip(prep, L, y_hats, a_hats):
+        if Li is not None and Li.c.size == 1 and Li.c[0] == 1.0 and options.instruments == "lags":
+            mom.append(_fir_moments(ds, Li.a, yh, ah, options))
+            continue
         Z = _instruments(ds, yh, ah, ds.r_hat0, Li, options)
         if Li is not None:
             yf = Li.prefilter(ds.y)[s:]
