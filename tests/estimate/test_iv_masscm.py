@@ -67,3 +67,14 @@ def test_pure_ar_fit():
     x = lfilter([1.0], a_true, rng.standard_normal(30000))
     m = hannan_rissanen(x, na=2, nc=0)
     assert np.allclose(m.a, a_true, atol=0.02) and m.c.size == 1 and np.isclose(m.lam, 1.0, rtol=0.05)
+
+
+def test_lag_gram_equals_explicit_products():
+    """The O(n p) Gram of the AR regression equals X^T X, X^T x built from the explicit lag matrix."""
+    from shipid.estimate.arma import _lag_gram, _lagged
+    x = np.cumsum(np.random.default_rng(11).standard_normal(700))
+    for p in (1, 3, 40):
+        X = np.ascontiguousarray(_lagged(x, p, p))
+        G, g = _lag_gram(x, p)
+        assert np.allclose(G, X.T @ X, rtol=1e-12, atol=1e-12 * np.abs(G).max())
+        assert np.allclose(g, X.T @ x[p:], rtol=1e-12, atol=1e-12 * np.abs(g).max())

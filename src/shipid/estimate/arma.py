@@ -64,6 +64,44 @@ def _ls(X: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.linalg.lstsq(X, y, rcond=None)[0]
 
 
+def _lag_gram(x: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+    """``X^T X`` and ``X^T x[p:]`` for ``X = _lagged(x, p, p)`` in O(n p) instead of O(n p^2).
+
+    Column i of X holds ``x_{t-1-i}``, rows ``t = p .. n-1``. The first row of the Gram matrix is a
+    correlation; shifting both lags by one moves the summation window by one sample, so
+    ``G[i, i+d] = G[0, d] + sum_{l<i} (x[p-2-l] x[p-2-l-d] - x[n-2-l] x[n-2-l-d])``.
+    """
+    n = x.size
+    # c[d] = sum_{t=p}^{n-1} x[t-1] x[t-1-d], d = 0..p-1;  g[j] = sum_t x[t] x[t-1-j]
+    c = np.correlate(x[p - 1:n - 1], x[:n - 1], mode="valid")
+    g = np.correlate(x[p:], x[:n - 1], mode="valid")
+    i = np.arange(p)[:, None]
+    d = np.arange(p)[None, :]
+    ok = (i + d) < p
+    # head/tail products for l = 0..p-2 and lag d (zero where the index would leave the record)
+    head_i = p - 2 - i[:-1]                                   # x[p-2-l]
+    hi, hj = head_i, head_i - d
+    hv = np.where(hj >= 0, x[hi] * x[np.maximum(hj, 0)], 0.0)
+    tl = n - 2 - i[:-1]
+    tv = x[tl] * x[tl - d]
+    corr = np.vstack([np.zeros((1, p)), np.cumsum(hv - tv, axis=0)])      # corr[i, d] = sum_{l<i}
+    U = np.where(ok, c[None, :] + corr, 0.0)                  # U[i, d] = G[i, i+d]
+    G = np.zeros((p, p))
+    ii, dd = np.nonzero(ok)
+    G[ii, ii + dd] = U[ii, dd]
+    G[ii + dd, ii] = U[ii, dd]
+    return G, g
+
+
+def _solve_normal(G: np.ndarray, g: np.ndarray, x: np.ndarray, p: int) -> np.ndarray:
+    """Solve ``G th = g`` as :func:`_ls` does (ridge-regularised Cholesky, least-squares fallback)."""
+    try:
+        c = np.linalg.cholesky(G + 1e-12 * np.trace(G) / G.shape[0] * np.eye(G.shape[0]))
+        return np.linalg.solve(c.T, np.linalg.solve(c, g))
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(_lagged(x, p, p), x[p:], rcond=None)[0]
+
+
 def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None = None) -> ARMA:
     """Fit an ARMA(na, nc) model to ``x`` (mean removed) by the two-stage Hannan–Rissanen method.
 
@@ -89,10 +127,12 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     xs = x / scale
     if nc == 0:                                   # pure AR: one least-squares fit is the whole method
         start = na
-        X = np.ascontiguousarray(_lagged(xs, na, start))   # one copy; BLAS would copy the strided view per product
-        th = _ls(X, xs[start:]) if na else np.zeros(0)
+        if not na:
+            return ARMA(np.ones(1), np.ones(1), float(np.mean(xs**2)) * scale**2)
+        G, g = _lag_gram(xs, na)
+        th = _solve_normal(G, g, xs, na)
         a = np.concatenate([[1.0], -th])           # the prefilter A(q) is FIR: stable whatever its roots
-        eps = xs[start:] - (X @ th if na else 0.0)
+        eps = np.convolve(a, xs)[start:n]          # = xs[start:] - X @ th
         return ARMA(a, np.ones(1), float(np.mean(eps**2)) * scale**2)
     nl = n_long if n_long is not None else max(20, 2 * (na + nc))
     nl = int(min(nl, max(1, n // 5)))
