@@ -161,3 +161,14 @@ def test_fir_fast_moments_equal_general_path(clean):
     assert np.allclose(new.R.T @ new.R, ref.R.T @ ref.R, rtol=1e-10, atol=1e-12 * np.abs(ref.R).max() ** 2)
     assert np.allclose(new.R.T @ new.r, ref.R.T @ ref.r, rtol=1e-10, atol=1e-12 * np.abs(ref.R.T @ ref.r).max())
     assert np.isclose(new.rss0, ref.rss0, rtol=1e-8)
+
+
+def test_scalar_map_and_jacobian_equal_vectorised(kn):
+    """The float-arithmetic g and dg/dtheta of the search equal the vectorised map (33) and its Jacobian."""
+    from shipid.methods.masscm import _fast_g, _fast_g_jac, _g_and_jac
+    from shipid.models.roll_reduced import to_moment
+    th = to_moment(np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182]))
+    code, Ts = np.array([0, 1, 2, 2]), np.array([0.02, 0.02, 0.02, 0.01])
+    G, J = _g_and_jac(th, kn, list(code), list(Ts), True)
+    assert np.allclose(G, _fast_g(th, kn, code, Ts), rtol=1e-14, atol=0)
+    assert np.allclose(J, _fast_g_jac(th, kn, code, Ts), rtol=1e-12, atol=1e-15 * np.abs(J).max())

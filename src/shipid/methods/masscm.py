@@ -344,6 +344,51 @@ def _fast_g_jac(th, known: KnownParams, code: np.ndarray, Ts: np.ndarray) -> np.
     return (dN - G[:, :, None] * dden[:, None, :]) / den[:, :, None]
 
 
+def _g_and_jac(th, known: KnownParams, code, Ts, jac: bool):
+    """:func:`_fast_g` (and :func:`_fast_g_jac`) for real ``th`` in plain float arithmetic.
+
+    The search evaluates g for a handful of datasets thousands of times per run; per-element numpy
+    calls cost more than the arithmetic there. Same formulas, checked against both in the tests.
+    """
+    k, A_x, d, K_r, K_v, K_d, z_f, q, zm = (float(v) for v in th)
+    M, g, zgb, zsb = known.M, known.g, known.zg_bar, known.zs_bar
+    zg, zs = zgb + z_f, zsb + z_f
+    kp = k - K_v * g
+    n = len(code)
+    G = np.empty((n, 5))
+    J = np.zeros((n, 5, 9)) if jac else None
+    for i in range(n):
+        c, T = code[i], Ts[i]
+        if c == 0:
+            qi, zb = 0.0, 0.0
+        elif c == 1:
+            qi, zb = known.m_c * (known.zc_bar + z_f), known.zc_bar
+        else:
+            qi, zb = q, zm
+        A2 = A_x + M * zg * (zgb - zsb) + qi * (zb - zsb) - K_v * zs
+        B = K_v + M * zg + qi
+        den = 2 * d * T + kp * T * T + 4 * A2
+        row = ((2 * kp * T * T - 8 * A2) / den, (-2 * d * T + kp * T * T + 4 * A2) / den,
+               -2 * T * B / den, 2 * T * K_r / den, 2 * T * K_d / den)
+        G[i] = row
+        if jac:
+            dA2 = [0.0, 1.0, 0.0, 0.0, -zs, 0.0,
+                   M * (zgb - zsb) + (known.m_c * (zb - zsb) if c == 1 else 0.0) - K_v,
+                   (zb - zsb) if c == 2 else 0.0, qi if c == 2 else 0.0]
+            dB = [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, M + (known.m_c if c == 1 else 0.0), 1.0 if c == 2 else 0.0, 0.0]
+            TT = T * T
+            Ji = J[i]
+            for p in range(9):
+                dkp = 1.0 if p == 0 else (-g if p == 4 else 0.0)
+                dd = 1.0 if p == 2 else 0.0
+                dden = 2 * T * dd + TT * dkp + 4 * dA2[p]
+                dN = (2 * TT * dkp - 8 * dA2[p], -2 * T * dd + TT * dkp + 4 * dA2[p], -2 * T * dB[p],
+                      2 * T * (1.0 if p == 3 else 0.0), 2 * T * (1.0 if p == 5 else 0.0))
+                for r in range(5):
+                    Ji[r, p] = (dN[r] - row[r] * dden) / den
+    return G, J
+
+
 _CODES = {NOMINAL: 0, CALIBRATION: 1, LOADED: 2}
 
 
@@ -359,18 +404,23 @@ def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fix
         th[free] = x
         return th
 
+    code_l, Ts_l = [int(c) for c in code], [float(t) for t in Ts]
+
     def fun(x):
         th = full(x)
-        G = _fast_g(th, known, code, Ts)
+        if np.iscomplexobj(th):                 # complex step (covariance): the vectorised map
+            G = _fast_g(th, known, code, Ts)
+        else:
+            G = _g_and_jac(th, known, code_l, Ts_l, False)[0]
         res = (np.einsum("nij,nj->ni", Rs, G) - rs).ravel()
         if prior is not None:
             res = np.concatenate([res, np.atleast_1d((th[I_ZF] - prior[0]) / prior[1])])
         return res
 
     def jac(x):
-        """Exact Jacobian of ``fun`` (analytic, :func:`_fast_g_jac`)."""
+        """Exact Jacobian of ``fun`` (analytic, :func:`_g_and_jac`)."""
         th = full(x)
-        dG = _fast_g_jac(th, known, code, Ts)[:, :, free]                 # (n, 5, n_free)
+        dG = _g_and_jac(th, known, code_l, Ts_l, True)[1][:, :, free]    # (n, 5, n_free)
         J = np.einsum("nij,njk->nik", Rs, dG).reshape(-1, dG.shape[-1])
         if prior is not None:
             row = np.zeros((1, J.shape[1]))
