@@ -229,11 +229,11 @@ def _fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOption
     n = ds.y.size
     c = ds.cache
     if "dr0" not in c:
-        c["dr0"], c["dd"] = _diff2(ds.r_hat0), _diff2(ds.delta)
+        dr0, dd = _diff2(ds.r_hat0), _diff2(ds.delta)
+        c["dr0"], c["dd"] = dr0 - dr0.mean(), dd - dd.mean()
         c["PhiT"] = np.ascontiguousarray(ds.Phi.T)
-    base = np.column_stack([y_hat, _diff2(a_hat), c["dr0"], c["dd"]])
-    base = base - base.mean(axis=0)
-    sig = [base[:, 0], base[:, 1], base[:, 2], base[:, 3], *c["PhiT"], ds.y]
+    da = _diff2(a_hat)
+    sig = [y_hat - y_hat.mean(), da - da.mean(), c["dr0"], c["dd"], *c["PhiT"], ds.y]
     filt = np.empty((len(sig), n))
     for k, x in enumerate(sig):
         filt[k] = np.convolve(a, x)[:n]
