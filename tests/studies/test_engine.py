@@ -124,3 +124,14 @@ def test_campaign_options_validation():
     opts = CampaignOptions(seed=4, dask_local=3, store="s.sqlite")
     assert opts.engine_kwargs() == {"executor": "dask-local", "workers": 3, "store": "s.sqlite",
                                     "resume": False, "retry_failed": False, "progress": True}
+
+
+def test_runs_carry_their_code_and_mixed_code_warns(monkeypatch):
+    from shipid.studies.executors import code_fingerprint
+    res = run_campaign(TOY, 4, 0, workers=1, progress=False)
+    assert {r.code for r in res.records} == {code_fingerprint()} and res.mixed_code == 0
+    # the engine believing it runs other source than its workers (an edited tree, another install)
+    monkeypatch.setattr("shipid.studies.engine.code_fingerprint", lambda: "f" * 64)
+    with pytest.warns(RuntimeWarning, match="other shipid source"):
+        res = run_campaign(TOY, 4, 0, workers=1, progress=False)
+    assert res.mixed_code == 4

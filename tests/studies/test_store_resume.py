@@ -61,10 +61,11 @@ def test_sigkill_then_resume_equals_clean_run(tmp_path):
             assert time.monotonic() < deadline, "campaign never stored a chunk"
             time.sleep(0.05)
         proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=10)
+        proc.communicate(timeout=10)   # reaps it and closes its pipes
     finally:
         if proc.poll() is None:
             proc.kill()
+            proc.communicate()
     assert proc.returncode == -signal.SIGKILL
     with CampaignStore(store) as st:
         before = {r.index: r for r in st.records("toy")}

@@ -40,7 +40,10 @@ With ``store=PATH`` every finished run goes into an SQLite file
 (:mod:`shipid.studies.store`). ``resume=True`` continues the campaign of the same
 name in that store, skipping the runs already there (ok or failed): no completed
 run is lost, none is repeated. It is refused with one line when the stored
-definition (task, seed, n_runs, kwargs, inputs, shipid version) differs. Without
+definition (task, seed, n_runs, kwargs, inputs, shipid version) differs. Every
+run also stores a hash of the shipid source its worker started from, and the
+engine warns when it differs from this process's (files edited during the run,
+another install on the cluster). Without
 ``resume`` a store that already holds the campaign is refused.
 
 Usage
@@ -72,14 +75,16 @@ import hashlib
 import json
 import os
 import time
+import warnings
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import shipid
 from shipid.errors import ShipidError
-from shipid.studies.executors import (dask_local_client, dask_remote_client, iter_dask, iter_inprocess,
-                                      iter_pool, resolve_task, task_reference, threads_limited, to_json)
+from shipid.studies.executors import (code_fingerprint, dask_local_client, dask_remote_client, iter_dask,
+                                      iter_inprocess, iter_pool, resolve_task, task_reference, threads_limited,
+                                      to_json)
 from shipid.studies.seeding import check_seed
 from shipid.studies.store import CampaignDefinition, CampaignStore, RunRecord, records_frame
 EXECUTORS = ("local", "dask-local", "scheduler")
@@ -111,6 +116,11 @@ class CampaignResult:
         Runs taken from the store by ``resume`` instead of computed now.
     store : str or None
         The store file.
+    kwargs : dict
+        The fixed keyword arguments.
+    mixed_code : int
+        Runs computed now by a worker whose shipid source differed from this process's
+        (a warning was issued; 0 is the normal case).
     """
 
     name: str
@@ -124,6 +134,7 @@ class CampaignResult:
     reused: int = 0
     store: str | None = None
     kwargs: dict = field(default_factory=dict)
+    mixed_code: int = 0
 
     @property
     def outputs(self) -> list[dict | None]:
@@ -155,7 +166,7 @@ class CampaignResult:
         return {"campaign": self.name, "task": self.task, "seed": self.seed, "runs": self.n_runs,
                 "ok": self.n_ok, "failed": self.n_failed, "reused_from_store": self.reused,
                 "executor": self.executor, "workers": self.workers, "wall_s": self.wall_s,
-                "store": self.store}
+                "store": self.store, "mixed_code": self.mixed_code}
 
 
 # --------------------------------------------------------------------------------------
@@ -279,12 +290,14 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         raise ShipidError(f"campaign '{name}': kwargs and inputs must be JSON-serialisable ({err})") from None
     inputs_sha = None if inputs_json is None else hashlib.sha256(
         ("[" + ",".join(inputs_json) + "]").encode()).hexdigest()
-    definition = CampaignDefinition(name, ref, seed, n_runs, kwargs_json, inputs_sha, shipid.__version__)
+    code = code_fingerprint()
+    definition = CampaignDefinition(name, ref, seed, n_runs, kwargs_json, inputs_sha, shipid.__version__, code)
 
     with ExitStack() as stack:
         st = None
         done: set[int] = set()
         memory: dict[int, RunRecord] = {}
+        mixed = 0
         if store is not None:
             st = stack.enter_context(CampaignStore(store, writer=True))
             old = st.definition(name)
@@ -349,6 +362,14 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         try:
             for rows in stream:
                 for r in rows:
+                    if r.get("code") not in (None, code):
+                        mixed += 1
+                        if mixed == 1:
+                            warnings.warn(
+                                f"campaign '{name}': worker {r['worker']} started from other shipid source "
+                                f"({r['code'][:12]} vs {code[:12]}: files edited during the run, or another "
+                                "install on the cluster); results may mix code (see the 'code' column)",
+                                RuntimeWarning, stacklevel=2)
                     r["inputs_json"] = "{}" if inputs_json is None else inputs_json[r["index"]]
                 if st is not None:
                     st.write(name, rows)
@@ -357,7 +378,7 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
                         memory[r["index"]] = RunRecord(
                             r["index"], r["seed"], json.loads(r["inputs_json"]),
                             None if r["outputs_json"] is None else json.loads(r["outputs_json"]),
-                            r["status"], r["error"], r["wall_s"], r["worker"], r["cpu_s"])
+                            r["status"], r["error"], r["wall_s"], r["worker"], r["cpu_s"], r.get("code"))
                 advance(len(rows))
         finally:
             if hasattr(stream, "close"):
@@ -367,7 +388,7 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         raise ShipidError(f"campaign '{name}': {len(records)} of {n_runs} runs came back (engine bug)")
     return CampaignResult(name=name, task=ref, seed=seed, n_runs=n_runs, records=records, executor=label,
                           workers=n_workers, wall_s=time.perf_counter() - t_start, reused=len(done),
-                          store=None if store is None else str(store), kwargs=kwargs)
+                          store=None if store is None else str(store), kwargs=kwargs, mixed_code=mixed)
 
 
 # --------------------------------------------------------------------------------------

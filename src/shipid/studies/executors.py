@@ -11,6 +11,8 @@ worker processes.
 from __future__ import annotations
 
 import dataclasses
+import functools
+import hashlib
 import importlib
 import json
 import multiprocessing
@@ -54,6 +56,28 @@ def to_json(obj, *, canonical: bool = False) -> str:
     if canonical:
         return json.dumps(obj, default=_jsonable, sort_keys=True, separators=(",", ":"))
     return json.dumps(obj, default=_jsonable)
+
+
+# --------------------------------------------------------------------------------------
+# Code identity
+# --------------------------------------------------------------------------------------
+@functools.lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """SHA-256 of shipid's Python source as this process imported it (file names and bytes).
+
+    Computed once per process (what the files held then, as a proxy for what the process
+    imported). Stored with every run, so a campaign whose workers ran other code (a
+    source tree edited during the run, a cluster with another install) can be seen;
+    the engine warns when it happens. A task outside the shipid package is not covered.
+    """
+    import shipid
+
+    root = Path(shipid.__file__).resolve().parent
+    h = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode() + b"\0")
+        h.update(path.read_bytes() + b"\0")
+    return h.hexdigest()
 
 
 # --------------------------------------------------------------------------------------
@@ -138,6 +162,7 @@ def run_chunk(task, seed: int, indices: Sequence[int], inputs: Sequence[Any] | N
     if limit_threads:
         _limit_threads()
     worker = f"{socket.gethostname()}:{os.getpid()}"
+    code = code_fingerprint()
     rows = []
     for k, i in enumerate(indices):
         inp = None if inputs is None else inputs[k]
@@ -155,7 +180,7 @@ def run_chunk(task, seed: int, indices: Sequence[int], inputs: Sequence[Any] | N
             out_json, status, error = None, "failed", error_text(exc)
         rows.append({"index": int(i), "seed": entropy, "outputs_json": out_json, "status": status,
                      "error": error, "wall_s": time.perf_counter() - t0, "worker": worker,
-                     "cpu_s": time.process_time() - c0})
+                     "cpu_s": time.process_time() - c0, "code": code})
     return rows
 
 

@@ -5,13 +5,15 @@ Tables
 ``campaigns``
     One row per campaign, keyed by its name: task reference (``"module:function"``),
     seed, number of runs, fixed keyword arguments (JSON), a SHA-256 of the per-run
-    inputs, the shipid version that created it, and the creation time (UTC).
+    inputs, the shipid version, a SHA-256 of shipid's source code when the campaign was
+    created (``code_sha256``; informational), and the creation time (UTC).
 ``runs``
     One row per finished run, primary key ``(campaign, run)``: the run's seed entropy
     ``[seed, i]`` (JSON), its inputs (JSON), outputs (JSON, ``NULL`` when it failed),
     ``status`` (``"ok"`` or ``"failed"``), ``error`` (``"Type: message"``), wall and CPU
     time of the run in seconds (``wall_s``, ``cpu_s``: the process's CPU time, so a loaded
-    machine shows as wall >> CPU), and the worker (``host:pid``) that ran it.
+    machine shows as wall >> CPU), the worker (``host:pid``) that ran it, and the
+    SHA-256 of the shipid source that worker started with (``code``).
 
 Durability: the engine writes each finished chunk of runs in one transaction
 (``synchronous=FULL``), so a process killed at any moment (SIGKILL included) leaves
@@ -40,6 +42,7 @@ CREATE TABLE IF NOT EXISTS campaigns (
     kwargs TEXT NOT NULL,
     inputs_sha256 TEXT,
     shipid_version TEXT NOT NULL,
+    code_sha256 TEXT,
     created_utc TEXT NOT NULL
 );
 CREATE TABLE IF NOT EXISTS runs (
@@ -53,6 +56,7 @@ CREATE TABLE IF NOT EXISTS runs (
     wall_s REAL,
     worker TEXT,
     cpu_s REAL,
+    code TEXT,
     PRIMARY KEY (campaign, run)
 );
 """
@@ -74,6 +78,7 @@ class RunRecord:
     wall_s: float | None = None
     worker: str | None = None
     cpu_s: float | None = None
+    code: str | None = None
 
     def same_result(self, other: "RunRecord") -> bool:
         """True when index, seed, inputs, outputs, status and error agree (timing and worker ignored)."""
@@ -97,6 +102,7 @@ class CampaignDefinition:
     kwargs: str = "{}"
     inputs_sha256: str | None = None
     shipid_version: str = field(default="")
+    code_sha256: str | None = None
 
     def differences(self, other: "CampaignDefinition") -> list[str]:
         """Names of the definition fields that differ between ``self`` and ``other``."""
@@ -159,7 +165,7 @@ class CampaignStore:
     def definition(self, name: str) -> CampaignDefinition | None:
         """The stored definition of campaign ``name``, or ``None``."""
         row = self._con.execute(
-            "SELECT name, task, seed, n_runs, kwargs, inputs_sha256, shipid_version "
+            "SELECT name, task, seed, n_runs, kwargs, inputs_sha256, shipid_version, code_sha256 "
             "FROM campaigns WHERE name = ?", (name,)).fetchone()
         return CampaignDefinition(*row) if row else None
 
@@ -176,8 +182,8 @@ class CampaignStore:
         with self._transaction():
             self._con.execute(
                 "INSERT INTO campaigns (name, task, seed, n_runs, kwargs, inputs_sha256, shipid_version, "
-                "created_utc) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-                (d.name, d.task, d.seed, d.n_runs, d.kwargs, d.inputs_sha256, d.shipid_version,
+                "code_sha256, created_utc) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                (d.name, d.task, d.seed, d.n_runs, d.kwargs, d.inputs_sha256, d.shipid_version, d.code_sha256,
                  datetime.now(timezone.utc).isoformat(timespec="seconds")))
 
     # -- runs ---------------------------------------------------------------------
@@ -202,12 +208,12 @@ class CampaignStore:
         transaction is rolled back: a run is never stored twice.
         """
         data = [(name, r["index"], json.dumps(r["seed"]), r["inputs_json"], r["outputs_json"],
-                 r["status"], r["error"], r["wall_s"], r["worker"], r.get("cpu_s")) for r in rows]
+                 r["status"], r["error"], r["wall_s"], r["worker"], r.get("cpu_s"), r.get("code")) for r in rows]
         try:
             with self._transaction():
                 self._con.executemany(
-                    "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s) "
-                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
+                    "INSERT INTO runs (campaign, run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s, "
+                    "code) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)", data)
         except sqlite3.IntegrityError:
             raise
         except sqlite3.Error as err:  # disk full, I/O error ...: one line; committed chunks stay
@@ -217,11 +223,12 @@ class CampaignStore:
     def records(self, name: str) -> list[RunRecord]:
         """All stored runs of ``name`` in run order."""
         cur = self._con.execute(
-            "SELECT run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s FROM runs "
+            "SELECT run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s, code FROM runs "
             "WHERE campaign = ? ORDER BY run", (name,))
         return [RunRecord(run, json.loads(seed), json.loads(inputs),
-                          None if outputs is None else json.loads(outputs), status, error, wall_s, worker, cpu_s)
-                for run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s in cur]
+                          None if outputs is None else json.loads(outputs), status, error, wall_s, worker, cpu_s,
+                          code)
+                for run, seed, inputs, outputs, status, error, wall_s, worker, cpu_s, code in cur]
 
     def _transaction(self):
         con = self._con
@@ -275,7 +282,7 @@ def records_frame(records: list[RunRecord], campaign: str | None = None):
     rows = []
     for r in records:
         row = {"campaign": campaign, "run": r.index, "seed": json.dumps(r.seed), "status": r.status,
-               "error": r.error, "wall_s": r.wall_s, "cpu_s": r.cpu_s, "worker": r.worker,
+               "error": r.error, "wall_s": r.wall_s, "cpu_s": r.cpu_s, "worker": r.worker, "code": r.code,
                "inputs": json.dumps(r.inputs), "outputs": None if r.outputs is None else json.dumps(r.outputs)}
         if r.outputs is not None:
             flat("out", r.outputs, row)
