@@ -59,6 +59,9 @@ def timed(label: str, **kw):
     print(f"  {label:<42s} {wall:8.2f} s wall  {run_cpu:8.2f} s run CPU ({100 * run_cpu / (wall * res.workers):3.0f} % "
           f"of {res.workers} worker{'s' if res.workers != 1 else ''})  load {load0:4.1f}->{os.getloadavg()[0]:4.1f}"
           f"  [{res.n_ok} ok, {res.n_failed} failed, {res.executor}]", flush=True)
+    if res.mixed_code:
+        print(f"  WARNING: {res.mixed_code} runs came from workers started on other shipid source "
+              "(files edited during the benchmark): outputs may legitimately differ", flush=True)
     return wall, res
 
 
