@@ -7,8 +7,10 @@ inputs) and fixed keyword arguments. Run ``i`` calls::
 
 so its randomness depends on (campaign seed, ``i``) only (see
 :mod:`shipid.studies.seeding`), and the results are identical bit for bit whatever
-the executor, the number of workers, the order in which runs finish, or a resume.
-The task must be a top-level (picklable, importable) function returning a dict of
+the executor, the number of workers, the order in which runs finish, or a resume
+-- provided the task is a function of its arguments only (no state carried between
+runs in a process that changes its numbers); BLAS runs one thread per worker, so
+reductions do not depend on thread scheduling. The task must be a top-level (picklable, importable) function returning a dict of
 JSON-able outputs (floats, ints, strings, lists, nested dicts; NumPy scalars and
 arrays are converted). An exception in a run is recorded with the run
 (``status="failed"``, ``error="Type: message"``) and never stops the campaign.
@@ -43,8 +45,10 @@ run is lost, none is repeated. It is refused with one line when the stored
 definition (task, seed, n_runs, kwargs, inputs, shipid version) differs. Every
 run also stores a hash of the shipid source its worker started from, and the
 engine warns when it differs from this process's (files edited during the run,
-another install on the cluster). Without
-``resume`` a store that already holds the campaign is refused.
+another install on the cluster). Without ``resume`` a store that already holds the
+campaign is refused; ``retry_failed=True`` (``--retry-failed``) with ``resume`` runs
+the stored failed runs again. One campaign process at a time may write a store (a
+lock file ``<store>.lock``); readers (export) are never blocked.
 
 Usage
 -----
