@@ -78,3 +78,15 @@ def test_lag_gram_equals_explicit_products():
         G, g = _lag_gram(x, p)
         assert np.allclose(G, X.T @ X, rtol=1e-12, atol=1e-12 * np.abs(G).max())
         assert np.allclose(g, X.T @ x[p:], rtol=1e-12, atol=1e-12 * np.abs(g).max())
+
+
+def test_lag_gram_equals_explicit_instrument_gram():
+    """Z^T Z of a lag-structured instrument matrix (45) from the lag-0 rows and edge corrections."""
+    from shipid.estimate.iv import lag_gram
+    rng = np.random.default_rng(12)
+    n, s, nls = 400, 17, (16, 5, 1, 2)
+    F = np.cumsum(rng.standard_normal((len(nls), n)), axis=1)
+    Z = np.column_stack([lag_matrix(F[k], nl, s) for k, nl in enumerate(nls)])
+    h = np.concatenate([F[k, s - 1 - np.arange(nl)] for k, nl in enumerate(nls)])
+    G = lag_gram(np.ascontiguousarray(Z.T), h, nls)
+    assert np.allclose(G, Z.T @ Z, rtol=1e-12, atol=1e-13 * np.abs(G).max())

@@ -15,6 +15,7 @@ nonlinear search over physical parameters costs almost nothing per evaluation.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +57,51 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
 def arx_simulate(b: np.ndarray, a: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Noise-free simulation ``y = B/A u``."""
     return lfilter(b, a, u)
+
+
+@functools.lru_cache(maxsize=8)
+def _lag_layout(nls: tuple[int, ...]):
+    lag = np.concatenate([np.arange(nl) for nl in nls])
+    sig = np.concatenate([np.full(nl, k) for k, nl in enumerate(nls)])
+    nz = lag.size
+    a, b = np.arange(nz)[:, None], np.arange(nz)[None, :]
+    mn = np.minimum(lag[:, None], lag[None, :])
+    ba, bb = a - mn, b - mn                                     # the entry on a lag-0 row or column
+    f0 = np.where(lag[ba] == 0, sig[ba] * nz + bb, sig[bb] * nz + ba).ravel()   # into F0 (by symmetry)
+    qidx = (a * (2 * nz - 1) + (b - a + nz - 1)).ravel()       # skew: Q[a, b - a + nz - 1] = D[a, b]
+    g1 = (a * (nz + 1) + b).ravel()                             # GCp[a, b]   = GC[a - 1, b - 1]
+    g2 = (ba * (nz + 1) + bb).ravel()                           # GCp[ba, bb] = GC[a - mn - 1, b - mn - 1]
+    return nz, f0, qidx, g1, g2, np.flatnonzero(lag == 0)
+
+
+def lag_gram(ZT: np.ndarray, h: np.ndarray, nls: tuple[int, ...]) -> np.ndarray:
+    """``Z^T Z`` for an instrument matrix of lags, in O(m n_sig n_z) instead of O(m n_z^2).
+
+    Parameters
+    ----------
+    ZT : ndarray (n_z, m)
+        ``Z`` transposed; its rows are lags ``0 .. nls[k]-1`` of signal k, signal after signal
+        (the layout of (45)), i.e. ``Z[t, (k, i)] = x_k[t - i]``.
+    h : ndarray (n_z,)
+        The row of ``Z`` one sample before its first row (``x_k[t0 - 1 - i]``).
+    nls : tuple of int
+        Lags per signal.
+
+    Shifting both lags by one moves the summation window back one sample, so
+    ``S[(k,i+1), (l,j+1)] = S[(k,i), (l,j)] + h h^T - e e^T`` (``e`` the last row of ``Z``): every entry is
+    a lag-0 row of ``S`` (a small product) plus a diagonal partial sum of ``D = h h^T - e e^T``.
+    """
+    nz, f0, qidx, g1, g2, lag0 = _lag_layout(tuple(int(v) for v in nls))
+    e = ZT[:, -1]
+    D = np.outer(h, h) - np.outer(e, e)
+    Q = np.zeros(nz * (2 * nz - 1))
+    Q[qidx] = D.ravel()
+    Qc = np.cumsum(Q.reshape(nz, 2 * nz - 1), axis=0)           # cumulative sums along the diagonals
+    GCp = np.zeros((nz + 1, nz + 1))
+    GCp[1:, 1:] = Qc.ravel()[qidx].reshape(nz, nz)
+    GCf = GCp.ravel()
+    F0 = ZT[lag0] @ ZT.T
+    return (F0.ravel()[f0] + GCf[g1] - GCf[g2]).reshape(nz, nz)
 
 
 @dataclass(frozen=True)
@@ -110,4 +156,4 @@ def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float =
     return IVMoments(R=R, r=r, rss0=rss0, n=n, rank_ok=bool(keep.sum() >= ng))
 
 
-__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products"]
+__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram"]

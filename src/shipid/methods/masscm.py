@@ -65,7 +65,7 @@ from scipy.signal import lfilter
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.arma import hannan_rissanen
-from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, iv_compress_products, lag_matrix
+from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, iv_compress_products, lag_gram, lag_matrix
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, THETA_NAMES, THETA_UNITS,
                                         KnownParams, bilinear_tf, discrete_coeffs, from_moment, roll_terms,
                                         to_moment)
@@ -238,13 +238,15 @@ def _fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOption
     for k, x in enumerate(sig):
         filt[k] = np.convolve(a, x)[:n]
     m = n - s
-    blocks = []
+    blocks, h, nls = [], [], []
     for k, nl in enumerate((options.n_y, options.n_as, options.n_r, options.n_delta)):
         if nl:
             blocks.append(np.lib.stride_tricks.sliding_window_view(filt[k, s - nl + 1:], m)[::-1])
+            h.append(filt[k, s - 1 - np.arange(nl)])
+            nls.append(nl)
     ZT = np.concatenate(blocks, axis=0)                       # (n_z, m): row j = lag of one signal
     P = filt[4:, s:]                                          # Phi columns then y, prefiltered
-    return iv_compress_products(ZT @ ZT.T, ZT @ P.T, m)
+    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(nls)), ZT @ P.T, m)
 
 
 def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
