@@ -233,10 +233,14 @@ def _fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOption
         c["dr0"], c["dd"] = dr0 - dr0.mean(), dd - dd.mean()
         c["PhiT"] = np.ascontiguousarray(ds.Phi.T)
     da = _diff2(a_hat)
-    sig = [y_hat - y_hat.mean(), da - da.mean(), c["dr0"], c["dd"], *c["PhiT"], ds.y]
+    sig = [y_hat - y_hat.mean(), da - da.mean(), c["dr0"], c["dd"], None, None, *c["PhiT"][2:], ds.y]
     filt = np.empty((len(sig), n))
     for k, x in enumerate(sig):
-        filt[k] = np.convolve(a, x)[:n]
+        if x is not None:
+            filt[k] = np.convolve(a, x)[:n]
+    # Phi columns 0, 1 are -y delayed by 1, 2 samples (37): the filter commutes with the delay
+    filt[4, 0], filt[4, 1:] = 0.0, -filt[9, :-1]
+    filt[5, :2], filt[5, 2:] = 0.0, -filt[9, :-2]
     m = n - s
     blocks, h, nls = [], [], []
     for k, nl in enumerate((options.n_y, options.n_as, options.n_r, options.n_delta)):
