@@ -38,7 +38,7 @@ import functools
 import warnings
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from shipid.methods.masscm import MassCMOptions, implausible_reasons, initial_state, iterate, prepare
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
@@ -82,6 +82,17 @@ def _state0(data_seed: int, vessel: str, options: MassCMOptions):
     return _CACHE[(data_seed, vessel, options)][2]
 
 
+_TPC: list = []
+
+
+def _one_thread():
+    """BLAS limited to one thread (small matrices: threads only cost here); the controller that finds
+    the BLAS libraries (a scan of the loaded libraries, ~2 ms) is made once per process."""
+    if not _TPC:
+        _TPC.append(ThreadpoolController())
+    return _TPC[0].limit(limits=1)
+
+
 def draw_initial(rng: np.random.Generator, vessel: str = "fishing-vessel") -> np.ndarray:
     """Initial values uniform between the Table 3 bounds, in :data:`THETA_NAMES` order."""
     t3 = table3(vessel)
@@ -102,7 +113,7 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
     prep, known = _prepared(data_seed, vessel, options)
     theta0 = draw_initial(rng, vessel)
     z_f = _zf_true(vessel) if zf_mode == "known" else None
-    with warnings.catch_warnings(), threadpool_limits(1):      # small matrices: threads only cost here
+    with warnings.catch_warnings(), _one_thread():
         warnings.simplefilter("ignore")
         try:
             core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init,
