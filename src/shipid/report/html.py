@@ -30,6 +30,8 @@ METHOD_TITLES = {
     "mass-cm": ("Mass and centre of mass from IMU and rudder", "Linder et al. 2015 (seed 000)"),
     "dp": ("DP low-frequency model, parallel EKF", "Fossen, Sagatun & Sørensen 1996 (seed 001)"),
     "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "Yoon & Rhee 2003 (seed 002)"),
+    "ebm-study": ("Manoeuvring coefficients by EBM: paper reproduction study",
+                  "Yoon & Rhee 2003 (seed 002), Tables 3 and 5"),
     "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
                 "Yoon & Rhee 2003 (seed 002) adapted to the MMG model"),
 }
