@@ -254,40 +254,53 @@ def iter_pool(chunks, workers: int, args, seed: int) -> Iterator[list[dict]]:
 
 
 def iter_dask(client, chunks, args, seed: int) -> Iterator[list[dict]]:
+    """Dask executor. Dask itself re-runs work lost with a worker; when it gives up on a
+    chunk (``KilledWorker``) the chunk is split into single runs, and a single run that
+    is killed again becomes a *suspect*, re-run alone once nothing else is in flight
+    (an innocent run queued on the same dying worker then succeeds); a suspect killed
+    alone is recorded as failed (``WorkerDied``).
+    """
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
     futs = {}
     ac = as_completed()
+    suspects: deque = deque()
 
-    def submit(c, attempt=1):
+    def submit(c, attempt=1, alone=False):
         f = client.submit(run_chunk, *args(c), pure=False, retries=0)
-        futs[f] = (c, attempt)
+        futs[f] = (c, attempt, alone)
         ac.add(f)
 
     for c in chunks:
         submit(c)
     try:
-        for f in ac:
-            c, attempt = futs.pop(f)
-            try:
-                rows = f.result()
-            except KilledWorker:
-                if len(c) > 1:
-                    for i in c:
-                        submit([i])
+        while True:
+            for f in ac:
+                c, attempt, alone = futs.pop(f)
+                try:
+                    rows = f.result()
+                except KilledWorker:
+                    if len(c) > 1:
+                        for i in c:
+                            submit([i])
+                    elif not alone:
+                        suspects.append(c)
+                    else:
+                        yield failed_rows(seed, c, "WorkerDied: Dask workers died running this run")
+                except Exception as exc:  # noqa: BLE001
+                    # run_chunk records every task exception itself, so this is the cluster
+                    # (lost data, communication): try again, then record it with the runs.
+                    if attempt < MAX_DASK_ATTEMPTS:
+                        submit(c, attempt + 1, alone)
+                    else:
+                        yield failed_rows(seed, c, error_text(exc))
                 else:
-                    yield failed_rows(seed, c, "WorkerDied: Dask workers died running this run")
-            except Exception as exc:  # noqa: BLE001
-                # run_chunk records every task exception itself, so this is the cluster
-                # (lost data, communication): try again, then record it with the runs.
-                if attempt < MAX_DASK_ATTEMPTS:
-                    submit(c, attempt + 1)
-                else:
-                    yield failed_rows(seed, c, error_text(exc))
-            else:
-                yield rows
-            f.release()
+                    yield rows
+                f.release()
+            if not suspects:
+                break
+            submit(suspects.popleft(), alone=True)   # nothing else in flight: it runs alone
     finally:
         for f in list(futs):
             f.cancel()
