@@ -1,7 +1,8 @@
 """Commands of seed 000 (Linder et al. 2015): mass and centre of mass from IMU and rudder.
 
 * ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json]``
-* ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W] [--json]`` (Table 3)
+* ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR]
+  [--store FILE [--resume]] [--json]`` (Table 3)
 * ``shipid study mass-cm-contour --out fig.png`` (Fig. 4)
 * ``shipid analyse crlb mass-cm [--duration S] [--wave-roll DEG] ...`` (Cramér–Rao bounds)
 
@@ -23,6 +24,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
+from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import InputError, ShipidError
 
 KNOWN_KEYS = ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")
@@ -139,18 +141,22 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
               help="given: start from the random Table-3 draw (paper); linear: the equation-error start.")
 @click.option("--data-seed", type=int, default=0, show_default=True, help="Seed of the three synthetic datasets.")
 @click.option("--json", "as_json", is_flag=True)
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Run i draws its initial values from SeedSequence([seed, i]).")
-@click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes [default: CPUs].")
-def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, seed, workers):
-    """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets)."""
-    from shipid.methods.masscm_study import summarise
-    from shipid.studies.engine import run_campaign
+@campaign_options
+def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, campaign):
+    """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
 
+    Runs through the campaign engine: a local process pool by default, ``--dask-local N``
+    or ``--scheduler ADDR`` for Dask, ``--store FILE [--resume]`` to keep and continue it.
+    """
+    from dataclasses import replace
+
+    from shipid.methods.masscm_study import summarise
+
+    seed = campaign.seed
     t0 = time.perf_counter()
-    res = run_campaign("shipid.methods.masscm_study:run_one", runs, seed=seed,
-                       kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init},
-                       workers=workers, progress=not as_json, name="mass-cm-sensitivity")
+    res = replace(campaign, progress=not as_json).run(
+        "shipid.methods.masscm_study:run_one", runs,
+        kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init}, name="mass-cm-sensitivity")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
