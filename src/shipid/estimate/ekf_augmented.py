@@ -71,8 +71,22 @@ class AugmentedModel:
     fd_step: float = 1e-6
 
 
+class _ThetaHistory:
+    """Shared views of a parameter history ``theta`` (n, ntheta) with covariances ``theta_cov``."""
+
+    @property
+    def theta_std(self) -> np.ndarray:
+        """Standard deviations of θ̂ at every step, ``(n, ntheta)``."""
+        return np.sqrt(np.einsum("kii->ki", self.theta_cov))
+
+    @property
+    def theta_final(self) -> np.ndarray:
+        """The last parameter estimate."""
+        return self.theta[-1]
+
+
 @dataclass(frozen=True)
-class AugmentedEKFResult:
+class AugmentedEKFResult(_ThetaHistory):
     """Output of :func:`augmented_ekf` (filtered, i.e. after the update at each step).
 
     Attributes
@@ -113,14 +127,6 @@ class AugmentedEKFResult:
     loglik: float
     P: np.ndarray | None = None
 
-    @property
-    def theta_std(self) -> np.ndarray:
-        """Standard deviations of θ̂ at every step, ``(n, ntheta)``."""
-        return np.sqrt(np.einsum("kii->ki", self.theta_cov))
-
-    @property
-    def theta_final(self) -> np.ndarray:
-        return self.theta[-1]
 
 
 def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray, rel_step: float = 1e-6
@@ -328,7 +334,7 @@ def augmented_ekf(model: AugmentedModel, x0: np.ndarray, theta0: np.ndarray, P0:
 # Parallel configuration, eqs. 20–25
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class ParallelEKFResult:
+class ParallelEKFResult(_ThetaHistory):
     """Output of :func:`parallel_augmented_ekf`.
 
     Attributes
@@ -355,13 +361,6 @@ class ParallelEKFResult:
     loglik: float
     combined: AugmentedEKFResult = field(repr=False)
 
-    @property
-    def theta_std(self) -> np.ndarray:
-        return np.sqrt(np.einsum("kii->ki", self.theta_cov))
-
-    @property
-    def theta_final(self) -> np.ndarray:
-        return self.theta[-1]
 
 
 def _blocks(a: Any, N: int) -> list[Any]:
