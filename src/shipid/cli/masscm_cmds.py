@@ -37,14 +37,17 @@ def _si(name: str, entry, path: str) -> float:
     if isinstance(entry, (int, float)) and not isinstance(entry, bool):
         return float(entry)
     if isinstance(entry, dict) and "value" in entry:
+        from shipid.data.units import parse_unit, to_si
+
         unit = entry.get("unit", _UNITS.get(name, ""))
         try:
-            import pint
-            ureg = pint.UnitRegistry()
-            return float(ureg.Quantity(float(entry["value"]), unit).to(_UNITS[name]).magnitude)
-        except Exception as err:  # noqa: BLE001 - one line for any unit problem
+            value, si = to_si(float(entry["value"]), unit)
+            if si != parse_unit(_UNITS[name]):
+                raise ValueError(f"{unit} is {si}, not {parse_unit(_UNITS[name])}")
+        except (ValueError, TypeError, InputError) as err:  # one line for any unit problem
             raise InputError(f"{name}: cannot convert {entry['value']} {unit} to {_UNITS[name]} ({err})",
                              file=path) from None
+        return float(value)
     raise InputError(f"{name} must be a number or {{ value = ..., unit = \"...\" }}", file=path)
 
 
