@@ -182,13 +182,7 @@ CANDIDATES: dict[str, dict[str, dict[str, tuple[str, ...]]]] = {
             "Y": ("Y_v", "Y_r", "CD_Y", "YR_gain"),
             "N": ("N_v", "N_r", "CD_N", "NR_arm"),
         },
-        "hull+rudder+4-quadrant-propeller": {
-            "X": ("X_0F", "X_0A", "X_vr", "XP_k0", "XP_k1", "XP_k2", "XP_c0", "XP_c1", "XP_c2", "XR_gain"),
-            "Y": ("Y_v", "Y_r", "CD_Y", "YP_a0", "YP_a1", "YP_a2", "YP_a3", "YP_a4", "YP_a5", "YP_a6",
-                  "YP_a7", "YR_gain"),
-            "N": ("N_v", "N_r", "CD_N", "NP_b0", "NP_b1", "NP_b2", "NP_b3", "NP_b4", "NP_b5", "NP_b6",
-                  "NP_b7", "NR_arm"),
-        },
+        "hull+rudder+4-quadrant-propeller": dict(mmg.COEFS["esso-lowspeed"]),  # every coefficient free
         "hull-only": {
             "X": ("X_0F", "X_0A", "X_vr"),
             "Y": ("Y_v", "Y_r", "CD_Y"),
