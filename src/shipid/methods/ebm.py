@@ -67,6 +67,11 @@ class EbmConfig:
         Gauss–Markov model smooths those jumps away and biases the regression.
         0 reproduces the paper's constant-Q model.
     rudder_q_halo : int
+    compiled : bool
+        Run step 1 on the numba-compiled filter and smoothers of
+        :mod:`shipid.estimate.cd_ekf_fast` (same algorithm and numbers to ~1e-11 as the
+        reference :func:`~shipid.estimate.cd_ekf.cd_ekf` path, tested; ~8× faster than
+        filterpy, ``benchmarks/bench_ebm_filter.py``). False runs the reference path.
     """
 
     q_force: tuple[float, float, float] = (1e8, 1e9, 1e13)
@@ -78,6 +83,7 @@ class EbmConfig:
     substeps: int = 1
     rudder_q_gain: float = 100.0
     rudder_q_halo: int = 3
+    compiled: bool = True
 
 
 def process_noise(model: EbmModel, delta: np.ndarray, config: EbmConfig) -> np.ndarray:
@@ -151,6 +157,9 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
                                    q_force=config.q_force, q_current=config.q_current)
     Q = process_noise(model, np.asarray(trial["delta"], dtype=float), config)
     smooth_fn = mbf_smoother if config.smoother == "mbf" else rts_smoother
+    if config.compiled:
+        from shipid.estimate.cd_ekf_fast import ebm_cd_ekf, mbf_smoother_fast, rts_smoother_fast
+        smooth_fn = mbf_smoother_fast if config.smoother == "mbf" else rts_smoother_fast
     current = np.zeros(2)
     first = None
     x0 = initial_state(z[0], model)
@@ -169,8 +178,11 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
             x0[2] = sm.x[0, 2]
             P0 = _prior_cov(True)
         try:
-            fr = cd_ekf(model.f, model.F, model.h, model.H, Q, R, t, z, x0, P0,
-                        substeps=config.substeps)
+            if config.compiled:
+                fr = ebm_cd_ekf(model, Q, R, t, z, x0, P0, substeps=config.substeps)
+            else:
+                fr = cd_ekf(model.f, model.F, model.h, model.H, Q, R, t, z, x0, P0,
+                            substeps=config.substeps)
         except NotPositiveDefiniteError as err:
             raise ShipidError(f"EBM step 1 failed on {trial.meta.get('source', 'trial')}: {err}") from None
         sm = smooth_fn(fr)

@@ -84,6 +84,15 @@ class EbmModel:
     def from_abkowitz(cls, p: AbkowitzParams, x_D: float, y_D: float, y_S: float, **kw) -> "EbmModel":
         return cls(m=p.m, x_G=p.x_G, Minv=np.linalg.inv(p.mass_matrix), x_D=x_D, y_D=y_D, y_S=y_S, **kw)
 
+    def kernel_params(self) -> np.ndarray:
+        """Parameter vector of the compiled kernels of :mod:`shipid.estimate.cd_ekf_fast`.
+
+        ``[m, x_G, Minv (3 × 3, row-major), x_D, y_D, y_S, absolute]`` (15 floats):
+        ``ebm_f/F/h/H`` there compute exactly :meth:`f`, :meth:`F`, :meth:`h`, :meth:`H`.
+        """
+        return np.concatenate([[self.m, self.x_G], np.asarray(self.Minv, dtype=float).ravel(),
+                               [self.x_D, self.y_D, self.y_S, 1.0 if self.absolute else 0.0]])
+
     # -- dynamics ------------------------------------------------------------------------
     def f(self, t: float, x: np.ndarray, u=None, theta=None) -> np.ndarray:
         """State equation (eq. 6) without noise; signature ``f(t, x, u, θ)``."""
