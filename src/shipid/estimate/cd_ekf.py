@@ -161,7 +161,10 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     substeps : int
         RK4 steps per sample interval for the state.
     check_pd : bool
-        Check that P stays positive definite (raises ``NotPositiveDefiniteError``).
+        Check that P stays positive definite (raises ``NotPositiveDefiniteError`` naming the
+        sample; checked every 50th sample and at the last, for cost — the compiled EBM path
+        :func:`shipid.estimate.cd_ekf_fast.ebm_cd_ekf` checks every sample). An innovation
+        covariance that is not positive definite raises it too.
 
     Returns
     -------
@@ -212,7 +215,11 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
             S = HP @ Hm.T + Rm
             S = 0.5 * (S + S.T)
             # one Cholesky and one triangular-solve pair for [S⁻¹H | S⁻¹ν]
-            L = np.linalg.cholesky(S)
+            try:
+                L = np.linalg.cholesky(S)
+            except np.linalg.LinAlgError:
+                check_positive_definite(S, f"innovation covariance at sample {k} (t = {t[k]:.6g} s)")
+                raise
             SiB = sla.cho_solve((L, True), np.column_stack([Hm, nu]), check_finite=False)
             SiH = SiB[:, :-1]
             Sinv_nu = SiB[:, -1]
@@ -239,7 +246,7 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
         else:
             H_all[k][:] = 0.0
         if check_pd and (k % 50 == 0 or k == N - 1):
-            check_positive_definite(P, f"filter covariance at t = {t[k]:.6g} s")
+            check_positive_definite(P, f"filter covariance at sample {k} (t = {t[k]:.6g} s)")
         x_filt[k] = x
         P_filt[k] = P
     return FilterResult(t=t, x_pred=x_pred, P_pred=P_pred, x_filt=x_filt, P_filt=P_filt, Phi=Phi,
