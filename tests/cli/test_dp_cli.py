@@ -49,7 +49,10 @@ def test_identify_dp_json_and_plot(trial_files, capsys):
     assert theta.shape == (9,) and np.all(np.isfinite(theta))
     # K1 = K2 (θ6) is well determined even from 300-s trials: within 5 % of eq. 49
     assert abs(theta[5] / 9.3e-3 - 1) < 0.05
-    assert res["provenance"]["inputs"][0].endswith("surge1.csv")
+    # inputs: one trial summary per file (issue 8, shipid.methods.dp_series)
+    first = res["provenance"]["inputs"][0]
+    assert first["name"].endswith("surge1.csv") and first["n_samples"] > 100 and "x" in first["channels"]
+    assert {"innovation_SI1_s", "innovation_SI2_psi"} <= set(res["series"]["residuals"])
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
     # never overwrite
     rc = main(_args(files) + ["--plot", str(png)])

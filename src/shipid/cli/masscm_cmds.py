@@ -117,8 +117,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
                            z_f_prior=kn["z_f_prior"], options=opts,
                            init="given" if kn["theta0"] is not None else "linear")
-    res.provenance["inputs"] = {"nominal": list(nominal), "calibration": list(calibration),
-                                "loaded": list(loaded), "known": known_path}
+    res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm_series)
     if as_json:
         d = res.to_dict()
         flat = {k: e.value for k, e in res.estimates.items()}
@@ -144,8 +143,11 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
               help="given: start from the random Table-3 draw (paper); linear: the equation-error start.")
 @click.option("--data-seed", type=int, default=0, show_default=True, help="Seed of the three synthetic datasets.")
 @click.option("--json", "as_json", is_flag=True)
+@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
+              help="Also write the study as a result JSON (Table 3 spread) for `shipid report`.")
+@click.option("--force", is_flag=True, help="Overwrite --out.")
 @campaign_options
-def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, campaign):
+def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
     """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
 
     Runs through the campaign engine: a local process pool by default, ``--dask-local N``
@@ -156,6 +158,9 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, campaign):
     from shipid.methods.masscm_study import summarise
 
     seed = campaign.seed
+    if out and Path(out).exists() and not force:  # fail before the study, not after it
+        from shipid.errors import OutputExistsError
+        raise OutputExistsError(out)
     t0 = time.perf_counter()
     res = replace(campaign, progress=not as_json).run(
         "shipid.methods.masscm_study:run_one", runs,
@@ -163,6 +168,10 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, campaign):
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
+    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report` (issue 8)
+        from shipid.methods.masscm_series import spread_result
+        spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
+                      f"--init {init} --data-seed {data_seed} --seed {seed}").write_json(out, force=force)
     if as_json:
         click.echo(json.dumps(s, indent=2, allow_nan=True))
         return

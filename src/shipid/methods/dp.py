@@ -451,7 +451,10 @@ def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequ
         st = run_stage(name, trials, vessel, theta, options, theta_cov=cov)
         theta, cov = st.theta_full, st.theta_cov
         stages.append(st)
-    return _result(stages, vessel, options, theta_true, provenance or {})
+    res = _result(stages, vessel, options, theta_true, provenance or {})
+    from shipid.methods.dp_series import attach  # report series: innovations with σ, inputs (issue 8)
+    attach(res, stages, vessel, surge, sway_yaw, azimuth)
+    return res
 
 
 def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, theta_true, provenance) -> Result:

@@ -342,7 +342,10 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
     prov = {"config": {"q_force": list(config.q_force), "q_current": config.q_current,
                        "passes": config.passes, "smoother": config.smoother, "ridge_k": config.ridge_k},
             "inputs": [s.trial.meta.get("source", "") for s in states]}
-    return Result(method="ebm", estimates=est, model=model, diagnostics=diag, series=series, provenance=prov)
+    res = Result(method="ebm", estimates=est, model=model, diagnostics=diag, series=series, provenance=prov)
+    from shipid.methods.ebm_series import attach  # report series (signals, Tables 1-2, 4, inputs; issue 8)
+    attach(res, states, fit)
+    return res
 
 
 __all__ = ["EbmConfig", "StateEstimate", "RegressionData", "EbmFit", "estimate_states",

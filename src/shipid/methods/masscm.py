@@ -813,7 +813,10 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         warnings.simplefilter("ignore", RuntimeWarning)
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options,
                        init=init or ("linear" if theta0 is None else "given"))
-    return _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    res = _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    from shipid.methods.masscm_series import attach  # report series: overlays, Fig. 4 map, inputs (issue 8)
+    attach(res, core, prep, known, options, datasets)
+    return res
 
 
 def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:

@@ -22,14 +22,19 @@ from shipid.report.sections._util import entries
 def ebm_section(result) -> list:
     """Seed 002 (Yoon & Rhee 2003): EBM stages, collinearity and validation"""
     frags: list = []
-    groups: dict[str, list[str]] = {}
+    # one figure per paper reference and trial: names "<trial>_<signal>" (shipid.methods.ebm_series)
+    # share the prefix; a title common to the whole group becomes its caption
+    groups: dict[tuple[str, str], list[tuple[str, Mapping]]] = {}
     for n, e in entries(result, "signals", where=lambda n, e: True):
-        groups.setdefault(str(e.get("paper") or "Figs 4, 9"), []).append(n)
-    for ref, sig in groups.items():
+        prefix = n.split("_", 1)[0] if "_" in n else ""
+        groups.setdefault((str(e.get("paper") or "Figs 4, 9"), prefix), []).append((n, e))
+    for (ref, _), sig in groups.items():
         for i in range(0, len(sig), 6):
-            names = tuple(sig[i:i + 6])
-            frags.append(Group("signals", names, f"{ref} — smoothed motion, estimated forces and current "
-                                                 "(shaded: ±2σ where given)."))
+            part = sig[i:i + 6]
+            titles = {e.get("title") for _, e in part}
+            text = titles.pop() if len(titles) == 1 and None not in titles else \
+                "smoothed motion, estimated forces and current (shaded: ±2σ where given)."
+            frags.append(Group("signals", tuple(n for n, _ in part), f"{ref} — {text}"))
     for name, _ in entries(result, "matrices", prefixes=("regressor_correlation",)):
         frags.append(Entry("matrices", name, paper="Tables 1–2",
                            title="Correlation of the regressors (|ρ| near 1: collinear, coefficients hard to "
