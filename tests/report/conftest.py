@@ -209,3 +209,73 @@ def example_reports(tmp_path_factory):
         path.write_text(html, encoding="utf-8")
         out[method] = (r, html, path)
     return out
+
+
+def _masscm_result():
+    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.models.roll_reduced import KnownParams
+    from shipid.models.roll_sim import simulate_datasets
+    from shipid.vessels import load_vessel
+
+    d = simulate_datasets("fishing-vessel", seed=0)
+    z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
+    return estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"), z_f=z_f)
+
+
+def _spread_result():
+    from shipid.methods.masscm_series import spread_result
+    from shipid.methods.masscm_study import run_one, summarise
+
+    outs = [run_one(i, 1) for i in range(4)]
+    s = summarise(outs)
+    s.update({"seed": 1, "data_seed": 0, "init": "given"})
+    return spread_result(s, outs, command="test: 4 runs")
+
+
+def _dp_result():
+    from shipid.methods.dp import identify_dp
+    from shipid.methods.dp_trials import TrialNoise, simulate_dp_trials
+    from shipid.models.dp import dp_vessel
+    from shipid.vessels import load_vessel
+
+    v = dp_vessel(load_vessel("supply"))
+    trials = simulate_dp_trials(v, 0, duration=300.0, n_per_kind=1, noise=TrialNoise())
+    return identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta)
+
+
+def _ebm_result():
+    from shipid.analysis.design import prbs_grid
+    from shipid.methods import ebm, ebm_series
+    from shipid.methods.ebm_trials import simulate_trial
+
+    res = ebm.identify([simulate_trial("zigzag-20", 300.0, seed=11)])
+    # the opt-in extras, small: held-out validation (Figs 6, 10) and a 2 x 2 D-optimal map (Fig. 7)
+    res.series["overlays"].update(ebm_series.validation_overlays(res, duration=100.0))
+    res.series["contours"] = {"d_optimal": ebm_series.d_optimal_contour(
+        prbs_grid((10.0, 35.0), (30.0, 105.0), duration=200.0, seeds=(0,), dt=2.0))}
+    return res
+
+
+#: Real method runs (small, seeded) whose reports the figure and browser tests check.
+METHOD_RUNS = {"mass-cm": _masscm_result, "mass-cm-spread": _spread_result, "dp": _dp_result,
+               "ebm": _ebm_result}
+
+
+@pytest.fixture(scope="session")
+def method_reports(tmp_path_factory):
+    """Reports of real (small) runs of the three methods, built once: name -> (Result, html, path).
+
+    The Result goes through its JSON (as ``shipid report RESULT.json`` reads it).
+    """
+    from shipid.report import build_report
+    from shipid.result import Result
+
+    out = {}
+    d = tmp_path_factory.mktemp("method-reports")
+    for name, make in METHOD_RUNS.items():
+        r = Result.from_json(make().to_json())
+        html = build_report(r)
+        path = d / f"report-{name}.html"
+        path.write_text(html, encoding="utf-8")
+        out[name] = (r, html, path)
+    return out

@@ -28,6 +28,24 @@ def test_report_renders_in_chromium(browser, example_reports, artifacts, method)
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
 
 
+#: Figures each real method report must show at least (tests/report/test_method_figures.py names them).
+MIN_FIGURES = {"mass-cm": 8, "mass-cm-spread": 1, "dp": 9, "ebm": 11}
+
+
+@pytest.mark.parametrize("name", list(MIN_FIGURES))
+def test_method_report_renders_in_chromium(browser, method_reports, artifacts, name):
+    """The reports of real method runs (with the paper figures of issue 8) load cleanly in Chromium."""
+    result, html, path = method_reports[name]
+    info = browser.check(path, artifacts / f"report-run-{name}.png")
+    assert info["errors"] == []
+    n_img = html.count("<img")
+    assert n_img >= MIN_FIGURES[name] and len(info["images"]) == n_img
+    for im in info["images"]:
+        assert im["complete"] and im["w"] > 0 and im["h"] > 0, im
+    assert info["external"] == []
+    assert info["width"] <= info["viewport"], "the page must not scroll sideways"
+
+
 def test_broken_image_would_be_detected(browser, tmp_path):
     """The check itself can fail: a page with a broken image and a console error is caught."""
     page = tmp_path / "broken.html"
