@@ -150,4 +150,26 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     return ARMA(a, c, lam)
 
 
-__all__ = ["ARMA", "hannan_rissanen"]
+def fit_ar(x: np.ndarray, p: int) -> ARMA:
+    """Pure AR(p) by least squares: ``hannan_rissanen(x, p, 0)`` computed by compiled kernels.
+
+    The same estimator and the same arithmetic steps (mean removal, scaling by the std, the O(n p) normal
+    equations of :func:`_lag_gram`, the ridge-regularised Cholesky solve of :func:`_solve_normal`, the
+    residual variance of ``A(q) x``) done by :func:`shipid.estimate.fir_kernels.ar_fit`; only the summation
+    order differs (rounding level; ``tests/estimate`` compares the two). Falls back to
+    :func:`hannan_rissanen` (its least-squares fallback) when the normal equations are not positive definite.
+    """
+    from shipid.estimate.fir_kernels import ar_fit
+
+    x = np.asarray(x, dtype=float)
+    x = x - x.mean()
+    scale = np.std(x)
+    if not p or not np.isfinite(scale) or scale == 0.0 or x.size <= 2 * p:
+        return hannan_rissanen(x, p, 0, n_long=p)
+    ok, a, s2 = ar_fit(x / scale, int(p))
+    if not ok:
+        return hannan_rissanen(x, p, 0, n_long=p)
+    return ARMA(a, np.ones(1), float(s2) * scale**2)
+
+
+__all__ = ["ARMA", "hannan_rissanen", "fit_ar"]

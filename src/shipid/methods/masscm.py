@@ -64,7 +64,7 @@ from scipy.signal import lfilter
 
 from shipid.data.trial import Trial
 from shipid.errors import InputError
-from shipid.estimate.arma import hannan_rissanen
+from shipid.estimate.arma import fit_ar, hannan_rissanen
 from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, iv_compress_products, lag_gram, lag_matrix
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, THETA_NAMES, THETA_UNITS,
                                         KnownParams, bilinear_tf, discrete_coeffs, from_moment, roll_terms,
@@ -101,6 +101,8 @@ class MassCMOptions:
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
+    compute: str = "fast"           # how (not what): "fast" compiled kernels (numba) for the FIR moments, the
+    #                                 AR fits and the search; "reference" the straightforward numpy/scipy path
 
 
 @dataclass
@@ -219,6 +221,52 @@ class _State:
 
 def _fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
     """IV moments of one dataset for a FIR prefilter ``L = A(q)`` (the AR noise model), lag instruments.
+
+    ``options.compute == "fast"``: :func:`_fir_moments_compiled`; ``"reference"``: :func:`_fir_moments_numpy`.
+    Both equal the general path of :func:`_build_moments` to rounding (tests).
+    """
+    if options.compute == "fast":
+        return _fir_moments_compiled(ds, a, y_hat, a_hat, options)
+    return _fir_moments_numpy(ds, a, y_hat, a_hat, options)
+
+
+def _fir_moments_compiled(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """:func:`_fir_moments_numpy` by the compiled kernels of :mod:`shipid.estimate.fir_kernels`.
+
+    The eight distinct signals (``y_hat``, ``mu_hat`` of a_s, the iterate-independent ``mu_hat`` of r and
+    the rudder difference, the three measured differences of (37) and ``y``) are filtered by one call
+    (:func:`~shipid.estimate.fir_kernels.fir_filter`); the delayed-``y`` columns of (37) are the delayed
+    filtered ``y``; ``Z^T Z`` and ``Z^T [Phi, y]`` come from :func:`~shipid.estimate.fir_kernels.lag_moments`
+    without forming ``Z``. The compression (eigen-decomposition with the rank rule) is the same function.
+    """
+    from shipid.estimate.fir_kernels import fir_filter, lag_moments
+
+    s = _start(options)
+    n = ds.y.size
+    c = ds.cache
+    if "X8" not in c:
+        dr0, dd = _diff2(ds.r_hat0), _diff2(ds.delta)
+        X = np.empty((8, n))
+        X[2], X[3] = dr0 - dr0.mean(), dd - dd.mean()
+        X[4:7] = ds.Phi[:, 2:].T
+        X[7] = ds.y
+        c["X8"] = X
+        c["nls"] = np.array([options.n_y, options.n_as, options.n_r, options.n_delta], dtype=np.int64)
+    X = c["X8"]
+    X[0] = y_hat - y_hat.mean()
+    da = _diff2(a_hat)
+    X[1] = da - da.mean()
+    Fl = fir_filter(np.ascontiguousarray(a, dtype=float), X)
+    T = np.empty((6, n))                     # Phi columns (37) then y, prefiltered
+    T[0, 0], T[0, 1:] = 0.0, -Fl[7, :-1]      # the filter commutes with the delay
+    T[1, :2], T[1, 2:] = 0.0, -Fl[7, :-2]
+    T[2:] = Fl[4:]
+    ZtZ, ZtP = lag_moments(Fl[:4], c["nls"], T, s)
+    return iv_compress_products(ZtZ, ZtP, n - s)
+
+
+def _fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for a FIR prefilter ``L = A(q)``, lag instruments, in numpy (reference).
 
     The same quantities as the general path of :func:`_build_moments` (``_instruments`` + prefilter +
     :func:`iv_compress`), arranged for speed: the iterate-independent columns are kept per dataset,
@@ -435,7 +483,41 @@ def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fix
         return J
 
     fun.jac = jac
+    pr = (np.array([1.0, prior[0], prior[1], float(np.sum(free[:I_ZF]))]) if prior is not None
+          else np.array([0.0, 0.0, 1.0, 0.0]))
+    # the same residuals for the compiled search (shipid.methods.masscm_search)
+    fun.kernel_args = (np.flatnonzero(free).astype(np.int64), np.asarray(theta_fixed, dtype=float).copy(),
+                       np.ascontiguousarray(Rs), np.ascontiguousarray(rs), code.astype(np.int64), Ts,
+                       _known_array(known), pr)
     return fun, full
+
+
+def _known_array(known: KnownParams) -> np.ndarray:
+    from shipid.methods.masscm_search import known_array
+    return known_array(known)
+
+
+def _compiled_search(fun, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, cold: bool) -> np.ndarray | None:
+    """Step B(a) by the compiled kernels of :mod:`shipid.methods.masscm_search`, or None (caller: ``trf``).
+
+    Warm iterations: the Gauss-Newton of :func:`_gauss_newton`. Cold start (first iteration): a bounded
+    Levenberg-Marquardt search to the tolerances of the ``trf`` search (``xtol = ftol = gtol = 1e-10``),
+    then the same Gauss-Newton as a polish where it confirms the minimum. A search that does not converge
+    returns None and the caller runs ``trf`` from ``x0``.
+    """
+    from shipid.methods.masscm_search import gauss_newton, levenberg_marquardt
+    args = fun.kernel_args
+    x = np.asarray(x0, dtype=float)
+    if cold:
+        status, xl, _nfev = levenberg_marquardt(x, lo, hi, *args, 500, 1e-10, 1e-10, 1e-10)
+        if status != 1:
+            return None
+        # converged to the trf tolerances; a Gauss-Newton polish is kept when it confirms a minimum (it
+        # refuses when the cost no longer resolves the remaining step, as at a stop on ftol)
+        ok, xg = gauss_newton(xl, lo, hi, *args, 20, 1e-10, 1e-9)
+        return xg if ok else xl
+    ok, x = gauss_newton(x, lo, hi, *args, 20, 1e-10, 1e-9)
+    return x if ok else None
 
 
 def _jac_cs(fun, x):
@@ -557,6 +639,8 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     """
     from shipid.estimate.arma import ARMA
     if options.noise_model == "ar":
+        if options.compute == "fast":
+            return fit_ar(eps, options.ar_order)         # the same AR fit by compiled kernels
         return hannan_rissanen(eps, options.ar_order, 0, n_long=options.ar_order)
     c = options.initial_c
     if c == 0:
@@ -646,7 +730,13 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         # numerical path, so there the search stays the original trust-region one with finite-difference
         # Jacobian, which keeps those (unidentified) results unchanged)
         flat = bool(free[I_ZF] and prior is None)
-        x = _gauss_newton(fun, fun.jac, x0, lo, hi) if j > 1 and not flat else None
+        x = None
+        if not flat and options.compute == "fast":
+            # the same searches compiled; the cold start (j = 1) by Levenberg-Marquardt + Gauss-Newton
+            # instead of trf (same tolerances; trf remains the fallback)
+            x = _compiled_search(fun, x0, lo, hi, cold=j == 1)
+        elif j > 1 and not flat:
+            x = _gauss_newton(fun, fun.jac, x0, lo, hi)
         if x is None:
             x = least_squares(fun, x0, jac="2-point" if flat else fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                               gtol=1e-10, max_nfev=2000, x_scale="jac").x

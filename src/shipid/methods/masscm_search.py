@@ -1,0 +1,252 @@
+"""Compiled (numba) inner search of Algorithm 1 (Linder et al. 2015, eqs. 40–41): the map (33), its Jacobian,
+the weighted IV residuals, Gauss–Newton and a bounded Levenberg–Marquardt search.
+
+Step B(a) of Algorithm 1 minimises ``sum_i ||R_i g_i(theta) - r_i||^2 / lam_i`` (the compressed criterion of
+:func:`shipid.estimate.iv.iv_compress`) over the physical parameters. The problem is tiny (5 residuals per
+dataset, at most 9 unknowns), so in Python the time goes into interpreter and scipy overhead, not arithmetic;
+these kernels do the same arithmetic compiled.
+
+* :func:`g_and_jac` — the map (22), (33) and its exact Jacobian, the formulas of
+  :func:`shipid.methods.masscm._g_and_jac` (tests compare them).
+* :func:`gauss_newton` — the warm-start Gauss–Newton of :func:`shipid.methods.masscm._gauss_newton`
+  (same acceptance and convergence rules; tests compare them).
+* :func:`levenberg_marquardt` — the cold-start search of the first iteration: Levenberg–Marquardt with
+  Marquardt's scaling (``diag(J^T J)``, like ``x_scale="jac"``), iterates kept strictly inside the bounds,
+  the same tolerances as the ``trf`` search it replaces (``xtol = ftol = gtol = 1e-10``). The caller polishes
+  its result with :func:`gauss_newton` and falls back to scipy's ``trf`` from the original start whenever
+  either does not converge cleanly, so a run can only differ from the ``trf`` path by where, within the
+  tolerances, the first search stopped (the study test compares them run by run).
+
+Compiled with ``cache=True`` (the machine code is stored next to this file and reused by every process);
+the first call in a process without a cache costs a few seconds of compilation, which
+:func:`shipid.methods.masscm_study.warm_up` pays once per worker.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: Layout of the ``kc`` array of known constants used by the kernels.
+KC_FIELDS = ("M", "g", "zg_bar", "zs_bar", "m_c", "zc_bar")
+
+
+def known_array(known) -> np.ndarray:
+    """The known parameters (§4.3) the kernels need, as a float array in :data:`KC_FIELDS` order."""
+    return np.array([getattr(known, f) for f in KC_FIELDS], dtype=np.float64)
+
+
+@njit(cache=True)
+def g_and_jac(th, code, Ts, kc, jac):
+    """``g_i(theta)`` (33) in the moment parameterisation for condition codes (0 nominal, 1 calibration,
+    2 loaded), shape (n, 5), and when ``jac`` its Jacobian (n, 5, 9); formulas of ``masscm._g_and_jac``."""
+    k, A_x, d, K_r, K_v, K_d, z_f, q, zm = th[0], th[1], th[2], th[3], th[4], th[5], th[6], th[7], th[8]
+    M, g, zgb, zsb, m_c, zc_bar = kc[0], kc[1], kc[2], kc[3], kc[4], kc[5]
+    zg, zs = zgb + z_f, zsb + z_f
+    kp = k - K_v * g
+    n = code.size
+    G = np.empty((n, 5))
+    J = np.zeros((n, 5, 9)) if jac else np.zeros((0, 5, 9))
+    dA2 = np.zeros(9)
+    dB = np.zeros(9)
+    row = np.empty(5)
+    for i in range(n):
+        c, T = code[i], Ts[i]
+        if c == 0:
+            qi, zb = 0.0, 0.0
+        elif c == 1:
+            qi, zb = m_c * (zc_bar + z_f), zc_bar
+        else:
+            qi, zb = q, zm
+        A2 = A_x + M * zg * (zgb - zsb) + qi * (zb - zsb) - K_v * zs
+        B = K_v + M * zg + qi
+        den = 2 * d * T + kp * T * T + 4 * A2
+        row[0] = (2 * kp * T * T - 8 * A2) / den
+        row[1] = (-2 * d * T + kp * T * T + 4 * A2) / den
+        row[2] = -2 * T * B / den
+        row[3] = 2 * T * K_r / den
+        row[4] = 2 * T * K_d / den
+        for r in range(5):
+            G[i, r] = row[r]
+        if jac:
+            dA2[:] = 0.0
+            dB[:] = 0.0
+            dA2[1] = 1.0
+            dA2[4] = -zs
+            dA2[6] = M * (zgb - zsb) + (m_c * (zb - zsb) if c == 1 else 0.0) - K_v
+            dA2[7] = (zb - zsb) if c == 2 else 0.0
+            dA2[8] = qi if c == 2 else 0.0
+            dB[4] = 1.0
+            dB[6] = M + (m_c if c == 1 else 0.0)
+            dB[7] = 1.0 if c == 2 else 0.0
+            TT = T * T
+            for p in range(9):
+                dkp = 1.0 if p == 0 else (-g if p == 4 else 0.0)
+                ddp = 1.0 if p == 2 else 0.0
+                dden = 2 * T * ddp + TT * dkp + 4 * dA2[p]
+                J[i, 0, p] = ((2 * TT * dkp - 8 * dA2[p]) - row[0] * dden) / den
+                J[i, 1, p] = ((-2 * T * ddp + TT * dkp + 4 * dA2[p]) - row[1] * dden) / den
+                J[i, 2, p] = ((-2 * T * dB[p]) - row[2] * dden) / den
+                J[i, 3, p] = ((2 * T * (1.0 if p == 3 else 0.0)) - row[3] * dden) / den
+                J[i, 4, p] = ((2 * T * (1.0 if p == 5 else 0.0)) - row[4] * dden) / den
+    return G, J
+
+
+@njit(cache=True)
+def residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, jac):
+    """Weighted IV residuals ``R_i g_i - r_i`` (stacked) and, when ``jac``, their Jacobian w.r.t. ``x``.
+
+    ``x`` are the free entries (``free_idx``) of theta; ``Rs``, ``rs`` are already weighted by
+    ``lam_i^-1/2``; ``prior = [flag, mean, std, column]`` adds the row ``(z_f - mean)/std``.
+    """
+    th = th_fixed.copy()
+    nf = free_idx.size
+    for j in range(nf):
+        th[free_idx[j]] = x[j]
+    G, Jg = g_and_jac(th, code, Ts, kc, jac)
+    n = code.size
+    has_prior = prior[0] != 0.0
+    m = 5 * n + (1 if has_prior else 0)
+    res = np.empty(m)
+    J = np.zeros((m, nf)) if jac else np.zeros((0, nf))
+    for i in range(n):
+        for a in range(5):
+            s = 0.0
+            for b in range(5):
+                s += Rs[i, a, b] * G[i, b]
+            res[5 * i + a] = s - rs[i, a]
+            if jac:
+                for j in range(nf):
+                    p = free_idx[j]
+                    s2 = 0.0
+                    for b in range(5):
+                        s2 += Rs[i, a, b] * Jg[i, b, p]
+                    J[5 * i + a, j] = s2
+    if has_prior:
+        res[m - 1] = (th[6] - prior[1]) / prior[2]
+        if jac:
+            J[m - 1, int(prior[3])] = 1.0 / prior[2]
+    return res, J
+
+
+@njit(cache=True)
+def _inside(x, lo, hi):
+    for j in range(x.size):
+        if not (np.isfinite(x[j]) and x[j] > lo[j] and x[j] < hi[j]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _off_bounds(x, lo, hi):
+    """True when no entry is within 1e-3 (relative to the bound) of a finite bound: an interior point."""
+    for j in range(x.size):
+        if np.isfinite(lo[j]) and x[j] - lo[j] <= 1e-3 * max(1.0, abs(lo[j])):
+            return False
+        if np.isfinite(hi[j]) and hi[j] - x[j] <= 1e-3 * max(1.0, abs(hi[j])):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _norm(x):
+    return np.sqrt(np.sum(x * x))
+
+
+@njit(cache=True)
+def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_steps, xtol, floor):
+    """Undamped Gauss–Newton of :func:`shipid.methods.masscm._gauss_newton` (``max_steps = 20``,
+    ``xtol = 1e-10``, ``floor = 1e-9`` there); returns ``(ok, x)``. No default arguments: numba's dispatcher
+    takes its slow path (~0.3 ms) for omitted ones."""
+    x = x0.copy()
+    r, _ = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, False)
+    cost = r @ r
+    for _k in range(max_steps):
+        _, J = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
+        dx = np.linalg.lstsq(J, -r)[0]
+        xn = x + dx
+        if not _inside(xn, lo, hi):
+            return False, x
+        rn, _ = residual(xn, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, False)
+        cn = rn @ rn
+        small = _norm(dx) <= xtol * (xtol + _norm(x))
+        if not np.isfinite(cn) or cn > cost * (1 + 1e-12) + 1e-300:
+            return _norm(dx) <= floor * _norm(x), x
+        x, r, cost = xn, rn, cn
+        if small:
+            return True, x
+    return False, x
+
+
+@njit(cache=True)
+def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_iter, xtol, ftol, gtol):
+    """Bounded Levenberg–Marquardt (Marquardt scaling, Nielsen's damping update), iterates strictly
+    inside ``(lo, hi)`` (a component that would cross a bound stops 0.995 of the way to it). Returns
+    ``(status, x, nfev)``: status 1 converged at an interior point (step, cost or gradient tolerance),
+    2 converged next to a bound, 0 not converged (iteration limit, non-finite values); the caller
+    accepts only 1."""
+    nf = x0.size
+    x = x0.copy()
+    r, J = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
+    cost = r @ r
+    nfev = 1
+    if not np.isfinite(cost):
+        return 0, x, nfev
+    A = J.T @ J
+    gr = J.T @ r
+    D = np.empty(nf)
+    for j in range(nf):
+        D[j] = max(np.sqrt(A[j, j]), 1e-300)
+    mu = 1e-3
+    nu = 2.0
+    for _it in range(max_iter):
+        gs = 0.0
+        for j in range(nf):
+            gs = max(gs, abs(gr[j]) / D[j])
+        if gs <= gtol * max(np.sqrt(cost), 1e-300):
+            return (1 if _off_bounds(x, lo, hi) else 2), x, nfev
+        H = A.copy()
+        for j in range(nf):
+            H[j, j] += mu * D[j] * D[j]
+        dx = np.linalg.solve(H, -gr)
+        # components that would leave the box stop short of the bound (0.995 of the way, as trf's
+        # step-back ratio); the others keep their step (a projected step: no stall at a bound)
+        for j in range(nf):
+            if x[j] + dx[j] >= hi[j]:
+                dx[j] = 0.995 * (hi[j] - x[j])
+            elif x[j] + dx[j] <= lo[j]:
+                dx[j] = 0.995 * (lo[j] - x[j])
+        xn = x + dx
+        if not _inside(xn, lo, hi):
+            mu *= nu
+            nu *= 2.0
+            if mu > 1e30:
+                return 0, x, nfev
+            continue
+        rn, Jn = residual(xn, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
+        nfev += 1
+        cn = rn @ rn
+        # predicted decrease of the linear model: -2 g^T dx - dx^T A dx
+        pred = -2.0 * (gr @ dx) - dx @ (A @ dx)
+        if np.isfinite(cn) and cn < cost:
+            rho = (cost - cn) / pred if pred > 0 else 0.0
+            dcost = cost - cn
+            x, r, J, cost = xn, rn, Jn, cn
+            A = J.T @ J
+            gr = J.T @ r
+            for j in range(nf):
+                D[j] = max(D[j], np.sqrt(A[j, j]))
+            t = 2.0 * rho - 1.0
+            mu *= max(1.0 / 3.0, 1.0 - t * t * t)
+            nu = 2.0
+            if _norm(dx) <= xtol * (xtol + _norm(x)) or (dcost <= ftol * cost and rho > 0.25):
+                return (1 if _off_bounds(x, lo, hi) else 2), x, nfev
+        else:
+            mu *= nu
+            nu *= 2.0
+            if mu > 1e30:
+                return 0, x, nfev
+    return 0, x, nfev
+
+
+__all__ = ["g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
