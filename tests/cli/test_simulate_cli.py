@@ -95,18 +95,36 @@ def test_vessels_lists_packaged_vessels_with_sources(capsys):
     assert "Yoon" in out and "Fossen" in out and "Linder" in out
 
 
-def test_demo_writes_and_does_not_clobber(tmp_path, capsys):
+def test_demo_writes_overwrites_with_force_and_does_not_clobber(tmp_path, capsys):
+    """ONE full demo run (the slowest test here): with --force into a folder that already holds
+    stale files of names the demo writes, which must all be replaced; then without --force it
+    must stop (exit 2) and leave every file as it was."""
     d = tmp_path / "demo"
-    assert main(["demo", "--out-dir", str(d)]) == 0
+    d.mkdir()
+    stale = ["nomoto_turning-35.csv"] + [f"{kind}-{m}.{ext}" for m in ("mass-cm", "dp", "ebm")
+                                         for kind, ext in (("result", "json"), ("report", "html"))]
+    for name in stale:
+        (d / name).write_text("stale\n")
+    assert main(["demo", "--out-dir", str(d), "--force"]) == 0
     out = capsys.readouterr().out
     files = sorted(p.name for p in d.iterdir())
     assert "nomoto_turning-35.csv" in files
     assert "demo done" in out and "skipped" not in out
+    for name in stale:
+        assert (d / name).read_text(encoding="utf-8")[:6] != "stale\n", name
     for f in files:
         if f.endswith(".csv"):  # the demo also writes result JSON and HTML reports (issue 8)
             assert len(read_trial(d / f)) > 100
+    # the reports show the papers' figures and tables (issue 8; details in tests/report)
+    html = {m: (d / f"report-{m}.html").read_text(encoding="utf-8") for m in ("mass-cm", "dp", "ebm")}
+    for m, marks in {"mass-cm": ("Fig. 4 —", "Table 3 —", "Roll rate p of the loaded dataset"),
+                     "dp": ("Fig. 8 —", "Innovation of heading ψ"),
+                     "ebm": ("Figs 4, 9 —", "Table 1 —", "Table 4 —", "Fig. 7 —", "Figs 6, 10 —")}.items():
+        for mark in marks:
+            assert mark in html[m], (m, mark)
+    before = {p.name: p.stat().st_mtime_ns for p in d.iterdir()}
     assert main(["demo", "--out-dir", str(d)]) == 2
-    assert main(["demo", "--out-dir", str(d), "--force"]) == 0
+    assert {p.name: p.stat().st_mtime_ns for p in d.iterdir()} == before
 
 
 def test_demo_default_folder_is_fresh(tmp_path, monkeypatch, capsys):

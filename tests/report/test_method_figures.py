@@ -148,3 +148,28 @@ def test_ebm_report_paper_figures(method_reports):
     sig = s["signals"]["t1_force_Y"]
     assert sig["unit"] == "N" and set(sig["lines"]) == {"Y smoothed", "Y true"} and "Y smoothed" in sig["std"]
     assert res.provenance["inputs"][0]["channels"]["psi"] == "rad"
+
+
+def test_identify_ebm_figures_flag_adds_fig7(tmp_path, capsys, monkeypatch):
+    """``shipid identify ebm --figures``: the result JSON carries the (coarse) D-optimal map, Fig. 7."""
+    import json
+
+    from shipid.cli import main
+    from shipid.data.io import write_trial
+    from shipid.methods import ebm_series
+    from shipid.methods.ebm_trials import simulate_trial
+
+    monkeypatch.setattr(ebm_series, "COARSE_AMPLITUDES", (10.0, 35.0))   # 2 x 2 grid of 200-s runs: quick
+    monkeypatch.setattr(ebm_series, "COARSE_PERIODS", (30.0, 105.0))
+    monkeypatch.setattr(ebm_series, "COARSE_DURATION", 200.0)
+    f = tmp_path / "zz.csv"
+    write_trial(simulate_trial("zigzag-20", 200.0, seed=3), f)
+    assert main(["identify", "ebm", "--trial", str(f), "--json", "--figures"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    c = res["series"]["contours"]["d_optimal"]
+    assert c["x"] == [30.0, 105.0] and c["y"] == [10.0, 35.0] and c["paper"] == "Fig. 7"
+    z = np.asarray(c["z"])
+    assert z.shape == (2, 2) and np.all(np.isfinite(z)) and np.all(z <= 0.0)   # log10 |WᵀW| <= 0
+    best = np.unravel_index(np.argmax(z), z.shape)
+    assert c["points"][0]["x"] == c["x"][best[1]] and c["points"][0]["y"] == c["y"][best[0]]
+    assert res["provenance"]["inputs"][0]["name"].endswith("zz.csv")

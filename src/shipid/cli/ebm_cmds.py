@@ -57,7 +57,9 @@ def _print_coefficients(res) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print the Result as JSON.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper (no rudder-aware noise).")
 @click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
-def identify_ebm(trials, vessel, as_json, paper, yaw_variant):
+@click.option("--figures", is_flag=True,
+              help="Also store a coarse D-optimal input map (Fig. 7; ~12 simulations) for `shipid report`.")
+def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
 
@@ -70,6 +72,9 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant):
     cfg = replace(_config(paper), yaw_rudder_variant=yaw_variant)
     with progress_bar(len(data), "EBM step 1 (EKF + smoother)") as advance:
         res = ebm.identify(data, vessel, config=cfg, progress=advance)
+    if figures:  # opt-in: the coarse Fig. 7 map of this vessel (shipid.methods.ebm_series)
+        from shipid.methods.ebm_series import coarse_d_optimal
+        res.series.setdefault("contours", {})["d_optimal"] = coarse_d_optimal(vessel)
     if as_json:
         click.echo(res.to_json())
     else:

@@ -151,7 +151,8 @@ def inputs(states) -> list[dict]:
     for k, st in enumerate(states):
         tr = st.trial
         try:
-            out.append(trial_summary(tr, name=_name(tr, k),
+            name = str(tr.meta["source"]) if tr.meta.get("format") and tr.meta.get("source") else _name(tr, k)
+            out.append(trial_summary(tr, name=name,
                                      channels=[c for c in REQUIRED if c in tr.channels]))
         except Exception:  # noqa: BLE001
             out.append({"name": str(tr.meta.get("source", f"trial {k + 1}"))})
@@ -217,6 +218,19 @@ def validation_overlays(result, manoeuvre: str = "prbs-10-40", duration: float =
     return out
 
 
+def add_validation(result, manoeuvre: str = "prbs-10-40", duration: float = 300.0, seed: int = 500,
+                   vessel: str = "esso-osaka") -> None:
+    """:func:`validation_overlays` into ``result.series["overlays"]``; a failure (e.g. an unstable
+    identified model) becomes a warning, never an exception."""
+    try:
+        ov = validation_overlays(result, manoeuvre, duration, seed, vessel)
+    except Exception as err:  # noqa: BLE001
+        result.diagnostics.setdefault("warnings", []).append(
+            f"report series: validation overlays not built ({type(err).__name__}: {err})")
+        return
+    result.series.setdefault("overlays", {}).update(ov)
+
+
 def d_optimal_contour(grid) -> dict:
     """Fig. 7: ``contours["d_optimal"]`` from a :class:`shipid.analysis.design.DesignGrid`."""
     a, per, val = grid.optimum("sway")
@@ -229,18 +243,24 @@ def d_optimal_contour(grid) -> dict:
                          "(the full map: shipid design prbs).")
 
 
-#: Coarse grid of the demo (the paper's Fig. 7 spans 5–35° × 15–200 s).
+#: Coarse grid of the demo and of ``identify ebm --figures`` (the paper's Fig. 7 spans 5–35° × 15–200 s).
 COARSE_AMPLITUDES = (10.0, 20.0, 35.0)
 COARSE_PERIODS = (30.0, 60.0, 105.0, 200.0)
+COARSE_DURATION = 600.0
 
 
-def coarse_d_optimal(vessel: str = "esso-osaka", *, amplitudes: Sequence[float] = COARSE_AMPLITUDES,
-                     periods: Sequence[float] = COARSE_PERIODS, duration: float = 600.0, dt: float = 2.0) -> dict:
-    """A coarse Fig. 7 map (12 noise-free simulations, a few seconds)."""
+def coarse_d_optimal(vessel: str = "esso-osaka", *, amplitudes: Sequence[float] | None = None,
+                     periods: Sequence[float] | None = None, duration: float | None = None,
+                     dt: float = 2.0) -> dict:
+    """A coarse Fig. 7 map (default :data:`COARSE_AMPLITUDES` × :data:`COARSE_PERIODS`, one PRBS seed,
+    :data:`COARSE_DURATION` s at ``dt`` = 2 s: 12 noise-free simulations, a few seconds)."""
     from shipid.analysis.design import prbs_grid
 
-    return d_optimal_contour(prbs_grid(amplitudes, periods, duration=duration, seeds=(0,), dt=dt, vessel=vessel))
+    grid = prbs_grid(COARSE_AMPLITUDES if amplitudes is None else amplitudes,
+                     COARSE_PERIODS if periods is None else periods,
+                     duration=COARSE_DURATION if duration is None else duration, seeds=(0,), dt=dt, vessel=vessel)
+    return d_optimal_contour(grid)
 
 
 __all__ = ["signals", "correlation_matrices", "conditioning_table", "force_fit_overlays", "innovations", "inputs",
-           "build", "attach", "validation_overlays", "d_optimal_contour", "coarse_d_optimal"]
+           "build", "attach", "validation_overlays", "add_validation", "d_optimal_contour", "coarse_d_optimal"]

@@ -123,6 +123,8 @@ def study(kind: str = "standard", seed: int = 0, *, scale: float = 1.0,
     if validation:
         th = p.with_theta(fit.surge.theta, fit.sway.theta, fit.yaw.theta)
         res.diagnostics["validation"] = validate(th, seed, scale)
+        from shipid.methods.ebm_series import add_validation  # Figs 6, 10 in the report (issue 8)
+        add_validation(res, VALIDATION_TRIAL[0], min(VALIDATION_TRIAL[1] * scale, 300.0), seed=seed + 500)
     res.method = "ebm-study"
     res.provenance.update({"seed": seed, "study": f"ebm-esso-osaka --input {kind}"})
     return res
