@@ -27,12 +27,12 @@ def prep():
     return prepare(list(simulate_datasets(seed=0).items()), MassCMOptions())
 
 
-def _same_moments(new, ref):
+def _same_moments(new, ref, tol=1e-10):
     # R is unique up to the signs of its rows: compare R^T R, R^T r and the residual part
     assert new.n == ref.n and new.rank_ok == ref.rank_ok
-    assert np.allclose(new.R.T @ new.R, ref.R.T @ ref.R, rtol=1e-10, atol=1e-12 * np.abs(ref.R).max() ** 2)
-    assert np.allclose(new.R.T @ new.r, ref.R.T @ ref.r, rtol=1e-10, atol=1e-12 * np.abs(ref.R.T @ ref.r).max())
-    assert np.isclose(new.rss0, ref.rss0, rtol=1e-8)
+    assert np.allclose(new.R.T @ new.R, ref.R.T @ ref.R, rtol=tol, atol=0.01 * tol * np.abs(ref.R).max() ** 2)
+    assert np.allclose(new.R.T @ new.r, ref.R.T @ ref.r, rtol=tol, atol=0.01 * tol * np.abs(ref.R.T @ ref.r).max())
+    assert np.isclose(new.rss0, ref.rss0, rtol=100 * tol)
 
 
 def test_compiled_fir_moments_equal_numpy_and_general_path(prep):
@@ -112,3 +112,33 @@ def test_study_runs_reach_the_same_solution_either_way():
         assert not a["implausible"] and not b["implausible"]
         for k in ("m", "zm_bar", "k", "A_x", "d", "K_r", "K_vdot", "K_delta"):
             assert abs(a[k] - b[k]) <= 1e-5 * max(abs(b[k]), 1e-3), k
+
+
+def test_fused_dataset_step_equals_reference_steps(prep, kn):
+    """Steps B(b)-(c) in one compiled call equal _noise_model (AR), _closed_loop_sim and the moments."""
+    from shipid.estimate.arma import hannan_rissanen
+    from shipid.methods.masscm import _closed_loop_sim, _step_compiled
+    from shipid.models.roll_reduced import discrete_coeffs, roll_terms
+    opt = MassCMOptions()
+    th = to_moment(TRUE * np.array([1.02, 0.97, 1.05, 1, 1, 0.99, 1, 1.01, 1.01]))
+    conds = [ds.condition for ds in prep]
+    Ts = np.array([ds.T for ds in prep])
+    G = discrete_coeffs(th, kn, conds, Ts, moment=True)
+    terms = roll_terms(th, kn, conds, moment=True)
+    s = _start(opt)
+    for i, ds in enumerate(prep):
+        L, lam, sim, mom = _step_compiled(ds, G[i], terms, i, kn, ds.y_hat0, ds.a_hat0, opt)
+        Lr = hannan_rissanen((ds.y - ds.Phi @ G[i])[s:], opt.ar_order, 0, n_long=opt.ar_order)
+        assert np.allclose(L.a, Lr.a, rtol=0, atol=1e-9) and np.isclose(lam, Lr.lam, rtol=1e-10)
+        yr, ar = _closed_loop_sim(ds, terms, i, kn)
+        assert np.allclose(sim[0], yr, rtol=0, atol=1e-12 * np.abs(yr).max())
+        assert np.allclose(sim[1], ar, rtol=0, atol=1e-12 * np.abs(ar).max())
+        # with the AR prefilter of a real residual the compressed moments are ill-conditioned (instrument
+        # eigenvalues down to ~1e-11 of the largest are kept): the numpy reference itself moves by up to
+        # ~1e-8 of the largest entry when the prefilter changes by the ~1e-11 rounding difference of the
+        # two AR fits; hence entries compared to 1e-7 of the largest one (not elementwise)
+        ref = _fir_moments_numpy(ds, Lr.a, yr, ar, opt)
+        assert mom.n == ref.n and mom.rank_ok == ref.rank_ok
+        for x, y in ((mom.R.T @ mom.R, ref.R.T @ ref.R), (mom.R.T @ mom.r, ref.R.T @ ref.r)):
+            assert np.abs(x - y).max() <= 1e-7 * np.abs(y).max()
+        assert np.isclose(mom.rss0, ref.rss0, rtol=1e-6)

@@ -52,6 +52,7 @@ tangential acceleration (9b), ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta
 
 from __future__ import annotations
 
+import functools
 import time
 import warnings
 from dataclasses import dataclass, field, replace
@@ -319,6 +320,55 @@ def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCM
     return mom
 
 
+def _coeffs(theta, known: KnownParams, conds, Ts, options: MassCMOptions) -> np.ndarray:
+    """``discrete_coeffs(theta, known, conds, Ts, moment=True)`` (33); compiled (same formulas) when fast."""
+    if options.compute == "fast" and all(c in _CODES for c in conds):
+        from shipid.methods.masscm_search import g_and_jac
+        code = np.array([_CODES[c] for c in conds], dtype=np.int64)
+        return g_and_jac(np.asarray(theta, dtype=float), code, np.asarray(Ts, dtype=float), _known_array(known),
+                         False)[0]
+    return discrete_coeffs(theta, known, conds, Ts, moment=True)
+
+
+def _fused(options: MassCMOptions) -> bool:
+    """Whether steps (b)-(c) run as one compiled call per dataset (:mod:`shipid.methods.masscm_step`)."""
+    return (options.compute == "fast" and options.prefilter and options.noise_model == "ar"
+            and options.ar_order > 0 and options.instruments == "lags")
+
+
+def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: KnownParams, y_hat, a_hat,
+                   options: MassCMOptions):
+    """Steps (b)-(c) of one dataset by :func:`shipid.methods.masscm_step.dataset_step`.
+
+    The same computation as :func:`_noise_model` (AR), :func:`_closed_loop_sim` and :func:`_fir_moments`
+    (tests compare them); where the compiled AR fit declines (normal equations not positive definite,
+    constant residual) this dataset is done on the reference path. Returns ``(L, lam, sim, moments)``
+    with ``sim`` None when the model is unstable (instruments kept).
+    """
+    from shipid.estimate.arma import ARMA
+    from shipid.methods.masscm_step import dataset_step
+
+    c = ds.cache
+    if "X8" not in c:
+        _fir_moments_compiled(ds, np.ones(1), y_hat, a_hat, options)      # fills the work array once
+    if "PhiT_c" not in c:
+        c["PhiT_c"] = np.ascontiguousarray(ds.Phi.T)
+    sim = np.array([terms["A1"][i], terms["d"][i], terms["k1"][i], terms["Kyaw"][i], terms["K_delta"][i],
+                    terms["z_s"][i], known.g, known.U, ds.T], dtype=float)
+    s = _start(options)
+    status, stable, a, lam, yh, ah, ZtZ, ZtP = dataset_step(
+        ds.y, c["PhiT_c"], np.ascontiguousarray(g_mid, dtype=float), s, int(options.ar_order), c["X8"], c["nls"],
+        ds.r_hat0, ds.delta, sim, y_hat, a_hat)
+    if status != 0:                                   # reference path for this dataset
+        eps = ds.y - ds.Phi @ g_mid
+        L = _noise_model(eps[s:], options)
+        sim_out = _closed_loop_sim(ds, terms, i, known)
+        yh, ah = sim_out if sim_out is not None else (y_hat, a_hat)
+        return L, L.lam, sim_out, _build_moments([ds], [L], [yh], [ah], options)[0]
+    L = ARMA(a, np.ones(1), float(lam))
+    return L, float(lam), ((yh, ah) if stable else None), iv_compress_products(ZtZ, ZtP, ds.y.size - s)
+
+
 def _transient(L, n: int, options: MassCMOptions) -> int:
     """Samples to drop while the prefilter's start-up transient decays (*).
 
@@ -492,9 +542,12 @@ def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fix
     return fun, full
 
 
+@functools.lru_cache(maxsize=16)
 def _known_array(known: KnownParams) -> np.ndarray:
     from shipid.methods.masscm_search import known_array
-    return known_array(known)
+    a = known_array(known)
+    a.flags.writeable = False                # shared by every call: read-only
+    return a
 
 
 def _compiled_search(fun, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, cold: bool) -> np.ndarray | None:
@@ -667,7 +720,8 @@ def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions())
 
 def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f: float | None = None,
             z_f_prior: tuple[float, float] | None = None, init: str = "given",
-            options: MassCMOptions = MassCMOptions(), state0: "_State | None" = None) -> dict:
+            options: MassCMOptions = MassCMOptions(), state0: "_State | None" = None,
+            jacobian: bool = True) -> dict:
     """Run Algorithm 1 step B on prepared datasets; the core shared by :func:`estimate_mass_cm` and the study.
 
     The search runs in the load-moment parameterisation ``q = m z_m`` (:data:`THETA_Q_NAMES`), in
@@ -675,7 +729,8 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     ``theta_q`` and ``J`` (Jacobian of the weighted residuals w.r.t. the free entries of ``theta_q``)
     are internal. Returns a plain dict so that Monte Carlo runs stay cheap; :func:`estimate_mass_cm`
     turns it into a :class:`Result`. ``state0``: the result of :func:`initial_state` for the same
-    ``prep`` and ``options`` (built here when not given).
+    ``prep`` and ``options`` (built here when not given). ``jacobian=False`` skips the final Jacobian
+    ``J`` (only the covariance needs it; the Monte Carlo study does not).
     """
     theta = np.asarray(theta0, dtype=float).copy()
     if z_f is not None:
@@ -741,7 +796,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             x = least_squares(fun, x0, jac="2-point" if flat else fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                               gtol=1e-10, max_nfev=2000, x_scale="jac").x
         theta = full(x)
-        G = discrete_coeffs(theta, known, conds, Ts, moment=True)
+        G = _coeffs(theta, known, conds, Ts, options)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
             warn.append(f"iteration {j}: non-finite estimate")
@@ -759,9 +814,25 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         # iterates, which damps the period-2 cycles that the prefilter feedback can otherwise sustain.
         th_mid = theta if th_prev is None else 0.5 * (theta + th_prev)
         th_prev = theta
-        G_mid = discrete_coeffs(th_mid, known, conds, Ts, moment=True)
+        G_mid = _coeffs(th_mid, known, conds, Ts, options)
         terms = roll_terms(th_mid, known, conds, moment=True)
         newL, lam = [], []
+        if _fused(options):
+            # the same steps (b)-(c) by one compiled call per dataset (shipid.methods.masscm_step)
+            moms = []
+            for i, ds in enumerate(prep):
+                L_i, lam_i, sim, mom = _step_compiled(ds, G_mid[i], terms, i, known, y_hats[i], a_hats[i], options)
+                newL.append(L_i)
+                lam.append(L_i.lam)
+                moms.append(mom)
+                if sim is None:
+                    warn.append(f"iteration {j}: model of dataset {i} ({ds.condition}) unstable; instruments kept")
+                else:
+                    y_hats[i], a_hats[i] = sim
+            lam = np.asarray(lam)
+            lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
+            state = _State(moms, lam, newL, Ts, conds)
+            continue
         for i, ds in enumerate(prep):
             eps = ds.y - ds.Phi @ G_mid[i]
             s = _start(options)
@@ -780,7 +851,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         lam = np.asarray(lam)
         lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
         state = _State(_build_moments(prep, newL, y_hats, a_hats, options), lam, newL, Ts, conds)
-    J = _jac_cs(fun, theta[free]) if fun is not None and np.all(np.isfinite(theta)) else None
+    J = _jac_cs(fun, theta[free]) if jacobian and fun is not None and np.all(np.isfinite(theta)) else None
     return {"theta": from_moment(theta), "theta_q": theta, "free": free, "J": J, "converged": converged, "iterations": j,
             "history": np.array(history), "dg": dgs, "state": state, "warnings": warn, "prior": prior}
 

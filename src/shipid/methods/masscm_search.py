@@ -206,9 +206,21 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
         if gs <= gtol * max(np.sqrt(cost), 1e-300):
             return (1 if _off_bounds(x, lo, hi) else 2), x, nfev
         H = A.copy()
+        rhs = -gr
         for j in range(nf):
             H[j, j] += mu * D[j] * D[j]
-        dx = np.linalg.solve(H, -gr)
+        # active set: a component pressed against its bound (within 1e-6) with the gradient pushing it
+        # out stays where it is for this step; the others move (it is released once the gradient turns)
+        for j in range(nf):
+            out_hi = np.isfinite(hi[j]) and hi[j] - x[j] <= 1e-6 * max(1.0, abs(hi[j])) and gr[j] < 0
+            out_lo = np.isfinite(lo[j]) and x[j] - lo[j] <= 1e-6 * max(1.0, abs(lo[j])) and gr[j] > 0
+            if out_hi or out_lo:
+                for k in range(nf):
+                    H[j, k] = 0.0
+                    H[k, j] = 0.0
+                H[j, j] = 1.0
+                rhs[j] = 0.0
+        dx = np.linalg.solve(H, rhs)
         # components that would leave the box stop short of the bound (0.995 of the way, as trf's
         # step-back ratio); the others keep their step (a projected step: no stall at a bound)
         for j in range(nf):
@@ -242,6 +254,9 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
             if _norm(dx) <= xtol * (xtol + _norm(x)) or (dcost <= ftol * cost and rho > 0.25):
                 return (1 if _off_bounds(x, lo, hi) else 2), x, nfev
         else:
+            # a rejected step below the step tolerance ends the search as in trf (rounding floor)
+            if _norm(dx) <= xtol * (xtol + _norm(x)):
+                return (1 if _off_bounds(x, lo, hi) else 2), x, nfev
             mu *= nu
             nu *= 2.0
             if mu > 1e30:

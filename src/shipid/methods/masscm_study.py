@@ -133,7 +133,7 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
         warnings.simplefilter("ignore")
         try:
             core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init,
-                           state0=_state0(data_seed, vessel, options))
+                           state0=_state0(data_seed, vessel, options), jacobian=False)
             theta = core["theta"]
             conv, its = bool(core["converged"]), int(core["iterations"])
         except (np.linalg.LinAlgError, ValueError) as err:     # recorded as implausible, never a crash

@@ -1,0 +1,140 @@
+"""One compiled (numba) pass of steps B(b)–(c) of Algorithm 1 (Linder et al. 2015) for one dataset.
+
+For the default configuration (AR noise model ``L = A(q)``, lag instruments (45)) an iteration of
+:func:`shipid.methods.masscm.iterate` does, per dataset, at the relaxed iterate ``theta_mid``:
+
+1. the equation error (42) ``eps = y - Phi g_i(theta_mid)``;
+2. its AR(p) noise model (least squares, :func:`shipid.estimate.arma.fit_ar`) — the prefilter (43);
+3. the closed-loop instrument simulation (46)–(47) (:func:`shipid.methods.masscm._closed_loop_sim`);
+4. the IV moments ``Z^T Z``, ``Z^T [Phi, y]`` of the prefiltered instruments
+   (:func:`shipid.methods.masscm._fir_moments_compiled`).
+
+:func:`dataset_step` does all four in one compiled call (the Python and numpy overhead of the separate
+calls was a third of a run). The arithmetic is that of the functions named above (tests compare them);
+the compression of the moments (eigen-decomposition with the rank rule) stays in
+:func:`shipid.estimate.iv.iv_compress_products`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
+
+
+@njit(cache=True)
+def _iir2(b, a, x):
+    """``lfilter(b, a, x)`` for second-order ``b``, ``a`` with ``a[0] = 1`` (direct form II transposed)."""
+    n = x.size
+    y = np.empty(n)
+    z0 = 0.0
+    z1 = 0.0
+    for t in range(n):
+        xt = x[t]
+        yt = b[0] * xt + z0
+        z0 = b[1] * xt - a[1] * yt + z1
+        z1 = b[2] * xt - a[2] * yt
+        y[t] = yt
+    return y
+
+
+@njit(cache=True)
+def _bilinear(p2, p1, p0, q2, q1, q0, T):
+    """:func:`shipid.models.roll_reduced.bilinear_tf` of ``(p2 s^2 + p1 s + p0)/(q2 s^2 + q1 s + q0)``."""
+    c = 2.0 / T
+    b = np.array([p2 * c * c + p1 * c + p0, -2 * p2 * c * c + 2 * p0, p2 * c * c - p1 * c + p0])
+    a = np.array([q2 * c * c + q1 * c + q0, -2 * q2 * c * c + 2 * q0, q2 * c * c - q1 * c + q0])
+    return b / a[0], a / a[0]
+
+
+@njit(cache=True)
+def _mean(x):
+    s = 0.0
+    for t in range(x.size):
+        s += x[t]
+    return s / x.size
+
+
+@njit(cache=True)
+def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
+    """Steps B(b)–(c) for one dataset; see the module docstring.
+
+    Parameters
+    ----------
+    y : (n,) output (roll rate); PhiT : (5, n) regressors (37) transposed; g_mid : (5,) ``g_i(theta_mid)``.
+    s : first instrument row (:func:`shipid.methods.masscm._start`); p : AR order.
+    X : (8, n) work array whose rows 2..7 hold the iterate-independent signals of
+        :func:`shipid.methods.masscm._fir_moments_compiled` (rows 0, 1 are overwritten).
+    nls : (4,) lags (n_y, n_as, n_r, n_delta).
+    r_hat0, delta : black-box yaw rate (44) and the (mean-removed) rudder.
+    sim : ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]`` of dataset i (``roll_terms`` at theta_mid).
+    y_hat, a_hat : the previous instrument signals (kept when the model is unstable).
+
+    Returns
+    -------
+    status : 0 ok; 1 the AR normal equations are not positive definite or the residual is constant
+        (the caller redoes this dataset on the reference path).
+    stable : whether the closed-loop simulation was done (else ``y_hat``, ``a_hat`` are the inputs).
+    a, lam : AR polynomial and innovation variance; y_hat, a_hat; ZtZ, ZtP : the IV moments.
+    """
+    n = y.size
+    # (42) equation error at theta_mid, and its AR(p) model (fit_ar: mean removed, scaled by the std)
+    e = np.empty(n - s)
+    for t in range(s, n):
+        v = y[t]
+        for j in range(5):
+            v -= PhiT[j, t] * g_mid[j]
+        e[t - s] = v
+    mu = _mean(e)
+    var = 0.0
+    for t in range(e.size):
+        e[t] -= mu
+        var += e[t] * e[t]
+    scale = np.sqrt(var / e.size)
+    empty = np.zeros((0, 0))
+    if not (np.isfinite(scale) and scale > 0.0) or e.size <= 2 * p:
+        return 1, False, np.zeros(p + 1), 0.0, y_hat, a_hat, empty, empty
+    for t in range(e.size):
+        e[t] /= scale
+    ok, a, s2 = ar_fit(e, p)
+    if not ok:
+        return 1, False, a, 0.0, y_hat, a_hat, empty, empty
+    lam = s2 * scale * scale
+    # (46)-(47) closed-loop instruments
+    A1, d, k1, Kyaw, Kd, zs, g, U, T = sim[0], sim[1], sim[2], sim[3], sim[4], sim[5], sim[6], sim[7], sim[8]
+    stable = A1 > 0 and d > 0 and k1 > 0
+    if stable:
+        u = Kyaw * r_hat0 + Kd * delta
+        b1, a1 = _bilinear(0.0, 1.0, 0.0, A1, d, k1, T)
+        y_hat = _iir2(b1, a1, u)
+        b2, a2 = _bilinear(zs, 0.0, g, A1, d, k1, T)
+        a_hat = _iir2(b2, a2, u) - U * r_hat0
+    # iterate-dependent instrument signals: y_hat and the difference of a_hat, mean removed
+    my = _mean(y_hat)
+    for t in range(n):
+        X[0, t] = y_hat[t] - my
+    X[1, 0] = 0.0
+    X[1, 1] = 0.0
+    for t in range(2, n):
+        X[1, t] = a_hat[t] - a_hat[t - 2]
+    md = _mean(X[1])
+    for t in range(n):
+        X[1, t] -= md
+    Fl = fir_filter(a, X)
+    Tm = np.empty((6, n))                  # Phi columns (37) then y, prefiltered; delays commute with L
+    Tm[0, 0] = 0.0
+    Tm[1, 0] = 0.0
+    Tm[1, 1] = 0.0
+    for t in range(1, n):
+        Tm[0, t] = -Fl[7, t - 1]
+    for t in range(2, n):
+        Tm[1, t] = -Fl[7, t - 2]
+    for j in range(4):
+        for t in range(n):
+            Tm[2 + j, t] = Fl[4 + j, t]
+    ZtZ, ZtP = lag_moments(Fl[:4], nls, Tm, s)
+    return 0, stable, a, lam, y_hat, a_hat, ZtZ, ZtP
+
+
+__all__ = ["dataset_step"]
