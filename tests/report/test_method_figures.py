@@ -173,3 +173,21 @@ def test_identify_ebm_figures_flag_adds_fig7(tmp_path, capsys, monkeypatch):
     best = np.unravel_index(np.argmax(z), z.shape)
     assert c["points"][0]["x"] == c["x"][best[1]] and c["points"][0]["y"] == c["y"][best[0]]
     assert res["provenance"]["inputs"][0]["name"].endswith("zz.csv")
+
+
+def test_masscm_sensitivity_out_writes_a_table3_result(tmp_path, capsys):
+    """``shipid study mass-cm-sensitivity --out R.json``: the study as a Result for ``shipid report``."""
+    from shipid.cli import main
+    from shipid.report import build_report
+    from shipid.result import Result
+
+    out = tmp_path / "t3.json"
+    args = ["study", "mass-cm-sensitivity", "--runs", "3", "--workers", "1", "--json", "--out", str(out)]
+    assert main(args) == 0
+    res = Result.from_json(out.read_text(encoding="utf-8"))
+    assert res.method == "mass-cm" and res.diagnostics["runs"] == 3
+    assert len(res.series["tables"]["spread"]["rows"]) == 9 and len(res.series["xy"]["spread"]["x"]) == 3
+    assert res.estimates["m"].value == pytest.approx(0.4, rel=2e-3)
+    assert count(tables(build_report(res)), "Table 3 — Sensitivity to the initial values: 3 of 3 runs") == 1
+    capsys.readouterr()
+    assert main(args) == 2 and "exists" in capsys.readouterr().err     # checked before the study runs
