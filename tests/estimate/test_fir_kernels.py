@@ -63,3 +63,20 @@ def test_fit_ar_equals_hannan_rissanen_pure_ar(seed):
     assert np.isclose(a.lam, b.lam, rtol=1e-12)
     # degenerate inputs take the reference path
     assert fit_ar(np.ones(100), 4).lam == 0.0
+
+
+@pytest.mark.parametrize("rank_deficient", [False, True])
+def test_compiled_projection_qr_equals_iv_compress_products(rank_deficient):
+    from shipid.estimate.iv import iv_compress_products, iv_compress_products_compiled
+    rng = np.random.default_rng(7)
+    Z = rng.standard_normal((800, 20))
+    if rank_deficient:                                   # exact collinearity: directions dropped by the rank rule
+        Z[:, 5] = Z[:, 3] - 2 * Z[:, 4]
+    P = np.column_stack([Z @ rng.standard_normal((20, 5)) + rng.standard_normal((800, 5)), rng.standard_normal(800)])
+    a = iv_compress_products_compiled(Z.T @ Z, Z.T @ P, 800)
+    b = iv_compress_products(Z.T @ Z, Z.T @ P, 800)
+    assert a.rank_ok == b.rank_ok and a.n == b.n
+    assert np.allclose(a.R.T @ a.R, b.R.T @ b.R, rtol=1e-11, atol=1e-13 * np.abs(b.R).max() ** 2)
+    assert np.allclose(a.R.T @ a.r, b.R.T @ b.r, rtol=1e-11, atol=1e-13 * np.abs(b.R.T @ b.r).max())
+    assert np.isclose(a.rss0, b.rss0, rtol=1e-10)
+    assert np.allclose(np.abs(np.diag(a.R)), np.abs(np.diag(b.R)), rtol=1e-11)

@@ -286,3 +286,67 @@ def ar_fit(xs, p):
 
 
 __all__ += ["ridge_cholesky_solve", "ar_fit"]
+
+
+@njit(cache=True)
+def project_qr(s, V, ZtP, rtol):
+    """The rest of :func:`shipid.estimate.iv.iv_compress_products` after ``s, V = eigh(Z^T Z)``.
+
+    ``P = S_k^-1/2 V_k^T Z^T [Phi, y]`` over the eigenvalues ``s > rtol max(s)``, then the triangular
+    factor of ``P`` by Householder QR (as LAPACK's ``geqrf``; rows may differ in sign, which leaves the
+    criterion unchanged). Returns ``(Rf, kept)``: ``Rf`` the (n_g+1, n_g+1) factor (rows beyond the rank
+    zero), ``kept`` the number of instrument directions used.
+    """
+    nz = s.size
+    nc = ZtP.shape[1]
+    thr = rtol * max(s[nz - 1], 1e-300)
+    kept = 0
+    for i in range(nz):
+        if s[i] > thr:
+            kept += 1
+    P = np.empty((kept, nc))
+    r = 0
+    for i in range(nz):
+        if s[i] > thr:
+            w = 1.0 / np.sqrt(s[i])
+            for c in range(nc):
+                acc = 0.0
+                for j in range(nz):
+                    acc += V[j, i] * ZtP[j, c]
+                P[r, c] = acc * w
+            r += 1
+    # Householder QR of P (kept x nc), R in the upper triangle
+    m = kept
+    for c in range(min(m, nc)):
+        norm = 0.0
+        for i in range(c, m):
+            norm += P[i, c] * P[i, c]
+        norm = np.sqrt(norm)
+        if norm == 0.0:
+            continue
+        alpha = -norm if P[c, c] >= 0 else norm
+        v0 = P[c, c] - alpha
+        # v = [v0, P[c+1:, c]], H = I - 2 v v^T / (v^T v)
+        vtv = v0 * v0
+        for i in range(c + 1, m):
+            vtv += P[i, c] * P[i, c]
+        if vtv > 0.0:
+            for cc in range(c + 1, nc):
+                dot = v0 * P[c, cc]
+                for i in range(c + 1, m):
+                    dot += P[i, c] * P[i, cc]
+                f = 2.0 * dot / vtv
+                P[c, cc] -= f * v0
+                for i in range(c + 1, m):
+                    P[i, cc] -= f * P[i, c]
+        P[c, c] = alpha
+        for i in range(c + 1, m):
+            P[i, c] = 0.0
+    Rf = np.zeros((nc, nc))
+    for i in range(min(m, nc)):
+        for c in range(i, nc):
+            Rf[i, c] = P[i, c]
+    return Rf, kept
+
+
+__all__ += ["project_qr"]

@@ -156,4 +156,16 @@ def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float =
     return IVMoments(R=R, r=r, rss0=rss0, n=n, rank_ok=bool(keep.sum() >= ng))
 
 
-__all__ = ["lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram"]
+def iv_compress_products_compiled(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float = 1e-12) -> IVMoments:
+    """:func:`iv_compress_products` with the projection and QR compiled
+    (:func:`shipid.estimate.fir_kernels.project_qr`); the eigen-decomposition is the same LAPACK call."""
+    from shipid.estimate.fir_kernels import project_qr
+
+    s, V = np.linalg.eigh(ZtZ)
+    Rf, kept = project_qr(s, V, np.ascontiguousarray(ZtP), float(rtol))
+    ng = ZtP.shape[1] - 1
+    rss0 = float(Rf[ng, ng] ** 2) if kept > ng else 0.0
+    return IVMoments(R=Rf[:ng, :ng].copy(), r=Rf[:ng, ng].copy(), rss0=rss0, n=n, rank_ok=bool(kept >= ng))
+
+
+__all__ = ["iv_compress_products_compiled", "lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram"]

@@ -66,7 +66,8 @@ from scipy.signal import lfilter
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.arma import fit_ar, hannan_rissanen
-from shipid.estimate.iv import arx_fit, arx_simulate, iv_compress, iv_compress_products, lag_gram, lag_matrix
+from shipid.estimate.iv import (arx_fit, arx_simulate, iv_compress, iv_compress_products,
+                                iv_compress_products_compiled, lag_gram, lag_matrix)
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, THETA_NAMES, THETA_UNITS,
                                         KnownParams, bilinear_tf, discrete_coeffs, from_moment, roll_terms,
                                         to_moment)
@@ -366,7 +367,7 @@ def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: K
         yh, ah = sim_out if sim_out is not None else (y_hat, a_hat)
         return L, L.lam, sim_out, _build_moments([ds], [L], [yh], [ah], options)[0]
     L = ARMA(a, np.ones(1), float(lam))
-    return L, float(lam), ((yh, ah) if stable else None), iv_compress_products(ZtZ, ZtP, ds.y.size - s)
+    return L, float(lam), ((yh, ah) if stable else None), iv_compress_products_compiled(ZtZ, ZtP, ds.y.size - s)
 
 
 def _transient(L, n: int, options: MassCMOptions) -> int:
