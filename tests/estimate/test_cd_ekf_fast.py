@@ -42,15 +42,15 @@ def problem():
 
 
 def _reference(pb, **kw):
-    m = pb["model"]
+    m = kw.get("model", pb["model"])
     return cd_ekf(m.f, m.F, m.h, m.H, kw.get("Q", pb["Q"]), pb["R"], pb["t"], kw.get("z", pb["z"]), pb["x0"],
-                  kw.get("P0", pb["P0"]))
+                  kw.get("P0", pb["P0"]), substeps=kw.get("substeps", 1))
 
 
 def _compiled(pb, **kw):
-    return fast.ebm_cd_ekf(pb["model"], kw.get("Q", pb["Q"]), pb["R"], pb["t"], kw.get("z", pb["z"]),
-                           pb["x0"], kw.get("P0", pb["P0"]), **{k: v for k, v in kw.items()
-                                                                 if k in ("tol", "max_terms")})
+    return fast.ebm_cd_ekf(kw.get("model", pb["model"]), kw.get("Q", pb["Q"]), pb["R"], pb["t"],
+                           kw.get("z", pb["z"]), pb["x0"], kw.get("P0", pb["P0"]),
+                           **{k: v for k, v in kw.items() if k in ("tol", "max_terms", "substeps")})
 
 
 def _close(a, b, rtol=RTOL):
@@ -96,9 +96,12 @@ def test_kernels_equal_model_methods(problem, absolute):
             np.testing.assert_allclose(kern(p, tk, x), meth(tk, x), rtol=1e-14, atol=1e-300)
 
 
-def test_compiled_filter_and_smoothers_equal_reference(problem):
-    fb = _reference(problem)
-    fa = _compiled(problem)
+@pytest.mark.parametrize("absolute, substeps", [(False, 1), (True, 2)])
+def test_compiled_filter_and_smoothers_equal_reference(problem, absolute, substeps):
+    from dataclasses import replace
+    kw = dict(model=replace(problem["model"], absolute=absolute), substeps=substeps)
+    fb = _reference(problem, **kw)
+    fa = _compiled(problem, **kw)
     _assert_filters_equal(fa, fb)
     _assert_smoothers_equal(fast.mbf_smoother_fast(fa), mbf_smoother(fb), fb)
     _assert_smoothers_equal(fast.rts_smoother_fast(fa), rts_smoother(fb), fb)

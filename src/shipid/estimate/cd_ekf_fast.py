@@ -46,7 +46,7 @@ so that the structure of the problem is not paid for in flops:
   ``Z = U − ½ Hᵀ (Kᵀ U)`` (again exact algebra, using Λ = Λᵀ).
 
 Compilation is cached on disk (``cache=True``, in ``__pycache__``), so only the first
-import on a machine pays the ~10–20 s compile. Everything compiled lives in this one file on
+import on a machine pays the compile (~30 s on the shared 2-core machine). Everything compiled lives in this one file on
 purpose: numba's cache is invalidated by changes to the file that holds a function, not by
 changes to compiled functions it calls from other files.
 """
