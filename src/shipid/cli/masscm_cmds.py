@@ -162,6 +162,8 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
         from shipid.errors import OutputExistsError
         raise OutputExistsError(out)
     t0 = time.perf_counter()
+    from shipid.methods.masscm_study import warm_up
+    warm_up(data_seed)       # compiles the numba kernels once here; the workers then load numba's disk cache
     res = replace(campaign, progress=not as_json).run(
         "shipid.methods.masscm_study:run_one", runs,
         kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init}, name="mass-cm-sensitivity")
