@@ -239,6 +239,13 @@ def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: floa
                         label="±2σ predicted")
         ax.legend(loc="upper right")
     ax.plot(t[sl], v[sl] / k, color=C_MODEL, lw=0.8)
+    if s is not None and s.shape == v.shape:
+        # the first innovations carry the prior's large σ: scale to the residual and the typical band
+        fin_v, fin_s = np.abs(v[np.isfinite(v)]), 2 * s[np.isfinite(s)]
+        if fin_v.size and fin_s.size:
+            lim = 1.15 * max(float(fin_v.max()), float(np.percentile(fin_s, 90)))
+            if lim > 0:
+                ax.set_ylim(-lim / k, lim / k)
     ax.axhline(0.0, color="#888888", lw=0.7)
     ax.set_xlabel("t [s]")
     ax.set_ylabel(axis_label(_short(label), su))
