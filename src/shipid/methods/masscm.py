@@ -534,13 +534,21 @@ def _residual_fun(state: _State, known: KnownParams, free: np.ndarray, theta_fix
         return J
 
     fun.jac = jac
+    fun.kernel_args = _kernel_args(state, known, free, theta_fixed, prior)
+    return fun, full
+
+
+def _kernel_args(state: _State, known: KnownParams, free: np.ndarray, theta_fixed: np.ndarray, prior) -> tuple:
+    """The residuals of :func:`_residual_fun` as arguments of the compiled kernels
+    (:func:`shipid.methods.masscm_search.residual`): the same weighted ``R_i``, ``r_i``."""
+    w = 1.0 / np.sqrt(state.lam)
+    Rs = np.stack([mo.R for mo in state.moments]) * w[:, None, None]
+    rs = np.stack([mo.r for mo in state.moments]) * w[:, None]
+    code = np.array([_CODES[c] for c in state.conds], dtype=np.int64)
     pr = (np.array([1.0, prior[0], prior[1], float(np.sum(free[:I_ZF]))]) if prior is not None
           else np.array([0.0, 0.0, 1.0, 0.0]))
-    # the same residuals for the compiled search (shipid.methods.masscm_search)
-    fun.kernel_args = (np.flatnonzero(free).astype(np.int64), np.asarray(theta_fixed, dtype=float).copy(),
-                       np.ascontiguousarray(Rs), np.ascontiguousarray(rs), code.astype(np.int64), Ts,
-                       _known_array(known), pr)
-    return fun, full
+    return (np.flatnonzero(free).astype(np.int64), np.asarray(theta_fixed, dtype=float).copy(), Rs, rs, code,
+            np.asarray(state.Ts, dtype=float), _known_array(known), pr)
 
 
 @functools.lru_cache(maxsize=16)
@@ -551,7 +559,7 @@ def _known_array(known: KnownParams) -> np.ndarray:
     return a
 
 
-def _compiled_search(fun, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, cold: bool) -> np.ndarray | None:
+def _compiled_search(args: tuple, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, cold: bool) -> np.ndarray | None:
     """Step B(a) by the compiled kernels of :mod:`shipid.methods.masscm_search`, or None (caller: ``trf``).
 
     Warm iterations: the Gauss-Newton of :func:`_gauss_newton`. Cold start (first iteration): a bounded
@@ -560,7 +568,6 @@ def _compiled_search(fun, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray, cold: 
     returns None and the caller runs ``trf`` from ``x0``.
     """
     from shipid.methods.masscm_search import gauss_newton, levenberg_marquardt
-    args = fun.kernel_args
     x = np.asarray(x0, dtype=float)
     if cold:
         status, xl, _nfev = levenberg_marquardt(x, lo, hi, *args, 500, 1e-10, 1e-10, 1e-10)
@@ -762,41 +769,49 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     dgs: list[float] = []
     j = 0
     fun = None
+    # (*) trust-region search with the load's centre kept inside |zm_bar| <= zm_bound: outside it the
+    # moment parameterisation degenerates (q -> 0 with q*zm_bar finite fits like an extra free A2)
+    lo = np.full(int(free.sum()), -np.inf)
+    hi = np.full(int(free.sum()), np.inf)
+    izm = int(np.sum(free[:I_ZM]))
+    lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
+    if free[I_ZF] and prior is None:
+        # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
+        # negative) on both sides (see identifiability_masscm); keep the search inside it
+        lo[:3] = 0.0
+        lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
+    lo_in, hi_in = lo.copy(), hi.copy()
+    fl, fh = np.isfinite(lo), np.isfinite(hi)
+    lo_in[fl] += 1e-6 * np.maximum(1.0, np.abs(lo[fl]))
+    hi_in[fh] -= 1e-6 * np.maximum(1.0, np.abs(hi[fh]))
+    flat = bool(free[I_ZF] and prior is None)
+    compiled = not flat and options.compute == "fast"
+    search_state = state
     for j in range(1, options.max_iter + 1):
-        fun, full = _residual_fun(state, known, free, theta, prior)
-        # (*) trust-region search with the load's centre kept inside |zm_bar| <= zm_bound: outside it the
-        # moment parameterisation degenerates (q -> 0 with q*zm_bar finite fits like an extra free A2)
-        lo = np.full(int(free.sum()), -np.inf)
-        hi = np.full(int(free.sum()), np.inf)
-        izm = int(np.sum(free[:I_ZM]))
-        lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
-        if free[I_ZF] and prior is None:
-            # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
-            # negative) on both sides (see identifiability_masscm); keep the search inside it
-            lo[:3] = 0.0
-            lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
-        lo_in, hi_in = lo.copy(), hi.copy()
-        fl, fh = np.isfinite(lo), np.isfinite(hi)
-        lo_in[fl] += 1e-6 * np.maximum(1.0, np.abs(lo[fl]))
-        hi_in[fh] -= 1e-6 * np.maximum(1.0, np.abs(hi[fh]))
+        search_state = state
+        # the compiled search needs only the kernel arguments; the Python residual function (closures)
+        # is built where it is used: the trf fallback, the reference path and the final Jacobian
+        fun = None if compiled else _residual_fun(state, known, free, theta, prior)[0]
         x0 = np.clip(theta[free], lo_in, hi_in)
         # (*) warm iterations (j >= 2) start next to the minimum: plain Gauss-Newton steps reach it in a
         # few evaluations; the trust-region search is the fallback whenever they do not converge cleanly
         # (z_f free without a prior: the flat z_f direction makes where the search stops depend on the
         # numerical path, so there the search stays the original trust-region one with finite-difference
         # Jacobian, which keeps those (unidentified) results unchanged)
-        flat = bool(free[I_ZF] and prior is None)
         x = None
-        if not flat and options.compute == "fast":
+        if compiled:
             # the same searches compiled; the cold start (j = 1) by Levenberg-Marquardt + Gauss-Newton
             # instead of trf (same tolerances; trf remains the fallback)
-            x = _compiled_search(fun, x0, lo, hi, cold=j == 1)
+            x = _compiled_search(_kernel_args(state, known, free, theta, prior), x0, lo, hi, cold=j == 1)
         elif j > 1 and not flat:
             x = _gauss_newton(fun, fun.jac, x0, lo, hi)
         if x is None:
+            if fun is None:
+                fun = _residual_fun(state, known, free, theta, prior)[0]
             x = least_squares(fun, x0, jac="2-point" if flat else fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                               gtol=1e-10, max_nfev=2000, x_scale="jac").x
-        theta = full(x)
+        theta = theta.copy()
+        theta[free] = x
         G = _coeffs(theta, known, conds, Ts, options)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
@@ -852,7 +867,10 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         lam = np.asarray(lam)
         lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
         state = _State(_build_moments(prep, newL, y_hats, a_hats, options), lam, newL, Ts, conds)
-    J = _jac_cs(fun, theta[free]) if jacobian and fun is not None and np.all(np.isfinite(theta)) else None
+    J = None
+    if jacobian and j > 0 and np.all(np.isfinite(theta)):
+        fun = _residual_fun(search_state, known, free, theta, prior)[0]     # the last search's criterion
+        J = _jac_cs(fun, theta[free])
     return {"theta": from_moment(theta), "theta_q": theta, "free": free, "J": J, "converged": converged, "iterations": j,
             "history": np.array(history), "dg": dgs, "state": state, "warnings": warn, "prior": prior}
 
