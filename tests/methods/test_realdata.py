@@ -161,3 +161,48 @@ def test_row_weights():
     np.testing.assert_array_equal(R.row_weights(u, v, r, 3.0, R.FitConfig()), [1.0, 1.0])
     with pytest.raises(Exception, match="unknown weighting"):
         R.row_weights(u, v, r, 3.0, R.FitConfig(weighting="bogus"))
+
+
+def test_fold_groups_leave_one_out_and_interleaved():
+    assert R.fold_groups(4, None) == [[0], [1], [2], [3]]
+    assert R.fold_groups(5, 2) == [[0, 2, 4], [1, 3]]
+    assert R.fold_groups(3, 10) == [[0], [1], [2]]        # never more folds than runs
+
+
+def test_candidate_lists_are_full_factorial():
+    """The frozen a-priori lists (shipid.studies.realdata_study docstring): Esso 2 hulls x 3 free sets x
+    2 weightings, KVLCC2 3 free sets x 2 gamma_R treatments; the default (first) is the published structure."""
+    es = R.CANDIDATES["esso-lowspeed"]
+    assert len(es) == 12 and next(iter(es)) == "hull+rudder+thrust"
+    assert sum(c.get("structure") == "esso-cubic-hull" for c in es.values()) == 6
+    assert sum(c.get("weighting") == "nondimensional" for c in es.values()) == 6
+    # the cubic variants free the same propeller/rudder coefficients as their low-speed twins
+    for name, c in es.items():
+        if name.startswith("cubic-"):
+            twin = es[name[len("cubic-"):]]
+            assert c["Y"][6:] == twin["Y"][3:] and c["X"][5:] == twin["X"][3:]
+    ya = R.CANDIDATES["yasukawa2015"]
+    assert len(ya) == 6 and sum("particulars" in c for c in ya.values()) == 3
+
+
+def test_cross_validate_pools_errors_over_folds_and_fails_a_broken_candidate():
+    need_params()
+    truth = mmg.load_published("esso_osaka_3m")
+    runs = [R.smooth_run(_sim_trial(truth, s, seconds=40.0)) for s in (21, 22, 23)]
+    cands = {"a": R.CANDIDATES["esso-lowspeed"]["hull-only"], "b": R.CANDIDATES["esso-lowspeed"]["hull-only"]}
+    seen = []
+
+    def fold_errors(model, test_idx, train_idx):
+        seen.append((tuple(test_idx), tuple(train_idx)))
+        assert not set(test_idx) & set(train_idx)
+        if len(seen) > 3:                          # candidate "b": its third fold fails
+            if test_idx == [2]:
+                raise ValueError("diverged")
+        # fold i: 2 errors of size (i + 1) -> pooled RMS sqrt((2*1 + 2*4 + 2*9) / 6)
+        return {"e": (2.0 * (test_idx[0] + 1) ** 2, 2)}
+
+    table = R.cross_validate(runs, truth, cands, fold_errors, lambda rms: rms["e"], folds=None)
+    assert seen[:3] == [((0,), (1, 2)), ((1,), (0, 2)), ((2,), (0, 1))]
+    assert table["a"]["e_rms"] == pytest.approx(np.sqrt(28.0 / 6.0))
+    assert table["a"]["score"] == table["a"]["e_rms"] and table["a"]["count"] == 6
+    assert table["b"]["score"] == float("inf")

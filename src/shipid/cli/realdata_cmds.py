@@ -4,8 +4,12 @@
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso]``
   and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
-* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022] [--json]``
-* ``shipid study kvlcc2-zigzag [--json]``
+* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json]``
+* ``shipid study kvlcc2-zigzag [--train-only] [--json]``
+
+The studies print the cross-validation table over the candidate structures (training
+runs only) and the chosen one before any test run is read (``--train-only`` stops
+there); see :mod:`shipid.studies.realdata_study` for the frozen protocol.
 """
 
 from __future__ import annotations
@@ -178,35 +182,49 @@ def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign
 @study.command("esso-osaka-heldout", context_settings=CONTEXT)
 @click.option("--split", type=click.Choice(["miyauchi2022", "wakita2022", "both"]), default="both",
               show_default=True, help="Training/test split of the data set's README.")
-@click.option("--folds", default=3, show_default=True, type=int,
-              help="CV folds within the training runs for the structure choice (0: leave one out).")
+@click.option("--folds", default=0, show_default=True, type=int,
+              help="CV folds within the training runs (0: leave one run out, the frozen scheme).")
+@click.option("--train-only", is_flag=True,
+              help="Stop after the CV table and the chosen structure: no test run is read.")
 @click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
-def esso_heldout_cmd(split, folds, as_json):
-    """Held-out error table of the identified MMG model and the published MMG set (Esso Osaka 3 m)."""
+def esso_heldout_cmd(split, folds, train_only, as_json):
+    """Esso Osaka 3 m: CV table over the candidate structures (training runs only), the chosen one,
+    then the held-out error table of the identified model vs the published MMG set."""
     from shipid.studies import realdata_study as S
 
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     splits = ["miyauchi2022", "wakita2022"] if split == "both" else [split]
     out = {}
-    for sp in splits:
-        out[sp] = S.esso_heldout(sp, folds=folds or None, progress=say)
+    for sp in splits:                      # every selection is made (and printed) before any test run is read
+        out[sp] = S.esso_train(sp, folds=folds or None, progress=say)
         if not as_json:
-            click.echo(S.format_esso(out[sp]))
+            click.echo(S.format_esso_training(out[sp]))
+    if not train_only:
+        for sp in splits:
+            out[sp]["heldout"] = S.esso_evaluate(out[sp], progress=say)
+            if not as_json:
+                click.echo(S.format_esso_heldout(out[sp]))
     if as_json:
         click.echo(json.dumps(out, indent=1, allow_nan=True))
 
 
 @study.command("kvlcc2-zigzag", context_settings=CONTEXT)
-@click.option("--folds", default=5, show_default=True, type=int,
-              help="CV folds within the training zig-zags (0: leave one out).")
+@click.option("--folds", default=0, show_default=True, type=int,
+              help="CV folds within the training zig-zags (0: leave one out, the frozen scheme).")
+@click.option("--train-only", is_flag=True,
+              help="Stop after the CV table and the chosen structure: no held-out zig-zag is read.")
 @click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
-def kvlcc2_cmd(folds, as_json):
-    """Identify from ten HSVA KVLCC2 zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
+def kvlcc2_cmd(folds, train_only, as_json):
+    """KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
     from shipid.studies import realdata_study as S
 
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
-    st = S.kvlcc2_zigzag(folds=folds or None, progress=say)
+    st = S.kvlcc2_train(folds=folds or None, progress=say)
+    if not as_json:
+        click.echo(S.format_kvlcc2_training(st))
+    if not train_only:
+        st.update(S.kvlcc2_evaluate(st, progress=say))
+        if not as_json:
+            click.echo(S.format_kvlcc2_heldout(st))
     if as_json:
         click.echo(json.dumps(st, indent=1, allow_nan=True))
-    else:
-        click.echo(S.format_kvlcc2(st))

@@ -31,15 +31,17 @@ constants, open-water curve that drives the rudder slipstream, Fujiwara wind
 coefficients). For the Esso Osaka these come from the published set, which its
 authors identified from runs of the same data set — stated in every Result.
 
-Structure selection: :func:`select_structure` compares the candidates of
-:data:`CANDIDATES` — sets of free coefficients, the hull structure (the low-speed
-hull vs the standard MMG cubic hull expanded about forward speed), the regression
-weighting (dimensional vs non-dimensional forces, :func:`row_weights`) and, for the
-standard MMG, a symmetric flow-straightening coefficient — by k-fold (or
-leave-one-run-out) cross-validation *within the training runs* on the RMS heading and
-position errors of 60-s horizons restarted from the measured state
-(:func:`shipid.methods.validate.validate`, score = RMS ψ/10° + RMS position/1 m); the
-test runs are never touched.
+Structure selection: :func:`cross_validate` fits every candidate of :data:`CANDIDATES`
+(sets of free coefficients, the hull structure — the low-speed hull vs the standard
+MMG cubic hull expanded about forward speed —, the regression weighting, dimensional
+vs non-dimensional forces (:func:`row_weights`), and for the standard MMG the
+flow-straightening γ_R treatment) without each fold's runs and scores it on them,
+errors pooled over all folds; :func:`select_structure` does it with 60-s horizons
+restarted from the measured state (:func:`shipid.methods.validate.validate`, score =
+RMS ψ/10° + RMS position/1 m), leave-one-run-out by default. Only training runs are
+ever passed in. The candidate lists are full factorial designs over axes fixed a
+priori; the reasons for each axis, the frozen hyper-parameters and the CV tables are
+in :mod:`shipid.studies.realdata_study`.
 
 Why a low-speed structure for the Esso Osaka: the random and berthing runs spend
 most of their time below 0.2 m/s (median speed 0.11 m/s on the random runs, against
@@ -47,11 +49,10 @@ about 0.5 m/s service speed), with drift angles beyond 90° and reversed propell
 hull expanded in ``v' = v/U``, ``r' = rL/U`` about forward motion (Abkowitz, or the
 standard MMG) scales every force with U² and has no term for the cross-flow drag of a
 ship moving sideways; the low-speed hull (drag blending with |β|, cross-flow
-integrals) holds at any drift angle. The cross-validation shows it: on the Miyauchi
-training runs (3-fold) the cubic hull scores 2.77 against 2.11 for the low-speed hull
-with the same propeller and rudder, and 2.37 against 1.77 when both regress
-non-dimensional forces; on the Wakita training runs 2.64 vs 2.43 and 2.13 vs 1.94
-(``shipid study esso-osaka-heldout`` prints the table).
+integrals) holds at any drift angle. The leave-one-run-out CV on the training runs
+agrees: the best low-speed candidate scores 1.84 against 2.38 for the best cubic-hull
+one on the Miyauchi training runs, 1.95 against 2.10 on the Wakita training runs
+(``shipid study esso-osaka-heldout --train-only`` prints the tables).
 """
 
 from __future__ import annotations
@@ -174,57 +175,68 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig()) -> SmoothedR
 
 
 # ----------------------------------------------------------------------------- step 2
-#: Candidate structures (sets of free coefficients) per MMG structure; the first is the default.
-CANDIDATES: dict[str, dict[str, dict[str, tuple[str, ...]]]] = {
-    "esso-lowspeed": {
-        "hull+rudder+thrust": {
-            "X": ("X_0F", "X_0A", "X_vr", "XP_k0", "XP_k1", "XP_k2", "XR_gain"),
-            "Y": ("Y_v", "Y_r", "CD_Y", "YR_gain"),
-            "N": ("N_v", "N_r", "CD_N", "NR_arm"),
-        },
-        "hull+rudder+4-quadrant-propeller": dict(mmg.COEFS["esso-lowspeed"]),  # every coefficient free
-        "hull-only": {
-            "X": ("X_0F", "X_0A", "X_vr"),
-            "Y": ("Y_v", "Y_r", "CD_Y"),
-            "N": ("N_v", "N_r", "CD_N"),
-        },
-        # the hull as a cubic expansion about steady forward motion (standard MMG, Abkowitz-like),
-        # same propeller/rudder/wind: the structure the low-speed hull is compared against
-        "cubic-hull+rudder+thrust": {
-            "structure": "esso-cubic-hull",
-            "X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv", "XP_k0", "XP_k1", "XP_k2", "XR_gain"),
-            "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr", "YR_gain"),
-            "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr", "NR_arm"),
-        },
-    },
-    "yasukawa2015": {
-        "full": {m: mmg.COEFS["yasukawa2015"][m] for m in mmg.MODES},
-        "linear-hull+rudder": {
-            "X": ("R_0", "X_vv", "X_vr", "X_rr", "XP_gain", "XR_gain"),
-            "Y": ("Y_v", "Y_r", "YR_gain"),
-            "N": ("N_v", "N_r", "NR_arm"),
-        },
-        "hull-only": {
-            "X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv"),
-            "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr"),
-            "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr"),
-        },
-    },
+# The candidate lists below were FROZEN a priori (session 2 of issue 6) from physics and
+# training-run evidence only; see the module docstring of shipid.studies.realdata_study
+# for the reasons of each axis. They are full factorial designs over their axes, so that
+# no combination is in or out because of how it scored on a test run.
+_ESSO_FREE = {
+    # hull only: propeller and rudder stay at the published values (identified by their
+    # authors from runs of this data set)
+    "hull-only": {"X": ("X_0F", "X_0A", "X_vr"), "Y": ("Y_v", "Y_r", "CD_Y"), "N": ("N_v", "N_r", "CD_N")},
+    # hull + ahead thrust (K_T polynomial) + rudder force gain and lever arm; the astern
+    # (Hachii) thrust and Ueno side-force polynomials stay fixed: rarely excited
+    "hull+rudder+thrust": {"X": ("X_0F", "X_0A", "X_vr", "XP_k0", "XP_k1", "XP_k2", "XR_gain"),
+                           "Y": ("Y_v", "Y_r", "CD_Y", "YR_gain"), "N": ("N_v", "N_r", "CD_N", "NR_arm")},
+    # every coefficient of the structure free (4-quadrant propeller included)
+    "hull+rudder+4-quadrant-propeller": dict(mmg.COEFS["esso-lowspeed"]),
 }
-# Variants regressing non-dimensional forces (FitConfig.weighting = "nondimensional"): in
-# dimensional least squares the few fast samples outweigh the berthing ones by (U/U_low)²
-for _name in list(CANDIDATES["esso-lowspeed"]):
-    if _name != "hull+rudder+4-quadrant-propeller":
-        CANDIDATES["esso-lowspeed"][_name + "/nondimensional"] = dict(
-            CANDIDATES["esso-lowspeed"][_name], weighting="nondimensional")
+_CUBIC_HULL = {"X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv"),
+               "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr"),
+               "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr")}
 
-# Variants with the flow-straightening coefficient γ_R made the same for both signs of
-# the rudder inflow angle (the mean of γ_R⁻ and γ_R⁺): the asymmetry of the prior set
-# belongs to its own propeller; whether it holds for the ship at hand is for the
-# cross-validation to say.
-for _name in list(CANDIDATES["yasukawa2015"]):
-    CANDIDATES["yasukawa2015"][_name + "/symmetric-gamma_R"] = dict(
-        CANDIDATES["yasukawa2015"][_name], particulars={"gamma_R": "symmetric"})
+
+def _esso_candidates() -> dict[str, dict]:
+    """Hull structure (low-speed | cubic) x free set (3) x regression weighting (2): 12 candidates."""
+    out: dict[str, dict] = {}
+    for weighting in ("none", "nondimensional"):
+        for hull in ("lowspeed", "cubic"):
+            for free_name, free in _ESSO_FREE.items():
+                if hull == "lowspeed":
+                    cand: dict = dict(free)
+                    name = free_name
+                else:
+                    # same propeller/rudder coefficients free, the hull replaced by the cubic expansion
+                    nh = {"X": 3, "Y": 3, "N": 3}
+                    cand = {m: _CUBIC_HULL[m] + tuple(free[m][nh[m]:]) for m in mmg.MODES}
+                    cand["structure"] = "esso-cubic-hull"
+                    name = "cubic-" + free_name
+                if weighting != "none":
+                    cand["weighting"] = weighting
+                    name += "/" + weighting
+                out[name] = cand
+    # the default (first) candidate: the structure of the published set with its own free set
+    first = "hull+rudder+thrust"
+    return {first: out.pop(first), **out}
+
+
+def _yasukawa_candidates() -> dict[str, dict]:
+    """Free set (3) x flow-straightening gamma_R (prior's asymmetric | symmetric mean): 6 candidates."""
+    base = {
+        "full": {m: mmg.COEFS["yasukawa2015"][m] for m in mmg.MODES},
+        "linear-hull+rudder": {"X": ("R_0", "X_vv", "X_vr", "X_rr", "XP_gain", "XR_gain"),
+                               "Y": ("Y_v", "Y_r", "YR_gain"), "N": ("N_v", "N_r", "NR_arm")},
+        "hull-only": dict(_CUBIC_HULL),
+    }
+    out = dict(base)
+    for name, cand in base.items():
+        out[name + "/symmetric-gamma_R"] = dict(cand, particulars={"gamma_R": "symmetric"})
+    return out
+
+
+#: Candidate structures (sets of free coefficients, hull structure, regression weighting,
+#: particular overrides) per prior structure; the first is the default.
+CANDIDATES: dict[str, dict[str, dict]] = {"esso-lowspeed": _esso_candidates(),
+                                          "yasukawa2015": _yasukawa_candidates()}
 
 
 def candidate_config(config: "FitConfig", cand: Mapping) -> "FitConfig":
@@ -406,64 +418,124 @@ def heldout_score(model: mmg.MmgModel, trials: Sequence[Trial], horizon: float =
     """Pooled RMS heading (deg) and position (m) errors over restarted horizons on ``trials``.
 
     ``decimate``: simulate on every n-th sample (cheaper; used inside cross-validation).
+    Returns ``psi``, ``pos``, ``score`` (:func:`horizon_score`) and ``count`` (horizons).
     """
+    se = horizon_sse(model, trials, horizon, decimate)
+    n = se["psi"][1]
+    if n == 0:
+        return {"psi": float("nan"), "pos": float("nan"), "score": float("nan"), "count": 0}
+    out = {q: float(np.sqrt(se[q][0] / n)) for q in ("psi", "pos")}
+    out["score"] = horizon_score(out)
+    out["count"] = int(n)
+    return out
+
+
+def horizon_score(rms: Mapping[str, float]) -> float:
+    """CV score of the Esso study: RMS ψ / 10° + RMS position / 1 m (10° of heading ~ 1 m of position)."""
+    return float(rms["psi"] / 10.0 + rms["pos"] / 1.0)
+
+
+def horizon_sse(model: mmg.MmgModel, trials: Sequence[Trial], horizon: float = 60.0,
+                decimate: int = 1) -> dict[str, tuple[float, int]]:
+    """``{"psi" | "pos": (sum of horizon-weighted squared RMS, horizon count)}`` for pooling."""
     from shipid.methods.validate import validate
 
     se = {"psi": 0.0, "pos": 0.0}
     n = 0
     for tr in trials:
         tr = subsample(tr, decimate)
-        v = validate(model, tr, horizon=horizon, windows=(), whole=False)
-        h = v.horizons
+        h = validate(model, tr, horizon=horizon, windows=(), whole=False).horizons
         if h["count"] == 0:
             continue
-        w = h["count"]
         for q in se:
-            se[q] += w * h[q]["rms"] ** 2
-        n += w
-    if n == 0:
-        return {"psi": float("nan"), "pos": float("nan"), "score": float("nan")}
-    out = {q: float(np.sqrt(se[q] / n)) for q in se}
-    out["score"] = out["psi"] / 10.0 + out["pos"] / 1.0      # 10 deg of heading ~ 1 m of position
-    return out
+            se[q] += h["count"] * h[q]["rms"] ** 2
+        n += h["count"]
+    return {q: (v, n) for q, v in se.items()}
+
+
+def fold_groups(n: int, folds: int | None) -> list[list[int]]:
+    """Run indices of each CV fold: leave-one-run-out (``folds`` None) or ``folds`` interleaved groups
+    (run ``i`` in fold ``i mod k``; the split lists are ordered by manoeuvre type, so every fold mixes types)."""
+    k = n if folds is None else max(2, min(folds, n))
+    return [list(range(i, n, k)) for i in range(k)]
+
+
+def cross_validate(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, candidates: Mapping[str, Mapping],
+                   fold_errors, combine, *, config: FitConfig = FitConfig(), folds: int | None = None,
+                   progress=None) -> dict[str, dict]:
+    """Cross-validation of every candidate over the training runs, errors pooled over all folds.
+
+    Parameters
+    ----------
+    runs : sequence of SmoothedRun
+        The TRAINING runs (nothing else is ever passed here).
+    fold_errors : callable
+        ``fold_errors(model, test_idx, train_idx) -> {quantity: (sum of squares, count)}``:
+        the errors of the model fitted without the runs ``test_idx`` on those runs.
+    combine : callable
+        ``combine({quantity: pooled RMS}) -> score`` (lower is better).
+
+    Returns
+    -------
+    dict
+        Per candidate: ``score``, the pooled RMS of every quantity, ``count`` and
+        ``folds``. A candidate whose fit or prediction fails (or diverges) in any fold
+        scores infinity: a structure that cannot be fitted on part of the data is not chosen.
+    """
+    groups = fold_groups(len(runs), folds)
+    table: dict[str, dict] = {}
+    for cname, cand in candidates.items():
+        cprior, free = apply_candidate(prior, cand)
+        cfg = candidate_config(config, cand)
+        acc: dict[str, list[float]] = {}
+        failed = False
+        for g in groups:
+            tr_idx = [i for i in range(len(runs)) if i not in g]
+            if not tr_idx:
+                continue
+            try:
+                m = fit([runs[i] for i in tr_idx], cprior, free, cfg).model
+                errs = fold_errors(m, g, tr_idx)
+            except (ShipidError, np.linalg.LinAlgError, ValueError):
+                failed = True
+                errs = {}
+            for q, (sse, cnt) in errs.items():
+                a = acc.setdefault(q, [0.0, 0])
+                a[0] += sse
+                a[1] += cnt
+            if progress is not None:
+                progress()
+        rms = {q: (float(np.sqrt(a[0] / a[1])) if a[1] else float("nan")) for q, a in acc.items()}
+        score = combine(rms) if rms and not failed else float("inf")
+        if not np.isfinite(score):
+            score = float("inf")
+        row = {"score": float(score), "folds": len(groups)}
+        row.update({f"{q}_rms": v for q, v in rms.items()})
+        row["count"] = int(max((a[1] for a in acc.values()), default=0))
+        table[cname] = row
+    return table
 
 
 def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior: mmg.MmgModel,
                      candidates: Mapping[str, Mapping[str, Sequence[str]]] | None = None, *,
                      config: FitConfig = FitConfig(), folds: int | None = None,
                      horizon: float = 60.0, decimate: int = 2, progress=None) -> tuple[str, dict[str, dict]]:
-    """Leave-one-run-out (or ``folds``-fold) cross-validation over the training runs.
+    """Leave-one-run-out (or ``folds``-fold) cross-validation over the TRAINING runs.
 
-    Returns the name of the candidate with the lowest mean held-out score
-    (RMS ψ/10° + RMS position/1 m over 60-s horizons) and the table of scores.
-    A candidate whose fit diverges in a fold scores infinity there.
+    Each candidate is fitted without the fold's runs and simulated on them over 60-s
+    horizons restarted from the measured state every 60 s (every ``decimate``-th
+    sample); the squared heading and position errors are pooled over all folds'
+    horizons, and the score is :func:`horizon_score` of the pooled RMS. Returns the
+    candidate with the lowest score (the first listed on a tie) and the table
+    (``psi_rms`` in deg, ``pos_rms`` in m).
     """
     cands = candidates or CANDIDATES[prior.structure]
-    n = len(trials)
-    k = n if folds is None else max(2, min(folds, n))
-    groups = [list(range(i, n, k)) for i in range(k)]
-    table: dict[str, dict] = {}
-    for cname, cand in cands.items():
-        cprior, free = apply_candidate(prior, cand)
-        scores = []
-        for g in groups:
-            train = [r for i, r in enumerate(runs) if i not in g]
-            test = [trials[i] for i in g]
-            if not train:
-                continue
-            try:
-                m = fit(train, cprior, free, candidate_config(config, cand)).model
-                sc = heldout_score(m, test, horizon, decimate)
-            except (ShipidError, np.linalg.LinAlgError, ValueError):
-                sc = {"psi": float("inf"), "pos": float("inf"), "score": float("inf")}
-            if not np.isfinite(sc["score"]):
-                sc["score"] = float("inf")
-            scores.append(sc)
-            if progress is not None:
-                progress()
-        table[cname] = {"score": float(np.mean([s["score"] for s in scores])),
-                        "psi_rms_deg": float(np.mean([s["psi"] for s in scores])),
-                        "pos_rms_m": float(np.mean([s["pos"] for s in scores])), "folds": len(scores)}
+
+    def fold_errors(model, test_idx, train_idx):
+        return horizon_sse(model, [trials[i] for i in test_idx], horizon, decimate)
+
+    table = cross_validate(runs, prior, cands, fold_errors, horizon_score, config=config, folds=folds,
+                           progress=progress)
     best = min(table, key=lambda c: table[c]["score"])
     return best, table
 
@@ -534,7 +606,7 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
 def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | None = None,
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
-             extra_provenance: Mapping | None = None) -> Result:
+             extra_provenance: Mapping | None = None, selector=None) -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -545,6 +617,10 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         Supplies the structure, the fixed constants and the values of non-free coefficients.
     structure : str, optional
         A candidate name of :data:`CANDIDATES`; with ``select`` and no name, chosen by CV.
+    selector : callable, optional
+        ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
+        default :func:`select_structure` (60-s horizon errors). It receives the training
+        runs only.
     """
     if not trials:
         raise InputError("no training runs given")
@@ -554,10 +630,14 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cands = CANDIDATES[prior.structure]
     selection = None
     if structure is None and select and len(trials) >= 2:
-        structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
-        selection = {"method": f"{'leave-one-run-out' if folds is None else f'{folds}-fold'} CV on the "
-                               "training runs, 60-s restarted horizons, score = RMS psi/10 deg + RMS pos/1 m",
-                     "table": table, "chosen": structure}
+        if selector is None:
+            structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
+            method = (f"{'leave-one-run-out' if folds is None else f'{folds}-fold'} CV on the training runs, "
+                      "60-s restarted horizons, errors pooled over folds, score = RMS psi/10 deg + RMS pos/1 m")
+        else:
+            structure, table, method = selector(trials, runs, prior, cands, fit_config, folds)
+        selection = {"method": method, "table": table, "chosen": structure,
+                     "training_runs": [r.source for r in runs]}
     elif structure is None:
         structure = next(iter(cands))
     if structure not in cands:
@@ -572,4 +652,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
 
 __all__ = ["SmoothConfig", "SmoothedRun", "smooth_run", "FitConfig", "CANDIDATES", "regression_data", "fit",
            "apply_candidate", "candidate_config", "row_weights", "subsample", "noise_from_data",
-           "MmgFit", "select_structure", "heldout_score", "build_result", "identify"]
+           "MmgFit", "select_structure", "heldout_score", "horizon_sse", "horizon_score", "fold_groups",
+           "cross_validate", "build_result", "identify"]
