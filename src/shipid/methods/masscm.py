@@ -46,6 +46,17 @@ Standard errors come from the asymptotic covariance of the weighted IV estimate,
 ``Cov = (sum_i G_i^T R_i^T R_i G_i / lam_i)^-1`` with ``G_i = dg_i/dtheta`` (exact, complex step),
 valid when the prefiltered residuals are white (checked in the diagnostics).
 
+Computation (``MassCMOptions.compute``; how, not what): ``"reference"`` (default) is the straightforward
+numpy/scipy path. ``"fast"`` (the Monte Carlo study's default) runs the same steps through numba kernels:
+steps (b)–(c) per dataset in one call (:mod:`shipid.methods.masscm_step`: equation error, AR fit by
+:func:`shipid.estimate.arma.fit_ar`, closed-loop instruments, the IV moments from
+:mod:`shipid.estimate.fir_kernels` without forming ``Z``), the same eigen-decomposition and rank rule
+with a compiled projection/QR (:func:`shipid.estimate.iv.iv_compress_products_compiled`), and the
+search (:mod:`shipid.methods.masscm_search`: the same Gauss–Newton; the first, cold-start search by a
+bounded Levenberg–Marquardt to trf's tolerances instead of scipy's trf, which stays the fallback). Tests
+compare every piece with the reference path and the study run by run (same solution within 3e-7 in m,
+the per-run spread of the study itself). The z_f-free (flat) case keeps the original trf search.
+
 Channels per dataset (a :class:`shipid.data.trial.Trial`): ``p`` roll rate (y of 9a), ``a_s``
 tangential acceleration (9b), ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta`` rudder.
 """
@@ -103,8 +114,9 @@ class MassCMOptions:
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
-    compute: str = "fast"           # how (not what): "fast" compiled kernels (numba) for the FIR moments, the
-    #                                 AR fits and the search; "reference" the straightforward numpy/scipy path
+    compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
+    #                                 compiled numba kernels (moments, AR fits, search; the Monte Carlo study's
+    #                                 default: a single estimate does not repay loading/compiling them)
 
 
 @dataclass
