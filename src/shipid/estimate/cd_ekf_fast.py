@@ -60,7 +60,7 @@ from shipid.estimate.cd_ekf import LOG2PI, FilterResult, cd_ekf
 from shipid.estimate.linalg import NotPositiveDefiniteError
 from shipid.estimate.smoothers import SmootherResult
 
-_JIT = dict(cache=True, nogil=True)
+_JIT = dict(cache=True, nogil=True, error_model="numpy")  # no ZeroDivisionError checks in loops
 
 # status codes returned by the compiled loops
 OK, P_NOT_PD, S_NOT_PD, TAYLOR_NOT_CONVERGED = 0, 1, 2, 3
@@ -341,8 +341,17 @@ def _taylor_into(Fh, Q, h, tol, max_terms, Phi, Qd, term, tmp, C, G, rowptr, col
     if qscale == 0.0:
         qscale = 1.0
     for k in range(2, max_terms):
-        _spmm(rowptr, cols, vals, term, tmp)   # Fh · (Fh)^{k−1}/(k−1)!
-        _spmm(rowptr, cols, vals, C, G)        # Fh · C_{k−1}
+        # tmp = Fh · (Fh)^{k−1}/(k−1)!  and  G = Fh · C_{k−1}, in one pass over Fh's non-zeros
+        for i in range(n):
+            for j in range(n):
+                tmp[i, j] = 0.0
+                G[i, j] = 0.0
+            for e in range(rowptr[i], rowptr[i + 1]):
+                l = cols[e]
+                v = vals[e]
+                for j in range(n):
+                    tmp[i, j] += v * term[l, j]
+                    G[i, j] += v * C[l, j]
         tmax = 0.0
         cmax = 0.0
         fk = 1.0 / k
