@@ -15,10 +15,11 @@ regressor matrix) remain in :mod:`shipid.estimate.iv`, :mod:`shipid.estimate.arm
 * :func:`ar_normal_equations` — ``X^T X``, ``X^T x`` and ``x^T x`` of the AR(p) regression
   (:func:`shipid.estimate.arma._lag_gram`): lag-0 correlations plus edge corrections.
 
-Compiled with ``cache=True``. The long dot products of :func:`lag_moments` (:func:`_lag_products`) and :func:`ar_normal_equations` may be reassociated
-(``fastmath={"reassoc", "contract"}``: vectorised partial sums) — only the summation order differs from the
+Compiled with ``cache=True``. The long dot products of :func:`lag_moments` (:func:`_lag_products`),
+:func:`ar_normal_equations` and the Cholesky solve may be reassociated (``fastmath={"reassoc",
+"contract"}``: vectorised partial sums, fused multiply-add) — only the summation order differs from the
 reference paths (rounding level, compared in the tests); nothing else is relaxed (no finite-math
-assumptions).
+assumptions). :func:`project_qr` finishes the IV compression after the eigen-decomposition.
 """
 
 from __future__ import annotations
@@ -222,7 +223,7 @@ def ar_normal_equations(x, p):
 __all__ = ["fir_filter", "lag_moments", "ar_normal_equations"]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"reassoc", "contract"})
 def ridge_cholesky_solve(G, g):
     """Solve ``(G + 1e-12 tr(G)/p I) th = g`` by Cholesky (the regularised normal equations of
     :func:`shipid.estimate.arma._solve_normal`); returns ``(ok, th)``, ``ok`` False if not positive definite."""
@@ -273,14 +274,11 @@ def ar_fit(xs, p):
         return False, a, 0.0
     n = xs.size
     m = n - p
-    e = np.zeros(m)
-    for u in range(p + 1):                        # e[t - p] = sum_u a[u] xs[t - u], t = p .. n-1 (axpy per tap)
-        au = a[u]
-        xu = xs[p - u:n - u]
-        for t in range(m):
-            e[t] += au * xu[t]
+    X = np.empty((1, n))
+    X[0] = xs
+    e = fir_filter(a, X)[0]                       # e[t] = sum_u a[u] xs[t - u]; used for t = p .. n-1
     s2 = 0.0
-    for t in range(m):
+    for t in range(p, n):
         s2 += e[t] * e[t]
     return True, a, s2 / m
 
