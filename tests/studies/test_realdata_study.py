@@ -194,12 +194,16 @@ def test_esso_split_beats_published_set(split):
 @pytest.mark.slow
 @pytest.mark.realdata
 def test_kvlcc2_overshoots_close_to_measured():
-    """Issue 6 target: every 1st and 2nd overshoot within 2 deg. BOUND SET AFTER THE EVALUATION."""
+    """Issue 6 target: every 1st and 2nd overshoot within 2 deg of the measured one (the frozen
+    configuration gave 1.70 deg at most, 2nd overshoot of 20/10 starboard; the bound is the target)."""
     need("kvlcc2_hsva")
     st = S.kvlcc2_zigzag()
+    assert st["structure"] == "full/symmetric-gamma_R"       # chosen by the overshoot CV (docstring table)
     errs = [e for row in st["overshoots"] for e in row["identified_error_deg"]]
     assert len(errs) == 6
-    assert max(abs(e) for e in errs) < 2.5
+    assert max(abs(e) for e in errs) <= 2.0
+    p = st["heldout"]["pooled"]
+    assert p["identified"]["psi"]["rms"] < p["published"]["psi"]["rms"]
 
 
 def test_study_cli_bad_split_and_missing_data_are_one_line(tmp_path, monkeypatch, capsys):
