@@ -27,12 +27,25 @@ Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --jso
   pattern (tight m and zm_bar, wide k, K_vdot, z_f), explained by the exact-fit family in z_f.
 * z_f free, ``--init given`` (random start), 200 runs: 106 flagged; m 0.4028 ± 0.0013 over the rest.
 
-Speed (``benchmarks/bench_masscm_study.py``, 2-core machine, z_f known): 34 ms/run in one process
-(was 82-88 ms); 10 000 runs 341 s with 1 worker, 168 s with 2 local workers (2.03x), LocalCluster
-about 1.1x the local pool. What it costs per run (about 6.2 outer iterations): the IV moments of
-three 3000-sample datasets per iteration (8 FIR convolutions, the lag Gram, a 50x50 eigh), the
-AR(40) refits, and the first (cold-start) trust-region search. The issue-3 goal of 60 s for
-10 000 runs is NOT reached.
+Speed (``benchmarks/bench_masscm_study.py``, the 2-core shared machine, z_f known). :func:`run_one`
+uses the compiled path (``compute="fast"``, :mod:`shipid.methods.masscm_step`,
+:mod:`shipid.methods.masscm_search`, :mod:`shipid.estimate.fir_kernels`; the same Algorithm 1, the
+reference path is kept and compared run by run). Measured 2026-11-22 00:04 UTC, load average 2.7
+(other engineers' jobs on the 2 cores), 200 runs per path interleaved in one process: 9.5 ms/run
+(compiled) against 32.2 ms/run (reference, the previous implementation), 3.4x; the same solution in
+every run (largest per-run difference of m 2.8e-7, the study's own spread 9e-8); session 1 measured
+34 ms/run on a quieter machine. Single-process estimate for 10 000 runs: 95 s on one core, about 48 s
+on two ideal workers. Campaigns (2000 runs, extrapolated): 1 worker 21.8 s (109 s per 10 000), 2 local
+workers 26.8 s and a 2-worker LocalCluster 34.8 s — not faster than one worker because at load 2.5-2.9
+the other jobs leave the two workers about one core (each run's wall time 27 ms against 14.6 ms CPU);
+the 1 -> 2 worker speed-up and the 60 s goal must be re-measured on a quiet machine. Where a run's time
+goes now (about 6.3 outer iterations, 16 dataset-iterations): per dataset-iteration the FIR filter of
+eight signals (~75 us), the lag products (~90 us), the AR(40) fit (~45 us), the closed-loop simulation
+(~20 us) and LAPACK's 50x50 eigen-decomposition (~120-200 us, kept: the rank rule of
+:func:`shipid.estimate.iv.iv_compress_products` needs the eigenvalues); the searches ~0.5 ms per run
+(7 % of runs fall back to scipy's trf for the first search: ~5 ms each). The numba kernels are compiled
+once per machine (about 40 s at load 4; cached on disk, ``cache=True``) and loaded by each worker in
+about a second; :func:`warm_up` does that before a campaign.
 
 :func:`run_one` is the per-run task, with the campaign-engine signature
 ``run_one(i, seedseq, **kwargs) -> dict`` (:mod:`shipid.studies.engine`).
