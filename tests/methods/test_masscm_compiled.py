@@ -97,7 +97,7 @@ def test_compiled_cold_search_reaches_the_trf_minimum(prep, kn):
         th0[6] = TRUE[6]
         x0 = np.delete(th0, 6)
         x0[-1] = np.clip(x0[-1], -2 + 2e-6, 2 - 2e-6)
-        status, x, _ = levenberg_marquardt(x0, lo, hi, *fun.kernel_args, 500, 1e-10, 1e-10, 1e-10)
+        status, x, _ = levenberg_marquardt(x0, lo, hi, *fun.kernel_args, 500, 1e-10, 1e-10, 1e-10, 1e-3)
         ref = least_squares(fun, x0, jac=fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                             gtol=1e-10, max_nfev=2000, x_scale="jac").x
         assert status == 1

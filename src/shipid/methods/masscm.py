@@ -575,14 +575,21 @@ def _compiled_search(args: tuple, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray
     """Step B(a) by the compiled kernels of :mod:`shipid.methods.masscm_search`, or None (caller: ``trf``).
 
     Warm iterations: the Gauss-Newton of :func:`_gauss_newton`. Cold start (first iteration): a bounded
-    Levenberg-Marquardt search to the tolerances of the ``trf`` search (``xtol = ftol = gtol = 1e-10``),
-    then the same Gauss-Newton as a polish where it confirms the minimum. A search that does not converge
-    returns None and the caller runs ``trf`` from ``x0``.
+    Levenberg-Marquardt search to the tolerances of the ``trf`` search (``xtol = ftol = gtol = 1e-10``;
+    a second try with strong initial damping when the first ends against a bound), then the same
+    Gauss-Newton as a polish where it confirms the minimum. A search that does not converge returns None
+    and the caller runs ``trf`` from ``x0``.
     """
     from shipid.methods.masscm_search import gauss_newton, levenberg_marquardt
     x = np.asarray(x0, dtype=float)
     if cold:
-        status, xl, _nfev = levenberg_marquardt(x, lo, hi, *args, 500, 1e-10, 1e-10, 1e-10)
+        # from the same start: first with little damping; if that ends against the |zm_bar| bound
+        # (a stationary point on the bound face, ~6 % of Table-3 starts), once more with strong initial
+        # damping (shorter first steps), which reaches the interior minimum in those cases
+        for mu0 in (1e-3, 1e2):
+            status, xl, _nfev = levenberg_marquardt(x, lo, hi, *args, 500, 1e-10, 1e-10, 1e-10, mu0)
+            if status == 1:
+                break
         if status != 1:
             return None
         # converged to the trf tolerances; a Gauss-Newton polish is kept when it confirms a minimum (it

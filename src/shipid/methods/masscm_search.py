@@ -179,12 +179,12 @@ def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, ma
 
 
 @njit(cache=True)
-def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_iter, xtol, ftol, gtol):
+def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_iter, xtol, ftol, gtol, mu0):
     """Bounded Levenberg–Marquardt (Marquardt scaling, Nielsen's damping update), iterates strictly
     inside ``(lo, hi)`` (a component that would cross a bound stops 0.995 of the way to it). Returns
     ``(status, x, nfev)``: status 1 converged at an interior point (step, cost or gradient tolerance),
     2 converged next to a bound, 0 not converged (iteration limit, non-finite values); the caller
-    accepts only 1."""
+    accepts only 1. ``mu0``: the initial damping (the caller tries 1e-3, then the more cautious 1e2)."""
     nf = x0.size
     x = x0.copy()
     r, J = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
@@ -197,7 +197,7 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     D = np.empty(nf)
     for j in range(nf):
         D[j] = max(np.sqrt(A[j, j]), 1e-300)
-    mu = 1e-3
+    mu = mu0                                  # initial damping relative to Marquardt's scaling
     nu = 2.0
     for _it in range(max_iter):
         gs = 0.0
