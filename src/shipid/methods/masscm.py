@@ -257,16 +257,7 @@ def _fir_moments_compiled(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: Mas
 
     s = _start(options)
     n = ds.y.size
-    c = ds.cache
-    if "X8" not in c:
-        dr0, dd = _diff2(ds.r_hat0), _diff2(ds.delta)
-        X = np.empty((8, n))
-        X[2], X[3] = dr0 - dr0.mean(), dd - dd.mean()
-        X[4:7] = ds.Phi[:, 2:].T
-        X[7] = ds.y
-        c["X8"] = X
-        c["nls"] = np.array([options.n_y, options.n_as, options.n_r, options.n_delta], dtype=np.int64)
-    X = c["X8"]
+    X, nls = _work(ds, options)
     X[0] = y_hat - y_hat.mean()
     da = _diff2(a_hat)
     X[1] = da - da.mean()
@@ -275,8 +266,25 @@ def _fir_moments_compiled(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: Mas
     T[0, 0], T[0, 1:] = 0.0, -Fl[7, :-1]      # the filter commutes with the delay
     T[1, :2], T[1, 2:] = 0.0, -Fl[7, :-2]
     T[2:] = Fl[4:]
-    ZtZ, ZtP = lag_moments(Fl[:4], c["nls"], T, s)
+    ZtZ, ZtP = lag_moments(Fl[:4], nls, T, s)
     return iv_compress_products(ZtZ, ZtP, n - s)
+
+
+def _work(ds: Dataset, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dataset work array of the compiled moments: rows 2..7 the iterate-independent signals
+    (``mu_hat`` of the black-box r (44), the rudder difference, both mean-removed; the measured differences
+    of (37); ``y``), rows 0, 1 overwritten per call; and the lags ``(n_y, n_as, n_r, n_delta)``."""
+    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
+    key = ("work", nls)
+    if key not in ds.cache:
+        dr0, dd = _diff2(ds.r_hat0), _diff2(ds.delta)
+        X = np.empty((8, ds.y.size))
+        X[0:2] = 0.0
+        X[2], X[3] = dr0 - dr0.mean(), dd - dd.mean()
+        X[4:7] = ds.Phi[:, 2:].T
+        X[7] = ds.y
+        ds.cache[key] = (X, np.array(nls, dtype=np.int64))
+    return ds.cache[key]
 
 
 def _fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
@@ -362,15 +370,14 @@ def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: K
     from shipid.methods.masscm_step import dataset_step
 
     c = ds.cache
-    if "X8" not in c:
-        _fir_moments_compiled(ds, np.ones(1), y_hat, a_hat, options)      # fills the work array once
+    X, nls = _work(ds, options)
     if "PhiT_c" not in c:
         c["PhiT_c"] = np.ascontiguousarray(ds.Phi.T)
     sim = np.array([terms["A1"][i], terms["d"][i], terms["k1"][i], terms["Kyaw"][i], terms["K_delta"][i],
                     terms["z_s"][i], known.g, known.U, ds.T], dtype=float)
     s = _start(options)
     status, stable, a, lam, yh, ah, ZtZ, ZtP = dataset_step(
-        ds.y, c["PhiT_c"], np.ascontiguousarray(g_mid, dtype=float), s, int(options.ar_order), c["X8"], c["nls"],
+        ds.y, c["PhiT_c"], np.ascontiguousarray(g_mid, dtype=float), s, int(options.ar_order), X, nls,
         ds.r_hat0, ds.delta, sim, y_hat, a_hat)
     if status != 0:                                   # reference path for this dataset
         eps = ds.y - ds.Phi @ g_mid
