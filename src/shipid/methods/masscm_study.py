@@ -19,9 +19,13 @@ that did not converge.
 
 Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --json``):
 
-* z_f known, initial values from the Table 3 bounds, 1000 runs: 0 flagged; m 0.399779 (std 2e-8),
-  zm_bar -0.182094 (std 9e-9); every run reaches the same solution (the 0.05 % offsets are the
-  bilinear-discretisation error of (32)). Table 3: m 0.4007 ± 0.0018, zm_bar -0.1821 ± 0.0004.
+* z_f known, initial values from the Table 3 bounds, 10 000 runs (2026-11-22, compiled path): 0 flagged;
+  m 0.3997776 (std 9.6e-8), zm_bar -0.1820948 (std 4.2e-8), 6.42 iterations on average; every run
+  reaches the same solution (the 0.05 % offsets are the bilinear-discretisation error of (32)). The
+  reference path (the implementation before the compiled one, commit af299ce) gives the same per run
+  (600 runs: m 0.3997776 ± 9.0e-8, largest per-run difference 2.8e-7); session 1 had printed
+  m 0.399779 ± 2e-8, zm_bar -0.182094 ± 9e-9 from an earlier state of the code.
+  Table 3: m 0.4007 ± 0.0018, zm_bar -0.1821 ± 0.0004.
 * z_f free (paper setting), ``--init linear``, 400 runs: 58 flagged; m 0.4014 ± 0.0032,
   zm_bar -0.18207 ± 0.00002, z_f -0.052 ± 0.033, k 16.0 ± 7.9, K_vdot 0.56 ± 0.65 — the Table 3
   pattern (tight m and zm_bar, wide k, K_vdot, z_f), explained by the exact-fit family in z_f.
@@ -38,7 +42,9 @@ every run (largest per-run difference of m 2.8e-7, the study's own spread 9e-8);
 on two ideal workers. Campaigns (2000 runs, extrapolated): 1 worker 21.8 s (109 s per 10 000), 2 local
 workers 26.8 s and a 2-worker LocalCluster 34.8 s — not faster than one worker because at load 2.5-2.9
 the other jobs leave the two workers about one core (each run's wall time 27 ms against 14.6 ms CPU);
-the 1 -> 2 worker speed-up and the 60 s goal must be re-measured on a quiet machine. Where a run's time
+the 1 -> 2 worker speed-up and the 60 s goal must be re-measured on a quiet machine. The full
+10 000-run study (``shipid study mass-cm-sensitivity --runs 10000 --workers 2 --seed 1 --json``, once,
+00:22 UTC, load average 2.1-2.7) took 105.6 s. Where a run's time
 goes now (about 6.3 outer iterations, 16 dataset-iterations): per dataset-iteration the FIR filter of
 eight signals (~75 us), the lag products (~90 us), the AR(40) fit (~45 us), the closed-loop simulation
 (~20 us) and LAPACK's 50x50 eigen-decomposition (~120-200 us, kept: the rank rule of
