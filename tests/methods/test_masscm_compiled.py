@@ -142,3 +142,20 @@ def test_fused_dataset_step_equals_reference_steps(prep, kn):
         for x, y in ((mom.R.T @ mom.R, ref.R.T @ ref.R), (mom.R.T @ mom.r, ref.R.T @ ref.r)):
             assert np.abs(x - y).max() <= 1e-7 * np.abs(y).max()
         assert np.isclose(mom.rss0, ref.rss0, rtol=1e-6)
+
+
+def test_delayed_y_columns_equal_explicit_products():
+    """The delayed-y regressor columns of Z^T Phi (37) by the window shift equal the explicit products."""
+    from shipid.estimate.iv import lag_matrix
+    from shipid.methods.masscm_step import _delayed_y_columns
+    rng = np.random.default_rng(10)
+    n, s, nls = 500, 17, np.array([16, 3, 1, 2], dtype=np.int64)
+    F = np.cumsum(rng.standard_normal((4, n)), axis=1)
+    yf = np.cumsum(rng.standard_normal(n))
+    Z = np.column_stack([lag_matrix(F[k], int(nl), s) for k, nl in enumerate(nls)])
+    Sy = Z.T @ yf[s:]
+    out = np.empty((Z.shape[1], 6))
+    _delayed_y_columns(F, nls, yf, Sy, s, out)
+    for d, col in ((1, 0), (2, 1)):
+        ref = -(Z.T @ yf[s - d:n - d])
+        assert np.allclose(out[:, col], ref, rtol=0, atol=1e-12 * np.abs(ref).max())

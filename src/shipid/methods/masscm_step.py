@@ -56,6 +56,45 @@ def _mean(x):
     return s / x.size
 
 
+@njit(cache=True, fastmath={"reassoc", "contract"})
+def _delayed_y_columns(F, nls, yf, Sy, s, ZtP):
+    """Columns 0, 1 of ``Z^T Phi`` (37): ``-sum_t F[k, t-i] yf[t-d]``, ``d = 1, 2``, ``t = s .. n-1``.
+
+    Moving the window back by ``d`` samples turns them into the y column ``Sy[(k, i-d)]`` plus edge terms:
+    ``sum_t f[t-i] y[t-1] = Sy[i-1] + f[s-i] y[s-1] - f[n-i] y[n-1]`` (i >= 1) and
+    ``sum_t f[t-i] y[t-2] = Sy[i-2] + f[s-i+1] y[s-1] + f[s-i] y[s-2] - f[n-i+1] y[n-1] - f[n-i] y[n-2]``
+    (i >= 2); the lags that would need a negative shift (i < d) are direct dot products.
+    """
+    n = yf.size
+    m = n - s
+    r = 0
+    for k in range(nls.size):
+        fk = F[k]
+        d10 = 0.0
+        for i in range(nls[k]):
+            if i == 0:
+                acc1 = 0.0
+                acc2 = 0.0
+                f0 = fk[s:]
+                y1 = yf[s - 1:n - 1]
+                y2 = yf[s - 2:n - 2]
+                for t in range(m):
+                    acc1 += f0[t] * y1[t]
+                    acc2 += f0[t] * y2[t]
+                d10 = acc1
+                D1, D2 = acc1, acc2
+            else:
+                D1 = Sy[r - 1] + fk[s - i] * yf[s - 1] - fk[n - i] * yf[n - 1]
+                if i == 1:                                   # sum_t f[t-1] y[t-2] from the i = 0 sum
+                    D2 = d10 + fk[s - 1] * yf[s - 2] - fk[n - 1] * yf[n - 2]
+                else:
+                    D2 = (Sy[r - 2] + fk[s - i + 1] * yf[s - 1] + fk[s - i] * yf[s - 2]
+                          - fk[n - i + 1] * yf[n - 1] - fk[n - i] * yf[n - 2])
+            ZtP[r, 0] = -D1
+            ZtP[r, 1] = -D2
+            r += 1
+
+
 @njit(cache=True)
 def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
     """Steps B(b)–(c) for one dataset; see the module docstring.
@@ -122,18 +161,14 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat)
     for t in range(n):
         X[1, t] -= md
     Fl = fir_filter(a, X)
-    Tm = np.empty((6, n))                  # Phi columns (37) then y, prefiltered; delays commute with L
-    Tm[0, 0] = 0.0
-    Tm[1, 0] = 0.0
-    Tm[1, 1] = 0.0
-    for t in range(1, n):
-        Tm[0, t] = -Fl[7, t - 1]
-    for t in range(2, n):
-        Tm[1, t] = -Fl[7, t - 2]
-    for j in range(4):
-        for t in range(n):
-            Tm[2 + j, t] = Fl[4 + j, t]
-    ZtZ, ZtP = lag_moments(Fl[:4], nls, Tm, s)
+    # products with the measured columns of (37) and y (rows 4..7 of Fl); the two delayed-y columns
+    # follow from the y column by the window shift (see _delayed_y_columns)
+    ZtZ, ZtT = lag_moments(Fl[:4], nls, Fl[4:8], s)
+    ZtP = np.empty((ZtT.shape[0], 6))
+    _delayed_y_columns(Fl, nls, Fl[7], ZtT[:, 3], s, ZtP)
+    for c in range(4):
+        for r in range(ZtT.shape[0]):
+            ZtP[r, 2 + c] = ZtT[r, c]
     return 0, stable, a, lam, y_hat, a_hat, ZtZ, ZtP
 
 
