@@ -22,7 +22,11 @@ developing, and three candidate axes (non-dimensional regression weighting, symm
 ones that looked good — with the reasons written below, did not look at held-out
 errors before the freeze, and made the CV scheme leave-one-run-out with errors pooled
 over all folds. What cannot be undone is that the axes themselves were once suggested
-by a look at test scores; weigh the margins accordingly.
+by a look at test scores; weigh the margins accordingly. Session 2 also knew the
+session-1 summary (Esso better than published on both splits; KVLCC2 worst held-out
+overshoot error 2.19°), which is why it looked for KVLCC2 improvements at all; the one
+it made (the steering-gear model below) rests on the training rudder records and the
+training-run CV only.
 
 Esso Osaka 3 m (``esso_heldout(split)``)
 ----------------------------------------
@@ -157,8 +161,9 @@ the HSVA particulars (error), same autopilot for both::
 Largest error 1.70° (2nd overshoot of 20/10 starboard): within the 2° target; the
 second overshoots are predicted too small on all three runs, as in CV. 60-s horizons
 on the held-out zig-zags: heading RMS 3.11 vs 11.98°, position 0.91 vs 3.87 m.
-Run time on the shared 2-core machine: about 12 min for the Esso study (the Wakita
-leave-one-run-out CV over 35 runs × 12 candidates is 8.5 min of it), 3.5 min for KVLCC2.
+Run time on the shared 2-core machine: 6–12 min for the Esso study depending on the
+load (the Wakita leave-one-run-out CV over 35 runs × 12 candidates is 5–8.5 min of it),
+1–3.5 min for KVLCC2; the slow tests that rerun both take about 7 min.
 """
 
 from __future__ import annotations
