@@ -154,6 +154,63 @@ def _norm(x):
 
 
 @njit(cache=True)
+def lstsq_qr(J, b):
+    """Least-squares solution of ``J x = b`` (full column rank, m >= n) by Householder QR.
+
+    What ``np.linalg.lstsq`` returns for a full-rank ``J`` (the Gauss-Newton steps here: 15 x 8), without
+    its SVD and workspace queries. Returns ``(ok, x)``; ``ok`` False when a column is (numerically) zero
+    or the triangular factor has a zero pivot (the caller then uses ``np.linalg.lstsq``).
+    """
+    m, n = J.shape
+    A = J.copy()
+    y = b.copy()
+    for c in range(n):
+        norm = 0.0
+        for i in range(c, m):
+            norm += A[i, c] * A[i, c]
+        norm = np.sqrt(norm)
+        if norm == 0.0:
+            return False, np.zeros(n)
+        alpha = -norm if A[c, c] >= 0 else norm
+        v0 = A[c, c] - alpha
+        vtv = v0 * v0
+        for i in range(c + 1, m):
+            vtv += A[i, c] * A[i, c]
+        for cc in range(c + 1, n):
+            dot = v0 * A[c, cc]
+            for i in range(c + 1, m):
+                dot += A[i, c] * A[i, cc]
+            f = 2.0 * dot / vtv
+            A[c, cc] -= f * v0
+            for i in range(c + 1, m):
+                A[i, cc] -= f * A[i, c]
+        dot = v0 * y[c]
+        for i in range(c + 1, m):
+            dot += A[i, c] * y[i]
+        f = 2.0 * dot / vtv
+        y[c] -= f * v0
+        for i in range(c + 1, m):
+            y[i] -= f * A[i, c]
+        A[c, c] = alpha
+    x = np.empty(n)
+    for i in range(n - 1, -1, -1):
+        v = y[i]
+        for k in range(i + 1, n):
+            v -= A[i, k] * x[k]
+        if A[i, i] == 0.0 or not np.isfinite(A[i, i]):
+            return False, np.zeros(n)
+        x[i] = v / A[i, i]
+    # rank check as lstsq's default cut-off: |R_ii| must not vanish against the largest
+    rmax = 0.0
+    for i in range(n):
+        rmax = max(rmax, abs(A[i, i]))
+    for i in range(n):
+        if abs(A[i, i]) <= max(m, n) * 2.220446049250313e-16 * rmax:
+            return False, np.zeros(n)
+    return True, x
+
+
+@njit(cache=True)
 def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_steps, xtol, floor):
     """Undamped Gauss–Newton of :func:`shipid.methods.masscm._gauss_newton` (``max_steps = 20``,
     ``xtol = 1e-10``, ``floor = 1e-9`` there); returns ``(ok, x)``. No default arguments: numba's dispatcher
@@ -163,7 +220,9 @@ def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, ma
     cost = r @ r
     for _k in range(max_steps):
         _, J = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
-        dx = np.linalg.lstsq(J, -r)[0]
+        ok, dx = lstsq_qr(J, -r)
+        if not ok:
+            dx = np.linalg.lstsq(J, -r)[0]
         xn = x + dx
         if not _inside(xn, lo, hi):
             return False, x
@@ -264,4 +323,4 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+__all__ = ["lstsq_qr", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
