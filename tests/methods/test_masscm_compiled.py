@@ -9,7 +9,8 @@ import pytest
 
 from shipid.methods.masscm import (MassCMOptions, _fir_moments_compiled, _fir_moments_numpy, _g_and_jac,
                                    _gauss_newton, _instruments, _residual_fun, _start, initial_state, prepare)
-from shipid.methods.masscm_search import g_and_jac, gauss_newton, known_array, levenberg_marquardt, residual
+from shipid.methods.masscm_search import (g_and_jac, gauss_newton, known_array, levenberg_marquardt, residual,
+                                          sim_terms)
 from shipid.methods.masscm_study import run_one
 from shipid.models.roll_reduced import KnownParams, to_moment
 from shipid.models.roll_sim import simulate_datasets
@@ -130,9 +131,13 @@ def test_fused_dataset_step_equals_reference_steps(prep, kn):
     Ts = np.array([ds.T for ds in prep])
     G = discrete_coeffs(th, kn, conds, Ts, moment=True)
     terms = roll_terms(th, kn, conds, moment=True)
+    code = np.array([{"nominal": 0, "calibration": 1, "loaded": 2}[c] for c in conds])
+    sims = sim_terms(th, code, Ts, known_array(kn))
+    for j, name in enumerate(("A1", "d", "k1", "Kyaw", "K_delta", "z_s")):
+        assert np.allclose(sims[:, j], terms[name], rtol=1e-14, atol=0), name
     s = _start(opt)
     for i, ds in enumerate(prep):
-        L, lam, sim, mom = _step_compiled(ds, G[i], terms, i, kn, ds.y_hat0, ds.a_hat0, opt)
+        L, lam, sim, mom = _step_compiled(ds, G[i], sims[i], th, i, kn, ds.y_hat0, ds.a_hat0, opt)
         Lr = hannan_rissanen((ds.y - ds.Phi @ G[i])[s:], opt.ar_order, 0, n_long=opt.ar_order)
         assert np.allclose(L.a, Lr.a, rtol=0, atol=1e-9) and np.isclose(lam, Lr.lam, rtol=1e-10)
         yr, ar = _closed_loop_sim(ds, terms, i, kn)

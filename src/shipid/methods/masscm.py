@@ -357,14 +357,15 @@ def _fused(options: MassCMOptions) -> bool:
             and options.ar_order > 0 and options.instruments == "lags")
 
 
-def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: KnownParams, y_hat, a_hat,
-                   options: MassCMOptions):
+def _step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.ndarray, i: int,
+                   known: KnownParams, y_hat, a_hat, options: MassCMOptions):
     """Steps (b)-(c) of one dataset by :func:`shipid.methods.masscm_step.dataset_step`.
 
     The same computation as :func:`_noise_model` (AR), :func:`_closed_loop_sim` and :func:`_fir_moments`
     (tests compare them); where the compiled AR fit declines (normal equations not positive definite,
     constant residual) this dataset is done on the reference path. Returns ``(L, lam, sim, moments)``
-    with ``sim`` None when the model is unstable (instruments kept).
+    with ``sim`` None when the model is unstable (instruments kept). ``sim``: row i of
+    :func:`shipid.methods.masscm_search.sim_terms` at ``th_mid`` (the terms of :func:`roll_terms`).
     """
     from shipid.estimate.arma import ARMA
     from shipid.methods.masscm_step import dataset_step
@@ -373,8 +374,6 @@ def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: K
     X, nls = _work(ds, options)
     if "PhiT_c" not in c:
         c["PhiT_c"] = np.ascontiguousarray(ds.Phi.T)
-    sim = np.array([terms["A1"][i], terms["d"][i], terms["k1"][i], terms["Kyaw"][i], terms["K_delta"][i],
-                    terms["z_s"][i], known.g, known.U, ds.T], dtype=float)
     s = _start(options)
     status, stable, a, lam, yh, ah, ZtZ, ZtP = dataset_step(
         ds.y, c["PhiT_c"], np.ascontiguousarray(g_mid, dtype=float), s, int(options.ar_order), X, nls,
@@ -382,7 +381,8 @@ def _step_compiled(ds: Dataset, g_mid: np.ndarray, terms: dict, i: int, known: K
     if status != 0:                                   # reference path for this dataset
         eps = ds.y - ds.Phi @ g_mid
         L = _noise_model(eps[s:], options)
-        sim_out = _closed_loop_sim(ds, terms, i, known)
+        terms = roll_terms(th_mid, known, [ds.condition], moment=True)
+        sim_out = _closed_loop_sim(ds, terms, 0, known)
         yh, ah = sim_out if sim_out is not None else (y_hat, a_hat)
         return L, L.lam, sim_out, _build_moments([ds], [L], [yh], [ah], options)[0]
     L = ARMA(a, np.ones(1), float(lam))
@@ -857,13 +857,16 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         th_mid = theta if th_prev is None else 0.5 * (theta + th_prev)
         th_prev = theta
         G_mid = _coeffs(th_mid, known, conds, Ts, options)
-        terms = roll_terms(th_mid, known, conds, moment=True)
         newL, lam = [], []
-        if _fused(options):
+        if _fused(options) and all(c in _CODES for c in conds):
             # the same steps (b)-(c) by one compiled call per dataset (shipid.methods.masscm_step)
+            from shipid.methods.masscm_search import sim_terms
+            sims = sim_terms(th_mid, np.array([_CODES[c] for c in conds], dtype=np.int64), Ts,
+                             _known_array(known))
             moms = []
             for i, ds in enumerate(prep):
-                L_i, lam_i, sim, mom = _step_compiled(ds, G_mid[i], terms, i, known, y_hats[i], a_hats[i], options)
+                L_i, lam_i, sim, mom = _step_compiled(ds, G_mid[i], sims[i], th_mid, i, known, y_hats[i],
+                                                      a_hats[i], options)
                 newL.append(L_i)
                 lam.append(L_i.lam)
                 moms.append(mom)
@@ -875,6 +878,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
             state = _State(moms, lam, newL, Ts, conds)
             continue
+        terms = roll_terms(th_mid, known, conds, moment=True)
         for i, ds in enumerate(prep):
             eps = ds.y - ds.Phi @ G_mid[i]
             s = _start(options)

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 #: Layout of the ``kc`` array of known constants used by the kernels.
-KC_FIELDS = ("M", "g", "zg_bar", "zs_bar", "m_c", "zc_bar")
+KC_FIELDS = ("M", "g", "zg_bar", "zs_bar", "m_c", "zc_bar", "U")
 
 
 def known_array(known) -> np.ndarray:
@@ -90,6 +90,37 @@ def g_and_jac(th, code, Ts, kc, jac):
                 J[i, 3, p] = ((2 * T * (1.0 if p == 3 else 0.0)) - row[3] * dden) / den
                 J[i, 4, p] = ((2 * T * (1.0 if p == 5 else 0.0)) - row[4] * dden) / den
     return G, J
+
+
+@njit(cache=True)
+def sim_terms(th, code, Ts, kc):
+    """Per dataset ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]``: the terms of
+    :func:`shipid.models.roll_reduced.roll_terms` (moment parameterisation) that the closed-loop
+    instrument simulation (46)–(47) needs (:func:`shipid.methods.masscm_step.dataset_step`)."""
+    k, A_x, d, K_r, K_v, K_d, z_f, q, zm = th[0], th[1], th[2], th[3], th[4], th[5], th[6], th[7], th[8]
+    M, g, zgb, zsb, m_c, zc_bar, U = kc[0], kc[1], kc[2], kc[3], kc[4], kc[5], kc[6]
+    zg, zs = zgb + z_f, zsb + z_f
+    n = code.size
+    out = np.empty((n, 9))
+    for i in range(n):
+        c = code[i]
+        if c == 0:
+            qi, zb = 0.0, 0.0
+        elif c == 1:
+            qi, zb = m_c * (zc_bar + z_f), zc_bar
+        else:
+            qi, zb = q, zm
+        B = K_v + M * zg + qi
+        out[i, 0] = A_x + M * zg ** 2 + qi * (zb + z_f)
+        out[i, 1] = d
+        out[i, 2] = k + M * g * zg + qi * g
+        out[i, 3] = K_r + U * B
+        out[i, 4] = K_d
+        out[i, 5] = zs
+        out[i, 6] = g
+        out[i, 7] = U
+        out[i, 8] = Ts[i]
+    return out
 
 
 @njit(cache=True)
@@ -323,4 +354,4 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["lstsq_qr", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+__all__ = ["sim_terms", "lstsq_qr", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
