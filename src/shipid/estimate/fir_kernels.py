@@ -200,12 +200,17 @@ def ar_normal_equations(x, p):
     for d in range(p):
         xd = x[p - 1 - d:n - 1 - d]
         ac = 0.0
-        ag = 0.0
         for t in range(m):
             ac += x1[t] * xd[t]
-            ag += x0[t] * xd[t]
         c[d] = ac
-        g[d] = ag
+    # g[d] is c[d+1] over the window one sample later: g[d] = c[d+1] - x[p-1] x[p-2-d] + x[n-1] x[n-2-d]
+    for d in range(p - 1):
+        g[d] = c[d + 1] - x[p - 1] * x[p - 2 - d] + x[n - 1] * x[n - 2 - d]
+    xl = x[0:n - p]                                   # the last lag directly: x[t - p], t = p .. n-1
+    ag = 0.0
+    for t in range(m):
+        ag += x0[t] * xl[t]
+    g[p - 1] = ag
     G = np.zeros((p, p))
     for d in range(p):
         v = c[d]
