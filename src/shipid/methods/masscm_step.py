@@ -12,7 +12,8 @@ For the default configuration (AR noise model ``L = A(q)``, lag instruments (45)
 :func:`dataset_step` does all four in one compiled call (the Python and numpy overhead of the separate
 calls was a third of a run). The arithmetic is that of the functions named above (tests compare them);
 the compression of the moments (eigen-decomposition with the rank rule) stays in
-:func:`shipid.estimate.iv.iv_compress_products`.
+:func:`shipid.estimate.iv.iv_compress_products`. Compiled with ``cache=True``; a cache older than
+:mod:`shipid.estimate.fir_kernels` (whose functions are compiled into these) is dropped at import.
 """
 
 from __future__ import annotations
@@ -20,7 +21,30 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from shipid.estimate import fir_kernels
 from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
+
+
+def _drop_stale_cache() -> None:
+    """Remove this module's numba cache index when :mod:`shipid.estimate.fir_kernels` is newer.
+
+    numba invalidates a cached function only when its own source file changes, but the kernels here
+    compile the ``fir_kernels`` functions into themselves: after an edit there, the cached
+    :func:`dataset_step` would silently keep the old code. Deleting the stale index files makes numba
+    compile afresh (once) and write a new cache.
+    """
+    import glob
+    import os
+    try:
+        dep = os.path.getmtime(fir_kernels.__file__)
+        for f in glob.glob(os.path.join(os.path.dirname(__file__), "__pycache__", "masscm_step.*.nbi")):
+            if os.path.getmtime(f) < dep:
+                os.remove(f)
+    except OSError:                     # read-only tree, a concurrent worker removed it first: harmless
+        pass
+
+
+_drop_stale_cache()
 
 
 @njit(cache=True)
