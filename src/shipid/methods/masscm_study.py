@@ -31,27 +31,29 @@ Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --jso
   pattern (tight m and zm_bar, wide k, K_vdot, z_f), explained by the exact-fit family in z_f.
 * z_f free, ``--init given`` (random start), 200 runs: 106 flagged; m 0.4028 ± 0.0013 over the rest.
 
-Speed (``benchmarks/bench_masscm_study.py 2000 200``, the 2-core shared VM, z_f known). :func:`run_one`
-uses the compiled path (``compute="fast"``: :mod:`shipid.methods.masscm_step`,
+Speed (``python benchmarks/bench_masscm_study.py 2000 300``, the 2-core shared VM, z_f known).
+:func:`run_one` uses the compiled path (``compute="fast"``: :mod:`shipid.methods.masscm_step`,
 :mod:`shipid.methods.masscm_search`, :mod:`shipid.estimate.fir_kernels`; the same Algorithm 1, the
-reference path is kept and compared run by run). Measured 2026-11-22 00:27 UTC at load average 1.1-1.5
-(other engineers' jobs; the host's speed also drifted by ~30 % between runs, so compare only numbers
-taken together): in one process, 200 runs per path interleaved, 10.1 ms/run compiled against 39.9 ms/run
-on the reference path (the previous implementation), 3.95x (3.4x at 00:04, load 2.7: 9.5 vs 32.2); the
-same solution in every run (largest per-run difference of m 2.8e-7, the study's own spread 9e-8).
-Campaigns of 2000 runs: 1 worker 23.5 s, 2 local workers 13.0 s (1 -> 2 speed-up 1.80x), 2-worker
-LocalCluster 16.7 s (1.28x the pool); extrapolated to 10 000 runs 117 s, 65 s and 84 s. The one full
+reference path is kept and compared run by run). Measured 2026-11-22 00:36 UTC, load average 1.1-1.5
+(other engineers' jobs; the host's speed also drifts by ~30 % between minutes, so compare only numbers
+taken together): in one process, 300 runs per path interleaved, 9.6 ms/run compiled against 46.4 ms/run
+on the reference path (the previous implementation), 4.8x (3.4x-4.0x in earlier runs of the same
+benchmark); the same solution in every run (largest per-run difference of m 2.8e-7, the study's own
+spread 9e-8). Campaigns of 2000 runs: 1 worker 22.0 s, 2 local workers 12.4 s (1 -> 2 speed-up
+1.78x), 2-worker LocalCluster 13.0 s (1.05x the pool); linear extrapolation to 10 000 runs 110 s,
+62 s and 65 s (it counts the ~1.2 s worker start-up five times: about 58 s for 2 workers). The one full
 10 000-run study (``shipid study mass-cm-sensitivity --runs 10000 --workers 2 --seed 1 --json``,
-00:22 UTC, load 2.1-2.7, i.e. about one core left to the two workers) took 105.6 s. The 60 s goal is
-within reach (about 10 ms/run on each of two workers plus ~1.5 s start-up per worker) but was not
-measured below 60 s on this shared machine; the lead's quiet re-measurement decides. Where a run's time
-goes now (about 6.3 outer iterations, 16 dataset-iterations): per dataset-iteration one compiled step
-(~0.29 ms: FIR filter of eight signals, lag products, AR(40) fit, closed-loop simulation) and LAPACK's
-50x50 eigen-decomposition (~0.13 ms; kept: the rank rule of :func:`shipid.estimate.iv.iv_compress_products`
-needs the eigenvalues, and the cheaper LAPACK drivers are not faster at this size); the searches ~0.5 ms;
-Python glue ~1 ms. The numba kernels are compiled once per machine (about 40 s at load 4; cached on
-disk, ``cache=True``) and loaded by each worker in about a second; :func:`warm_up` does that before a
-campaign.
+00:22 UTC, an earlier build about 10 % slower, load 2.1-2.7, i.e. about one core left to the two
+workers) took 105.6 s. So the 60 s goal is at the edge on this machine and was not measured below 60 s;
+the lead's quiet re-measurement decides. Where a run's time goes now (about 6.4 outer iterations,
+16 dataset-iterations): per dataset-iteration one compiled step (~0.27 ms: FIR filter of eight
+signals, lag products, AR(40) fit, closed-loop simulation) and LAPACK's 50x50 eigen-decomposition
+(~0.13-0.16 ms; kept: the rank rule of :func:`shipid.estimate.iv.iv_compress_products` needs the
+eigenvalues, and the subset drivers are slower at this size); the searches ~0.3 ms; Python glue ~1.5 ms.
+Whether a run stops after 6 or 9 iterations (dg just around the 1e-5 tolerance at iteration 6, ~12 % of
+runs take 9) varies with rounding, on either path. The numba kernels are compiled once per machine
+(30-40 s; cached on disk, ``cache=True``) and loaded by each worker in about a second; :func:`warm_up`
+does that before a campaign (the CLI calls it).
 
 :func:`run_one` is the per-run task, with the campaign-engine signature
 ``run_one(i, seedseq, **kwargs) -> dict`` (:mod:`shipid.studies.engine`).
