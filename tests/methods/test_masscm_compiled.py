@@ -180,3 +180,13 @@ def test_householder_least_squares_equals_lstsq():
     assert ok and np.allclose(x, np.linalg.lstsq(J, b, rcond=None)[0], rtol=1e-10, atol=0)
     J[:, 3] = 2 * J[:, 1]                                            # rank deficient: declined
     assert not lstsq_qr(J, b)[0]
+
+
+def test_spd_solve_equals_numpy():
+    from shipid.methods.masscm_search import _spd_solve
+    rng = np.random.default_rng(12)
+    A = rng.standard_normal((20, 8))
+    H, b = A.T @ A + 1e-3 * np.eye(8), rng.standard_normal(8)
+    ok, x = _spd_solve(H, b)
+    assert ok and np.allclose(x, np.linalg.solve(H, b), rtol=1e-11, atol=0)
+    assert not _spd_solve(-H, b)[0]

@@ -185,12 +185,45 @@ def _norm(x):
 
 
 @njit(cache=True)
+def _spd_solve(H, b):
+    """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``."""
+    n = b.size
+    L = np.zeros((n, n))
+    for j in range(n):
+        d = H[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return False, np.zeros(n)
+        d = np.sqrt(d)
+        L[j, j] = d
+        for i in range(j + 1, n):
+            v = H[i, j]
+            for k in range(j):
+                v -= L[i, k] * L[j, k]
+            L[i, j] = v / d
+    z = np.empty(n)
+    for i in range(n):
+        v = b[i]
+        for k in range(i):
+            v -= L[i, k] * z[k]
+        z[i] = v / L[i, i]
+    x = np.empty(n)
+    for i in range(n - 1, -1, -1):
+        v = z[i]
+        for k in range(i + 1, n):
+            v -= L[k, i] * x[k]
+        x[i] = v / L[i, i]
+    return True, x
+
+
+@njit(cache=True)
 def lstsq_qr(J, b):
     """Least-squares solution of ``J x = b`` (full column rank, m >= n) by Householder QR.
 
     What ``np.linalg.lstsq`` returns for a full-rank ``J`` (the Gauss-Newton steps here: 15 x 8), without
     its SVD and workspace queries. Returns ``(ok, x)``; ``ok`` False when a column is (numerically) zero
-    or the triangular factor has a zero pivot (the caller then uses ``np.linalg.lstsq``).
+    or the triangular factor has a (relatively) vanishing pivot.
     """
     m, n = J.shape
     A = J.copy()
@@ -244,16 +277,17 @@ def lstsq_qr(J, b):
 @njit(cache=True)
 def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_steps, xtol, floor):
     """Undamped Gauss–Newton of :func:`shipid.methods.masscm._gauss_newton` (``max_steps = 20``,
-    ``xtol = 1e-10``, ``floor = 1e-9`` there); returns ``(ok, x)``. No default arguments: numba's dispatcher
-    takes its slow path (~0.3 ms) for omitted ones."""
+    ``xtol = 1e-10``, ``floor = 1e-9`` there), the step by :func:`lstsq_qr` (a rank-deficient Jacobian
+    returns not ok, where the reference would take a minimum-norm step); returns ``(ok, x)``. No default
+    arguments: numba's dispatcher takes its slow path (~0.3 ms) for omitted ones."""
     x = x0.copy()
     r, _ = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, False)
     cost = r @ r
     for _k in range(max_steps):
         _, J = residual(x, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, True)
         ok, dx = lstsq_qr(J, -r)
-        if not ok:
-            dx = np.linalg.lstsq(J, -r)[0]
+        if not ok:                       # rank-deficient Jacobian: not converged here (caller: trf)
+            return False, x
         xn = x + dx
         if not _inside(xn, lo, hi):
             return False, x
@@ -310,7 +344,13 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
                     H[k, j] = 0.0
                 H[j, j] = 1.0
                 rhs[j] = 0.0
-        dx = np.linalg.solve(H, rhs)
+        ok, dx = _spd_solve(H, rhs)
+        if not ok:                        # not positive definite (rounding): more damping
+            mu *= nu
+            nu *= 2.0
+            if mu > 1e30:
+                return 0, x, nfev
+            continue
         # components that would leave the box stop short of the bound (0.995 of the way, as trf's
         # step-back ratio); the others keep their step (a projected step: no stall at a bound)
         for j in range(nf):
