@@ -52,7 +52,7 @@ signals, lag products, AR(40) fit, closed-loop simulation) and LAPACK's 50x50 ei
 eigenvalues, and the subset drivers are slower at this size); the searches ~0.3 ms; Python glue ~1.5 ms.
 Whether a run stops after 6 or 9 iterations (dg just around the 1e-5 tolerance at iteration 6, ~12 % of
 runs take 9) varies with rounding, on either path. The numba kernels are compiled once per machine
-(30-40 s; cached on disk, ``cache=True``) and loaded by each worker in about a second; :func:`warm_up`
+(about 27 s for all of them at load 1; cached on disk, ``cache=True``) and loaded by each worker in about a second; :func:`warm_up`
 does that before a campaign (the CLI calls it).
 
 :func:`run_one` is the per-run task, with the campaign-engine signature
