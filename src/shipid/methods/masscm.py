@@ -42,6 +42,24 @@ exact fit, with ``m = rho m_c (zc_bar + z_f)/(zm_bar + z_f)``. The estimator the
 ``z_f`` as a known input, a Gaussian prior, or (paper reproduction) leaves it free, in which case
 the reported ``m`` is conditional on the ``z_f`` where the search stopped and says so.
 
+z_f free (no prior), the search (*): the criterion (40) is exactly flat along the exact-fit family, so
+step B(a) has a line of minimisers. Diagnosis (2026-11-22, the §5 study, data seed 0, campaign seed 1):
+with the original search 107 of 200 random-start runs (``--init given``) and 58 of 400 ``--init linear``
+runs were flagged, almost all because the FIRST (cold) search stopped far from the minimum
+(criterion ~1.5e-4 where the same z_f admits ~1.5e-10): a finite-difference Jacobian on the flat
+direction ended trf early, and the physical bounds ``k, A_x, d >= 0`` of the z_f-free search trapped it
+in degenerate points (the "smooth signal" ``y_t ~ 2 y_{t-1} - y_{t-2}`` with A2 huge and A_x on its
+bound, or the load moment -> 0 at ``|zm_bar| = zm_bound``). The IV iterations started from such a
+model then drift to A2 -> 0 (flagged ``A2 <= 0`` / not converged) — with a good first iterate the same
+iterations converge at every fixed z_f we tried in the physical range. The convergence rule was not
+the cause: it is already on the identifiable g_i, not on z_f. Now: (1) the z_f-free trf search uses the
+exact Jacobian; (2) the cold search is followed by the z_f-known cold search (compiled or trf, from the
+same start) at the z_f where the free one stopped, and the lower criterion value wins
+(:func:`_held_cold_search`); (3) the warm searches hold z_f there (minimum-norm: the null direction of
+the flat criterion is not moved), i.e. they are the z_f-known searches at that z_f. After: 5 of the 200
+``given`` and 21 of the 400 ``linear`` runs flagged, all as not converged (no implausible estimate); see
+:mod:`shipid.methods.masscm_study`. z_f known and z_f with a prior are unchanged.
+
 Standard errors come from the asymptotic covariance of the weighted IV estimate,
 ``Cov = (sum_i G_i^T R_i^T R_i G_i / lam_i)^-1`` with ``G_i = dg_i/dtheta`` (exact, complex step),
 valid when the prefiltered residuals are white (checked in the diagnostics).
@@ -55,7 +73,8 @@ with a compiled projection/QR (:func:`shipid.estimate.iv.iv_compress_products_co
 search (:mod:`shipid.methods.masscm_search`: the same Gauss–Newton; the first, cold-start search by a
 bounded Levenberg–Marquardt to trf's tolerances instead of scipy's trf, which stays the fallback). Tests
 compare every piece with the reference path and the study run by run (same solution within 3e-7 in m,
-the per-run spread of the study itself). The z_f-free (flat) case keeps the original trf search.
+the per-run spread of the study itself). With z_f free the cold search with z_f moving is trf (exact
+Jacobian) on either path; everything after it is the z_f-known search at the z_f it reached.
 
 Channels per dataset (a :class:`shipid.data.trial.Trial`): ``p`` roll rate (y of 9a), ``a_s``
 tangential acceleration (9b), ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta`` rudder.
@@ -607,6 +626,38 @@ def _compiled_search(args: tuple, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray
     return x if ok else None
 
 
+def _held_cold_search(theta: np.ndarray, theta_start: np.ndarray, fun, x: np.ndarray, state: "_State",
+                      known: KnownParams, held: tuple, prior, options: MassCMOptions) -> np.ndarray:
+    """Second stage of the cold search with z_f free (no prior): the z_f-known cold search at the z_f
+    where the free (trf) search stopped, from the original start; the lower criterion value wins.
+
+    The criterion (40) is exactly flat along the exact-fit family, so its minimum over the other eight
+    parameters at any fixed z_f (inside the physical range reached by the free search) is the global one;
+    the free search, pressed against the physical bounds ``k, A_x, d >= 0`` or ``|zm_bar| <= zm_bound``,
+    can stop in a degenerate local minimum instead (the "smooth signal" ``y_t ~ 2 y_{t-1} - y_{t-2}``,
+    A2 -> large, or the load moment -> 0). The same search as with z_f known (compiled or trf, from the
+    same start) does not.
+    """
+    free_h, lo_h, hi_h, lo_in_h, hi_in_h = held
+    th_fix = theta_start.copy()
+    th_fix[I_ZF] = theta[I_ZF]
+    x0 = np.clip(th_fix[free_h], lo_in_h, hi_in_h)
+    x2 = None
+    if options.compute == "fast":
+        x2 = _compiled_search(_kernel_args(state, known, free_h, th_fix, prior), x0, lo_h, hi_h, cold=True)
+    fun2 = _residual_fun(state, known, free_h, th_fix, prior)[0]
+    if x2 is None:
+        x2 = least_squares(fun2, x0, jac=fun2.jac, method="trf", bounds=(lo_h, hi_h), xtol=1e-10, ftol=1e-10,
+                           gtol=1e-10, max_nfev=2000, x_scale="jac").x
+    r1, r2 = fun(x), fun2(x2)
+    c1, c2 = float(r1 @ r1), float(r2 @ r2)
+    if np.isfinite(c2) and c2 < c1:
+        th2 = th_fix.copy()
+        th2[free_h] = x2
+        return th2
+    return theta
+
+
 def _jac_cs(fun, x):
     J = np.empty((fun(x).size, x.size))
     for j in range(x.size):
@@ -811,33 +862,47 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     lo_in[fl] += 1e-6 * np.maximum(1.0, np.abs(lo[fl]))
     hi_in[fh] -= 1e-6 * np.maximum(1.0, np.abs(hi[fh]))
     flat = bool(free[I_ZF] and prior is None)
-    compiled = not flat and options.compute == "fast"
+    free_all = free
+    if flat:
+        # (*) z_f free without a prior (module docstring, "z_f free"): z_f moves only in the first (cold)
+        # search; the warm searches hold it where that search left it (a minimum-norm step: the criterion
+        # is exactly flat along the exact-fit family, so its null direction is not moved) and are then the
+        # z_f-known searches at that z_f
+        izf = int(np.sum(free[:I_ZF]))
+        free_held = free.copy()
+        free_held[I_ZF] = False
+        held = (free_held, np.delete(lo, izf), np.delete(hi, izf), np.delete(lo_in, izf), np.delete(hi_in, izf))
     search_state = state
     for j in range(1, options.max_iter + 1):
         search_state = state
+        if flat and j == 2:
+            free, lo, hi, lo_in, hi_in = held
+        cold_flat = flat and j == 1
+        compiled = options.compute == "fast" and not cold_flat
         # the compiled search needs only the kernel arguments; the Python residual function (closures)
         # is built where it is used: the trf fallback, the reference path and the final Jacobian
         fun = None if compiled else _residual_fun(state, known, free, theta, prior)[0]
         x0 = np.clip(theta[free], lo_in, hi_in)
         # (*) warm iterations (j >= 2) start next to the minimum: plain Gauss-Newton steps reach it in a
         # few evaluations; the trust-region search is the fallback whenever they do not converge cleanly
-        # (z_f free without a prior: the flat z_f direction makes where the search stops depend on the
-        # numerical path, so there the search stays the original trust-region one with finite-difference
-        # Jacobian, which keeps those (unidentified) results unchanged)
+        # (the cold search with z_f free stays trf, with the exact Jacobian, on either path)
         x = None
         if compiled:
             # the same searches compiled; the cold start (j = 1) by Levenberg-Marquardt + Gauss-Newton
             # instead of trf (same tolerances; trf remains the fallback)
             x = _compiled_search(_kernel_args(state, known, free, theta, prior), x0, lo, hi, cold=j == 1)
-        elif j > 1 and not flat:
+        elif j > 1:
             x = _gauss_newton(fun, fun.jac, x0, lo, hi)
         if x is None:
             if fun is None:
                 fun = _residual_fun(state, known, free, theta, prior)[0]
-            x = least_squares(fun, x0, jac="2-point" if flat else fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
+            x = least_squares(fun, x0, jac=fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                               gtol=1e-10, max_nfev=2000, x_scale="jac").x
+        theta_start = theta
         theta = theta.copy()
         theta[free] = x
+        if cold_flat:
+            theta = _held_cold_search(theta, theta_start, fun, x, state, known, held, prior, options)
         G = _coeffs(theta, known, conds, Ts, options)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
@@ -897,6 +962,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         lam = np.asarray(lam)
         lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
         state = _State(_build_moments(prep, newL, y_hats, a_hats, options), lam, newL, Ts, conds)
+    free = free_all
     J = None
     if jacobian and j > 0 and np.all(np.isfinite(theta)):
         fun = _residual_fun(search_state, known, free, theta, prior)[0]     # the last search's criterion
