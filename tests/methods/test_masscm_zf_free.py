@@ -4,8 +4,9 @@ With z_f free the criterion (40) is exactly flat along the exact-fit family (iss
 a run can only legitimately differ from the z_f-known study by where on that family it stops; zm_bar and
 rho = m z_m/(m_c z_c) are identifiable and must come out as with z_f known, and m must equal the family's
 m(z_f) at the z_f where the run stopped. Before the fix of the z_f-free search (finite-difference Jacobian,
-z_f moving in every iteration, no second cold search) 13 of these 20 runs were flagged; after it 2 (1 of
-the first 40); see :mod:`shipid.methods.masscm_study` for the 200/400-run counts.
+z_f moving in every iteration, no second cold search) 20 of these 40 runs were flagged (A2 <= 0, m <= 0,
+not converged); after it 1 (run 29: not converged, Algorithm 1 in a period-4 cycle with zm_bar and rho
+settled); see :mod:`shipid.methods.masscm_study` for the 200/400-run counts.
 """
 
 import numpy as np
@@ -26,12 +27,14 @@ def kn():
 
 @pytest.fixture(scope="module")
 def free_runs():
-    return [run_one(i, 1, zf_mode="free", init="given") for i in range(20)]   # Table 3 random starts
+    return [run_one(i, 1, zf_mode="free", init="given") for i in range(40)]   # Table 3 random starts
 
 
 def test_zf_free_runs_are_rarely_flagged(free_runs):
     flagged = [o for o in free_runs if o["implausible"]]
-    assert len(flagged) <= 3, [o["reasons"] for o in flagged]      # was 13 of 20 before the fix
+    assert len(flagged) <= 3, [o["reasons"] for o in flagged]      # was 20 of 40 before the fix
+    for o in flagged:       # what remains is the IV iteration cycling, not an implausible estimate
+        assert o["reasons"] == ["not converged"] and o["identifiable_drift"] < 1e-4
 
 
 def test_zf_free_identifiable_quantities_as_with_zf_known(free_runs, kn):
