@@ -59,9 +59,9 @@ def test_design_prbs_subprocess():
                        capture_output=True, text=True, timeout=300, env={**__import__("os").environ,
                                                                          "SHIPID_NO_PROGRESS": "1"})
     assert r.returncode == 0, r.stderr
-    out = json.loads(r.stdout)
-    assert out["optimum_sway"]["amplitude_deg"] == 35.0  # larger rudder, better conditioned (Fig. 7)
-    assert len(out["log10_det_sway"]) == 2
+    out = json.loads(r.stdout)  # a shipid Result (method "ebm-design") since --out/--json write one
+    assert out["estimates"]["amplitude"]["value"] == 35.0  # larger rudder, better conditioned (Fig. 7)
+    assert len(out["series"]["contours"]["d_optimal"]["z"]) == 2
 
 
 def test_design_prbs_bad_grid(capsys):

@@ -73,6 +73,8 @@ class DesignGrid:
     seeds: tuple[int, ...]
     duration: float
     current_speed: float
+    dt: float = 1.0                 # s, simulation / sampling step
+    vessel: str = "esso-osaka"
 
     def optimum(self, mode: str = "sway") -> tuple[float, float, float]:
         """(amplitude deg, period s, log10 |WᵀW|) of the best grid point for ``mode``
@@ -106,7 +108,7 @@ def prbs_grid(amplitudes=(5, 10, 15, 20, 25, 30, 35), periods=(15, 30, 45, 60, 7
             W[i, j] = np.mean([v["sway"] for v in vals])
             if progress is not None:
                 progress()
-    return DesignGrid(A, T, S, W, tuple(int(s) for s in seeds), float(duration), cs)
+    return DesignGrid(A, T, S, W, tuple(int(s) for s in seeds), float(duration), cs, float(dt), vessel)
 
 
 def current_sweep(amplitude_deg: float, period: float, speeds=(-4.0, -2.0, 0.0, 2.0, 4.0), *,
@@ -126,4 +128,116 @@ def current_sweep(amplitude_deg: float, period: float, speeds=(-4.0, -2.0, 0.0, 
     return out
 
 
-__all__ = ["log_det_criterion", "prbs_criterion", "DesignGrid", "prbs_grid", "current_sweep"]
+def _neighbours(values: np.ndarray, v: float) -> str:
+    """Grid resolution around ``v``: the neighbouring grid values (or 'grid edge')."""
+    vals = np.sort(np.asarray(values, dtype=float))
+    i = int(np.argmin(np.abs(vals - v)))
+    lo = f"{vals[i - 1]:g}" if i > 0 else "grid edge"
+    hi = f"{vals[i + 1]:g}" if i + 1 < vals.size else "grid edge"
+    return f"{lo} … {hi}"
+
+
+def _grid_table(grid: DesignGrid, values: np.ndarray, what: str, paper: str | None) -> dict:
+    from shipid.report.convention import table
+
+    cols = ["amplitude"] + [f"T = {p:g} s" for p in grid.periods]
+    rows = [[float(a)] + [float(v) for v in values[i]] for i, a in enumerate(grid.amplitudes)]
+    return table(cols, rows, units=["deg"] + ["-"] * grid.periods.size, paper=paper,
+                 title=f"log10 |WᵀW| of the {what} regressors on the grid (rows: PRBS amplitude, columns: "
+                       f"clock period; {grid.duration:g} s runs, mean over {len(grid.seeds)} PRBS seed(s)).")
+
+
+def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict | None = None):
+    """The D-optimality map as a :class:`shipid.result.Result` (method ``"ebm-design"``) for ``shipid report``.
+
+    Yoon & Rhee (2003) §5.1.4, Fig. 7 (and Fig. 8 when ``sweep`` from :func:`current_sweep` is given).
+
+    Parameters
+    ----------
+    grid : DesignGrid
+        From :func:`prbs_grid`; the whole grid goes into ``series["contours"]["d_optimal"]``
+        (sway = yaw regressors, the criterion the optimum is chosen on, paper "Fig. 7", the optimum
+        marked) and ``contours["d_optimal_surge"]``, with the values in ``tables["d_optimal_grid"]``
+        and ``tables["d_optimal_grid_surge"]``.
+    command : str, optional
+        The command line, stored in ``provenance["command"]``.
+    sweep : dict, optional
+        :func:`current_sweep` output at the optimum: ``xy["current_sweep"]`` (paper "Fig. 8").
+
+    Returns
+    -------
+    shipid.result.Result
+        ``estimates``: ``amplitude`` [deg], ``period`` [s] of the best grid point and its
+        ``log10_det_sway``; their std is NaN — the optimum is only known to the grid spacing,
+        which each note states.
+    """
+    from shipid.report.convention import contour, xy
+    from shipid.result import Estimate, Result
+
+    a, per, val = grid.optimum("sway")
+    a_s, per_s, val_s = grid.optimum("surge")
+    shape = f"{grid.amplitudes.size} × {grid.periods.size}"
+    setting = (f"{shape} grid, {grid.duration:g} s runs at dt = {grid.dt:g} s, mean over {len(grid.seeds)} "
+               f"PRBS seed(s), current {grid.current_speed:.3g} m/s")
+    common = dict(x_label="PRBS clock period", x_unit="s", y_label="PRBS amplitude", y_unit="deg")
+    contours = {
+        "d_optimal": contour(grid.periods, grid.amplitudes, grid.sway, **common,
+                             z_label="log10 |WᵀW| (sway = yaw regressors)",
+                             points=[{"x": per, "y": a, "label": f"optimum {a:g}° / {per:g} s"}], paper="Fig. 7",
+                             title=f"D-optimality of the PRBS rudder input: log10 |WᵀW| of the sway (= yaw) "
+                                   f"regressors over amplitude × clock period ({setting}); optimum {a:g}° / "
+                                   f"{per:g} s on this grid (paper: 35° / 105 s)."),
+        "d_optimal_surge": contour(grid.periods, grid.amplitudes, grid.surge, **common,
+                                   z_label="log10 |WᵀW| (surge regressors)",
+                                   points=[{"x": per_s, "y": a_s, "label": f"surge optimum {a_s:g}° / {per_s:g} s"}],
+                                   title=f"log10 |WᵀW| of the surge regressors on the same grid ({setting})."),
+    }
+    series: dict = {"contours": contours,
+                    "tables": {"d_optimal_grid": _grid_table(grid, grid.sway, "sway (= yaw)", "Fig. 7"),
+                               "d_optimal_grid_surge": _grid_table(grid, grid.surge, "surge", None)}}
+    if sweep is not None:
+        series["xy"] = {"current_sweep": xy(sweep["speeds_knot"], {"surge": sweep["surge"], "sway": sweep["sway"]},
+                                            x_label="current speed (towards 45°; negative: towards 225°)",
+                                            x_unit="kn", y_label="log10 |WᵀW|", y_unit="-", paper="Fig. 8",
+                                            title=f"D-optimality versus current speed at the optimum PRBS "
+                                                  f"({a:g}° / {per:g} s), approach speed over ground fixed.")}
+    res_note = "grid optimum; only known to the grid spacing (neighbours {})"
+    estimates = {
+        "amplitude": Estimate(a, unit="deg", status="derived",
+                              note=res_note.format(_neighbours(grid.amplitudes, a) + " deg")),
+        "period": Estimate(per, unit="s", status="derived",
+                           note=res_note.format(_neighbours(grid.periods, per) + " s")),
+        "log10_det_sway": Estimate(val, unit="-", status="derived",
+                                   note="D-criterion at the optimum (≤ 0; 0 for orthogonal regressors)"),
+    }
+    warnings = []
+    if per in (grid.periods.min(), grid.periods.max()) and grid.periods.size > 1:
+        warnings.append(f"the optimum period {per:g} s lies on the edge of the grid: the criterion may peak outside it")
+    if a == grid.amplitudes.min() and grid.amplitudes.size > 1:
+        warnings.append(f"the optimum amplitude {a:g} deg lies on the lower edge of the grid")
+    if not np.all(np.isfinite(grid.sway)):
+        warnings.append("some grid points have a singular regressor matrix (log10 |WᵀW| = -inf)")
+    # a grid evaluation: no iterative estimator, so no converged / iterations entries
+    diagnostics = {"grid_shape": [int(grid.amplitudes.size), int(grid.periods.size)],
+                   "evaluations": int(grid.amplitudes.size * grid.periods.size * len(grid.seeds)),
+                   "criterion": "log10 |WᵀW| of the unit-length-scaled sway regressors (yaw identical)",
+                   "optimum_surge": f"{a_s:g} deg / {per_s:g} s (log10 |WᵀW| = {val_s:.3f})",
+                   "resolution": f"amplitudes {', '.join(f'{v:g}' for v in grid.amplitudes)} deg; periods "
+                                 f"{', '.join(f'{v:g}' for v in grid.periods)} s",
+                   "warnings": warnings}
+    provenance = {"seed": int(grid.seeds[0]) if grid.seeds else None, "prbs_seeds": list(grid.seeds),
+                  "command": command or "shipid.analysis.design.design_result",
+                  "settings": {"vessel": grid.vessel, "duration_s": grid.duration, "dt_s": grid.dt,
+                               "current_speed_m_s": grid.current_speed,
+                               "amplitudes_deg": grid.amplitudes.tolist(), "periods_s": grid.periods.tolist()},
+                  "inputs": [{"name": f"simulated PRBS runs ({grid.vessel}, noise-free truth)",
+                              "n_samples": int(round(grid.duration / grid.dt)) + 1, "duration_s": grid.duration,
+                              "dt_s": grid.dt, "t0_s": 0.0, "channels": ["u_r", "v_r", "r", "delta", "n"],
+                              "note": f"one run per grid point and seed: {shape} × {len(grid.seeds)}"}]}
+    return Result(method="ebm-design", estimates=estimates,
+                  model={"vessel": grid.vessel, "model": "modified Abkowitz (Yoon & Rhee 2003 eqs. 1-3)",
+                         "input": "PRBS rudder"},
+                  diagnostics=diagnostics, series=series, provenance=provenance)
+
+
+__all__ = ["log_det_criterion", "prbs_criterion", "DesignGrid", "prbs_grid", "current_sweep", "design_result"]

@@ -2,12 +2,10 @@
 
 * ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--json]``
 * ``shipid study ebm-esso-osaka --input standard|optimal-prbs [--seed S] [--json]``
-* ``shipid design prbs --vessel esso-osaka [--json]``
+* ``shipid design prbs --vessel esso-osaka [--json] [--out RESULT.json [--force]]``
 """
 
 from __future__ import annotations
-
-import json
 
 import click
 import numpy as np
@@ -144,11 +142,22 @@ def study_ebm(kind, seed, scale, as_json, paper):
 @click.option("--seeds", default=2, show_default=True, type=click.IntRange(1, 50),
               help="PRBS realisations averaged per grid point.")
 @click.option("--currents", default="", help="Also sweep the current speed (knots, comma-separated) at the optimum (Fig. 8).")
-@click.option("--json", "as_json", is_flag=True)
-def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, as_json):
+@click.option("--dt", default=1.0, show_default=True, type=click.FloatRange(0.05, 5.0),
+              help="Simulation / sampling step of each PRBS run [s].")
+@click.option("--json", "as_json", is_flag=True, help="Print the map as a shipid Result (JSON) on stdout.")
+@click.option("--out", "out", default=None, type=click.Path(dir_okay=False), metavar="RESULT.json",
+              help="Also write the map as a shipid Result for `shipid report` (Fig. 7).")
+@click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
+def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
     """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7)."""
-    from shipid.analysis.design import current_sweep, prbs_grid
+    from pathlib import Path
+
+    from shipid.analysis.design import current_sweep, design_result, prbs_grid
+    from shipid.errors import OutputExistsError
     from shipid.progress import progress_bar
+
+    if out is not None and Path(out).exists() and not force:
+        raise OutputExistsError(out)  # before the (minutes-long) grid, not after
 
     vessel = _check_vessel(vessel)
     try:
@@ -160,19 +169,24 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, as_json)
     if not A or not T or min(A) <= 0 or min(T) <= 0 or max(A) > 35:
         raise ShipidError("need amplitudes in (0, 35] deg and positive periods")
     with progress_bar(len(A) * len(T), "D-optimality grid") as advance:
-        g = prbs_grid(A, T, duration=duration, seeds=tuple(range(seeds)), vessel=vessel, progress=advance)
-    out = g.to_dict()
+        g = prbs_grid(A, T, duration=duration, seeds=tuple(range(seeds)), dt=dt, vessel=vessel, progress=advance)
     a, per, val = g.optimum("sway")
-    if C:
-        out["current_sweep"] = current_sweep(a, per, C, duration=duration, seeds=tuple(range(seeds)), vessel=vessel)
+    sweep = current_sweep(a, per, C, duration=duration, seeds=tuple(range(seeds)), dt=dt, vessel=vessel) if C else None
+    cmd = (f"shipid design prbs --vessel {vessel} --amplitudes {','.join(f'{x:g}' for x in A)} "
+           f"--periods {','.join(f'{x:g}' for x in T)} --duration {duration:g} --seeds {seeds} --dt {dt:g}"
+           + (f" --currents {','.join(f'{x:g}' for x in C)}" if C else ""))
+    res = design_result(g, command=cmd, sweep=sweep)
+    if out is not None:
+        path = res.write_json(out, force=force)
+        click.echo(f"wrote {path} (shipid report {path} --out report.html)", err=as_json)
     if as_json:
-        click.echo(json.dumps(out, indent=2))
+        click.echo(res.to_json())
         return
     click.echo("log10 |W'W| of the sway (= yaw) regressors; rows amplitude (deg), columns period (s)")
     click.echo(" " * 8 + "".join(f"{p:>9g}" for p in g.periods))
     for i, amp in enumerate(g.amplitudes):
         click.echo(f"{amp:>8g}" + "".join(f"{v:>9.2f}" for v in g.sway[i]))
     click.echo(f"optimum: amplitude {a:g} deg, period {per:g} s (log10 |W'W| = {val:.2f})")
-    if C:
-        cs = out["current_sweep"]
+    if sweep is not None:
+        cs = sweep
         click.echo("current (kn): " + ", ".join(f"{s:g}: {v:.2f}" for s, v in zip(cs["speeds_knot"], cs["sway"])))
