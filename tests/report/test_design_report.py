@@ -19,6 +19,7 @@ def test_report_renders_the_design_map(tmp_path, capsys):
     fig7 = [f for f in figs if "Fig. 7" in f and "<img" in f]
     assert fig7, "no <img> captioned with Fig. 7"
     assert "data:image/png;base64," in fig7[0] and "amplitude × clock period" in fig7[0]
+    assert "D-optimal PRBS input design" in html      # the method's own title, not the generic fallback
 
 
 def test_coarse_map_caption_says_coarse_and_points_to_the_full_map():

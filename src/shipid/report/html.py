@@ -34,6 +34,7 @@ METHOD_TITLES = {
                   "Yoon & Rhee 2003 (seed 002), Tables 3 and 5"),
     "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
                 "Yoon & Rhee 2003 (seed 002) adapted to the MMG model"),
+    "ebm-design": ("D-optimal PRBS input design for EBM", "Yoon & Rhee 2003 (seed 002), Figs 7–8"),
 }
 
 GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
