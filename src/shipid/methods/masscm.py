@@ -626,6 +626,14 @@ def _compiled_search(args: tuple, x0: np.ndarray, lo: np.ndarray, hi: np.ndarray
     return x if ok else None
 
 
+def _floored_weights(lam) -> np.ndarray:
+    """The innovation variances lambda_i of the datasets as the weights of (40), floored at 1e-12 of the
+    largest so that a (numerically) perfect fit of one dataset cannot make its weight infinite; all ones
+    when every lambda is zero (noise-free data fitted exactly)."""
+    lam = np.asarray(lam, dtype=float)
+    return np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
+
+
 def _held_cold_search(theta: np.ndarray, theta_start: np.ndarray, fun, x: np.ndarray, state: "_State",
                       known: KnownParams, held: tuple, prior, options: MassCMOptions) -> np.ndarray:
     """Second stage of the cold search with z_f free (no prior): the z_f-known cold search at the z_f
@@ -939,9 +947,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
                     warn.append(f"iteration {j}: model of dataset {i} ({ds.condition}) unstable; instruments kept")
                 else:
                     y_hats[i], a_hats[i] = sim
-            lam = np.asarray(lam)
-            lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
-            state = _State(moms, lam, newL, Ts, conds)
+            state = _State(moms, _floored_weights(lam), newL, Ts, conds)
             continue
         terms = roll_terms(th_mid, known, conds, moment=True)
         for i, ds in enumerate(prep):
@@ -959,9 +965,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
                 warn.append(f"iteration {j}: model of dataset {i} ({ds.condition}) unstable; instruments kept")
             else:
                 y_hats[i], a_hats[i] = sim
-        lam = np.asarray(lam)
-        lam = np.maximum(lam, 1e-12 * max(lam.max(), 1e-300)) if lam.max() > 0 else np.ones_like(lam)
-        state = _State(_build_moments(prep, newL, y_hats, a_hats, options), lam, newL, Ts, conds)
+        state = _State(_build_moments(prep, newL, y_hats, a_hats, options), _floored_weights(lam), newL, Ts, conds)
     free = free_all
     J = None
     if jacobian and j > 0 and np.all(np.isfinite(theta)):
