@@ -20,7 +20,7 @@ The function is pure: it takes the model and data and returns a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -75,6 +75,25 @@ class FilterResult:
     nis: np.ndarray
     HtSinv_nu: np.ndarray
     HtSinv_H: np.ndarray
+
+    @classmethod
+    def allocate(cls, t: np.ndarray, N: int, n: int, m: int) -> "FilterResult":
+        """Output arrays for ``N`` samples, ``n`` states and ``m`` measurements, for a filter
+        to fill in place (innovations and NIS start as NaN = no measurement; ``loglik`` is NaN until
+        set with :func:`dataclasses.replace`). Shared by :func:`cd_ekf` and the compiled
+        :func:`shipid.estimate.cd_ekf_fast.ebm_cd_ekf`, so both return the same fields."""
+        nd = max(N - 1, 0)
+        return cls(t=t, x_pred=np.empty((N, n)), P_pred=np.empty((N, n, n)), x_filt=np.empty((N, n)),
+                   P_filt=np.empty((N, n, n)), Phi=np.empty((nd, n, n)), Qd=np.empty((nd, n, n)),
+                   innov=np.full((N, m), np.nan), S=np.zeros((N, m, m)), K=np.zeros((N, n, m)),
+                   H=np.zeros((N, m, n)), loglik=float("nan"), nis=np.full(N, np.nan),
+                   HtSinv_nu=np.zeros((N, n)), HtSinv_H=np.zeros((N, n, n)))
+
+    def buffers(self) -> tuple:
+        """The arrays a filter fills: ``x_pred, P_pred, x_filt, P_filt, Phi, Qd, innov, S, K, H, nis,
+        HtSinv_nu, HtSinv_H``."""
+        return (self.x_pred, self.P_pred, self.x_filt, self.P_filt, self.Phi, self.Qd, self.innov, self.S,
+                self.K, self.H, self.nis, self.HtSinv_nu, self.HtSinv_H)
 
 
 def van_loan(F: np.ndarray, Q: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -174,12 +193,8 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     z = np.asarray(z, dtype=float)
     N, m = z.shape
     n = x0.size
-    x_pred = np.empty((N, n)); P_pred = np.empty((N, n, n))
-    x_filt = np.empty((N, n)); P_filt = np.empty((N, n, n))
-    Phi = np.empty((max(N - 1, 0), n, n)); Qd = np.empty((max(N - 1, 0), n, n))
-    innov = np.full((N, m), np.nan); S_all = np.zeros((N, m, m))
-    K_all = np.zeros((N, n, m)); H_all = np.zeros((N, m, n)); nis = np.full(N, np.nan)
-    HSn = np.zeros((N, n)); HSH = np.zeros((N, n, n))
+    fr = FilterResult.allocate(t, N, n, m)
+    x_pred, P_pred, x_filt, P_filt, Phi, Qd, innov, S_all, K_all, H_all, nis, HSn, HSH = fr.buffers()
     loglik = 0.0
     x = np.array(x0, dtype=float)
     P = symmetrize(np.array(P0, dtype=float))
@@ -249,9 +264,7 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
             check_positive_definite(P, f"filter covariance at sample {k} (t = {t[k]:.6g} s)")
         x_filt[k] = x
         P_filt[k] = P
-    return FilterResult(t=t, x_pred=x_pred, P_pred=P_pred, x_filt=x_filt, P_filt=P_filt, Phi=Phi,
-                        Qd=Qd, innov=innov, S=S_all, K=K_all, H=H_all, loglik=float(loglik), nis=nis,
-                        HtSinv_nu=HSn, HtSinv_H=HSH)
+    return replace(fr, loglik=float(loglik))
 
 
 __all__ = ["FilterResult", "cd_ekf", "van_loan", "taylor_discretise", "rk4_propagate"]

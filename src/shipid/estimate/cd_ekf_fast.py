@@ -53,6 +53,8 @@ changes to compiled functions it calls from other files.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from numba import njit
 
@@ -630,28 +632,20 @@ def ebm_cd_ekf(model, Q: np.ndarray, R: np.ndarray, t: np.ndarray, z: np.ndarray
         raise ValueError(f"Q per step must have N - 1 = {N - 1} matrices, got {Qa.shape[0]}")
     R = np.ascontiguousarray(R, dtype=float)
     P0 = np.ascontiguousarray(P0, dtype=float)
-    x_pred = np.empty((N, n)); P_pred = np.empty((N, n, n))
-    x_filt = np.empty((N, n)); P_filt = np.empty((N, n, n))
-    Phi = np.empty((max(N - 1, 0), n, n)); Qd = np.empty((max(N - 1, 0), n, n))
-    innov = np.full((N, m), np.nan); S_all = np.zeros((N, m, m))
-    K_all = np.zeros((N, n, m)); H_all = np.zeros((N, m, n)); nis = np.full(N, np.nan)
-    HSn = np.zeros((N, n)); HSH = np.zeros((N, n, n))
+    fr = FilterResult.allocate(t, N, n, m)
     out = np.zeros(1)
     status, k = _ebm_filter_loop(p, Qa, R, t, z, x0, P0, int(substeps), bool(check_pd), float(tol),
-                                 int(max_terms), x_pred, P_pred, x_filt, P_filt, Phi, Qd, innov, S_all,
-                                 K_all, H_all, nis, HSn, HSH, out)
+                                 int(max_terms), *fr.buffers(), out)
     if status == TAYLOR_NOT_CONVERGED:
         return cd_ekf(model.f, model.F, model.h, model.H, Q, R, t, z, x0, P0, substeps=substeps,
                       check_pd=check_pd)
     if status == S_NOT_PD:
         ok = np.isfinite(z[k])
-        Hm = H_all[k][ok]
-        _raise_not_pd("innovation covariance", k, t[k], Hm @ P_pred[k] @ Hm.T + R[np.ix_(ok, ok)])
+        Hm = fr.H[k][ok]
+        _raise_not_pd("innovation covariance", k, t[k], Hm @ fr.P_pred[k] @ Hm.T + R[np.ix_(ok, ok)])
     if status == P_NOT_PD:
-        _raise_not_pd("filter covariance", k, t[k], P_filt[k])
-    return FilterResult(t=t, x_pred=x_pred, P_pred=P_pred, x_filt=x_filt, P_filt=P_filt, Phi=Phi,
-                        Qd=Qd, innov=innov, S=S_all, K=K_all, H=H_all, loglik=float(out[0]), nis=nis,
-                        HtSinv_nu=HSn, HtSinv_H=HSH)
+        _raise_not_pd("filter covariance", k, t[k], fr.P_filt[k])
+    return replace(fr, loglik=float(out[0]))
 
 
 # ---------------------------------------------------------------------------------------

@@ -38,6 +38,18 @@ def known_array(known) -> np.ndarray:
 
 
 @njit(cache=True)
+def _load_moment(c, m_c, zc_bar, z_f, q, zm):
+    """Load moment about the roll axis and the load's height bar of one dataset, by condition code:
+    nominal (0) none, calibration (1) the known ``m_c`` at ``zc_bar``, loaded (2) the unknown ``q = m zm``
+    at ``zm`` (moment parameterisation of (27)/(30))."""
+    if c == 0:
+        return 0.0, 0.0
+    if c == 1:
+        return m_c * (zc_bar + z_f), zc_bar
+    return q, zm
+
+
+@njit(cache=True)
 def g_and_jac(th, code, Ts, kc, jac):
     """``g_i(theta)`` (33) in the moment parameterisation for condition codes (0 nominal, 1 calibration,
     2 loaded), shape (n, 5), and when ``jac`` its Jacobian (n, 5, 9); formulas of ``masscm._g_and_jac``."""
@@ -53,12 +65,7 @@ def g_and_jac(th, code, Ts, kc, jac):
     row = np.empty(5)
     for i in range(n):
         c, T = code[i], Ts[i]
-        if c == 0:
-            qi, zb = 0.0, 0.0
-        elif c == 1:
-            qi, zb = m_c * (zc_bar + z_f), zc_bar
-        else:
-            qi, zb = q, zm
+        qi, zb = _load_moment(c, m_c, zc_bar, z_f, q, zm)
         A2 = A_x + M * zg * (zgb - zsb) + qi * (zb - zsb) - K_v * zs
         B = K_v + M * zg + qi
         den = 2 * d * T + kp * T * T + 4 * A2
@@ -104,13 +111,7 @@ def sim_terms(th, code, Ts, kc):
     n = code.size
     out = np.empty((n, 9))
     for i in range(n):
-        c = code[i]
-        if c == 0:
-            qi, zb = 0.0, 0.0
-        elif c == 1:
-            qi, zb = m_c * (zc_bar + z_f), zc_bar
-        else:
-            qi, zb = q, zm
+        qi, zb = _load_moment(code[i], m_c, zc_bar, z_f, q, zm)
         B = K_v + M * zg + qi
         out[i, 0] = A_x + M * zg ** 2 + qi * (zb + z_f)
         out[i, 1] = d
