@@ -196,18 +196,24 @@ def artifacts() -> Path:
 @pytest.fixture(scope="session")
 def example_reports(tmp_path_factory):
     """The HTML reports of the three example results, built once: method -> (Result, html, path)."""
-    from shipid.report import build_report
     from shipid.report.examples import EXAMPLES
+
+    return _build_reports(EXAMPLES, tmp_path_factory.mktemp("reports"))
+
+
+def _build_reports(makers: dict, folder: Path) -> dict:
+    """name -> (Result, html, path) for each ``make()`` in ``makers``: the Result goes through its JSON
+    (as ``shipid report RESULT.json`` reads it) and the HTML is written to ``folder/report-NAME.html``."""
+    from shipid.report import build_report
     from shipid.result import Result
 
     out = {}
-    d = tmp_path_factory.mktemp("reports")
-    for method, make in EXAMPLES.items():
+    for name, make in makers.items():
         r = Result.from_json(make().to_json())
         html = build_report(r)
-        path = d / f"report-{method}.html"
+        path = folder / f"report-{name}.html"
         path.write_text(html, encoding="utf-8")
-        out[method] = (r, html, path)
+        out[name] = (r, html, path)
     return out
 
 
@@ -267,15 +273,4 @@ def method_reports(tmp_path_factory):
 
     The Result goes through its JSON (as ``shipid report RESULT.json`` reads it).
     """
-    from shipid.report import build_report
-    from shipid.result import Result
-
-    out = {}
-    d = tmp_path_factory.mktemp("method-reports")
-    for name, make in METHOD_RUNS.items():
-        r = Result.from_json(make().to_json())
-        html = build_report(r)
-        path = d / f"report-{name}.html"
-        path.write_text(html, encoding="utf-8")
-        out[name] = (r, html, path)
-    return out
+    return _build_reports(METHOD_RUNS, tmp_path_factory.mktemp("method-reports"))
