@@ -343,10 +343,18 @@ def _decode(raw: bytes, label: str, what: str = "CSV") -> tuple[str, str]:
         return raw.decode("cp1252", errors="replace"), "cp1252"
 
 
-def _lines(text: str) -> list[str]:
-    lines = text.splitlines()
+_NEWLINE = re.compile(r"\r\n|\r|\n")
+
+
+def _lines(text: str, label: str) -> list[str]:
+    """The text's lines, split at CR/LF only (``str.splitlines`` would also split at, and so hide from
+    :func:`_check_text`, the control characters \\x0b, \\x0c, \\x1c-\\x1e and \\x85), trailing blank lines
+    dropped; a file with no line left is empty."""
+    lines = _NEWLINE.split(text)
     while lines and not lines[-1].strip():
         lines.pop()
+    if not lines:
+        raise InputError("empty file", file=label)
     return lines
 
 
@@ -362,7 +370,7 @@ def _read_csv(p: Path, label: str) -> _Table:
     if not raw.strip():
         raise InputError("empty file", file=label)
     text, enc = _decode(raw, label)
-    lines = _lines(text)
+    lines = _lines(text, label)
     _check_text(lines, label)
     quoted = '"' in text
     header = next(csv.reader([lines[0]])) if quoted else lines[0].split(",")
@@ -435,7 +443,7 @@ def _read_kvlcc2(p: Path, label: str) -> _Table:
     if raw.startswith(b"PAR1") or b"\x00" in raw[:65536]:
         raise InputError("binary content, not an HSVA .dat text file", file=label)
     text = raw.decode("cp1252", errors="replace")
-    lines = _lines(text)
+    lines = _lines(text, label)
     h = KVLCC2_HEADER_LINES
     if len(lines) <= h:
         raise InputError(f"header only: an HSVA .dat file has {h} header lines and then data", file=label)
