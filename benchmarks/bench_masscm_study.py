@@ -13,17 +13,22 @@ Not a test: it prints timings and ratios, asserts nothing about speed.
      the raw samples of the three datasets (no instruments, no prefilter), from the same initial values.
    Prints ms/run (wall and CPU), the ratios, and the Table-3 means/stds (fast and reference must agree
    run by run: the largest per-run difference of m is printed).
-2. The study through the campaign engine (:func:`shipid.studies.engine.run_campaign`): wall time of
-   RUNS runs with 1 and 2 local worker processes and with a 2-worker Dask ``LocalCluster``; the 1 -> 2
-   worker speed-up; the Table-3 means / stds of each. With RUNS < 10 000 the 10 000-run time is
-   extrapolated (labelled so). The numba kernels are compiled (or loaded from the on-disk cache) once
-   before timing (:func:`shipid.methods.masscm_study.warm_up`); each worker process still loads the
-   cache and synthesises the datasets once (included in the timings). Goal (issues 3 and 7): 10 000
-   runs in under 60 s, >= 1.8x from 1 to 2 workers on the 2-core machine.
+2. The study through the campaign engine (:func:`shipid.studies.engine.run_campaign`, with the task's
+   ``warm_up`` as ``shipid study mass-cm-sensitivity`` runs it): wall time of RUNS runs with 1 and 2
+   local worker processes and with a 2-worker Dask ``LocalCluster``; the 1 -> 2 worker speed-up; the
+   Table-3 means / stds of each; the mean CPU time per run measured inside the workers (how much two
+   busy cores slow each other). With RUNS < 10 000 the 10 000-run time is extrapolated (labelled so).
+   The numba kernels are compiled (or loaded from the on-disk cache) once before timing; the workers
+   are forked from a forkserver that ran the warm-up once (:mod:`shipid.studies.worker_preload`; its
+   start is inside the timing of the first multi-worker campaign). ROUNDS > 1 repeats the modes in
+   alternating order (1,2,dask / dask,2,1 / ...) so that a drift of the shared machine's speed (it moves
+   by up to ~30 % between minutes) does not favour one mode; the speed-up is printed per round and as
+   the median. Goal (issues 3 and 7): 10 000 runs in under 60 s, >= 1.8x from 1 to 2 workers on the
+   2-core machine.
 
-Usage:  python benchmarks/bench_masscm_study.py [RUNS] [PER_RUN_RUNS] [MODES]
+Usage:  python benchmarks/bench_masscm_study.py [RUNS] [PER_RUN_RUNS] [MODES] [ROUNDS]
         MODES: comma list of 1,2,dask (default all three), e.g. ``... 2000 200 2,dask``;
-        PER_RUN_RUNS 0 skips part 1, RUNS 0 skips part 2.
+        PER_RUN_RUNS 0 skips part 1, RUNS 0 skips part 2; ROUNDS default 1.
 """
 
 import os
@@ -42,6 +47,7 @@ from shipid.studies.engine import run_campaign
 
 ZF = -0.028
 TASK = "shipid.methods.masscm_study:run_one"
+WARM_UP = "shipid.methods.masscm_study:warm_up"
 
 
 def peer_run(i, seed, prep, known):
@@ -108,39 +114,54 @@ def per_run(n1):
 def campaign(runs, label, **engine):
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
-    res = run_campaign(TASK, runs, seed=2, progress=False, **engine)
+    res = run_campaign(TASK, runs, seed=2, progress=False, warm_up=WARM_UP, **engine)
     wall = time.perf_counter() - t0
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, wall_s=wall)
     failed = sum(1 for r in res.records if r.status != "ok")
+    cpu = 1e3 * np.mean([r.cpu_s for r in res.records if r.cpu_s is not None])
     est = "measured" if runs >= 10_000 else f"extrapolated from {runs}"
-    print(f"{label:28s}: {runs} runs {wall:7.1f} s  ({1e3 * wall / runs:.2f} ms/run; "
+    print(f"{label:28s}: {runs} runs {wall:7.1f} s  ({1e3 * wall / runs:.2f} ms/run; worker CPU {cpu:.2f} ms/run; "
           f"10 000 runs {wall / runs * 1e4:.0f} s {est}, goal < 60 s)  flagged {s['flagged']}  failed {failed}  "
           f"load {load0:.2f} -> {os.getloadavg()[0]:.2f}", flush=True)
     return wall, s
 
 
+MODES = {"1": ("local, 1 worker", {"workers": 1}), "2": ("local, 2 workers", {"workers": 2}),
+         "dask": ("dask LocalCluster, 2 workers", {"executor": "dask-local", "workers": 2})}
+
+
 def main():
     runs = int(sys.argv[1]) if len(sys.argv) > 1 else 10_000
     n1 = int(sys.argv[2]) if len(sys.argv) > 2 else 200
-    modes = sys.argv[3].split(",") if len(sys.argv) > 3 else ["1", "2", "dask"]
+    modes = [m for m in ("1", "2", "dask") if m in (sys.argv[3].split(",") if len(sys.argv) > 3 else MODES)]
+    rounds = int(sys.argv[4]) if len(sys.argv) > 4 else 1
     print(f"warm-up (numba kernels compiled or loaded from cache, datasets): {warm_up():.1f} s", flush=True)
     if n1 > 0:
         per_run(n1)
     if runs <= 0:
         return
-    walls, sums = {}, {}
-    if "1" in modes:
-        walls["1"], sums["1"] = campaign(runs, "local, 1 worker", workers=1)
-    if "2" in modes:
-        walls["2"], sums["2"] = campaign(runs, "local, 2 workers", workers=2)
-    if "dask" in modes:
-        walls["dask"], sums["dask"] = campaign(runs, "dask LocalCluster, 2 workers", executor="dask-local",
-                                               workers=2)
+    walls = {m: [] for m in modes}
+    sums = {}
+    for r in range(rounds):
+        order = modes if r % 2 == 0 else modes[::-1]
+        if rounds > 1:
+            print(f"round {r + 1} of {rounds} (order {', '.join(order)})", flush=True)
+        for m in order:
+            label, engine = MODES[m]
+            w, sums[m] = campaign(runs, label, **engine)
+            walls[m].append(w)
+        if "1" in walls and "2" in walls:
+            print(f"  speed-up 1 -> 2 local workers, this round: {walls['1'][-1] / walls['2'][-1]:.2f}x", flush=True)
     if "1" in walls and "2" in walls:
-        print(f"speed-up 1 -> 2 local workers: {walls['1'] / walls['2']:.2f}x (goal >= 1.8x)")
+        ratios = np.array(walls["1"]) / np.array(walls["2"])
+        print(f"speed-up 1 -> 2 local workers: median {np.median(ratios):.2f}x over {rounds} round(s) "
+              f"(each {', '.join(f'{x:.2f}' for x in ratios)}; goal >= 1.8x)")
     if "2" in walls and "dask" in walls:
-        print(f"dask LocalCluster / local pool (2 workers): {walls['dask'] / walls['2']:.2f}")
+        print(f"dask LocalCluster / local pool (2 workers): median "
+              f"{np.median(np.array(walls['dask']) / np.array(walls['2'])):.2f}")
+    for m in modes:
+        print(f"wall {MODES[m][0]}: " + ", ".join(f"{w:.1f}" for w in walls[m]) + " s")
     for k, s in sums.items():
         print(f"Table 3 ({k}):  " + "  ".join(
             f"{n} {s['parameters'][n]['mean']:.6g} ± {s['parameters'][n]['std']:.2g}"

@@ -162,11 +162,11 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
         from shipid.errors import OutputExistsError
         raise OutputExistsError(out)
     t0 = time.perf_counter()
-    from shipid.methods.masscm_study import warm_up
-    warm_up(data_seed)       # compiles the numba kernels once here; the workers then load numba's disk cache
+    # warm_up compiles the numba kernels once here, then warms the forkserver every worker is forked from
     res = replace(campaign, progress=not as_json).run(
         "shipid.methods.masscm_study:run_one", runs,
-        kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init}, name="mass-cm-sensitivity")
+        kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init}, name="mass-cm-sensitivity",
+        warm_up="shipid.methods.masscm_study:warm_up")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})

@@ -215,13 +215,15 @@ def _identifiable_drift(history: np.ndarray, known, last: int = 10) -> float:
     return float(max(np.ptp(zm) / max(abs(zm.mean()), 1e-300), np.ptp(rho) / max(abs(rho.mean()), 1e-300)))
 
 
-def warm_up(data_seed: int = 0, vessel: str = "fishing-vessel") -> float:
+def warm_up(data_seed: int = 0, vessel: str = "fishing-vessel", **_run_kwargs) -> float:
     """Compile the numba kernels of the fast path (or load them from numba's on-disk cache) and build this
     process's dataset cache, by one run; returns the seconds it took.
 
-    Call it in the parent before a campaign starts its workers: the first compilation (tens of seconds)
-    then happens once and writes the cache, and every worker process only loads it (about a second)
-    instead of all of them compiling at the same time.
+    The campaign's ``warm_up`` (:func:`shipid.studies.engine.run_campaign`; it passes the campaign's
+    kwargs, of which only ``data_seed`` and ``vessel`` matter here): it runs in the parent first, so the
+    first compilation (tens of seconds) happens once and writes the cache, then once in the forkserver
+    the workers are forked from, so that no worker pays the ~1.6 s of imports, cache loading and dataset
+    synthesis itself. The run it makes changes no later run (the caches are keyed by their inputs).
     """
     import time
     t0 = time.perf_counter()

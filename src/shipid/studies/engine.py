@@ -87,8 +87,8 @@ from typing import Callable, Sequence
 import shipid
 from shipid.errors import ShipidError
 from shipid.studies.executors import (code_fingerprint, dask_local_client, dask_remote_client, iter_dask,
-                                      iter_inprocess, iter_pool, resolve_task, task_reference, threads_limited,
-                                      to_json)
+                                      error_text, iter_inprocess, iter_pool, resolve_task, task_reference,
+                                      threads_limited, to_json, warm_up_here)
 from shipid.studies.seeding import check_seed
 from shipid.studies.store import CampaignDefinition, CampaignStore, RunRecord, records_frame
 EXECUTORS = ("local", "dask-local", "scheduler")
@@ -215,7 +215,8 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
                  inputs: Sequence[dict] | None = None, kwargs: dict | None = None, name: str | None = None,
                  executor: str = "local", workers: int | None = None, scheduler_address: str | None = None,
                  store: str | os.PathLike | None = None, resume: bool = False, retry_failed: bool = False,
-                 progress: bool = True, chunk_size: int | None = None) -> CampaignResult:
+                 progress: bool = True, chunk_size: int | None = None,
+                 warm_up: str | None = None) -> CampaignResult:
     """Run ``task`` for runs ``0 .. n_runs-1`` and return every run's outputs in run order.
 
     Parameters
@@ -250,6 +251,14 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         Show a progress bar (on an interactive stderr only).
     chunk_size : int, optional
         Runs per chunk (default chosen from the number of runs and workers).
+    warm_up : str, optional
+        ``"module:function"`` called as ``warm_up(**kwargs)`` (the campaign's shared kwargs;
+        it may ignore those it does not use) before the first run: once in this process
+        (numba compiles here and writes its disk cache), once in the forkserver the local
+        pool's and the LocalCluster's workers are forked from (every worker then starts
+        warm, :mod:`shipid.studies.worker_preload`), and on every worker of an existing
+        scheduler. It must not change any run's numbers, only do work earlier (imports,
+        compiled kernels, per-process caches). Not part of the campaign's definition.
 
     Returns
     -------
@@ -324,16 +333,32 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
 
         # executor set-up (nothing to start when a resumed campaign is already complete)
         client = None
+        warm = None if warm_up is None else (task_reference(warm_up), kwargs)
+        if todo and warm is not None:
+            try:
+                with threads_limited():
+                    warm_up_here(*warm)
+            except Exception as err:  # noqa: BLE001 - the runs will record their own failures
+                warnings.warn(f"campaign '{name}': warm-up {warm[0]} failed ({error_text(err)}); "
+                              "the runs go ahead without it", RuntimeWarning, stacklevel=2)
+                warm = None
         if not todo:
             n_workers = 0
         elif executor == "local":
             n_workers = workers or available_cpus()
         elif executor == "dask-local":
             n_workers = workers or available_cpus()
-            client = stack.enter_context(dask_local_client(n_workers))
+            client = stack.enter_context(dask_local_client(n_workers, warm))
         else:
             client = stack.enter_context(dask_remote_client(scheduler_address))
             n_workers = max(1, len(client.scheduler_info().get("workers", {})))
+            if warm is not None:
+                try:
+                    client.run(warm_up_here, *warm)
+                except Exception as err:  # noqa: BLE001 - a slower start, not a failed campaign
+                    warnings.warn(f"campaign '{name}': warm-up on the scheduler's workers failed "
+                                  f"({error_text(err)}); each warms up on its first run", RuntimeWarning,
+                                  stacklevel=2)
         chunks = chunk_indices(todo, n_workers, chunk_size)
 
         task_arg = ref if isinstance(task, str) else fn
@@ -355,7 +380,7 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
         else:
             label = "local"
             n_workers = min(n_workers, len(chunks))
-            stream = iter_pool(chunks, n_workers, args, seed)
+            stream = iter_pool(chunks, n_workers, args, seed, warm)
 
         if progress:
             from shipid.progress import progress_bar
@@ -458,7 +483,8 @@ class CampaignOptions:
                 "progress": self.progress}
 
     def run(self, task: str | Callable, n_runs: int | None = None, *, inputs=None, kwargs=None,
-            name: str | None = None, chunk_size: int | None = None) -> CampaignResult:
+            name: str | None = None, chunk_size: int | None = None,
+            warm_up: str | None = None) -> CampaignResult:
         """``run_campaign(task, n_runs, self.seed, ...)`` with these options."""
         return run_campaign(task, n_runs, self.seed, inputs=inputs, kwargs=kwargs, name=name,
-                            chunk_size=chunk_size, **self.engine_kwargs())
+                            chunk_size=chunk_size, warm_up=warm_up, **self.engine_kwargs())

@@ -192,13 +192,61 @@ def failed_rows(seed: int, indices: Sequence[int], error: str) -> list[dict]:
 # --------------------------------------------------------------------------------------
 # Executors: each yields lists of finished rows
 # --------------------------------------------------------------------------------------
+_SERVER_WARM: list = []     # the warm-up spec this process's forkserver was started with (at most one)
+
+
+def start_forkserver(warm_up: str | None = None, warm_kwargs: dict | None = None,
+                     modules: Sequence[str] = ()) -> bool:
+    """Start this process's ``forkserver`` with the task's warm-up run in it; True if it ran there.
+
+    The server (one per process, shared by the local pool and the Dask LocalCluster) imports
+    :mod:`shipid.studies.worker_preload` and ``modules`` and runs ``warm_up(**warm_kwargs)``
+    once; every worker forked from it starts warm (see that module). When the server is
+    already running (an earlier campaign of this process started it) it is left as it is and
+    False is returned unless it was started with the same warm-up: workers then warm up on
+    their own, as they would without this (slower to start, same results).
+    """
+    from multiprocessing import forkserver
+
+    spec = None if warm_up is None else to_json({"warm_up": warm_up, "kwargs": warm_kwargs or {}}, canonical=True)
+    server = forkserver._forkserver
+    if getattr(server, "_forkserver_pid", None) is not None:   # running (private attribute; absent: start)
+        return spec is not None and _SERVER_WARM == [spec]
+    from shipid.studies.worker_preload import WARM_UP_VAR
+
+    multiprocessing.get_context("forkserver").set_forkserver_preload(
+        ["shipid.studies.worker_preload", *modules])
+    old = os.environ.get(WARM_UP_VAR)
+    try:
+        if spec is None:
+            os.environ.pop(WARM_UP_VAR, None)
+        else:
+            os.environ[WARM_UP_VAR] = spec       # read by the server as it imports worker_preload
+        server.ensure_running()
+    finally:
+        if old is None:
+            os.environ.pop(WARM_UP_VAR, None)
+        else:
+            os.environ[WARM_UP_VAR] = old
+    _SERVER_WARM[:] = [spec]
+    return spec is not None
+
+
+def warm_up_here(warm_up: str, warm_kwargs: dict | None = None) -> None:
+    """Run a campaign's warm-up in this process (Dask workers: ``client.run``; the parent)."""
+    resolve_task(warm_up)(**(warm_kwargs or {}))
+
+
 def iter_inprocess(chunks, args) -> Iterator[list[dict]]:
     for c in chunks:
         yield run_chunk(*args(c), limit_threads=False)
 
 
-def iter_pool(chunks, workers: int, args, seed: int) -> Iterator[list[dict]]:
+def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) -> Iterator[list[dict]]:
     """Process pool with recovery from dead worker processes.
+
+    Workers are forked from this process's forkserver, started warm with ``warm``
+    (``(warm_up, kwargs)``, see :func:`start_forkserver`) when it is not running yet.
 
     When a worker dies, every chunk in flight is lost (the pool breaks). Those chunks
     become *suspects* and are re-run one at a time in a fresh pool; a suspect that
@@ -208,6 +256,7 @@ def iter_pool(chunks, workers: int, args, seed: int) -> Iterator[list[dict]]:
     import concurrent.futures as cf
     from concurrent.futures.process import BrokenProcessPool
 
+    start_forkserver(*(warm or (None, None)))
     ctx = multiprocessing.get_context("forkserver")
     normal, suspects = deque(chunks), deque()
     inflight: dict = {}
@@ -328,11 +377,15 @@ def _import_distributed():
 class dask_local_client:
     """A LocalCluster on loopback with ``n`` single-threaded worker processes, and its client."""
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, warm: tuple | None = None):
         self.n = n
+        self.warm = warm
 
     def __enter__(self):
         distributed = _import_distributed()
+        # the nanny forks its worker from this process's forkserver: start it warm (and with
+        # distributed imported) when it is not running yet, see start_forkserver
+        start_forkserver(*(self.warm or (None, None)), modules=("distributed",))
         with warnings.catch_warnings():
             # no dashboard; the scheduler's small HTTP (health) server binds 127.0.0.1 and, when
             # 8787 is taken by another cluster, moves to a free port with a warning that means nothing here

@@ -61,3 +61,21 @@ def toy_run(i: int, seedseq: np.random.SeedSequence, *, n: int = 200, slope: flo
     coef, rss, *_ = np.linalg.lstsq(A, y, rcond=None)
     return {"a": float(coef[0]), "b": float(coef[1]), "rss": float(rss[0]),
             "draw": int(rng.integers(0, 2**31))}
+
+
+#: Process id of the process :func:`toy_warm_up` ran in (inherited by processes forked after it).
+WARMED_IN: int | None = None
+
+
+def toy_warm_up(fail: bool = False, **_run_kwargs) -> None:
+    """A campaign warm-up for tests: records the process it ran in (:data:`WARMED_IN`);
+    raises ``RuntimeError`` with ``fail=True``."""
+    global WARMED_IN
+    if fail:
+        raise RuntimeError("toy warm-up failure")
+    WARMED_IN = os.getpid()
+
+
+def toy_probe(i: int, seedseq: np.random.SeedSequence, **_kwargs) -> dict:
+    """A task that reports where it ran and whether its process came warm (``warmed_in``)."""
+    return {"pid": os.getpid(), "warmed_in": WARMED_IN}
