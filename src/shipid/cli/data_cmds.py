@@ -16,6 +16,8 @@ from shipid.data.io import FORMATS, parse_channel_map, read_trial, write_trial
 
 
 def _read_options(f):
+    f = click.option("--skip-bad-sentences", "skip_bad", is_flag=True,
+                     help="NMEA logs: skip corrupt sentences (counted; still fails when more than 5 % are bad).")(f)
     f = click.option("--trim-empty", is_flag=True,
                      help="Drop rows with no value at all at the start and end of the file (recorded).")(f)
     f = click.option("--resample", type=float, default=None, metavar="DT",
@@ -31,19 +33,20 @@ def _read_options(f):
     return f
 
 
-def _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty):
+def _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, skip_bad=False):
     required = [s.strip() for s in require.split(",") if s.strip()] if require else None
     return read_trial(file, fmt=fmt, channel_map=parse_channel_map(channels), required=required,
-                      interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty)
+                      interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty,
+                      skip_bad=skip_bad)
 
 
 @cli.command("check")
 @click.argument("file", type=click.Path(dir_okay=False))
 @_read_options
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, as_json):
+def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, as_json, skip_bad):
     """Read and validate a trial FILE; print what it holds (exit 2 with one line if it is bad)."""
-    trial = _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty)
+    trial = _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, skip_bad)
     summary = {
         "file": file, "format": trial.meta.get("format"), "profile": trial.meta.get("profile"),
         "samples": len(trial), "dt": trial.dt, "t0": float(trial.t[0]), "duration": trial.duration,
@@ -75,9 +78,9 @@ def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
 @click.option("--units", "units", default=None, metavar="MAP",
               help="Write channels in these units instead of SI: 'psi=deg,n=rpm'.")
 @click.option("--force", is_flag=True, help="Overwrite DEST if it exists.")
-def convert(src, dest, fmt, channels, require, interpolate_gaps, resample, trim_empty, units, force):
+def convert(src, dest, fmt, channels, require, interpolate_gaps, resample, trim_empty, units, force, skip_bad):
     """Read and validate SRC, write it to DEST (.csv or .parquet) with standard names."""
-    trial = _read(src, fmt, channels, require, interpolate_gaps, resample, trim_empty)
+    trial = _read(src, fmt, channels, require, interpolate_gaps, resample, trim_empty, skip_bad)
     path = write_trial(trial, dest, units=parse_channel_map(units), force=force)
     click.echo(f"wrote {path} ({len(trial)} samples, {len(trial.channels)} channels)")
     return 0

@@ -56,7 +56,7 @@ from shipid.data.validate import validate_arrays
 from shipid.errors import InputError, ShipidError
 from shipid.outputs import atomic_write
 
-FORMATS = ("csv", "parquet", "esso", "kvlcc2")
+FORMATS = ("csv", "parquet", "esso", "kvlcc2", "nmea")
 
 #: Column maps of the named format profiles: standard name -> column name in the file.
 PROFILES: dict[str, dict[str, str]] = {
@@ -84,7 +84,8 @@ KVLCC2_HEADER_LINES = 4
 #: Folders of the Esso Osaka data set; a run's folder names its manoeuvre.
 ESSO_MANOEUVRES = ("turning", "zigzag", "random", "berthing")
 
-_EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2"}
+_EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2",
+               ".nmea": "nmea", ".log": "csv"}  # .txt/.log: NMEA when the content looks like it (shipid.data.nmea)
 
 
 @dataclass
@@ -143,6 +144,7 @@ def read_trial(
     manoeuvre: str | None = None,
     trim_empty_rows: bool = False,
     method: str | None = None,
+    skip_bad: bool = False,
 ) -> Trial:
     """Read a trial file, convert it to SI and validate it.
 
@@ -169,6 +171,9 @@ def read_trial(
         Remove rows without any value at the start and the end of the file (recorded).
     method : str, optional
         Name of the method asking for ``required`` (for the message: "required by ...").
+    skip_bad : bool
+        NMEA logs only: skip corrupt sentences, counted in ``meta["skipped"]``
+        (:func:`shipid.data.nmea.read_nmea`).
 
     Returns
     -------
@@ -195,6 +200,10 @@ def read_trial(
             table = _read_parquet(p, label)
         elif fmt == "kvlcc2":
             table = _read_kvlcc2(p, label)
+        elif fmt == "nmea":
+            from shipid.data.nmea import read_nmea
+            table = read_nmea(p, label, skip_bad=skip_bad, resample=resample, interpolate_gaps=interpolate_gaps)
+            resample = None  # already on its uniform grid
         else:
             table = _read_csv(p, label)
     except InputError:
@@ -248,6 +257,14 @@ def _resolve_format(p: Path, fmt: str | None, label: str) -> str:
             raise InputError(f"unknown format '{fmt}' (choose from {', '.join(FORMATS)})", file=label)
         return f
     ext = p.suffix.lower()
+    if ext in (".txt", ".log"):
+        from shipid.data.nmea import looks_like_nmea
+        try:
+            with open(p, "rb") as fh:
+                if looks_like_nmea(fh.read(4096)):
+                    return "nmea"
+        except OSError:
+            pass
     if ext in _EXTENSIONS:
         return _EXTENSIONS[ext]
     raise InputError(f"cannot tell the format from the extension '{p.suffix}' "
