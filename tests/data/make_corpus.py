@@ -87,8 +87,12 @@ def bad_files():
     b["missing_channel.csv"] = text(HEADER, r)            # checked with --require u,v,r
     body = [list(x) for x in r]; body[3][2] = "abc"
     b["text_in_numeric.csv"] = text(HEADER, body)
-    b["semicolon_delimiter.csv"] = "\n".join([HEADER.replace(",", ";")] + [";".join(x) for x in r]) + "\n"
-    b["tab_delimiter.csv"] = "\n".join([HEADER.replace(",", "\t")] + ["\t".join(x) for x in r]) + "\n"
+    # ';' and tab files are read since shipid.data.csv_dialect; what stays bad is an unclear dialect
+    b["semicolon_mixed_decimal.csv"] = "\n".join([HEADER.replace(",", ";")] + [";".join(x) for x in r[:2]] +
+                                                 [";".join(x).replace(".", ",") for x in r[2:]]) + "\n"
+    b["ambiguous_delimiter.csv"] = "\n".join(["t [s],x [m];u [m/s],psi [rad]"] +
+                                             [f"{x[0]},{x[1]};{x[2]},{x[3]}" for x in r]) + "\n"
+    b["pipe_delimiter.csv"] = "\n".join([HEADER.replace(",", "|")] + ["|".join(x) for x in r]) + "\n"
     rng = np.random.default_rng(20261121)
     b["binary_junk.csv"] = rng.integers(0, 256, size=512, dtype=np.uint8).tobytes()
     body = [list(x) for x in r]; body[3][0] = "0.33"

@@ -3,14 +3,16 @@
 Formats
 -------
 ``csv``
-    Comma-separated text, UTF-8 (a BOM is accepted; cp1252 is tried when the bytes
-    are not UTF-8), ``\\n``, ``\\r\\n`` or ``\\r`` line ends. The first line is the
-    header; every cell is ``name [unit]`` (the convention of the Esso Osaka 3 m data
-    set). A header cell *without* a unit is an error unless the unit is supplied by a
-    format profile or by the channel map (``'psi=heading[deg]'``). Each following
-    line is one data row (row 1 is the first line after the header); blank lines at
-    the very end of the file are ignored, any other line must have as many fields as
-    the header. Empty cells are missing values (see :mod:`shipid.data.validate`).
+    Comma-, semicolon- or tab-separated text (a decimal comma with the latter two;
+    :mod:`shipid.data.csv_dialect`, recorded in ``meta["csv_dialect"]``), UTF-8
+    (a BOM is accepted; cp1252 is tried when the bytes are not UTF-8), ``\\n``,
+    ``\\r\\n`` or ``\\r`` line ends. The first line is the header; every cell is
+    ``name [unit]`` (the convention of the Esso Osaka 3 m data set). A header cell
+    *without* a unit is an error unless the unit is supplied by a format profile or
+    by the channel map (``'psi=heading[deg]'``). Each following line is one data
+    row (row 1 is the first line after the header); blank lines at the very end of
+    the file are ignored, any other line must have as many fields as the header.
+    Empty cells are missing values (see :mod:`shipid.data.validate`).
 ``parquet``
     One numeric column per channel; units in the schema metadata key
     ``shipid.units`` (JSON ``{name: unit}``), or in column names ``name [unit]``.
@@ -27,6 +29,11 @@ Formats
     degrees. Body velocities are derived from the earth-fixed ones:
     ``u = ẋ cos ψ + ẏ sin ψ``, ``v = −ẋ sin ψ + ẏ cos ψ`` (Fossen 1994, eq. 2.18 with
     z down). Chosen automatically for ``.dat`` files.
+``nmea``
+    An NMEA 0183 log (:mod:`shipid.data.nmea`): ``.nmea``, or a ``.txt``/``.log``
+    whose first lines are sentences (``$``, ``!``, a tag block ``\\`` or a time
+    stamp and ``$``); interpolated onto a uniform grid; ``skip_bad`` skips corrupt
+    sentences.
 
 Channel maps
 ------------
@@ -50,6 +57,7 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
+from shipid.data.csv_dialect import detect_dialect
 from shipid.data.trial import CHANNELS, Trial
 from shipid.data.units import from_si, parse_unit, split_header, to_si
 from shipid.data.validate import validate_arrays
@@ -390,13 +398,15 @@ def _read_csv(p: Path, label: str) -> _Table:
     lines = _lines(text, label)
     _check_text(lines, label)
     quoted = '"' in text
-    header = next(csv.reader([lines[0]])) if quoted else lines[0].split(",")
+    dialect = detect_dialect(lines[0], lines[1:], label)   # ',' ';' or tab, decimal comma (shipid.data.csv_dialect)
+    sep = dialect.delimiter
+    header = next(csv.reader([lines[0]], delimiter=sep)) if quoted else lines[0].split(sep)
     header = [h.strip() for h in header]
     if len(header) == 1:
-        for sep, name in ((";", "';'"), ("\t", "tab"), ("|", "'|'")):
-            if sep in lines[0]:
+        for other, name in ((";", "';'"), ("\t", "tab"), ("|", "'|'")):
+            if other in lines[0]:
                 raise InputError(f"header has one column only: the file seems to be separated by {name}; "
-                                 "shipid reads comma-separated values", file=label)
+                                 "shipid reads comma-, semicolon- or tab-separated values", file=label)
     if all(_NUMBER_LIKE.match(h) for h in header if h) and any(header):
         raise InputError("no header line: the first line holds numbers; expected 'name [unit]' cells",
                          file=label)
@@ -418,11 +428,13 @@ def _read_csv(p: Path, label: str) -> _Table:
     data_lines = lines[1:]
     if not data_lines:
         raise InputError("header only, no data rows", file=label)
+    if dialect.decimal == ",":
+        data_lines = [line.replace(",", ".") for line in data_lines]
     ncol = len(names)
     if quoted:
-        cells = list(csv.reader(data_lines))
+        cells = list(csv.reader(data_lines, delimiter=sep))
     else:
-        cells = [line.split(",") for line in data_lines]
+        cells = [line.split(sep) for line in data_lines]
     data = np.empty((len(cells), ncol), dtype=np.float64)
     for i, row in enumerate(cells):
         if len(row) != ncol:
@@ -434,7 +446,8 @@ def _read_csv(p: Path, label: str) -> _Table:
             data[i] = [float(c) for c in row]
         except ValueError:
             data[i] = [_cell(c, label, names[j], i + 1) for j, c in enumerate(row)]
-    return _Table(names, units, data, np.arange(1, len(cells) + 1), {"encoding": enc})
+    return _Table(names, units, data, np.arange(1, len(cells) + 1),
+                  {"encoding": enc, "csv_dialect": dialect.as_meta()})
 
 
 def _cell(c: str, label: str, channel: str, row: int) -> float:
