@@ -133,6 +133,10 @@ def test_tag_block_log_reads_back_the_trajectory(tag_log):
     # speeds are written to 0.001 kn: 9.719 kn for 9.7192 kn, relative rounding <= 0.0005/9.72 = 5e-5
     np.testing.assert_allclose(tr["U"], U, rtol=6e-5)
     np.testing.assert_allclose(tr["sog"], U, rtol=6e-5)
+    # derived over-ground velocities: the ship moves along its heading (no drift in the truth)
+    np.testing.assert_allclose(tr["u"], U, rtol=6e-5)
+    np.testing.assert_allclose(tr["v"], 0.0, atol=U * math.radians(0.01))    # cog written to 0.01 deg
+    np.testing.assert_allclose(np.hypot(tr["x_dot"], tr["y_dot"]), U, rtol=6e-5)
     np.testing.assert_allclose(tr["wind_speed_rel"], 12.0 * 1852 / 3600, rtol=1e-12)
     np.testing.assert_allclose(tr["wind_dir_rel"], math.radians(30.0), rtol=1e-12)
     assert tr.meta["ignored"] == {"GSV": 101}
@@ -241,6 +245,26 @@ def test_long_gap_left_nan_for_validation(tmp_path):
         read_trial(p)
     tr = read_trial(p, interpolate_gaps=6.0)
     assert np.all(np.isfinite(tr["psi"]))
+
+
+@pytest.mark.parametrize("field, value, fragment", [
+    (9, "2211", "date is not ddmmyy"),          # pynmea2 would read this as 2 Feb 2011
+    (9, "2211x5", "date is not ddmmyy"),        # pynmea2 would hand back the text
+    (1, "0230", "UTC time '0230' is not hhmmss.ss"),
+    (1, "256000", "UTC time"),
+])
+def test_bad_rmc_time_or_date_is_an_error(tmp_path, field, value, fragment):
+    # found by fuzzing: pynmea2 does not refuse a malformed date, it returns a wrong or raw value
+    lines = sentences(3.0)
+    k = next(i for i, (_, s) in enumerate(lines) if "RMC" in s and i > 10)
+    fields = lines[k][1].split("*")[0].split(",")
+    fields[field] = value
+    msg = pynmea2.parse(",".join(fields))
+    lines[k] = (lines[k][0], str(msg))
+    p = write_log(tmp_path / "d.nmea", "none", lines)
+    with pytest.raises(InputError, match=fragment) as info:
+        read_trial(p)
+    assert f"line {k + 1}, RMC sentence" in str(info.value)
 
 
 def test_hdg_with_variation_gives_true_heading(tmp_path):

@@ -34,6 +34,9 @@ MWV    wind: reference ``R`` -> ``wind_speed_rel``, ``wind_dir_rel`` (angle off 
        ``wind_angle_true``. Units K/M/N/S (km/h, m/s, knots, mph).
 =====  ==========================================================================
 
+With ``sog``, ``cog`` and ``psi`` the reader also derives ``x_dot``, ``y_dot``, ``u``
+and ``v`` over ground (``meta["derived"]``; see :func:`_derive`).
+
 Other sentences (GSV, GSA, AIS ``!AIVDM``, proprietary ``$P...``) are counted in
 ``meta["ignored"]`` and not used. A sentence with status ``V`` (data invalid) is
 not used and counted in ``meta["invalid"]``; empty fields are not used.
@@ -143,6 +146,7 @@ CHANNEL_UNITS = {
     "x": "m", "y": "m", "psi": "rad", "psi_magnetic": "rad", "r": "rad/s", "delta": "rad", "n": "1/s",
     "sog": "m/s", "cog": "rad", "U": "m/s", "wind_speed_rel": "m/s", "wind_dir_rel": "rad",
     "wind_speed": "m/s", "wind_angle_true": "rad",
+    "x_dot": "m/s", "y_dot": "m/s", "u": "m/s", "v": "m/s",
 }
 
 
@@ -238,6 +242,8 @@ def _time_of_day(msg) -> float | None:
     ts = _field(msg, "timestamp")
     if not ts:
         return None
+    if not re.fullmatch(r"\d{6}(\.\d+)?", ts):
+        raise _Bad(msg.sentence_type, f"UTC time '{ts[:12]}' is not hhmmss.ss", "t")
     try:
         tod = msg.timestamp
     except (ValueError, TypeError, IndexError):
@@ -250,11 +256,16 @@ def _time_of_day(msg) -> float | None:
 def _sentence_date(msg) -> date | None:
     try:
         if msg.sentence_type == "RMC" and _field(msg, "datestamp"):
-            return msg.datestamp
+            # pynmea2 hands back the raw text when it cannot convert, and strptime reads
+            # '2211' as 2 Feb 2011: insist on ddmmyy
+            d = msg.datestamp
+            if not re.fullmatch(r"\d{6}", _field(msg, "datestamp")) or not isinstance(d, date):
+                raise ValueError
+            return d
         if msg.sentence_type == "ZDA" and _field(msg, "year"):
             return date(int(msg.year), int(msg.month), int(msg.day))
     except (ValueError, TypeError):
-        raise _Bad(msg.sentence_type, "date out of range", "t") from None
+        raise _Bad(msg.sentence_type, "date is not ddmmyy or out of range", "t") from None
     return None
 
 
@@ -574,6 +585,9 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
     elif day0 is not None:
         t0_abs = datetime(day0.year, day0.month, day0.day, tzinfo=timezone.utc).timestamp()
     t, data, names, gaps, span = _grid(chans, label, resample, interpolate_gaps)
+    derived = _derive(names, data)
+    if derived:
+        meta["derived"] = derived
     meta.update({
         "encoding": enc,
         "time_base": base,
@@ -598,6 +612,31 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
     units = ["s"] + [CHANNEL_UNITS[n] for n in names]
     matrix = np.column_stack([span["dt"] * np.arange(t.size)] + data)   # exact steps, not t - t[0]
     return _Table(cols, units, matrix, np.arange(1, t.size + 1), meta)
+
+
+def _derive(names: list[str], data: list[np.ndarray]) -> dict:
+    """Earth-fixed and body velocities over ground from ``sog``/``cog`` (and ``psi``), appended in place.
+
+    ``x_dot = sog cos(cog)``, ``y_dot = sog sin(cog)``; with a heading, ``u = x_dot cos psi
+    + y_dot sin psi`` and ``v = -x_dot sin psi + y_dot cos psi`` (Fossen 1994, eq. 2.18).
+    These are over ground: they equal the velocities through the water only without current.
+    """
+    col = dict(zip(names, data))
+    out = {}
+    if "sog" in col and "cog" in col:
+        xd, yd = col["sog"] * np.cos(col["cog"]), col["sog"] * np.sin(col["cog"])
+        new = {"x_dot": xd, "y_dot": yd}
+        out = {"x_dot": "sog*cos(cog)", "y_dot": "sog*sin(cog)"}
+        if "psi" in col:
+            c, s = np.cos(col["psi"]), np.sin(col["psi"])
+            new.update(u=xd * c + yd * s, v=-xd * s + yd * c)
+            out.update(u="x_dot*cos(psi) + y_dot*sin(psi) (over ground)",
+                       v="-x_dot*sin(psi) + y_dot*cos(psi) (over ground)")
+        for k, v in new.items():
+            if k not in col:
+                names.append(k)
+                data.append(v)
+    return out
 
 
 def _advance(last_t, t_line):
