@@ -534,10 +534,9 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
             try:
                 msg = pynmea2.parse(body, check="*" in body)
             except pynmea2.ChecksumError as err:
-                raise _Bad(stype, str(err.args[0]) if err.args else "checksum does not match", stype) from None
+                raise _Bad(stype, _first_text(err, "checksum does not match"), stype) from None
             except (pynmea2.ParseError, ValueError, TypeError, AttributeError, IndexError) as err:
-                why = err.args[0] if err.args and isinstance(err.args[0], str) else "could not parse"
-                raise _Bad(stype, f"unparsable sentence ({why})", stype) from None
+                raise _Bad(stype, f"unparsable sentence ({_first_text(err, 'could not parse')})", stype) from None
             talkers.add(address[:2])
             vals: dict = {}
             _values(msg, stype, vals, counts)
@@ -637,6 +636,18 @@ def _derive(names: list[str], data: list[np.ndarray]) -> dict:
                 names.append(k)
                 data.append(v)
     return out
+
+
+def _first_text(err: Exception, default: str) -> str:
+    """The message of a pynmea2 error (its args nest the text in a tuple with the fields)."""
+    args = list(err.args)
+    while args:
+        a = args.pop(0)
+        if isinstance(a, str):
+            return a
+        if isinstance(a, (tuple, list)):
+            args = list(a) + args
+    return default
 
 
 def _advance(last_t, t_line):
