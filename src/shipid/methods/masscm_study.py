@@ -42,18 +42,24 @@ Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --jso
   the physical bounds k, A_x, d >= 0 or |zm_bar| = 2), and Algorithm 1 started from such a model drifts to
   A2 -> 0. Now the free search uses the exact Jacobian, is followed by the z_f-known cold search at the
   z_f it reached (lower criterion wins), and the warm searches hold z_f (minimum-norm).
-  What is left is not the z_f-free search: every remaining flagged run has m, zm_bar at the right values
-  but Algorithm 1's iteration in a period-4 cycle (relative change of the calibration set's beta0 up to
-  7e-3, m within 5e-5) and it stops at ``max_iter``. The same cycle appears with z_f KNOWN at
-  some values: z_f = -0.029 or -0.0275 gives 20 of 20 random starts not converged, z_f = -0.028, -0.02,
-  -0.035, -0.05 give 0 of 10-20 (the study's true z_f, -0.028, happens to be a converging one). The
-  z_f-free runs that stop near such a z_f inherit it (every one of the 26 stopped at z_f between -0.02752 and -0.02745,
-  where the free cold search often ends). The summary JSON counts them: ``flagged_reasons`` (how often
-  each rule fired) and ``not_converged_settled`` (runs flagged only as not converged whose zm_bar and rho
-  vary by less than 1e-4 relative over the last 10 iterates, :func:`_identifiable_drift`): 5 of 5 and
-  21 of 21 here. They stay flagged: the rule is not loosened. So the paper's 5 of 10 000 is not reproduced with
-  our rule (2.5 % and 5 % here), and the difference is the convergence of the IV fixed-point iteration,
-  which with z_f known we leave unchanged (the relaxation damps period-2 cycles only).
+  What was left then was not the z_f-free search: every remaining flagged run had m, zm_bar at the right
+  values but Algorithm 1's iteration in a period-4 cycle (relative change of the calibration set's beta0 up
+  to 7e-3, m within 5e-5), stopping at ``max_iter``. The same cycle appears with z_f KNOWN at some values
+  (z_f = -0.029 or -0.0275: 20 of 20 random starts not converged; the study's true -0.028 happens to
+  converge), and the z_f-free runs stopped near such a z_f (all 26 between -0.02752 and -0.02745). The
+  four-iterate relaxation from iteration 10 on (``MassCMOptions.cycle_after``, :mod:`shipid.methods.masscm`)
+  removes it: with the same commands **0 of 200** (``--init given``; m 0.40249 ± 0.0012, zm_bar
+  -0.18207 ± 1.3e-5, z_f -0.061 ± 0.015, 7.4 iterations on average) and **0 of 400** (``--init linear``;
+  m 0.40132 ± 0.0029) are flagged. The full paper protocol, ``shipid study mass-cm-sensitivity --z-f free
+  --init given --runs 10000 --seed 1 --json`` (2026-11-22): **11 of 10 000 flagged** (the paper: 5), now
+  implausible estimates (9 A2 <= 0, 6 m <= 0, 6 k - K_vdot g <= 0, 4 A1 <= 0, 10 also not converged; a run
+  may trip several), none "settled"; over the 9 989 others m 0.40255 ± 0.0012 (Table 3: 0.4007 ± 0.0018),
+  zm_bar -0.18207 ± 1.3e-5 (-0.1821 ± 0.0004), z_f -0.0617 ± 0.0147 (-0.0403 ± 0.0225), k 18.4 ± 3.5
+  (13.3 ± 5.4), K_vdot 0.76 ± 0.29 (0.34 ± 0.44): the Table 3 pattern, tight m and zm_bar, wide k, K_vdot
+  and z_f, with our search stopping further along the flat family than the paper's. The summary JSON counts
+  ``flagged_reasons`` (how often each rule fired) and ``not_converged_settled`` (runs flagged only as not
+  converged whose zm_bar and rho vary by less than 1e-4 relative over the last 10 iterates,
+  :func:`_identifiable_drift`).
 
 Speed (``python benchmarks/bench_masscm_study.py 2000 300``, the 2-core shared VM, z_f known).
 :func:`run_one` uses the compiled path (``compute="fast"``: :mod:`shipid.methods.masscm_step`,
@@ -70,10 +76,18 @@ spread 9e-8). Campaigns of 2000 runs: 1 worker 22.0 s, 2 local workers 12.4 s (1
 00:22 UTC, an earlier build about 10 % slower, load 2.1-2.7, i.e. about one core left to the two
 workers) took 105.6 s. Quiet re-measurement, the full 10 000 runs per mode
 (``python benchmarks/bench_masscm_study.py``, 00:40 UTC, load 0.7-2.1): 1 worker 95.3 s, 2 local
-workers 58.3 s (under the 60 s goal, by little), 2-worker LocalCluster 65.9 s; 1 -> 2 speed-up 1.64x,
-below the 1.8x goal. The engine is not what limits it (the toy task of ``benchmarks/bench_campaign.py``
-scales 1.87x on the same machine): two independent processes of this study, with no communication,
-each slow from ~8.7 to ~10.2 ms/run when both cores are busy, which caps the speed-up near 1.7x. Where a run's time goes now (about 6.4 outer iterations,
+workers 58.3 s, 2-worker LocalCluster 65.9 s; 1 -> 2 speed-up 1.64x, below the 1.8x goal. Part of the
+loss was each worker's start (imports, numba cache, datasets: ~1.6 s, paid inside the 2-worker timing
+but not the in-process 1-worker one), part the machine's speed drifting between the two sequential
+measurements. Since 2026-11-22 02:10 the workers come warm from the forkserver (``run_campaign(...,
+warm_up=...)``, :mod:`shipid.studies.worker_preload`) and the benchmark repeats the modes in alternating
+order: ``python benchmarks/bench_masscm_study.py 10000 0 1,2,dask 3`` (02:17-02:31 UTC, load 1.0-2.2,
+machine slower than at 00:40: 9.4-10.0 ms/run in one process) gave 1 worker 100.1 / 98.6 / 94.3 s,
+2 local workers 51.2 / 49.3 / 51.9 s, LocalCluster 54.1 / 52.0 / 62.9 s; speed-up **1.95 / 2.00 / 1.82x,
+median 1.95x**; the CPU time per run measured inside the workers is 0-9 % higher with both cores busy.
+End to end, one fresh CLI process each (imports, warm-up and forkserver start included):
+``shipid study mass-cm-sensitivity --runs 10000 --workers 2 --seed 1 --json`` 47.6 s, ``--workers 1``
+94.6 s (1.99x). Where a run's time goes now (about 6.4 outer iterations,
 16 dataset-iterations): per dataset-iteration one compiled step (~0.27 ms: FIR filter of eight
 signals, lag products, AR(40) fit, closed-loop simulation) and LAPACK's 50x50 eigen-decomposition
 (~0.13-0.16 ms; kept: the rank rule of :func:`shipid.estimate.iv.iv_compress_products` needs the
