@@ -81,8 +81,8 @@ def sentences(t_end=T_END):
     return [(t, str(s)) for t, s in out]
 
 
-def _tag(c):
-    body = f"c:{c:.3f},s:logger"
+def _tag(c, fmt=".3f"):
+    body = f"c:{c:{fmt}},s:logger"
     cs = 0
     for ch in body:
         cs ^= ord(ch)
@@ -280,6 +280,31 @@ def test_hdg_with_variation_gives_true_heading(tmp_path):
     np.testing.assert_allclose(tr["psi"], math.radians(355.0 + 2.0 - 4.5), rtol=1e-12)
     np.testing.assert_allclose(tr["r"], -math.radians(6.0) / 60, rtol=1e-12)
     assert tr.meta["psi_source"].startswith("HDG")
+
+
+def test_other_units_millisecond_tags_zda_and_format_option(tmp_path):
+    lines = []
+    for k in range(11):
+        t = k * 1.0
+        hms, _ = _hms(T0_UNIX + t)
+        lines += [(t, str(pynmea2.MWV("WI", "MWV", ("270.0", "T", "36.0", "K", "A")))),
+                  (t, str(pynmea2.VTG("GP", "VTG", ("90.0", "T", "", "M", "", "N", "18.52", "K", "A")))),
+                  (t, str(pynmea2.RPM("II", "RPM", ("E", "2", "-120.0", "", "A")))),
+                  (t, str(pynmea2.ZDA("GP", "ZDA", (hms, "22", "11", "2025", "00", "00"))))]
+    p = tmp_path / "w.dat"                                    # not an NMEA extension: --format nmea
+    p.write_text("\n".join(_tag(1000 * (T0_UNIX + t), ".0f") + s.split("*")[0]
+                           for t, s in lines) + "\n")         # c: in ms, sentences without checksum
+    with pytest.raises(InputError):
+        read_trial(p)                                         # .dat -> HSVA format: not this file
+    tr = read_trial(p, fmt="nmea")
+    assert tr.meta["t0_unix"] == pytest.approx(T0_UNIX) and tr.dt == pytest.approx(1.0)
+    assert tr.meta["no_checksum"] == len(lines)
+    np.testing.assert_allclose(tr["wind_speed"], 10.0, rtol=1e-12)           # 36 km/h
+    np.testing.assert_allclose(tr["wind_angle_true"], math.radians(270.0), rtol=1e-12)
+    np.testing.assert_allclose(tr["sog"], 18.52 / 3.6, rtol=1e-12)            # km/h when knots are empty
+    np.testing.assert_allclose(tr["cog"], math.pi / 2, rtol=1e-12)
+    np.testing.assert_allclose(tr["n"], -2.0, rtol=1e-12)                     # astern, engine 2
+    assert tr.meta["rpm_source"] == "engine 2"
 
 
 def test_sniffing_txt_and_log():

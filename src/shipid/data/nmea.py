@@ -89,7 +89,9 @@ with their line numbers.
 
 Bad lines
 ---------
-A failed checksum, an unparsable sentence, a field out of range or a line that
+A sentence with a checksum must match it; one without (``*hh`` missing) is
+accepted, as some loggers strip them, and counted in ``meta["no_checksum"]``. A
+failed checksum, an unparsable sentence, a field out of range or a line that
 is no sentence is one :class:`~shipid.errors.InputError` naming the file, the
 channel (or sentence type) and the line. With ``skip_bad=True`` such lines are
 skipped and counted per sentence type in ``meta["skipped"]``; more than
@@ -472,6 +474,7 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
     skipped: dict[str, int] = {}
     first_bad: str | None = None
     n_sentences = 0
+    no_checksum = 0
     before_fix = 0
     last_t: float | None = None
     fix_day = 0.0           # sentence_utc: seconds added for midnight crossings
@@ -531,6 +534,8 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
                 if t_line is not None:
                     last_t = _advance(last_t, t_line)
                 continue
+            if "*" not in body:
+                no_checksum += 1
             try:
                 msg = pynmea2.parse(body, check="*" in body)
             except pynmea2.ChecksumError as err:
@@ -594,6 +599,7 @@ def read_nmea(p: Path, label: str, *, skip_bad: bool = False, resample: float | 
         "talkers": sorted(talkers),
         "skipped": skipped,
         "ignored": ignored,
+        "no_checksum": no_checksum,
         "invalid": counts["invalid"],
         "gaps": gaps,
         "span": span,
