@@ -144,3 +144,19 @@ def test_external_scheduler_and_worker_processes(tmp_path, local_reference):
                 p.wait(timeout=15)
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, signal.SIGKILL)
+
+
+def test_scheduler_workers_run_the_warm_up_before_the_first_run(cluster):
+    """With an existing scheduler the warm-up runs on every connected worker (``client.run``) first."""
+    cl, client = cluster
+    res = run_campaign("shipid.studies.toy:toy_probe", 20, 3, executor="scheduler",
+                       scheduler_address=cl.scheduler_address, progress=False,
+                       warm_up="shipid.studies.toy:toy_warm_up")
+    outs = [r.outputs for r in res.records]
+    assert all(o["warmed_in"] == o["pid"] for o in outs)          # warmed in the worker itself
+    assert len(set(client.run(_warmed_pid).values()) - {None}) == 2   # both workers, not just those that ran
+
+
+def _warmed_pid():
+    import shipid.studies.toy as toy
+    return toy.WARMED_IN
