@@ -81,7 +81,7 @@ loss was each worker's start (imports, numba cache, datasets: ~1.6 s, paid insid
 but not the in-process 1-worker one), part the machine's speed drifting between the two sequential
 measurements. Since 2026-11-22 02:10 the workers come warm from the forkserver (``run_campaign(...,
 warm_up=...)``, :mod:`shipid.studies.worker_preload`) and the benchmark repeats the modes in alternating
-order: ``python benchmarks/bench_masscm_study.py 10000 0 1,2,dask 3`` (02:17-02:31 UTC, load 1.0-2.2,
+order: ``python benchmarks/bench_masscm_study.py 10000 0 1,2,dask 3`` (02:17-02:28 UTC, load 1.0-2.2,
 machine slower than at 00:40: 9.4-10.0 ms/run in one process) gave 1 worker 100.1 / 98.6 / 94.3 s,
 2 local workers 51.2 / 49.3 / 51.9 s, LocalCluster 54.1 / 52.0 / 62.9 s; speed-up **1.95 / 2.00 / 1.82x,
 median 1.95x**; the CPU time per run measured inside the workers is 0-9 % higher with both cores busy.
