@@ -135,6 +135,12 @@ ANGLE_CHANNELS = ("psi", "psi_magnetic", "cog", "wind_dir_rel", "wind_angle_true
 #: Range checks: |rate of turn| [deg/min], |rudder| [deg], |rpm|, speeds [knots].
 MAX_ROT_DEG_MIN = 1800.0
 MAX_RUDDER_DEG = 90.0
+#: Sentences carrying one status-gated angle: status field, value field, |limit|, label, channel, seconds
+#: per unit of time in the value (ROT is in deg/min, so rad/s = radians(value) / 60).
+_GATED_ANGLES = {
+    "ROT": ("status", "rate_of_turn", MAX_ROT_DEG_MIN, "rate of turn [deg/min]", "r", 60.0),
+    "RSA": ("rsa_starboard_status", "rsa_starboard", MAX_RUDDER_DEG, "rudder angle [deg]", "delta", 1.0),
+}
 MAX_RPM = 10000.0
 MAX_SPEED_KN = 200.0
 
@@ -332,22 +338,14 @@ def _values(msg, stype: str, out: dict, counts: dict) -> None:
         else:
             var = var if _field(msg, "var_dir") == "E" else -var
         out[name] = math.radians(h + dev + var) % (2 * math.pi)
-    elif stype == "ROT":
-        if _field(msg, "status") != "A":
+    elif stype in _GATED_ANGLES:      # ROT, RSA: one angle (rate) each, valid only with status A
+        status, fld, limit, what, channel, per_s = _GATED_ANGLES[stype]
+        if _field(msg, status) != "A":
             invalid()
             return
-        rot = _num(msg, "rate_of_turn", stype, "r")
-        if rot is not None:
-            out["r"] = math.radians(_in_range(rot, -MAX_ROT_DEG_MIN, MAX_ROT_DEG_MIN, stype,
-                                              "rate of turn [deg/min]", "r")) / 60.0
-    elif stype == "RSA":
-        if _field(msg, "rsa_starboard_status") != "A":
-            invalid()
-            return
-        d = _num(msg, "rsa_starboard", stype, "delta")
-        if d is not None:
-            out["delta"] = math.radians(_in_range(d, -MAX_RUDDER_DEG, MAX_RUDDER_DEG, stype,
-                                                  "rudder angle [deg]", "delta"))
+        v = _num(msg, fld, stype, channel)
+        if v is not None:
+            out[channel] = math.radians(_in_range(v, -limit, limit, stype, what, channel)) / per_s
     elif stype == "RPM":
         if _field(msg, "status") != "A":
             invalid()
