@@ -1,0 +1,46 @@
+"""Known limitations of Algorithm 1 (Linder et al. 2015) beyond the paper's noise-free §5 study.
+
+See the "Known limitations" section of :mod:`shipid.methods.masscm`. One is a property (finite-sample bias of
+the weakly determined K_vdot that shrinks with the record length: asserted), one a defect left open (wrong m
+under narrow-band wave roll with noise-free sensors: a strict xfail, so that fixing it turns this file red
+until the xfail is removed).
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from shipid.methods.masscm import estimate_mass_cm
+from shipid.models.roll_reduced import KnownParams
+from shipid.models.roll_sim import NoiseSpec, simulate_datasets
+
+ZF = -0.028                        # Table 2 (vessel file), known
+M_TRUE, KVDOT_TRUE = 0.4, 0.1      # Table 2
+
+
+def _estimate(seed: int, duration: float, noise: NoiseSpec):
+    known = KnownParams.from_vessel("fishing-vessel")
+    d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([7, seed]), duration=duration, noise=noise)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return estimate_mass_cm(list(d.items()), known, z_f=ZF)
+
+
+def test_kvdot_bias_under_sensor_noise_shrinks_with_record_length():
+    noise = NoiseSpec(acc_std=0.02)
+    bias = {T: np.mean([_estimate(i, T, noise).value("K_vdot") for i in range(2)]) - KVDOT_TRUE for T in (75.0, 1200.0)}
+    # measured +0.52 (75 s) and +0.09 (1200 s); a consistent estimator's bias falls with N
+    assert 0 < bias[1200.0] < 0.4 * bias[75.0], bias
+    r = _estimate(0, 300.0, noise)
+    assert abs(r.value("m") - M_TRUE) < 3 * r.std("m")          # m is not affected
+    assert "finite-sample bias" in r.estimates["K_vdot"].note
+
+
+@pytest.mark.xfail(strict=True, reason="open defect: AR(40) prefilter under narrow-band wave roll with noise-free "
+                                       "sensors converges to a wrong m (masscm module docstring, Known limitations)")
+def test_wave_roll_without_sensor_noise_gives_m_within_its_standard_error():
+    for i in range(3):
+        r = _estimate(i, 300.0, NoiseSpec(wave_roll_deg=0.5))
+        assert not r.diagnostics["implausible"]
+        assert abs(r.value("m") - M_TRUE) < 3 * r.std("m"), (i, r.value("m"), r.std("m"))
