@@ -44,3 +44,18 @@ def test_wave_roll_without_sensor_noise_gives_m_within_its_standard_error():
         r = _estimate(i, 300.0, NoiseSpec(wave_roll_deg=0.5))
         assert not r.diagnostics["implausible"]
         assert abs(r.value("m") - M_TRUE) < 3 * r.std("m"), (i, r.value("m"), r.std("m"))
+
+
+def test_structured_ar_noise_model_handles_the_wave_roll_case():
+    """``noise_model="ar-structured"`` divides the unit-circle zeros out before the AR fit; on the same three
+    realisations m comes out within 3 standard errors, none flagged (measured 0.401, 0.361, 0.460)."""
+    from shipid.methods.masscm import MassCMOptions
+    known = KnownParams.from_vessel("fishing-vessel")
+    for i in range(3):
+        d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([7, i]), duration=300.0,
+                              noise=NoiseSpec(wave_roll_deg=0.5))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = estimate_mass_cm(list(d.items()), known, z_f=ZF, options=MassCMOptions(noise_model="ar-structured"))
+        assert not r.diagnostics["implausible"] and r.diagnostics["converged"]
+        assert abs(r.value("m") - M_TRUE) < 3 * r.std("m"), (i, r.value("m"), r.std("m"))

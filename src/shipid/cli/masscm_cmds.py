@@ -97,8 +97,11 @@ def _fmt(v: float) -> str:
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
 @click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
+@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma"]), default="ar", show_default=True,
+              help="Noise model of the prefilter (43): AR(40); AR(40) of eps/(1 - 0.99 q^-2) (narrow-band wave "
+                   "roll with low-noise sensors, see the masscm module's Known limitations); structured ARMA.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
-def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, as_json):
+def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, as_json):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
     Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
@@ -113,7 +116,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     for cond, paths in (("nominal", nominal), ("calibration", calibration), ("loaded", loaded)):
         for p in paths:
             datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
-    opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter)
+    opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
     res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
                            z_f_prior=kn["z_f_prior"], options=opts,
                            init="given" if kn["theta0"] is not None else "linear")
