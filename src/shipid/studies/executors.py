@@ -193,6 +193,7 @@ def failed_rows(seed: int, indices: Sequence[int], error: str) -> list[dict]:
 # Executors: each yields lists of finished rows
 # --------------------------------------------------------------------------------------
 _SERVER_WARM: list = []     # the warm-up spec this process's forkserver was started with (at most one)
+WARM_UP_VAR = "SHIPID_WORKER_WARM_UP"   # how the spec reaches the forkserver (read by shipid.studies.worker_preload)
 
 
 def start_forkserver(warm_up: str | None = None, warm_kwargs: dict | None = None,
@@ -212,8 +213,6 @@ def start_forkserver(warm_up: str | None = None, warm_kwargs: dict | None = None
     server = forkserver._forkserver
     if getattr(server, "_forkserver_pid", None) is not None:   # running (private attribute; absent: start)
         return spec is not None and _SERVER_WARM == [spec]
-    from shipid.studies.worker_preload import WARM_UP_VAR
-
     multiprocessing.get_context("forkserver").set_forkserver_preload(
         ["shipid.studies.worker_preload", *modules])
     old = os.environ.get(WARM_UP_VAR)

@@ -3,7 +3,7 @@
 The local pool and the Dask LocalCluster start their workers from one ``forkserver``
 process (:mod:`multiprocessing.forkserver`). The campaign engine starts that server
 with this module in its preload list and, in the environment variable
-:data:`WARM_UP_VAR`, the task's warm-up (``{"warm_up": "module:function", "kwargs":
+:data:`shipid.studies.executors.WARM_UP_VAR`, the task's warm-up (``{"warm_up": "module:function", "kwargs":
 {...}}``). Importing this module in the server then runs the warm-up there, once:
 imports, numba kernels loaded from the disk cache, datasets a task caches per process.
 Every worker forked afterwards starts with all of it in memory, instead of each
@@ -23,8 +23,9 @@ import json
 import os
 import sys
 
-WARM_UP_VAR = "SHIPID_WORKER_WARM_UP"
-_BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+import numpy  # noqa: F401  - imported once here for every worker
+
+from shipid.studies.executors import _BLAS_ENV, WARM_UP_VAR, code_fingerprint, resolve_task
 
 #: What the warm-up did in this process: ``None`` (none asked), ``"ok"`` or the error text.
 STATUS: str | None = None
@@ -38,7 +39,6 @@ def _warm_up_from_environment() -> None:
     for var in _BLAS_ENV:                  # workers run one BLAS thread each (as _worker_init sets)
         os.environ[var] = "1"
     try:
-        from shipid.studies.executors import code_fingerprint, resolve_task
         from threadpoolctl import threadpool_limits
 
         code_fingerprint()                 # cached: workers report the source this server loaded
@@ -52,9 +52,5 @@ def _warm_up_from_environment() -> None:
         print(f"shipid: worker warm-up {spec} failed in the forkserver ({STATUS}); "
               "each worker warms up on its own", file=sys.stderr, flush=True)
 
-
-import numpy  # noqa: E402,F401  - imported once here for every worker
-
-import shipid.studies.executors  # noqa: E402,F401
 
 _warm_up_from_environment()
