@@ -19,12 +19,12 @@ ZF = -0.028                        # Table 2 (vessel file), known
 M_TRUE, KVDOT_TRUE = 0.4, 0.1      # Table 2
 
 
-def _estimate(seed: int, duration: float, noise: NoiseSpec):
+def _estimate(seed: int, duration: float, noise: NoiseSpec, noise_check: bool = False):
     known = KnownParams.from_vessel("fishing-vessel")
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([7, seed]), duration=duration, noise=noise)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return estimate_mass_cm(list(d.items()), known, z_f=ZF)
+        return estimate_mass_cm(list(d.items()), known, z_f=ZF, noise_check=noise_check)
 
 
 def test_kvdot_bias_under_sensor_noise_shrinks_with_record_length():
@@ -59,3 +59,20 @@ def test_structured_ar_noise_model_handles_the_wave_roll_case():
             r = estimate_mass_cm(list(d.items()), known, z_f=ZF, options=MassCMOptions(noise_model="ar-structured"))
         assert not r.diagnostics["implausible"] and r.diagnostics["converged"]
         assert abs(r.value("m") - M_TRUE) < 3 * r.std("m"), (i, r.value("m"), r.std("m"))
+
+
+def _noise_warning(r) -> bool:
+    return any("depends on the noise model" in w for w in r.diagnostics["warnings"])
+
+
+def test_noise_model_check_warns_on_the_wave_failure_and_not_on_sensor_noise():
+    """The AR(40) failure of the wave-only case is no longer silent: m 1.29 ± 0.20 (seed 0) is 4 combined std
+    from the structured AR's 0.40 ± 0.03, and the result says so; the issue-3 noise (waves plus sensor noise)
+    gives no such warning (fresh seeds 100-119: 0 of 20 warned, and all 9 wave-only estimates beyond 3 std
+    were warned or flagged)."""
+    wave = _estimate(0, 300.0, NoiseSpec(wave_roll_deg=0.5), noise_check=True)
+    chk = wave.diagnostics["noise_model_check"]
+    assert chk["z"] > 1.5 and _noise_warning(wave)
+    assert abs(chk["m"] - M_TRUE) < 3 * chk["m_std"]
+    ok = _estimate(0, 300.0, NoiseSpec.issue3(), noise_check=True)
+    assert ok.diagnostics["noise_model_check"]["z"] < 1.5 and not _noise_warning(ok)

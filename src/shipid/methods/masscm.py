@@ -103,6 +103,12 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   option is for records in waves with low-noise sensors, and a later session should find a noise model
   good in both (its IIR prefilter also has no compiled path). The default's failure is pinned by a
   strict xfail test, the option's behaviour on three realisations by a test.
+  **The failure is no longer silent**: :func:`estimate_mass_cm` (``noise_check=True``, the default; not the
+  Monte Carlo studies) estimates again with ``ar-structured`` and warns when the two m differ by more
+  than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (``diagnostics["noise_model_check"]``).
+  The threshold was chosen on seeds [11, 0..9] (issue-3 noise: at most 0.91; wave-only: 1.8-12.7 where
+  not absurd) and checked on fresh seeds [11, 100..119]: issue-3 noise 0 of 20 warned; wave-only 9 of 20
+  estimates beyond 3 std, every one of them warned or flagged implausible; sensor noise only 0 of 15 warned.
 
 Standard errors come from the asymptotic covariance of the weighted IV estimate,
 ``Cov = (sum_i G_i^T R_i^T R_i G_i / lam_i)^-1`` with ``G_i = dg_i/dtheta`` (exact, complex step),
@@ -1120,7 +1126,7 @@ def _covariance(core: dict) -> tuple[np.ndarray, list[str], bool]:
 def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
                      theta0: Sequence[float] | None = None, z_f: float | None = None,
                      z_f_prior: tuple[float, float] | None = None, init: str | None = None,
-                     options: MassCMOptions = MassCMOptions()) -> Result:
+                     options: MassCMOptions = MassCMOptions(), noise_check: bool = True) -> Result:
     """Estimate the load mass ``m`` and its centre ``zm_bar`` (and the nuisance parameters) by Algorithm 1.
 
     Parameters
@@ -1140,6 +1146,11 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         Starting point of the first search: ``"linear"`` (default without ``theta0``) solves the
         multiplied-out, linear form of (40) (:func:`linear_initial`), independent of initial values;
         ``"given"`` (default with ``theta0``) starts from ``theta0`` as in the paper's §5.
+    noise_check : bool
+        With the AR(40) noise model and z_f known or with a prior: estimate once more with
+        ``noise_model="ar-structured"`` from the same start and warn when the two m differ by more
+        than :data:`NOISE_CHECK_Z` combined standard errors (the narrow-band disturbance failure of
+        "Known limitations"); recorded in ``diagnostics["noise_model_check"]``. About doubles the time.
 
     Returns
     -------
@@ -1154,12 +1165,45 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         raise InputError(f"theta0 needs {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})")
     with warnings.catch_warnings(), threadpool_limits(1):     # small matrices: BLAS threads only cost here
         warnings.simplefilter("ignore", RuntimeWarning)
-        core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options,
-                       init=init or ("linear" if theta0 is None else "given"))
+        init = init or ("linear" if theta0 is None else "given")
+        core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options, init=init)
     res = _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    if (noise_check and options.prefilter and options.noise_model == "ar"
+            and (z_f is not None or z_f_prior is not None)):
+        _noise_model_check(res, prep, known, th0, z_f, z_f_prior, options, init)
+        res.diagnostics["wall_s"] = time.perf_counter() - t0
     from shipid.methods.masscm_series import attach  # report series: overlays, Fig. 4 map, inputs (issue 8)
     attach(res, core, prep, known, options, datasets)
     return res
+
+
+#: Warn when AR(40) and the structured AR give m this many combined standard errors apart. Chosen on 10
+#: issue-3 and 10 wave-only realisations (seeds [11, 0..9]: largest issue-3 value 0.91, wave-only values
+#: 1.8-12.7 where not absurd) and checked on fresh seeds (module docstring, "Known limitations").
+NOISE_CHECK_Z = 1.5
+
+
+def _noise_model_check(res: Result, prep, known, th0, z_f, z_f_prior, options: MassCMOptions, init: str) -> None:
+    """Cross-check the AR(40) estimate of m against the structured AR noise model (see :func:`estimate_mass_cm`)."""
+    alt = replace(options, noise_model="ar-structured")
+    with warnings.catch_warnings(), threadpool_limits(1):
+        warnings.simplefilter("ignore", RuntimeWarning)
+        core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=alt, init=init)
+    cov, names, _ = _covariance(core)
+    k = names.index("m")
+    m_alt = float(core["theta"][I_M])
+    s_alt = float(np.sqrt(cov[k, k])) if np.isfinite(cov[k, k]) and cov[k, k] >= 0 else float("inf")
+    m, s = res.value("m"), res.std("m")
+    z = abs(m - m_alt) / np.hypot(s, s_alt) if np.isfinite(np.hypot(s, s_alt)) else float("nan")
+    res.diagnostics["noise_model_check"] = {"noise_model": "ar-structured", "m": m_alt, "m_std": s_alt,
+                                            "converged": bool(core["converged"]), "z": float(z),
+                                            "threshold": NOISE_CHECK_Z}
+    if np.isfinite(z) and z > NOISE_CHECK_Z:
+        res.diagnostics["warnings"].append(
+            f"m depends on the noise model: AR(40) gives {m:.4g} ± {s:.2g} kg, the structured AR "
+            f"{m_alt:.4g} ± {s_alt:.2g} kg ({z:.1f} combined std apart); the AR(40) prefilter probably does not "
+            "whiten the equation error (a narrow-band disturbance such as wave roll with low-noise sensors): "
+            "try --noise-model ar-structured (shipid.methods.masscm, 'Known limitations')")
 
 
 def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
