@@ -175,32 +175,31 @@ def ebm_H_into(t, x, p, H):
     H[5, 0], H[5, 2] = 1.0, -p[13]
 
 
+def _allocating(into, shape, p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
+    """Call a compiled ``*_into(t, x, p, out)`` kernel on a fresh output array of ``shape``."""
+    out = np.empty(shape)
+    into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
+    return out
+
+
 def ebm_f(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
     """Allocating wrapper of :func:`ebm_f_into` (for tests and scripts)."""
-    out = np.empty(17)
-    ebm_f_into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
-    return out
+    return _allocating(ebm_f_into, 17, p, t, x)
 
 
 def ebm_F(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
     """Allocating wrapper of :func:`ebm_F_into`."""
-    out = np.empty((17, 17))
-    ebm_F_into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
-    return out
+    return _allocating(ebm_F_into, (17, 17), p, t, x)
 
 
 def ebm_h(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
     """Allocating wrapper of :func:`ebm_h_into`."""
-    out = np.empty(6)
-    ebm_h_into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
-    return out
+    return _allocating(ebm_h_into, 6, p, t, x)
 
 
 def ebm_H(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
     """Allocating wrapper of :func:`ebm_H_into`."""
-    out = np.empty((6, 17))
-    ebm_H_into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
-    return out
+    return _allocating(ebm_H_into, (6, 17), p, t, x)
 
 
 # ---------------------------------------------------------------------------------------
