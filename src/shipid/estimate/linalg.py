@@ -14,8 +14,40 @@ Why these forms (DESIGN.md practice 6):
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy import linalg as sla
+from threadpoolctl import ThreadpoolController
+
+
+_TPC: list = []
+
+
+def one_blas_thread():
+    """Context manager (and decorator) that runs BLAS/LAPACK on one thread.
+
+    OpenBLAS splits the reductions of ``dot``/``gemv`` (and LAPACK built on them) between
+    its threads, so the last bits of a result depend on how many threads it runs, i.e. on
+    the machine's core count and on ``OPENBLAS_NUM_THREADS``. Iterative estimators
+    (Algorithm 1 of seed 000, the EKFs) amplify such differences to ~1e-9 relative. Every
+    number shipid reports is computed under this limit, so a result is the same in one
+    process, in N campaign workers (which run one thread each) and on any core count.
+    The matrices are small (tens of columns), so threads only cost here. The controller
+    (a scan of the loaded libraries, ~2 ms) is made once per process.
+    """
+    if not _TPC:
+        _TPC.append(ThreadpoolController())
+    return _TPC[0].limit(limits=1)
+
+
+def single_threaded(fn):
+    """Decorator: call ``fn`` under :func:`one_blas_thread` (see there for why)."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        with one_blas_thread():
+            return fn(*args, **kwargs)
+    return wrapper
 
 
 class NotPositiveDefiniteError(np.linalg.LinAlgError):

@@ -109,8 +109,8 @@ import warnings
 from dataclasses import replace
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
+from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm import MassCMOptions, implausible_reasons, initial_state, iterate, prepare
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import simulate_datasets
@@ -159,15 +159,7 @@ def _state0(data_seed: int, vessel: str, options: MassCMOptions):
     return _CACHE[_key(data_seed, vessel, options)][2]
 
 
-_TPC: list = []
-
-
-def _one_thread():
-    """BLAS limited to one thread (small matrices: threads only cost here); the controller that finds
-    the BLAS libraries (a scan of the loaded libraries, ~2 ms) is made once per process."""
-    if not _TPC:
-        _TPC.append(ThreadpoolController())
-    return _TPC[0].limit(limits=1)
+_one_thread = one_blas_thread
 
 
 def draw_initial(rng: np.random.Generator, vessel: str = "fishing-vessel") -> np.ndarray:
@@ -189,14 +181,16 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     rng = np.random.default_rng(ss)
     options = MassCMOptions(max_iter=max_iter, compute=compute)
-    prep, known = _prepared(data_seed, vessel, options)
+    with _one_thread():      # the cached datasets too: their AR fits must not depend on the BLAS threads
+        prep, known = _prepared(data_seed, vessel, options)
+        state0 = _state0(data_seed, vessel, options)
     theta0 = draw_initial(rng, vessel)
     z_f = _zf_true(vessel) if zf_mode == "known" else None
     with warnings.catch_warnings(), _one_thread():
         warnings.simplefilter("ignore")
         try:
             core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init,
-                           state0=_state0(data_seed, vessel, options), jacobian=False)
+                           state0=state0, jacobian=False)
             theta = core["theta"]
             conv, its = bool(core["converged"]), int(core["iterations"])
             drift = _identifiable_drift(core["history"], known)
