@@ -6,6 +6,9 @@ Three methods, each reproduced from its paper and extended:
 * DP low-frequency model identification with a parallel state-augmented EKF
   (Fossen, Sagatun & Sørensen 1996);
 * Estimation-Before-Modelling of manoeuvring coefficients (Yoon & Rhee 2003).
+
+From Python: ``shipid.identify(method, trials, vessel=..., options=...)``, ``shipid.validate``,
+``shipid.simulate``, ``shipid.read_trial``, ``shipid.load_vessel`` (:mod:`shipid.api`).
 """
 
 from importlib.metadata import PackageNotFoundError, version
@@ -15,4 +18,27 @@ try:
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0.0.0+unknown"
 
-__all__ = ["__version__"]
+#: The public names, loaded on first use (PEP 562) so that ``import shipid`` stays cheap.
+_LAZY = {
+    "identify": "shipid.api", "validate": "shipid.api", "METHODS": "shipid.api",
+    "read_trial": "shipid.data.io", "write_trial": "shipid.data.io", "Trial": "shipid.data.trial",
+    "Result": "shipid.result", "Estimate": "shipid.result", "load_vessel": "shipid.vessels",
+}
+
+__all__ = ["__version__", "simulate", *_LAZY]
+
+
+def __getattr__(name: str):
+    if name == "simulate":       # the subpackage, callable as shipid.api.simulate
+        import importlib
+
+        return importlib.import_module("shipid.simulate")
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'shipid' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
