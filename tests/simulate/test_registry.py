@@ -65,3 +65,12 @@ def test_fishing_vessel_zigzag():
     tr = run_manoeuvre(m, "zigzag-10", duration=60.0, dt=0.05)
     k = np.flatnonzero(np.diff(tr["delta_cmd"])) + 1
     assert len(k) >= 4 and "phi" in tr
+
+
+def test_unknown_vessel_lists_names_as_shipid_vessels_shows_them():
+    names = sorted(e.name for e in registry.list_vessels())
+    with pytest.raises(ShipidError) as err:
+        registry.get_ship_model("titanic")
+    for n in names:
+        assert n in str(err.value)
+    assert "esso_osaka" not in str(err.value) and "esso-osaka" in str(err.value)

@@ -81,7 +81,7 @@ def get_ship_model(name: str) -> ShipModel:
     try:
         vessel = load_vessel(name)
     except ShipidError:
-        known = sorted(set(vessel_names()) | set(GENERIC))
+        known = sorted({e.name for e in list_vessels()} | set(GENERIC))   # as `shipid vessels` shows them
         raise ShipidError(f"unknown vessel {name!r} (known: {', '.join(known)})") from None
     module = _family_of(vessel)
     model = _import_family(module, vessel.name)(vessel)

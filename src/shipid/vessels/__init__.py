@@ -102,11 +102,14 @@ def _parse(name: str, text: str) -> Vessel:
 
 def load_vessel(name: str) -> Vessel:
     """Load a packaged vessel by name or alias (``"esso-osaka"``, ``"supply"`` ...)."""
+    shown = []
     for stem in vessel_names():
         v = _parse(stem, (_data_dir() / f"{stem}.toml").read_text(encoding="utf-8"))
         if name == stem or name == v.name or name in v.aliases:
             return v
-    raise ShipidError(f"unknown vessel {name!r} (known: {', '.join(vessel_names())})")
+        shown.append(v.name)
+    # named as `shipid vessels` shows them (nomoto is a model family, offered by the simulator itself)
+    raise ShipidError(f"unknown vessel {name!r} (known: {', '.join(sorted(shown))})")
 
 
 __all__ = ["Param", "Vessel", "load_vessel", "vessel_names"]
