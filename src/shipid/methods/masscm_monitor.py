@@ -506,7 +506,8 @@ class MassCMMonitor:
         stat, tau, th_tail = self._detect()
         alarm = stat is not None and stat > self.opt.threshold
         if alarm:
-            self._reset(tau, th_tail)
+            _, tau2, th2 = self._detect(locate=True)
+            self._reset(tau2 if tau2 is not None else tau, th2 if th2 is not None else th_tail)
         converged = bool(ok and not alarm and t1 - self._since >= self.opt.min_window - 0.5 * self.T)
         return MonitorUpdate(t1, summ["m"], summ["m_std"], summ["zm_bar"], summ["zm_bar_std"], summ["rho"],
                              summ["rho_std"], converged, bool(alarm), self.change_at,
@@ -581,16 +582,20 @@ class MassCMMonitor:
             return th, None
         return th, 0.5 * (S + S.T)
 
-    def _detect(self):
-        """Largest two-window Wald statistic over the admissible splits: ``(T, change_at, theta_tail)``."""
+    def _detect(self, locate: bool = False):
+        """Largest two-window Wald statistic over the admissible splits: ``(T, change_at, theta_tail)``.
+
+        ``locate``: after an alarm, the change time is the arg-max over the splits with tails from one block
+        to ``detect_max`` (the alarm itself needs a tail of ``detect_min``)."""
         o = self.opt
         blocks = list(self.blocks)
         t_end = blocks[-1].t1
         best = (None, None, None)
+        tmin = o.every if locate else o.detect_min
         for j in range(1, len(blocks)):
             tail = t_end - blocks[j].t0
             ref = blocks[j].t0 - blocks[0].t0
-            if not (o.detect_min - 0.5 * self.T <= tail <= o.detect_max + 0.5 * self.T
+            if not (tmin - 0.5 * self.T <= tail <= o.detect_max + 0.5 * self.T
                     and ref >= o.ref_min - 0.5 * self.T):
                 continue
             th_r, S_r = self._fit_load(blocks[:j], self.theta_q)

@@ -83,7 +83,7 @@ def simulate_stream(spec: StreamSpec = StreamSpec(), *, vessel: str = "fishing-v
     a_s = out["a_s"] + nz.acc_bias + nz.acc_std * rs.standard_normal(n)
     r = out["r"] + nz.gyro_bias + nz.gyro_std * rs.standard_normal(n)
     t = np.arange(n) * dt
-    stream = Trial(t, {"p": p, "a_s": a_s, "r": r, "delta": delta, "phi": out["phi"]},
+    stream = Trial(t, {"p": p, "a_s": a_s, "r": r, "delta": delta},
                    meta={"vessel": vessel, "condition": "loaded", "simulated": True})
     g = v.values("general")
     truth = {"vessel": vessel, "seed": int(seed), "change_at": spec.change_at if k < n else None,
@@ -133,4 +133,36 @@ def write_stream_files(sim: dict, out: str | Path, *, force: bool = False) -> di
     return paths
 
 
-__all__ = ["StreamSpec", "simulate_stream", "truth_at", "known_toml", "write_stream_files"]
+def simulate_stream_cmd(vessel: str, out: str, *, duration: float | None, seed: int, change_at: float | None,
+                        to: str | None, force: bool) -> None:
+    """``shipid simulate VESSEL mass-cm-stream``: simulate and write the files, one line on stdout."""
+    import click
+
+    from shipid.errors import ShipidError
+
+    if vessel not in ("fishing-vessel", "fishing_vessel", "linder2015"):
+        raise ShipidError(f"mass-cm-stream is defined for the fishing-vessel (seed 000), not {vessel!r}")
+    if not str(out).lower().endswith(".csv"):
+        raise ShipidError(f"{out}: the stream must be a .csv file")
+    spec = StreamSpec() if duration is None else StreamSpec(duration=float(duration))
+    m1, z1 = spec.m1, spec.zm1
+    if to is not None:
+        try:
+            m1, z1 = (float(x) for x in to.split(","))
+        except ValueError:
+            raise ShipidError(f"--to must be 'M,ZM' (kg, m), got {to!r}") from None
+        if not m1 > 0:
+            raise ShipidError(f"--to: the mass must be positive, got {m1:g}")
+    if change_at is not None and not 0 < change_at < spec.duration:
+        raise ShipidError(f"--change-at must lie inside the stream (0, {spec.duration:g}) s, got {change_at:g}")
+    spec = StreamSpec(**{**asdict(spec), "noise": spec.noise, "change_at": change_at, "m1": m1, "zm1": z1})
+    if seed < 0:
+        raise ShipidError(f"--seed must be >= 0, got {seed}")
+    paths = write_stream_files(simulate_stream(spec, vessel="fishing-vessel", seed=seed), out, force=force)
+    ch = "no load change" if change_at is None else (f"load {spec.m0:g} kg at {spec.zm0:g} m -> {m1:g} kg at "
+                                                     f"{z1:g} m at {change_at:g} s")
+    click.echo(f"wrote {paths['stream']} ({spec.duration:g} s at {spec.fs:g} Hz, {ch}, seed {seed}), "
+               f"{paths['nominal']}, {paths['calibration']}, {paths['known']}, {paths['truth']}")
+
+
+__all__ = ["simulate_stream_cmd", "StreamSpec", "simulate_stream", "truth_at", "known_toml", "write_stream_files"]
