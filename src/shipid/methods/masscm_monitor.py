@@ -107,7 +107,7 @@ class MonitorOptions:
     detect_min: float = 30.0
     detect_max: float = 120.0
     ref_min: float = 60.0
-    threshold: float = 25.0
+    threshold: float = 40.0
     ar_fit: float = 120.0
     masscm: MassCMOptions = MassCMOptions()
 

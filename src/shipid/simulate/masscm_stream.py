@@ -43,14 +43,15 @@ class StreamSpec:
     noise: NoiseSpec = NoiseSpec.issue3()
 
 
-def simulate_stream(spec: StreamSpec = StreamSpec(), *, vessel: str = "fishing-vessel", seed: int = 0) -> dict:
+def simulate_stream(spec: StreamSpec = StreamSpec(), *, vessel: str = "fishing-vessel",
+                    seed: int | np.random.SeedSequence = 0) -> dict:
     """Nominal, calibration datasets and the loaded stream (with the change), and the truth.
 
     Returns ``{"nominal": Trial, "calibration": Trial, "stream": Trial, "truth": dict}``; every random draw
     comes from children of ``SeedSequence(seed)`` (nominal, calibration, stream rudder, waves, sensors).
     """
     v = load_vessel(vessel)
-    ss = np.random.SeedSequence(seed)
+    ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(int(seed))
     c_nom, c_cal, c_rud, c_wave, c_sens = ss.spawn(5)
     kw = dict(duration=spec.reference_duration, fs=spec.fs, delta_amp=spec.delta_amp, delta_clock=spec.delta_clock,
               noise=spec.noise)
@@ -86,7 +87,8 @@ def simulate_stream(spec: StreamSpec = StreamSpec(), *, vessel: str = "fishing-v
     stream = Trial(t, {"p": p, "a_s": a_s, "r": r, "delta": delta},
                    meta={"vessel": vessel, "condition": "loaded", "simulated": True})
     g = v.values("general")
-    truth = {"vessel": vessel, "seed": int(seed), "change_at": spec.change_at if k < n else None,
+    truth = {"vessel": vessel, "seed": (int(seed) if not isinstance(seed, np.random.SeedSequence)
+                                        else [int(x) for x in np.atleast_1d(seed.entropy)] + list(seed.spawn_key)), "change_at": spec.change_at if k < n else None,
              "before": {"m": spec.m0, "zm_bar": spec.zm0}, "after": {"m": spec.m1, "zm_bar": spec.zm1},
              "z_f": float(g["z_f"]), "spec": {**asdict(spec), "noise": asdict(spec.noise)}}
     return {NOMINAL: nominal, CALIBRATION: calibration, "stream": stream, "truth": truth}
