@@ -105,8 +105,10 @@ def tradeoff(runs: int) -> None:
             res = run_campaign(TASK, runs, seed=sd, kwargs={**kw, "window": w}, workers=1, progress=False)
             recs = [r.outputs for r in res.records if r.status == "ok"]
             s = summarise(recs, kw["change_at"] is not None)
-            keep = {k: s[k] for k in ("false_alarms", "coverage_m_mean", "coverage_zm_mean", "streams_both_ge_90",
-                                      "max_T_before", "delay_max", "delay_mean") if k in s}
+            keep = {k: (round(s[k], 4) if isinstance(s[k], float) else s[k])
+                    for k in ("false_alarms", "coverage_m_mean", "coverage_zm_mean", "streams_both_ge_90",
+                              "m_std_mean", "m_err_rms", "zm_std_mean", "zm_err_rms", "max_T_before", "delay_max",
+                              "delay_mean") if k in s}
             print(f"window {w:4.0f} s, {label}, {runs} runs: {json.dumps(keep)}")
 
 

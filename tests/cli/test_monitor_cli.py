@@ -71,3 +71,16 @@ def test_bad_stream_is_one_line(stream, capsys, tmp_path):
     assert rc == 2 and len(err) == 1 and "bad.csv" in err[0]
     rc = main(_args(stream, "--stream", str(tmp_path / "none.csv")))
     assert rc == 2
+
+
+def test_live_panel_renders():
+    from rich.console import Console
+
+    from shipid.cli.monitor_cmds import _panel
+    from shipid.methods.masscm_monitor import MonitorUpdate
+
+    u = MonitorUpdate(930.0, 0.71, 0.09, -0.141, 0.018, 3.0, 0.12, False, True, 900.0, window_s=30.0, statistic=63.0)
+    con = Console(file=io.StringIO(), width=100)
+    con.print(_panel(u, "s.nominal.csv"))
+    text = con.file.getvalue()
+    assert "0.71" in text and "ALARM" in text and "900" in text

@@ -52,22 +52,20 @@ from __future__ import annotations
 import math
 import warnings
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import lfilter
 from threadpoolctl import threadpool_limits
 
 from shipid.data.trial import Trial
-from shipid.errors import InputError
+from shipid.errors import InputError, ShipidError
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm import DEFAULT_THETA0, MassCMOptions, iterate, prepare
+from shipid.methods.masscm_monitor_fit import fit_load, search
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, KnownParams, bilinear_tf, discrete_coeffs,
-                                        from_moment, roll_terms)
-
-#: Window / detector trade-off measured by ``benchmarks/bench_masscm_monitor.py`` (see module docstring).
-TRADE_OFF = "see benchmarks/bench_masscm_monitor.py --tradeoff"
+                                        roll_terms)
 
 I_Q, I_ZM, I_ZF = 7, 8, 6
 _HIST = 64            # samples of history carried into each block (AR order 40 + 16 lags + 2 differences)
@@ -288,6 +286,9 @@ class MassCMMonitor:
             prep = prepare([(NOMINAL, self._refs[0]), (CALIBRATION, self._refs[1]), (LOADED, loaded)], opts)
             core = iterate(prep, self.known, DEFAULT_THETA0, z_f=self.z_f, init="linear", options=opts)
         st = core["state"]
+        if not np.all(np.isfinite(core["theta_q"])):
+            raise ShipidError("the start-up run of Algorithm 1 on the first "
+                              f"{self.opt.init:g} s of the stream gave a non-finite estimate; cannot monitor")
         self.ref_moments = [st.moments[0], st.moments[1]]
         self.ref_lam = np.array(st.lam[:2], dtype=float)
         self.Ts = np.array([ds.T for ds in prep])
@@ -341,7 +342,10 @@ class MassCMMonitor:
         if coef is not None:
             sm.coef = coef
         if sm.coef is None:
-            raise InputError("the start-up model of the loaded condition is unstable: cannot build instruments")
+            raise ShipidError("the start-up estimate of the loaded condition is an unstable roll model, so no "
+                              "instruments can be simulated: Algorithm 1 failed on the start-up window (with narrow-"
+                              "band wave roll and low-noise sensors the AR(40) prefilter is known to fail, "
+                              "shipid.methods.masscm 'Known limitations'); try a longer --init")
         b1, a1, b2, a2, Kyaw, Kd = sm.coef
         delta = b.raw[3]
         r_hat, sm.zr = lfilter(br, ar, delta, zi=sm.zr)
@@ -394,77 +398,6 @@ class MassCMMonitor:
         ZtP = sum(b.ZtP for b in blocks)
         return ZtZ, ZtP, int(sum(b.n for b in blocks))
 
-    def _search(self, moments, lams, conds, theta_q, free, max_iter: int = 40, gjac=None):
-        """Minimise (40) over the ``free`` entries of ``theta_q`` (damped Gauss-Newton, complex-step Jacobian).
-
-        Returns ``(theta_q, converged, J)`` with ``J`` the Jacobian of the weighted residuals at the solution.
-        """
-        Rs = [mo.R / math.sqrt(l) for mo, l in zip(moments, lams)]
-        rs = [mo.r / math.sqrt(l) for mo, l in zip(moments, lams)]
-        Ts = np.full(len(conds), self.T)
-        idx = np.flatnonzero(free)
-        zb = self.opt.masscm.zm_bound
-
-        def fun(x):
-            th = theta_q.astype(x.dtype).copy()
-            th[idx] = x
-            G = discrete_coeffs(th, self.known, conds, Ts, moment=True)
-            return np.concatenate([R @ G[i] - r for i, (R, r) in enumerate(zip(Rs, rs))])
-
-        def jac(x):
-            if gjac is not None:                  # analytic dG/dx, shape (n_datasets, 5, n_free)
-                th = theta_q.copy()
-                th[idx] = x
-                dG = gjac(th)
-                return np.concatenate([R @ dG[i] for i, R in enumerate(Rs)])
-            J = np.empty((sum(r.size for r in rs), x.size))
-            for j in range(x.size):
-                xc = x.astype(complex)
-                xc[j] += 1e-30j
-                J[:, j] = fun(xc).imag / 1e-30
-            return J
-
-        x = theta_q[idx].astype(float).copy()
-        izm = list(idx).index(I_ZM) if I_ZM in idx else None
-        res = fun(x)
-        cost = float(res @ res)
-        mu = 1e-4
-        converged = False
-        J = jac(x)
-        for _ in range(max_iter):
-            A, gr = J.T @ J, J.T @ res
-            D = np.diag(np.maximum(np.diag(A), 1e-300))
-            accepted = False
-            while mu < 1e12:
-                try:
-                    dx = -np.linalg.solve(A + mu * D, gr)
-                except np.linalg.LinAlgError:
-                    mu *= 10
-                    continue
-                xn = x + dx
-                if izm is not None and abs(xn[izm]) > zb:
-                    mu *= 10
-                    continue
-                rn = fun(xn)
-                cn = float(rn @ rn)
-                if np.isfinite(cn) and cn <= cost:
-                    accepted = True
-                    break
-                mu *= 10
-            if not accepted:
-                converged = bool(np.linalg.norm(gr) <= 1e-8 * (1 + cost))
-                break
-            small = np.linalg.norm(dx) <= 1e-9 * (1e-9 + np.linalg.norm(x))
-            x, res, cost = xn, rn, cn
-            mu = max(mu * 0.1, 1e-12)
-            J = jac(x)
-            if small or cost == 0.0:
-                converged = True
-                break
-        th = theta_q.copy()
-        th[idx] = x
-        return th, converged, J
-
     def _load_summary(self, theta_q: np.ndarray, cov_qz: np.ndarray) -> dict:
         """``m, zm_bar, rho`` and their standard errors from ``(q, zm_bar)`` and its 2x2 covariance."""
         q, zm = float(theta_q[I_Q]), float(theta_q[I_ZM])
@@ -486,8 +419,8 @@ class MassCMMonitor:
         mom = iv_compress_products(ZtZ, ZtP, n)
         free = np.ones(9, dtype=bool)
         free[I_ZF] = False
-        th, ok, J = self._search(self.ref_moments + [mom], [*self.ref_lam, self.lam_loaded],
-                                 [NOMINAL, CALIBRATION, LOADED], self.theta_q, free)
+        th, ok, J = search(self.ref_moments + [mom], [*self.ref_lam, self.lam_loaded], self.known,
+                           [NOMINAL, CALIBRATION, LOADED], self.T, self.theta_q, free, self.opt.masscm.zm_bound)
         if not (ok and np.all(np.isfinite(th))):
             warn.append(f"t = {t1:g} s: window search not converged; estimate kept from the last update")
             th = self.theta_q
@@ -514,73 +447,9 @@ class MassCMMonitor:
                              window_s=t1 - blocks[0].t0, statistic=stat, warnings=tuple(warn))
 
     def _fit_load(self, blocks, theta_q: np.ndarray):
-        """``(q, zm_bar)`` of the loaded condition on ``blocks`` with the ship's coefficients held at ``theta_q``.
-
-        Gauss-Newton on the five residuals ``(R g(q, zm_bar) - r)/sqrt(lam)`` of (40) with the analytic
-        derivative of (33): ``A2 = c_A2 + q (zm_bar - zs_bar)`` and ``B = c_B + q`` (22), the rest fixed.
-        Returns ``(theta_q, cov)`` (cov of ``(q, zm_bar)``, None when the fit fails).
-        """
+        """:func:`shipid.methods.masscm_monitor_fit.fit_load` on the summed moments of ``blocks``."""
         mom = iv_compress_products(*self._sum(blocks))
-        kn, T = self.known, self.T
-        tm = roll_terms(theta_q, kn, [LOADED], moment=True)
-        q, zm = float(theta_q[I_Q]), float(theta_q[I_ZM])
-        cA2 = float(tm["A2"][0]) - q * (zm - kn.zs_bar)
-        cB = float(tm["B"][0]) - q
-        kp, d, Kr, Kd = (float(tm[k][0]) for k in ("kp", "d", "K_r", "K_delta"))
-        w = 1.0 / math.sqrt(self.lam_loaded)
-        R, r = mom.R * w, mom.r * w
-        TT = T * T
-
-        def g_and_jac(q, zm):
-            A2 = cA2 + q * (zm - kn.zs_bar)
-            B = cB + q
-            den = 2 * d * T + kp * TT + 4 * A2
-            g = np.array([2 * kp * TT - 8 * A2, -2 * d * T + kp * TT + 4 * A2, -2 * T * B, 2 * T * Kr,
-                          2 * T * Kd]) / den
-            dA2 = np.array([zm - kn.zs_bar, q])
-            dN = np.outer([-8.0, 4.0, 0.0, 0.0, 0.0], dA2)
-            dN[2, 0] -= 2 * T
-            return g, (dN - np.outer(g, 4 * dA2)) / den
-
-        x = np.array([q, zm])
-        g, dg = g_and_jac(*x)
-        res = R @ g - r
-        cost = float(res @ res)
-        ok = False
-        for _ in range(50):
-            J = R @ dg
-            try:
-                dx = -np.linalg.lstsq(J, res, rcond=None)[0]
-            except np.linalg.LinAlgError:
-                break
-            step = 1.0
-            while step > 1e-6:
-                xn = x + step * dx
-                if abs(xn[1]) <= self.opt.masscm.zm_bound:
-                    gn, dgn = g_and_jac(*xn)
-                    rn = R @ gn - r
-                    cn = float(rn @ rn)
-                    if np.isfinite(cn) and cn <= cost:
-                        break
-                step *= 0.5
-            else:
-                ok = bool(np.linalg.norm(J.T @ res) <= 1e-10 * (1.0 + cost))
-                break
-            small = np.linalg.norm(step * dx) <= 1e-10 * (1e-10 + np.linalg.norm(x))
-            x, g, dg, res, cost = xn, gn, dgn, rn, cn
-            if small:
-                ok = True
-                break
-        th = theta_q.copy()
-        th[[I_Q, I_ZM]] = x
-        if not ok:
-            return th, None
-        J = R @ dg
-        try:
-            S = np.linalg.inv(J.T @ J)
-        except np.linalg.LinAlgError:
-            return th, None
-        return th, 0.5 * (S + S.T)
+        return fit_load(mom, self.lam_loaded, self.known, self.T, theta_q, self.opt.masscm.zm_bound)
 
     def _detect(self, locate: bool = False):
         """Largest two-window Wald statistic over the admissible splits: ``(T, change_at, theta_tail)``.

@@ -60,7 +60,11 @@ def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: fl
             "delay": (after[0] - change_at) if after else None,
             "located_first": (located[alarms.index(after[0])] if after else None),
             "coverage_m": float(np.mean(in_m)) if ok else None, "coverage_zm": float(np.mean(in_z)) if ok else None,
-            "n_cov": len(ok), "max_T_before": float(max(pre)) if pre else None,
+            "n_cov": len(ok),
+            "m_std_mean": float(np.mean([u.m_std for u in ok])) if ok else None,
+            "zm_std_mean": float(np.mean([u.zm_bar_std for u in ok])) if ok else None,
+            "m_err_rms": float(np.sqrt(np.mean([(u.m - a) ** 2 for u, a in zip(ok, mt)]))) if ok else None,
+            "zm_err_rms": float(np.sqrt(np.mean([(u.zm_bar - a) ** 2 for u, a in zip(ok, zt)]))) if ok else None, "max_T_before": float(max(pre)) if pre else None,
             "converged_frac": float(np.mean([u.converged for u in ok])) if ok else None,
             "cpu_s": cpu, "wall_s": wall, "stream_s": duration}
 
@@ -77,6 +81,10 @@ def summarise(records: list[dict], change: bool) -> dict:
            "streams_coverage_zm_ge_90": sum(r["coverage_zm"] >= 0.9 for r in records),
            "streams_both_ge_90": sum(r["coverage_m"] >= 0.9 and r["coverage_zm"] >= 0.9 for r in records),
            "max_T_before": float(max(r["max_T_before"] for r in records)),
+           "m_std_mean": float(np.mean([r["m_std_mean"] for r in records])),
+           "m_err_rms": float(np.sqrt(np.mean([r["m_err_rms"] ** 2 for r in records]))),
+           "zm_std_mean": float(np.mean([r["zm_std_mean"] for r in records])),
+           "zm_err_rms": float(np.sqrt(np.mean([r["zm_err_rms"] ** 2 for r in records]))),
            "cpu_s_max": float(max(r["cpu_s"] for r in records)), "cpu_s_mean": float(np.mean([r["cpu_s"] for r in records]))}
     if change:
         d = [r["delay"] for r in records if r["delay"] is not None]
