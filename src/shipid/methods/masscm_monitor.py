@@ -257,16 +257,20 @@ class MassCMMonitor:
 
     def _drain(self) -> list[MonitorUpdate]:
         out = []
-        while self._npending >= self.nb:
-            allp = np.hstack(self._pending)
-            blk, rest = allp[:, :self.nb], allp[:, self.nb:]
-            self._pending = [rest] if rest.shape[1] else []
-            self._npending = rest.shape[1]
-            u = self._block(blk)
+        if self._npending < self.nb:
+            return out
+        allp = np.hstack(self._pending)
+        a = 0
+        while allp.shape[1] - a >= self.nb:
+            u = self._block(allp[:, a:a + self.nb])
+            a += self.nb
             if u is not None:
                 out.append(u)
                 if self.keep_updates:
                     self.updates.append(u)
+        rest = allp[:, a:]
+        self._pending = [rest.copy()] if rest.shape[1] else []
+        self._npending = rest.shape[1]
         return out
 
     def feed_trial(self, trial: Trial, chunk: int | None = None) -> list[MonitorUpdate]:
