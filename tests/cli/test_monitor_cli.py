@@ -83,4 +83,4 @@ def test_live_panel_renders():
     con = Console(file=io.StringIO(), width=100)
     con.print(_panel(u, "s.nominal.csv"))
     text = con.file.getvalue()
-    assert "0.71" in text and "ALARM" in text and "900" in text
+    assert "0.71" in text and "ALARM" in text and "900" in text and "m [kg]" in text and "zm_bar [m]" in text

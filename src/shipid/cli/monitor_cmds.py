@@ -92,6 +92,7 @@ def _header(fh, label: str) -> list[str]:
 
 
 def _panel(u, nominal_label: str):
+    from rich.markup import escape
     from rich.table import Table
 
     tb = Table(title=f"shipid monitor mass-cm  ({nominal_label})", show_header=True)
@@ -102,13 +103,13 @@ def _panel(u, nominal_label: str):
 
     def fmt(v, p=4):
         return "—" if v is None else f"{v:.{p}g}"
-    tb.add_row("t [s]", fmt(j["t"], 6), f"window {j['window_s']:.0f} s")
-    tb.add_row("m [kg]", fmt(j["m"]), fmt(j["m_std"], 2))
-    tb.add_row("zm_bar [m]", fmt(j["zm_bar"]), fmt(j["zm_bar_std"], 2))
-    tb.add_row("rho [-]", fmt(j["rho"]), fmt(j["rho_std"], 2))
+    tb.add_row(escape("t [s]"), fmt(j["t"], 6), f"window {j['window_s']:.0f} s")
+    tb.add_row(escape("m [kg]"), fmt(j["m"]), fmt(j["m_std"], 2))
+    tb.add_row(escape("zm_bar [m]"), fmt(j["zm_bar"]), fmt(j["zm_bar_std"], 2))
+    tb.add_row(escape("rho [-]"), fmt(j["rho"]), fmt(j["rho_std"], 2))
     tb.add_row("converged", "yes" if j["converged"] else "no", "")
     tb.add_row("detector T", fmt(j["statistic"], 3), "ALARM" if j["alarm"] else "")
-    tb.add_row("last change at [s]", fmt(j["change_at"], 6), "")
+    tb.add_row(escape("last change at [s]"), fmt(j["change_at"], 6), "")
     return tb
 
 
