@@ -95,3 +95,22 @@ def test_input_errors():
     p[5] = np.nan
     with pytest.raises(InputError, match="non-finite"):
         mon.feed(st.t[100:200], p, st["a_s"][100:200], st["r"][100:200], st["delta"][100:200])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("change_at", [900.0, None])
+def test_issue_targets_one_full_stream(change_at):
+    """The issue's scenario on one seeded 1800-s stream (the Monte Carlo is benchmarks/bench_masscm_monitor.py)."""
+    sim = simulate_stream(StreamSpec(change_at=change_at), seed=181818)
+    ups = run_monitor(sim["nominal"], sim["calibration"], sim["stream"], KN, Z_F)
+    alarms = [u.t for u in ups if u.alarm]
+    if change_at is None:
+        assert alarms == []
+        t0 = 300.0
+    else:
+        assert len(alarms) == 1 and change_at < alarms[0] <= change_at + 120.0
+        t0 = change_at + 300.0
+    sel = [u for u in ups if u.t >= t0]
+    mt, zt = truth_at(sim["truth"], [u.t for u in sel])
+    assert np.mean([abs(u.m - a) <= 2 * u.m_std for u, a in zip(sel, mt)]) >= 0.9
+    assert np.mean([abs(u.zm_bar - a) <= 2 * u.zm_bar_std for u, a in zip(sel, zt)]) >= 0.9
