@@ -45,17 +45,26 @@ def load_result(path: str | Path):
 @click.option("--out", "-o", "out", required=True, type=click.Path(dir_okay=False, path_type=str),
               help="HTML file to write (self-contained; open it in any browser, no network needed).")
 @click.option("--force", is_flag=True, help="Overwrite OUT if it exists.")
-def report_cmd(result_json: str, out: str, force: bool) -> None:
+@click.option("--truth", "truth", type=click.Path(dir_okay=False, exists=True), default=None,
+              help="Monitoring runs: the truth sidecar (*.truth.json) of a simulated stream.")
+def report_cmd(result_json: str, out: str, force: bool, truth: str | None = None) -> None:
     """Write the HTML report of a result written with --json.
 
     The report shows the data used, the estimates with standard errors and 95 %
     confidence intervals, diagnostics and warnings, measured-vs-model overlays,
     residuals with their autocorrelation and the method's own figures.
+    A monitoring run (the JSON lines of `shipid monitor mass-cm`) gives its own page:
+    m(t), zm_bar(t) with ±2 std bands, the alarms, and the truth with --truth.
     """
     from shipid.report.html import write_report
+    from shipid.report.monitor import is_monitor_jsonl, write_monitor_report
 
     if Path(out).exists() and not force:
         raise OutputExistsError(out)
+    if Path(result_json).is_file() and is_monitor_jsonl(result_json):
+        path = write_monitor_report(result_json, out, truth_path=truth, force=force)
+        click.echo(f"report written to {path} ({path.stat().st_size / 1024:.0f} kB)")
+        return
     result = load_result(result_json)
     click.echo(f"shipid: building the {result.method} report from {result_json} ...", err=True)
     path = write_report(result, out, force=force)

@@ -28,16 +28,27 @@ _SUFFIXES = (".csv", ".parquet", ".pq")
 @click.option("--speed", type=float, default=None, help="Approach speed in m/s [default: service speed].")
 @click.option("--noise", is_flag=True, help="Add default sensor noise (shipid.simulate.noise.DEFAULT_NOISE).")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@click.option("--change-at", type=float, default=None,
+              help="mass-cm-stream: time of the load change (s) [default: no change].")
+@click.option("--to", "to", type=str, default=None,
+              help="mass-cm-stream: the load after the change, 'M,ZM' (kg, m) [default: 0.7,-0.14].")
 def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, dt: float,
-                 seed: int, speed: float | None, noise: bool, force: bool) -> None:
+                 seed: int, speed: float | None, noise: bool, force: bool, change_at: float | None = None,
+                 to: str | None = None) -> None:
     """Simulate VESSEL through MANOEUVRE and write the trial.
 
     \b
     VESSEL     a packaged vessel (see `shipid vessels`) or `nomoto`
     MANOEUVRE  straight | turning-35[-port] | zigzag-20 | zigzag-10-5 | prbs-10[-T]
                | dp-surge | dp-sway-yaw | dp-azimuth
+               | mass-cm-stream (fishing-vessel: a 50-Hz loaded IMU + rudder stream with a load
+               change, its nominal / calibration datasets, known.toml and truth beside it)
     Example: shipid simulate esso-osaka zigzag-20 --out z.csv
     """
+    if manoeuvre == "mass-cm-stream":
+        from shipid.simulate.masscm_stream import simulate_stream_cmd
+        simulate_stream_cmd(vessel, out, duration=duration, seed=seed, change_at=change_at, to=to, force=force)
+        return
     from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
     from shipid.simulate.registry import get_ship_model
 
