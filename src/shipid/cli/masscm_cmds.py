@@ -100,8 +100,10 @@ def _fmt(v: float) -> str:
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma"]), default="ar", show_default=True,
               help="Noise model of the prefilter (43): AR(40); AR(40) of eps/(1 - 0.99 q^-2) (narrow-band wave "
                    "roll with low-noise sensors, see the masscm module's Known limitations); structured ARMA.")
+@click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
-def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, as_json):
+def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
+                     as_json):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
     Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
@@ -119,7 +121,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
     res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
                            z_f_prior=kn["z_f_prior"], options=opts,
-                           init="given" if kn["theta0"] is not None else "linear")
+                           init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
     res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm_series)
     if as_json:
         d = res.to_dict()

@@ -299,6 +299,7 @@ def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool =
     out = {k: r.value(k) for k in ("m", "zm_bar", "rho", "k", "A_x", "d", "K_r", "K_vdot", "K_delta")}
     out.update({f"{k}_std": r.std(k) for k in ("m", "zm_bar", "rho")})
     out.update({"converged": r.diagnostics["converged"], "iterations": r.diagnostics["iterations"],
-                "implausible": r.diagnostics["implausible"]})
+                "implausible": r.diagnostics["implausible"],
+                "nuisance_outside_physical": bool(r.diagnostics.get("nuisance_outside_physical"))})
     return out
 __all__ = ["run_one", "warm_up", "efficiency_run", "summarise", "table3", "draw_initial", "TABLE3_ORDER"]
