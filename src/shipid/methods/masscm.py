@@ -186,8 +186,10 @@ class MassCMOptions:
     instruments: str = "lags"       # "lags": (45) with n_y, n_as, n_r, n_delta; "regressors": noise-free (37)
     transient_tol: float = 0.01      # prefilter start-up: drop samples until the slowest pole decays to this
     transient_max: float = 0.2       # ... but at most this fraction of the record
-    noise_model: str = "ar"          # "ar": AR(ar_order) of the residuals, prefilter = FIR A(q); "ar-structured":
-    #                                 AR(ar_order) of eps/(1 - c q^-2), L = A/(1 - c q^-2); "arma": structured ARMA
+    noise_model: str = "auto"        # "auto": AR(ar_order) of eps/(1 - c q^-2) with c chosen by the innovation
+    #                                 likelihood among AUTO_C (c = 0 is "ar"), see _noise_model_auto; "ar": AR(ar_order)
+    #                                 of the residuals, prefilter = FIR A(q); "ar-structured": AR(ar_order) of
+    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
@@ -890,6 +892,8 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
     """
     from shipid.estimate.arma import ARMA
+    if options.noise_model == "auto":
+        return _noise_model_auto(eps, options)
     if options.noise_model == "ar":
         if options.compute == "fast":
             return fit_ar(eps, options.ar_order)         # the same AR fit by compiled kernels
@@ -909,6 +913,55 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     e2 = lfilter([1.0], den, eps)
     m = hannan_rissanen(e2, options.arma_na, options.arma_nc)
     return ARMA(m.a, np.convolve(m.c, den), m.lam)
+
+
+#: Candidate MA factors ``1 - c q^-2`` of the ``"auto"`` noise model (c = 0: the plain AR model).
+AUTO_C = (0.0, 0.5, 0.9, 0.97, 0.99)
+
+
+#: From this iteration on the ``"auto"`` noise model keeps each dataset's c of the previous iteration (the
+#: choice between candidates, a discrete step, otherwise can keep an iteration from settling).
+AUTO_HOLD = 3
+
+
+def _ma_c(L) -> float:
+    """The ``c`` of a prefilter ``A(q) / (1 - c q^-2)`` (0 for a FIR prefilter or none)."""
+    if L is None or L.c.size < 3:
+        return 0.0
+    return float(-L.c[2])
+
+
+def _noise_model_auto(eps: np.ndarray, options: MassCMOptions, candidates: tuple = ()):
+    """Noise model ``eps = (1 - c q^-2) / A(q) e`` with ``c`` chosen by the data (``noise_model="auto"``).
+
+    A Box–Jenkins-type noise model estimated inside the refined-IV iteration (Young & Jakeman's RIV: the
+    prefilter is the inverse of the current noise model): AR(``ar_order``) ``A`` by least squares on
+    ``eps / (1 - c q^-2)`` for each ``c`` of :data:`AUTO_C`, and the ``c`` whose innovations
+    ``A(q) eps / (1 - c q^-2)`` have the smallest variance over a common window (the samples after the
+    start-up transient of the slowest candidate, at most ``transient_max`` of the record) wins: with the
+    same ``eps`` and monic, minimum-phase filters this is the Gaussian innovation likelihood, and every
+    candidate has the same number of estimated coefficients. ``c`` near 1 is the unit-circle MA factor of
+    the wave moment in (35) (the ``"ar-structured"`` model), ``c = 0`` the plain AR model of white sensor
+    noise (``"ar"``). Returns an :class:`~shipid.estimate.arma.ARMA` with ``c`` recorded in ``L.c``.
+    ``candidates``: the c values to try (default :data:`AUTO_C`); :func:`iterate` passes the previous one
+    alone from iteration :data:`AUTO_HOLD` on.
+    """
+    from shipid.estimate.arma import ARMA
+    eps = np.asarray(eps, dtype=float)
+    n = eps.size
+    r = np.sqrt(max(AUTO_C))
+    k = int(min(np.ceil(np.log(options.transient_tol) / np.log(r)), options.transient_max * n)) if r > 0 else 0
+    best = None
+    for c in (candidates or AUTO_C):
+        den = np.array([1.0, 0.0, -c]) if c else np.ones(1)
+        e2 = lfilter([1.0], den, eps) if c else eps
+        m = (fit_ar(e2, options.ar_order) if options.compute == "fast"
+             else hannan_rissanen(e2, options.ar_order, 0, n_long=options.ar_order))
+        inn = lfilter(m.a, [1.0], e2 - e2.mean())[k:]
+        lam = float(np.mean((inn - inn.mean()) ** 2))
+        if best is None or lam < best[0]:          # lam (after the start-up) is also the model's innovation variance
+            best = (lam, ARMA(m.a, den, lam))
+    return best[1]
 
 
 def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions()) -> "_State":
@@ -1074,7 +1127,10 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             eps = ds.y - ds.Phi @ G_mid[i]
             s = _start(options)
             if options.prefilter:
-                arma = _noise_model(eps[s:], options)
+                if options.noise_model == "auto" and j >= AUTO_HOLD:       # (*) c held (see _noise_model_auto)
+                    arma = _noise_model_auto(eps[s:], options, (_ma_c(state.L[i]),))
+                else:
+                    arma = _noise_model(eps[s:], options)
                 newL.append(arma)
                 lam.append(arma.lam)
             else:
@@ -1268,6 +1324,11 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         init = init or ("linear" if theta0 is None else "given")
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options, init=init)
     res = _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    if options.prefilter and core["state"] is not None:
+        res.diagnostics["noise_model_selected"] = {
+            "noise_model": options.noise_model,
+            "c": [_ma_c(L) for L in core["state"].L],
+            "structure": "prefilter L = A(q)/(1 - c q^-2) per dataset (c = 0: AR)"}
     if (noise_check and options.prefilter and options.noise_model == "ar"
             and (z_f is not None or z_f_prior is not None)):
         _noise_model_check(res, prep, known, th0, z_f, z_f_prior, options, init)
@@ -1383,6 +1444,7 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         eps = ds.y - ds.Phi @ G
         s = _start(options)
         ef = st.L[i].prefilter(eps)[s:] if st.L[i] is not None else eps[s:]
+        ef = ef[_transient(st.L[i], ef.size, options):]          # the prefilter's start-up, as in the moments
         ef = ef - ef.mean()
         ac = np.array([np.dot(ef[:-k], ef[k:]) for k in range(1, 21)]) / max(np.dot(ef, ef), 1e-300)
         resid.append({"condition": ds.condition, "n": int(ds.y.size), "T": ds.T,

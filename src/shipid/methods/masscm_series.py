@@ -95,7 +95,7 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
     Returns ``(overlays, residuals)`` dicts of convention entries, each series decimated by a stride to at
     most ``max_points`` samples.
     """
-    from shipid.methods.masscm import MassCMOptions, _closed_loop_sim, _start
+    from shipid.methods.masscm import MassCMOptions, _closed_loop_sim, _start, _transient
     from shipid.models.roll_reduced import discrete_coeffs, roll_terms
 
     conds = [ds.condition for ds in prep]
@@ -120,9 +120,12 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
                                            "rudder and yaw (waves, noise), with its autocorrelation and 95 % "
                                            "white-noise bounds." + _every(k))
         eps = ds.y - ds.Phi @ G[i]
-        s = _start(options if options is not None else MassCMOptions())
+        opts = options if options is not None else MassCMOptions()
+        s = _start(opts)
         L = st.L[i] if st is not None and i < len(st.L) else None
         ef = L.prefilter(eps)[s:] if L is not None else eps[s:]
+        s += _transient(L, ef.size, opts)            # the prefilter's start-up, as in the moments
+        ef = ef[s - _start(opts):]
         lam = float(st.lam[i]) if st is not None and i < len(st.lam) else float("nan")
         k = _stride(ef.size, max_points)
         ef = ef[::k]
