@@ -19,9 +19,23 @@ Unknowns: ``theta`` of (30) with ``z_f`` known (it is not identifiable, see
 :mod:`shipid.analysis.identifiability_masscm`). Bounds on ``zm_bar``, ``rho = m z_m/(m_c z_c)`` and
 ``m`` follow by the delta method.
 
-Measured (``benchmarks/bench_masscm_efficiency.py``): Algorithm 1 with the AR prefilters reaches
-this bound; its spread over noise realisations came out slightly *below* it (ratio ~0.8–0.9 over
-24–100 realisations), so read the number as the asymptotic IV bound, not a strict finite-sample floor.
+``H_i`` (``method``): ``"spectrum"`` (default) takes the exact spectral density of the equation error at
+the true parameters from the transfers of the simulated noise sources (:func:`equation_error_spectrum`:
+gyro and accelerometer noise analytically, the wave moment through the exact sampled ship model (11)) and
+evaluates the information in Whittle's frequency-domain form; ``"ar"`` (the former bound) fits an AR(40)
+to a simulated noise record, which cannot represent the unit-circle zeros of the wave-roll equation error.
+The spectrum agrees with simulated noise records (variance and band powers, tests); with white sensor noise
+only (no unit-circle zeros) both forms agree to < 1 %; with wave roll the exact form is larger (300 s,
+0.5 deg waves, noise-free sensors: m 0.064 vs 0.046; issue-3 noise: 0.076 vs 0.059).
+
+**Not a floor for Algorithm 1.** Monte Carlo (``shipid study mass-cm-coverage``, 300-s records, seed 1800,
+100 realisations per regime, default noise model) puts the estimator's spread *below* this bound in every
+regime (module :mod:`shipid.methods.masscm_coverage` has the numbers), most in sensor noise (~0.7) where
+the noise spectrum is exact and both forms agree. So the information used here — the rudder-driven
+regressors only, the optimal-IV covariance — is not the Cramér–Rao bound of the data-generating model;
+a bound from the exact likelihood of the ship model with the wave filter and sensor noise (state-space,
+Kalman filter or Whittle with the outputs p, a_s, r themselves) is left to do. Read the number as the
+asymptotic optimal-IV covariance, not a finite-sample floor.
 """
 
 from __future__ import annotations

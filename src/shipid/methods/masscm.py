@@ -20,8 +20,11 @@ B. Iterate ``j = 1, 2, ...``:
        load-moment parameterisation ``q = m z_m``* (polynomial, no division by z_m);
        ``Q_i = (Z_i^T Z_i)^-1``* (two-stage least squares: the extended IV then approaches the optimal
        IV) and ``lam_i`` the innovation variance of dataset i's noise model* (1 in the first iteration);
-   (b) residuals (42) and noise models: AR(40)* by least squares (``noise_model="ar"``; the
-       structured ARMA of :func:`_noise_model` is the alternative), prefilter ``L = A`` (43);
+   (b) residuals (42) and noise models (43)*: by default (``noise_model="auto"``) per dataset the
+       Box–Jenkins-type model ``eps = (1 - c q^-2)/A(q) e``, ``A`` AR(40) by least squares, ``c`` chosen
+       among :data:`AUTO_C` by the innovation likelihood (:func:`_noise_model_auto`; the noise model
+       estimated inside the refined-IV iteration, as in Young & Jakeman's RIV), prefilter
+       ``L = A/(1 - c q^-2)``; ``"ar"`` is plain AR(40), ``L = A`` (the fused compiled path, Table 3);
        built at the mean of the last two iterates* (relaxation against period-2 cycles), of the
        last four from iteration ``cycle_after`` (10) on* (against period-4 cycles; see "z_f free");
        the prefilter start-up transient is dropped* (:func:`_transient`);
@@ -87,7 +90,8 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   (``diagnostics["nuisance_outside_physical"]``, one warning line). Measured on fresh seeds [23, 0..99]
   (issue-3 noise, 300 s): 0 of 100 flagged, 94 with a nuisance coefficient outside its physical range;
   m 0.4048 ± 0.056 (spread), ±2-std coverage 0.97.
-* **Narrow-band wave roll without sensor noise.** With the 0.5 deg wave roll (1-s peak period, near the roll
+* **Narrow-band wave roll without sensor noise** (plain AR(40), ``noise_model="ar"``; the default
+  ``"auto"`` handles it, see "Noise model" below). With the 0.5 deg wave roll (1-s peak period, near the roll
   resonance) and noise-free sensors, the AR(40) prefilter does not whiten the equation error (its spectrum
   has the zeros of the bilinear numerator on the unit circle and a narrow peak) and Algorithm 1 can converge
   to a wrong m with a small standard error (m 1.29 ± 0.20 and 0.046 ± 0.004 in two of three realisations,
@@ -104,12 +108,9 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   (CRLB 0.059), coverage of ±2 std 0.97 vs 0.99, flagged 39 vs 84 (mostly k - K_vdot g <= 0, the K_vdot
   bias above), but its m is biased, mean 0.4150 (+3.1 standard errors of the mean) where AR(40) gives
   0.3988 (-0.2). With white sensor noise only (gyro 0.002 rad/s and accelerometer 0.02 m/s^2, 20
-  realisations) both are fine (m 0.4008 ± 0.0054 vs 0.4006 ± 0.0046). So the default stays AR(40): the
-  option is for records in waves with low-noise sensors, and a later session should find a noise model
-  good in both (its IIR prefilter also has no compiled path). The default's failure is pinned by a
-  strict xfail test, the option's behaviour on three realisations by a test.
-  **The failure is no longer silent**: :func:`estimate_mass_cm` (``noise_check=True``, the default; not the
-  Monte Carlo studies) estimates again with ``ar-structured`` and warns when the two m differ by more
+  realisations) both are fine (m 0.4008 ± 0.0054 vs 0.4006 ± 0.0046). Neither fixed c is good in both
+  regimes, which is why the default now chooses c from the data.
+  With ``noise_model="ar"`` and ``noise_check=True`` :func:`estimate_mass_cm` estimates again with ``ar-structured`` and warns when the two m differ by more
   than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (``diagnostics["noise_model_check"]``).
   The threshold was chosen on seeds [11, 0..9] (issue-3 noise: at most 0.91; wave-only: 1.8-12.7 where
   not absurd) and checked on fresh seeds [11, 100..119]: issue-3 noise 0 of 20 warned; wave-only 9 of 20

@@ -20,6 +20,27 @@ bound of :func:`shipid.analysis.crlb_masscm.crlb` for the same regime and record
 relative standard error of a spread, ``1/sqrt(2 (n-1))``). Runs flagged implausible or not converged are
 counted; ``quantities`` are over all runs that returned finite estimates (flagging is reported, not used
 to drop runs, so that coverage is not flattered), ``quantities_unflagged`` over the converged, unflagged ones.
+
+Measured (``shipid study mass-cm-coverage --regime R --runs 100 --workers 1 --seed 1800 --json``, 300-s
+records, default options: noise model ``"auto"``; seeds 1800 were not used while choosing the noise
+model, which was tried on seeds [99, 0..5], [98, 0..3] and the coverage runs at seed 1700):
+
+============  ========================  ==================  ==================  ===================
+regime        runs (flagged / not conv)  m: cov, spread/bnd  zm_bar               rho
+============  ========================  ==================  ==================  ===================
+waves         100 (1 / 2)                0.95               0.93                0.97
+  unflagged   97                         0.96, 0.67          0.93, 1.01          0.98, 0.66
+sensors       100 (0 / 0)                0.99, 0.66          0.99, 0.67          0.98, 0.69
+both          100 (0 / 0)                0.98, 0.49          0.99, 0.49          0.98, 0.36
+============  ========================  ==================  ==================  ===================
+
+Means within one spread of the truth in every regime (waves: over the 97 unflagged runs; the one flagged
+run is absurd, m ~ 1e12, and dominates the all-runs mean and spread); the largest bias is in sensor noise,
+m 0.3972 (-3.8 standard errors of the mean, 0.4 spread). The bound is the optimal-IV bound of
+:func:`shipid.analysis.crlb_masscm.crlb` (exact noise spectrum): the spreads are below it, so it is not the
+Cramér–Rao bound of the data-generating model (see that module). With the former default noise model
+(plain AR(40), seed 1700) the waves regime had coverage 0.39 / 0.36 / 0.45 (51 flagged, 22 not
+converged); sensors 0.98 / 0.99 / 1.00 and both 0.99 / 0.99 / 1.00 were fine.
 """
 
 from __future__ import annotations
