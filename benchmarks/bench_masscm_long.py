@@ -66,10 +66,13 @@ def main():
     trees = [("this tree", here)] + ([("peer", peer)] if Path(peer).is_dir() else [])
     rows = {label: measure(src, duration) for label, src in trees}
     print(f"identify mass-cm, 3 datasets x {duration:g} s at 50 Hz, issue-3 noise, z_f known, one core")
-    print(f"{'':10s} {'wall s':>8s} {'alloc peak MiB':>15s} {'max RSS MiB':>12s} {'JSON MB':>8s} {'m':>9s}  src")
+    print(f"{'':10s} {'wall s':>8s} {'alloc peak MiB':>15s} {'max RSS MiB':>12s} {'(before)':>9s} {'JSON MB':>8s} "
+          f"{'m':>9s}  src")
     for label, r in rows.items():
         print(f"{label:10s} {r['wall_s']:8.2f} {r['alloc_peak_mib']:15.1f} {r['maxrss_mib']:12.1f} "
-              f"{r['json_mb']:8.2f} {r['m']:9.5f}  {r['src']}")
+              f"{r['maxrss_before_mib']:9.1f} {r['json_mb']:8.2f} {r['m']:9.5f}  {r['src']}")
+    print("(alloc peak: memory allocated during estimate_mass_cm; max RSS: the whole process, (before) = after "
+          "imports and the simulation of the data, before the estimate)")
     if "peer" in rows:
         a, b = rows["this tree"], rows["peer"]
         print(f"ratio this/peer: time {a['wall_s'] / b['wall_s']:.2f}, allocation peak "
