@@ -425,8 +425,7 @@ def _filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     X = X.copy()
     X[0] = y_hat - y_hat.mean()
     X[1] = da - da.mean()
-    F = L.prefilter(X.T).T if L is not None else X
-    F = np.ascontiguousarray(F)
+    F = lfilter(L.a, L.c, X, axis=1) if L is not None else X          # = L.prefilter of each row
     T = np.empty((6, n))
     T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
     T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
