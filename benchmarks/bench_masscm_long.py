@@ -12,6 +12,11 @@ Printed per tree: wall time of :func:`shipid.methods.masscm.estimate_mass_cm`, t
 during it (``tracemalloc``, numpy included), the process's peak resident set, the size of the result JSON, and
 the estimate of m; then the ratios this/peer. Targets of issue 17 for 1 h: <= 5 s, <= 400 MB, JSON <= 2 MB.
 
+Measured 2026-12-01 on the shared 2-core VM (load 8-9 from other jobs, so absolute times are inflated;
+compare the ratio): this tree 8.48 s, allocation peak 185 MiB, JSON 0.66 MB; peer (/work/main) 17.19 s,
+227 MiB, 58.85 MB; time ratio 0.49. An earlier run at lower load, before the default noise model became
+"auto": 2.95 s vs 5.71 s.
+
 Usage:  python benchmarks/bench_masscm_long.py [DURATION_S=3600] [PEER_SRC=/work/main/src]
 """
 

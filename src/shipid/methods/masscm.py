@@ -934,8 +934,10 @@ def _ma_c(L) -> float:
 def _noise_model_auto(eps: np.ndarray, options: MassCMOptions, candidates: tuple = ()):
     """Noise model ``eps = (1 - c q^-2) / A(q) e`` with ``c`` chosen by the data (``noise_model="auto"``).
 
-    A Box–Jenkins-type noise model estimated inside the refined-IV iteration (Young & Jakeman's RIV: the
-    prefilter is the inverse of the current noise model): AR(``ar_order``) ``A`` by least squares on
+    A Box–Jenkins-type noise model estimated inside the refined-IV iteration (the RIV family of Young &
+    Jakeman; Young, "Refined instrumental variable estimation: maximum likelihood optimization of a unified
+    Box–Jenkins model", Automatica 52, 2015: the prefilter is the inverse of the current noise model, whose
+    parameters are re-estimated from the residuals at every iteration): AR(``ar_order``) ``A`` by least squares on
     ``eps / (1 - c q^-2)`` for each ``c`` of :data:`AUTO_C`, and the ``c`` whose innovations
     ``A(q) eps / (1 - c q^-2)`` have the smallest variance over a common window (the samples after the
     start-up transient of the slowest candidate, at most ``transient_max`` of the record) wins: with the
