@@ -88,8 +88,9 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   plausibility on what the data determine (:func:`implausible_identifiable`: m and zm_bar with their
   standard errors, the identified roll mode of every dataset) and reports the nuisance finding apart
   (``diagnostics["nuisance_outside_physical"]``, one warning line). Measured on fresh seeds [23, 0..99]
-  (issue-3 noise, 300 s): 0 of 100 flagged, 94 with a nuisance coefficient outside its physical range;
-  m 0.4048 ± 0.056 (spread), ±2-std coverage 0.97.
+  (issue-3 noise, 300 s, ``noise_model="ar"``): 0 of 100 flagged, 94 with a nuisance coefficient outside
+  its physical range; m 0.4048 ± 0.056 (spread), ±2-std coverage 0.97. With the default ``"auto"`` noise
+  model (:mod:`shipid.methods.masscm_coverage`, regime "both" = the issue-3 noise, seed 1800): 0 of 100.
 * **Narrow-band wave roll without sensor noise** (plain AR(40), ``noise_model="ar"``; the default
   ``"auto"`` handles it, see "Noise model" below). With the 0.5 deg wave roll (1-s peak period, near the roll
   resonance) and noise-free sensors, the AR(40) prefilter does not whiten the equation error (its spectrum
