@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from shipid.cli import main
@@ -91,3 +92,17 @@ def test_contour_figure(tmp_path):
     assert main(["study", "mass-cm-contour", "--out", str(out)]) == 0
     assert out.stat().st_size > 1000
     assert main(["study", "mass-cm-contour", "--out", str(out)]) == 2       # never clobber without --force
+
+
+def test_coverage_study_json(capsys):
+    """Two short realisations per regime through the campaign engine: every statistic is there and computed."""
+    rc = main(["study", "mass-cm-coverage", "--regime", "sensors", "--runs", "3", "--duration", "60",
+               "--workers", "1", "--seed", "3", "--json"])
+    assert rc in (0, None)
+    s = json.loads(capsys.readouterr().out)
+    assert s["regime"] == "sensors" and s["runs"] == 3 and s["noise"]["wave_roll_deg"] == 0
+    for k in ("m", "zm_bar", "rho"):
+        q = s["quantities"][k]
+        assert np.isfinite(q["spread"]) and q["spread"] > 0 and q["bound"] > 0
+        assert q["spread_over_bound"] == pytest.approx(q["spread"] / q["bound"])
+        assert 0.0 <= q["coverage_2std"] <= 1.0

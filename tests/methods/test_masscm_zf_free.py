@@ -53,7 +53,7 @@ def test_warm_iterations_hold_zf_and_paths_agree(kn):
     """Minimum-norm warm searches: z_f moves only in the first (cold) search; fast and reference agree."""
     outs = {}
     for compute in ("fast", "reference"):
-        opts = MassCMOptions(compute=compute)
+        opts = MassCMOptions(compute=compute, noise_model="ar")
         prep, known = _prepared(0, "fishing-vessel", opts)
         th0 = draw_initial(np.random.default_rng(np.random.SeedSequence([1, 3])))
         core = iterate(prep, known, th0, options=opts, state0=_state0(0, "fishing-vessel", opts), jacobian=False)
@@ -74,7 +74,7 @@ def test_period_4_cycle_is_damped(compute):
     th0 = draw_initial(np.random.default_rng(np.random.SeedSequence([1, 0])))
     out = {}
     for cyc in (0, 10):
-        opts = MassCMOptions(compute=compute, cycle_after=cyc)
+        opts = MassCMOptions(compute=compute, cycle_after=cyc, noise_model="ar")
         prep, known = _prepared(0, "fishing-vessel", opts)
         out[cyc] = iterate(prep, known, th0, z_f=-0.029, options=opts, state0=_state0(0, "fishing-vessel", opts),
                            jacobian=False)

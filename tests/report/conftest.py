@@ -225,7 +225,7 @@ def _masscm_result():
 
     d = simulate_datasets("fishing-vessel", seed=0)
     z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
-    return estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"), z_f=z_f)
+    return estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"), z_f=z_f, cost_map=True)
 
 
 def _spread_result():

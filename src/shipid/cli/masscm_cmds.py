@@ -97,11 +97,14 @@ def _fmt(v: float) -> str:
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
 @click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
-@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma"]), default="ar", show_default=True,
-              help="Noise model of the prefilter (43): AR(40); AR(40) of eps/(1 - 0.99 q^-2) (narrow-band wave "
-                   "roll with low-noise sensors, see the masscm module's Known limitations); structured ARMA.")
+@click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma"]), default="auto",
+              show_default=True,
+              help="Noise model of the prefilter (43): auto: AR(40) of eps/(1 - c q^-2) with c chosen by the data "
+                   "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
+@click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
-def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, as_json):
+def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
+                     as_json):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
     Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
@@ -119,7 +122,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
     res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
                            z_f_prior=kn["z_f_prior"], options=opts,
-                           init="given" if kn["theta0"] is not None else "linear")
+                           init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
     res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm_series)
     if as_json:
         d = res.to_dict()
@@ -188,6 +191,56 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
                    f"{p['paper_std']:10.3g}")
 
 
+@study.command("mass-cm-coverage")
+@click.option("--regime", type=click.Choice(["waves", "sensors", "both"]), required=True,
+              help="waves: 0.5 deg wave roll, noise-free sensors; sensors: gyro/accelerometer noise and biases, "
+                   "no waves; both: the two (issue-3 noise).")
+@click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
+@click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
+              help="Length of each of the three datasets (s).")
+@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto"]), default=None,
+              help="Noise model of Algorithm 1 (default: the estimator's default).")
+@click.option("--json", "as_json", is_flag=True)
+@campaign_options
+def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
+    """Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.
+
+    Fresh rudder and noise realisations per run (SeedSequence([seed, i])), z_f known; the bound is
+    `shipid analyse crlb mass-cm` for the same regime and record length.
+    """
+    from dataclasses import replace
+
+    from shipid.methods.masscm import MassCMOptions
+    from shipid.methods.masscm_coverage import bound_for, summarise
+
+    t0 = time.perf_counter()
+    kw = {"regime": regime, "duration": duration,
+          "noise_model": noise_model or MassCMOptions().noise_model}
+    res = replace(campaign, progress=not as_json).run("shipid.methods.masscm_coverage:run_one", runs, kwargs=kw,
+                                                     name="mass-cm-coverage",
+                                                     warm_up="shipid.methods.masscm_coverage:warm_up")
+    outs = [r.outputs if r.status == "ok" else None for r in res.records]
+    s = summarise(outs, regime=regime, duration=duration, bound=bound_for(regime, duration))
+    s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"],
+              "wall_s": time.perf_counter() - t0})
+    if as_json:
+        click.echo(json.dumps(s, indent=2, allow_nan=True))
+        return
+    click.echo(f"mass-cm coverage, regime {regime}: {s['used']} of {s['runs']} runs ({s['failed']} failed, "
+               f"{s['flagged_implausible']} flagged implausible, {s['not_converged']} not converged), "
+               f"3 x {duration:g} s, seed {campaign.seed}, {s['wall_s']:.1f} s")
+    click.echo(f"  {'':7s} {'true':>9s} {'mean':>9s} {'bias/se':>8s} {'spread':>9s} {'mean std':>9s} "
+               f"{'bound':>9s} {'spr/bnd':>8s} {'cov 2std':>8s}")
+    rows = [(k, q) for k, q in s["quantities"].items()]
+    rows += [(f"{k}*", q) for k, q in s["quantities_unflagged"].items()]
+    for k, q in rows:
+        ratio = q["spread_over_bound"]
+        click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
+                   f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
+                   f"{ratio if ratio is not None else float('nan'):8.2f} {q['coverage_2std']:8.2f}")
+    click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
+
+
 @study.command("mass-cm-contour")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Figure file (.png/.pdf/.svg).")
 @click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True)
@@ -215,15 +268,19 @@ def crlb_group():
 @click.option("--wave-roll", type=float, default=0.5, show_default=True, help="Roll std from waves alone (deg).")
 @click.option("--wave-period", type=float, default=1.0, show_default=True, help="Wave peak period (s).")
 @click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--method", type=click.Choice(["spectrum", "ar"]), default="spectrum", show_default=True,
+              help="spectrum: the exact equation-error spectrum of the simulated noise (Whittle form); ar: an AR(40) "
+                   "noise model fitted to a simulated noise record (cannot represent the wave-roll zeros).")
 @click.option("--json", "as_json", is_flag=True)
-def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, as_json):
+def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, method, as_json):
     """Bounds on zm_bar, rho and m (z_f known) for a ship, excitation, noise and record length."""
     from shipid.analysis.crlb_masscm import crlb
     from shipid.models.roll_sim import NoiseSpec
     if duration <= 0 or fs <= 0:
         raise ShipidError("--duration and --fs must be positive")
     noise = NoiseSpec(gyro_std=gyro_std, acc_std=acc_std, wave_roll_deg=wave_roll, wave_period=wave_period)
-    b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed)
+    b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
+             method=method)
     if as_json:
         click.echo(json.dumps(b, indent=2, allow_nan=True))
         return

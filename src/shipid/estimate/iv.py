@@ -44,8 +44,16 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     s = max(na, nb - 1)
-    R = np.column_stack([-lag_matrix(y, na + 1, s)[:, 1:], lag_matrix(u, nb, s)])
-    th, *_ = np.linalg.lstsq(R, y[s:], rcond=None)
+    R = np.column_stack([-lag_matrix(y, na + 1, s)[:, 1:], lag_matrix(u, nb, s), y[s:]])
+    # least squares by a thin QR of [R, y] (O(n k^2), no SVD of the long matrix); lstsq when rank deficient
+    Rf = np.linalg.qr(R, mode="r")
+    k = na + nb
+    d = np.abs(np.diag(Rf[:k, :k]))
+    if d.size and d.min() > 1e-10 * max(d.max(), 1e-300):
+        from scipy.linalg import solve_triangular
+        th = solve_triangular(Rf[:k, :k], Rf[:k, k])
+    else:
+        th, *_ = np.linalg.lstsq(R[:, :k], y[s:], rcond=None)
     a = np.concatenate([[1.0], th[:na]])
     roots = np.roots(a)
     if np.any(np.abs(roots) >= 1.0):

@@ -20,8 +20,11 @@ B. Iterate ``j = 1, 2, ...``:
        load-moment parameterisation ``q = m z_m``* (polynomial, no division by z_m);
        ``Q_i = (Z_i^T Z_i)^-1``* (two-stage least squares: the extended IV then approaches the optimal
        IV) and ``lam_i`` the innovation variance of dataset i's noise model* (1 in the first iteration);
-   (b) residuals (42) and noise models: AR(40)* by least squares (``noise_model="ar"``; the
-       structured ARMA of :func:`_noise_model` is the alternative), prefilter ``L = A`` (43);
+   (b) residuals (42) and noise models (43)*: by default (``noise_model="auto"``) per dataset the
+       Box–Jenkins-type model ``eps = (1 - c q^-2)/A(q) e``, ``A`` AR(40) by least squares, ``c`` chosen
+       among :data:`AUTO_C` by the innovation likelihood (:func:`_noise_model_auto`; the noise model
+       estimated inside the refined-IV iteration, as in Young & Jakeman's RIV), prefilter
+       ``L = A/(1 - c q^-2)``; ``"ar"`` is plain AR(40), ``L = A`` (the fused compiled path, Table 3);
        built at the mean of the last two iterates* (relaxation against period-2 cycles), of the
        last four from iteration ``cycle_after`` (10) on* (against period-4 cycles; see "z_f free");
        the prefilter start-up transient is dropped* (:func:`_transient`);
@@ -80,9 +83,16 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   consistent estimator with weak instruments for these coefficients; 2SLS is biased towards least squares
   in finite samples), m, zm_bar and rho are not affected (issue-3 efficiency: 0.82-0.89 of the CRLB). The
   estimates' notes say so. A consequence to know: with the issue-3 noise on 300-s records K_vdot comes out
-  near 1.08, so ``k - K_vdot g <= 0`` and the implausibility rule flags 84 of 100 such estimates although
-  their m, zm_bar and rho are good; the flag is right about K_vdot, and longer records cure it.
-* **Narrow-band wave roll without sensor noise.** With the 0.5 deg wave roll (1-s peak period, near the roll
+  near 1.08, so ``k - K_vdot g <= 0``: the Table-3 rule (:func:`implausible_reasons`) flagged 84 of 100 such
+  estimates although their m, zm_bar and rho are good. :func:`estimate_mass_cm` therefore judges
+  plausibility on what the data determine (:func:`implausible_identifiable`: m and zm_bar with their
+  standard errors, the identified roll mode of every dataset) and reports the nuisance finding apart
+  (``diagnostics["nuisance_outside_physical"]``, one warning line). Measured on fresh seeds [23, 0..99]
+  (issue-3 noise, 300 s, ``noise_model="ar"``): 0 of 100 flagged, 94 with a nuisance coefficient outside
+  its physical range; m 0.4048 ± 0.056 (spread), ±2-std coverage 0.97. With the default ``"auto"`` noise
+  model (:mod:`shipid.methods.masscm_coverage`, regime "both" = the issue-3 noise, seed 1800): 0 of 100.
+* **Narrow-band wave roll without sensor noise** (plain AR(40), ``noise_model="ar"``; the default
+  ``"auto"`` handles it, see "Noise model" below). With the 0.5 deg wave roll (1-s peak period, near the roll
   resonance) and noise-free sensors, the AR(40) prefilter does not whiten the equation error (its spectrum
   has the zeros of the bilinear numerator on the unit circle and a narrow peak) and Algorithm 1 can converge
   to a wrong m with a small standard error (m 1.29 ± 0.20 and 0.046 ± 0.004 in two of three realisations,
@@ -99,12 +109,9 @@ Known limitations (measured 2026-11-22, fishing vessel, z_f known, three 300-s d
   (CRLB 0.059), coverage of ±2 std 0.97 vs 0.99, flagged 39 vs 84 (mostly k - K_vdot g <= 0, the K_vdot
   bias above), but its m is biased, mean 0.4150 (+3.1 standard errors of the mean) where AR(40) gives
   0.3988 (-0.2). With white sensor noise only (gyro 0.002 rad/s and accelerometer 0.02 m/s^2, 20
-  realisations) both are fine (m 0.4008 ± 0.0054 vs 0.4006 ± 0.0046). So the default stays AR(40): the
-  option is for records in waves with low-noise sensors, and a later session should find a noise model
-  good in both (its IIR prefilter also has no compiled path). The default's failure is pinned by a
-  strict xfail test, the option's behaviour on three realisations by a test.
-  **The failure is no longer silent**: :func:`estimate_mass_cm` (``noise_check=True``, the default; not the
-  Monte Carlo studies) estimates again with ``ar-structured`` and warns when the two m differ by more
+  realisations) both are fine (m 0.4008 ± 0.0054 vs 0.4006 ± 0.0046). Neither fixed c is good in both
+  regimes, which is why the default now chooses c from the data.
+  With ``noise_model="ar"`` and ``noise_check=True`` :func:`estimate_mass_cm` estimates again with ``ar-structured`` and warns when the two m differ by more
   than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (``diagnostics["noise_model_check"]``).
   The threshold was chosen on seeds [11, 0..9] (issue-3 noise: at most 0.91; wave-only: 1.8-12.7 where
   not absurd) and checked on fresh seeds [11, 100..119]: issue-3 noise 0 of 20 warned; wave-only 9 of 20
@@ -181,13 +188,17 @@ class MassCMOptions:
     instruments: str = "lags"       # "lags": (45) with n_y, n_as, n_r, n_delta; "regressors": noise-free (37)
     transient_tol: float = 0.01      # prefilter start-up: drop samples until the slowest pole decays to this
     transient_max: float = 0.2       # ... but at most this fraction of the record
-    noise_model: str = "ar"          # "ar": AR(ar_order) of the residuals, prefilter = FIR A(q); "ar-structured":
-    #                                 AR(ar_order) of eps/(1 - c q^-2), L = A/(1 - c q^-2); "arma": structured ARMA
+    noise_model: str = "auto"        # "auto": AR(ar_order) of eps/(1 - c q^-2) with c chosen by the innovation
+    #                                 likelihood among AUTO_C (c = 0 is "ar"), see _noise_model_auto; "ar": AR(ar_order)
+    #                                 of the residuals, prefilter = FIR A(q); "ar-structured": AR(ar_order) of
+    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
     cycle_after: int = 10           # (*) from this iteration on, not yet converged: steps (b)-(c) at the mean of
     #                                 the last four iterates instead of two (damps period-4 cycles); 0 = never
+    explicit_moments: bool = False  # how (not what): True forms the instrument matrix Z of an IIR prefilter
+    #                                 explicitly (the reference of _filtered_lag_moments; O(n n_z^2), n x n_z memory)
     compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
     #                                 compiled numba kernels (moments, AR fits, search; the Monte Carlo study's
     #                                 default: a single estimate does not repay loading/compiling them)
@@ -397,12 +408,55 @@ def _fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCM
     return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(nls)), ZT @ P.T, m)
 
 
+def _filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for any prefilter ``L`` (or none), lag instruments, without forming ``Z``.
+
+    The same quantities as the explicit path (:func:`_instruments`, prefilter, transient drop
+    :func:`_transient`, :func:`iv_compress`; tests compare them): the ten signals are prefiltered once
+    (``lfilter``, from rest), the two delayed-``y`` columns of (37) are the delayed filtered ``y`` (the filter
+    commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag structure
+    (:func:`shipid.estimate.fir_kernels.lag_moments` when ``compute == "fast"``, else
+    :func:`shipid.estimate.iv.lag_gram`). Cost O(n n_z) per dataset and no n × n_z matrix, which is
+    what keeps long records linear in time and bounded in memory.
+    """
+    s = _start(options)
+    n = ds.y.size
+    da = _diff2(a_hat)
+    X, _nls = _work(ds, options)
+    X = X.copy()
+    X[0] = y_hat - y_hat.mean()
+    X[1] = da - da.mean()
+    F = lfilter(L.a, L.c, X, axis=1) if L is not None else X          # = L.prefilter of each row
+    T = np.empty((6, n))
+    T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
+    T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
+    T[2:] = F[4:]
+    s2 = s + _transient(L, n - s, options)
+    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
+    if options.compute == "fast":
+        from shipid.estimate.fir_kernels import lag_moments
+        ZtZ, ZtP = lag_moments(np.ascontiguousarray(F[:4]), np.array(nls, dtype=np.int64), T, s2)
+        return iv_compress_products(ZtZ, ZtP, n - s2)
+    m = n - s2
+    blocks, h, used = [], [], []
+    for k, nl in enumerate(nls):
+        if nl:
+            blocks.append(np.lib.stride_tricks.sliding_window_view(F[k, s2 - nl + 1:], m)[::-1])
+            h.append(F[k, s2 - 1 - np.arange(nl)])
+            used.append(nl)
+    ZT = np.concatenate(blocks, axis=0)
+    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(used)), ZT @ T[:, s2:].T, m)
+
+
 def _build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
     s = _start(options)
     mom = []
     for ds, Li, yh, ah in zip(prep, L, y_hats, a_hats):
         if Li is not None and Li.c.size == 1 and Li.c[0] == 1.0 and options.instruments == "lags":
             mom.append(_fir_moments(ds, Li.a, yh, ah, options))
+            continue
+        if options.instruments == "lags" and options.explicit_moments is False:
+            mom.append(_filtered_lag_moments(ds, Li, yh, ah, options))
             continue
         Z = _instruments(ds, yh, ah, ds.r_hat0, Li, options)
         if Li is not None:
@@ -839,6 +893,8 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
     """
     from shipid.estimate.arma import ARMA
+    if options.noise_model == "auto":
+        return _noise_model_auto(eps, options)
     if options.noise_model == "ar":
         if options.compute == "fast":
             return fit_ar(eps, options.ar_order)         # the same AR fit by compiled kernels
@@ -858,6 +914,57 @@ def _noise_model(eps: np.ndarray, options: MassCMOptions):
     e2 = lfilter([1.0], den, eps)
     m = hannan_rissanen(e2, options.arma_na, options.arma_nc)
     return ARMA(m.a, np.convolve(m.c, den), m.lam)
+
+
+#: Candidate MA factors ``1 - c q^-2`` of the ``"auto"`` noise model (c = 0: the plain AR model).
+AUTO_C = (0.0, 0.5, 0.9, 0.97, 0.99)
+
+
+#: From this iteration on the ``"auto"`` noise model keeps each dataset's c of the previous iteration (the
+#: choice between candidates, a discrete step, otherwise can keep an iteration from settling).
+AUTO_HOLD = 3
+
+
+def _ma_c(L) -> float:
+    """The ``c`` of a prefilter ``A(q) / (1 - c q^-2)`` (0 for a FIR prefilter or none)."""
+    if L is None or L.c.size < 3:
+        return 0.0
+    return float(-L.c[2])
+
+
+def _noise_model_auto(eps: np.ndarray, options: MassCMOptions, candidates: tuple = ()):
+    """Noise model ``eps = (1 - c q^-2) / A(q) e`` with ``c`` chosen by the data (``noise_model="auto"``).
+
+    A Box–Jenkins-type noise model estimated inside the refined-IV iteration (the RIV family of Young &
+    Jakeman; Young, "Refined instrumental variable estimation: maximum likelihood optimization of a unified
+    Box–Jenkins model", Automatica 52, 2015: the prefilter is the inverse of the current noise model, whose
+    parameters are re-estimated from the residuals at every iteration): AR(``ar_order``) ``A`` by least squares on
+    ``eps / (1 - c q^-2)`` for each ``c`` of :data:`AUTO_C`, and the ``c`` whose innovations
+    ``A(q) eps / (1 - c q^-2)`` have the smallest variance over a common window (the samples after the
+    start-up transient of the slowest candidate, at most ``transient_max`` of the record) wins: with the
+    same ``eps`` and monic, minimum-phase filters this is the Gaussian innovation likelihood, and every
+    candidate has the same number of estimated coefficients. ``c`` near 1 is the unit-circle MA factor of
+    the wave moment in (35) (the ``"ar-structured"`` model), ``c = 0`` the plain AR model of white sensor
+    noise (``"ar"``). Returns an :class:`~shipid.estimate.arma.ARMA` with ``c`` recorded in ``L.c``.
+    ``candidates``: the c values to try (default :data:`AUTO_C`); :func:`iterate` passes the previous one
+    alone from iteration :data:`AUTO_HOLD` on.
+    """
+    from shipid.estimate.arma import ARMA
+    eps = np.asarray(eps, dtype=float)
+    n = eps.size
+    r = np.sqrt(max(AUTO_C))
+    k = int(min(np.ceil(np.log(options.transient_tol) / np.log(r)), options.transient_max * n)) if r > 0 else 0
+    best = None
+    for c in (candidates or AUTO_C):
+        den = np.array([1.0, 0.0, -c]) if c else np.ones(1)
+        e2 = lfilter([1.0], den, eps) if c else eps
+        m = (fit_ar(e2, options.ar_order) if options.compute == "fast"
+             else hannan_rissanen(e2, options.ar_order, 0, n_long=options.ar_order))
+        inn = lfilter(m.a, [1.0], e2 - e2.mean())[k:]
+        lam = float(np.mean((inn - inn.mean()) ** 2))
+        if best is None or lam < best[0]:          # lam (after the start-up) is also the model's innovation variance
+            best = (lam, ARMA(m.a, den, lam))
+    return best[1]
 
 
 def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions()) -> "_State":
@@ -1023,7 +1130,10 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             eps = ds.y - ds.Phi @ G_mid[i]
             s = _start(options)
             if options.prefilter:
-                arma = _noise_model(eps[s:], options)
+                if options.noise_model == "auto" and j >= AUTO_HOLD:       # (*) c held (see _noise_model_auto)
+                    arma = _noise_model_auto(eps[s:], options, (_ma_c(state.L[i]),))
+                else:
+                    arma = _noise_model(eps[s:], options)
                 newL.append(arma)
                 lam.append(arma.lam)
             else:
@@ -1077,6 +1187,52 @@ def implausible_reasons(theta: np.ndarray, known: KnownParams, conds=(NOMINAL, C
     return why
 
 
+def implausible_identifiable(theta: np.ndarray, known: KnownParams, conds=(NOMINAL, CALIBRATION, LOADED),
+                             std: dict | None = None) -> list[str]:
+    """Implausibility judged on what the data determine: the rule of :func:`estimate_mass_cm`'s flag.
+
+    The datasets determine the discrete coefficients ``g_i`` (35) of every dataset, hence its continuous
+    coefficients (26) ``alpha1 = d/A2``, ``alpha2 = kp/A2``, ``beta1 = -B/A2``, and (z_f known or with a
+    prior) ``m``, ``zm_bar`` and ``rho`` (:mod:`shipid.analysis.identifiability_masscm`); they do not
+    determine the split of ``A2`` into ``A_x`` and ``K_vdot z_s`` or of ``kp`` into ``k`` and ``K_vdot g`` well
+    (finite-sample IV bias of K_vdot under sensor noise, module docstring "Known limitations"). Flagged when
+    any of:
+
+    * a non-finite estimate;
+    * ``m <= 1e-6 M`` with its ±2-std interval also there (``std["m"]``; the point alone without a std);
+    * ``|zm_bar| > 10 m`` beyond two of its standard errors (degenerate, load moment ~ 0);
+    * the identified roll mode of any dataset is not that of a ship: the closed-loop roll equation (18),
+      ``A1 phi'' + d phi' + k1 phi = ...`` with ``A1 = A2 + B z_s``, ``k1 = kp + B g``, divided by ``A2``:
+      ``A1/A2 = 1 - beta1 z_s``, ``d/A2 = alpha1``, ``k1/A2 = alpha2 - beta1 g`` must all be positive
+      (a stable, damped roll mode with restoring). These ratios are functions of ``g_i`` alone.
+
+    The physical conditions on the nuisance split (``A_x, d, k - K_vdot g, A1, A2 > 0`` of
+    :func:`implausible_reasons`, the Table-3 study's rule) are reported apart (``diagnostics
+    ["nuisance_outside_physical"]``), not as a flag on the estimate of m.
+    """
+    std = std or {}
+    if not np.all(np.isfinite(theta)):
+        return ["non-finite estimate"]
+    m, zm = theta[I_M], theta[I_ZM]
+    sm, sz = float(std.get("m", 0.0)), float(std.get("zm_bar", 0.0))
+    sm = sm if np.isfinite(sm) else 0.0
+    sz = sz if np.isfinite(sz) else 0.0
+    why = []
+    if m + 2 * sm <= 1e-6 * known.M:
+        why.append("m <= 0 (or vanishing) beyond 2 std")
+    if abs(zm) - 2 * sz > 10.0:
+        why.append("|zm_bar| > 10 m beyond 2 std")
+    t = roll_terms(theta, known, list(conds))
+    A2 = t["A2"]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = {"A1/A2": t["A1"] / A2, "d/A2": t["d"] / A2, "k1/A2": t["k1"] / A2}
+    for name, v in ratios.items():
+        bad = [c for c, x in zip(conds, v) if not (np.isfinite(x) and x > 0)]
+        if bad:
+            why.append(f"identified roll mode not physical ({name} <= 0 in {', '.join(sorted(set(bad)))})")
+    return why
+
+
 def rho_of(theta: np.ndarray, known: KnownParams) -> float:
     """Moment ratio ``rho = m z_m / (m_c z_c)`` with z measured from the centre of rotation (24)."""
     z_f, m, zm = theta[I_ZF], theta[I_M], theta[I_ZM]
@@ -1126,7 +1282,8 @@ def _covariance(core: dict) -> tuple[np.ndarray, list[str], bool]:
 def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
                      theta0: Sequence[float] | None = None, z_f: float | None = None,
                      z_f_prior: tuple[float, float] | None = None, init: str | None = None,
-                     options: MassCMOptions = MassCMOptions(), noise_check: bool = True) -> Result:
+                     options: MassCMOptions = MassCMOptions(), noise_check: bool = True,
+                     cost_map: bool = False) -> Result:
     """Estimate the load mass ``m`` and its centre ``zm_bar`` (and the nuisance parameters) by Algorithm 1.
 
     Parameters
@@ -1151,6 +1308,8 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         ``noise_model="ar-structured"`` from the same start and warn when the two m differ by more
         than :data:`NOISE_CHECK_Z` combined standard errors (the narrow-band disturbance failure of
         "Known limitations"); recorded in ``diagnostics["noise_model_check"]``. About doubles the time.
+    cost_map : bool
+        Also store the Fig. 4 cost map ``series["contours"]["cost"]`` (report-only work, off by default).
 
     Returns
     -------
@@ -1168,12 +1327,18 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
         init = init or ("linear" if theta0 is None else "given")
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options, init=init)
     res = _to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    if options.prefilter and core["state"] is not None:
+        res.diagnostics["noise_model_selected"] = {
+            "noise_model": options.noise_model,
+            "c": [_ma_c(L) for L in core["state"].L],
+            "structure": "prefilter L = A(q)/(1 - c q^-2) per dataset (c = 0: AR)"}
     if (noise_check and options.prefilter and options.noise_model == "ar"
             and (z_f is not None or z_f_prior is not None)):
         _noise_model_check(res, prep, known, th0, z_f, z_f_prior, options, init)
         res.diagnostics["wall_s"] = time.perf_counter() - t0
     from shipid.methods.masscm_series import attach  # report series: overlays, Fig. 4 map, inputs (issue 8)
-    attach(res, core, prep, known, options, datasets)
+    from shipid.methods.masscm_series import CONTOUR_N
+    attach(res, core, prep, known, options, datasets, contour_n=CONTOUR_N if cost_map else 0)
     return res
 
 
@@ -1258,7 +1423,8 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
     est["dm_dzf"] = Estimate(float(slope), float("nan"), "kg/m", "derived",
                              "slope of the exact-fit family m(z_f) = rho m_c (zc_bar+z_f)/(zm_bar+z_f)")
     conds = [ds.condition for ds in prep]
-    reasons = implausible_reasons(theta, known, conds)
+    reasons = implausible_identifiable(theta, known, conds, {"m": std.get("m", 0.0), "zm_bar": std.get("zm_bar", 0.0)})
+    nuisance = [w for w in implausible_reasons(theta, known, conds) if w not in ("non-finite estimate",)]
     warn = list(core["warnings"])
     if not core["converged"]:
         warn.append(f"not converged after {core['iterations']} iterations (tol {options.tol:g} on g)")
@@ -1270,6 +1436,10 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         warn.append("z_f not given: m is not identifiable from the three datasets (only zm_bar and rho are)")
     if reasons:
         warn.append("implausible solution: " + ", ".join(reasons))
+    elif nuisance:
+        warn.append("nuisance coefficients outside their physical range (" + ", ".join(nuisance) + "): "
+                    "K_vdot, K_r, K_delta carry a finite-sample IV bias under sensor noise (module docstring, "
+                    "'Known limitations'); m, zm_bar and rho are judged on their own and not flagged")
     st = core["state"]
     resid = []
     for i, ds in enumerate(prep):
@@ -1277,6 +1447,7 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         eps = ds.y - ds.Phi @ G
         s = _start(options)
         ef = st.L[i].prefilter(eps)[s:] if st.L[i] is not None else eps[s:]
+        ef = ef[_transient(st.L[i], ef.size, options):]          # the prefilter's start-up, as in the moments
         ef = ef - ef.mean()
         ac = np.array([np.dot(ef[:-k], ef[k:]) for k in range(1, 21)]) / max(np.dot(ef, ef), 1e-300)
         resid.append({"condition": ds.condition, "n": int(ds.y.size), "T": ds.T,
@@ -1297,6 +1468,8 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         diagnostics={"converged": bool(core["converged"]), "iterations": int(core["iterations"]),
                      "z_f_mode": zf_mode, "covariance_conditional_on_z_f": conditional,
                      "implausible": bool(reasons), "implausible_reasons": reasons,
+                     "implausible_rule": "judged on the identifiable quantities (implausible_identifiable)",
+                     "nuisance_outside_physical": nuisance,
                      "identifiability": ("zm_bar and rho are identifiable from nominal+calibration+loaded data; "
                                          "z_f is not, and m = rho m_c (zc_bar+z_f)/(zm_bar+z_f) follows only "
                                          "once z_f is pinned (shipid.analysis.identifiability_masscm)"),
@@ -1308,4 +1481,5 @@ def _to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
 
 
 __all__ = ["MassCMOptions", "Dataset", "prepare", "iterate", "estimate_mass_cm", "implausible_reasons",
+           "implausible_identifiable",
            "rho_of", "dm_dzf", "DEFAULT_THETA0", "REQUIRED"]

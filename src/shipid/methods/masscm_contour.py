@@ -24,7 +24,7 @@ def cost_grid(data_seed: int = 0, zf_mode: str = "known", n: int = 61, span_m: f
     known = KnownParams.from_vessel(vessel)
     prep = prepare(list(d.items()))
     z_f = float(load_vessel(vessel).value("general", "z_f")) if zf_mode == "known" else None
-    core = iterate(prep, known, np.zeros(9), z_f=z_f, init="linear", options=MassCMOptions())
+    core = iterate(prep, known, np.zeros(9), z_f=z_f, init="linear", options=MassCMOptions(noise_model="ar"))
     th = core["theta"]
     free = np.ones(9, dtype=bool)
     fun, _ = _residual_fun(core["state"], known, free, to_moment(th), None)

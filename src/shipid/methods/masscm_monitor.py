@@ -142,7 +142,8 @@ class MonitorOptions:
     ref_min: float = 60.0
     threshold: float = 40.0
     ar_fit: float = 120.0
-    masscm: MassCMOptions = MassCMOptions()
+    # the block moments implement the AR(40) prefilter only (the offline default "auto" may pick an IIR one)
+    masscm: MassCMOptions = MassCMOptions(noise_model="ar")
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,9 @@ Builds the :mod:`shipid.report.convention` entries that ``shipid report`` draws 
   instruments, prefilters and weights) over a grid of load mass ``m`` and centre ``zm_bar``, every
   other parameter at the estimate (as :func:`shipid.methods.masscm_contour.cost_grid`). A coarse
   :data:`CONTOUR_N` × :data:`CONTOUR_N` grid (about 20 µs per cost evaluation: ~15 ms).
+* The time series above keep at most :data:`MAX_SERIES_POINTS` samples each (every k-th sample, k
+  the smallest stride that fits; the title says k): a result's size is bounded whatever the record
+  length. The statistics of the method (residual whiteness, innovation variances) use every sample.
 * ``provenance["inputs"]`` — one :func:`~shipid.report.convention.trial_summary` per dataset.
 
 And, for the Table-3 study (``shipid study mass-cm-sensitivity --out``),
@@ -32,6 +35,8 @@ from shipid.report.convention import contour, overlay, residual, table, trial_su
 
 #: Grid points per axis of the Fig. 4 cost map stored with every result (coarse: cheap).
 CONTOUR_N = 25
+#: Most samples kept per stored time series (overlay or residual); longer records are decimated by a stride.
+MAX_SERIES_POINTS = 2000
 #: Grid span: relative in m, absolute (m) in zm_bar (as :func:`shipid.methods.masscm_contour.cost_grid`).
 SPAN_M, SPAN_Z = 0.05, 0.02
 
@@ -75,12 +80,22 @@ def cost_contour(core: dict, known, n: int = CONTOUR_N, *, true: tuple[float, fl
                          "parameters at the estimate; the valley follows constant load moment m·z̄_m.")
 
 
-def model_overlays(core: dict, prep, known, options=None) -> tuple[dict, dict]:
+def _stride(n: int, max_points: int = MAX_SERIES_POINTS) -> int:
+    """Smallest stride that keeps at most ``max_points`` of ``n`` samples."""
+    return max(1, -(-int(n) // int(max_points)))
+
+
+def _every(k: int) -> str:
+    return "" if k == 1 else f" Stored every {k}-th sample (at most {MAX_SERIES_POINTS} per series)."
+
+
+def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_SERIES_POINTS) -> tuple[dict, dict]:
     """Measured vs simulated roll rate per dataset, and the prefiltered equation errors.
 
-    Returns ``(overlays, residuals)`` dicts of convention entries.
+    Returns ``(overlays, residuals)`` dicts of convention entries, each series decimated by a stride to at
+    most ``max_points`` samples.
     """
-    from shipid.methods.masscm import MassCMOptions, _closed_loop_sim, _start
+    from shipid.methods.masscm import MassCMOptions, _closed_loop_sim, _start, _transient
     from shipid.models.roll_reduced import discrete_coeffs, roll_terms
 
     conds = [ds.condition for ds in prep]
@@ -95,24 +110,30 @@ def model_overlays(core: dict, prep, known, options=None) -> tuple[dict, dict]:
         tag = ds.condition if count[ds.condition] == 1 else f"{ds.condition}_{count[ds.condition]}"
         t = np.arange(ds.y.size) * ds.T
         sim = _closed_loop_sim(ds, terms, i, known)
+        k = _stride(t.size, max_points)
         if sim is not None:
-            ov[f"p_{tag}"] = overlay(t, ds.y - ds.y.mean(), sim[0], "rad/s", kind="fit",
+            ov[f"p_{tag}"] = overlay(t[::k], (ds.y - ds.y.mean())[::k], sim[0][::k], "rad/s", kind="fit",
                                      label=f"roll rate p ({tag})",
                                      title=f"Roll rate p of the {tag} dataset: measured (record mean removed) and "
                                            "simulated by the identified roll model (18) from the measured rudder "
                                            "and the black-box yaw rate (44); residual = roll not explained by "
                                            "rudder and yaw (waves, noise), with its autocorrelation and 95 % "
-                                           "white-noise bounds.")
+                                           "white-noise bounds." + _every(k))
         eps = ds.y - ds.Phi @ G[i]
-        s = _start(options if options is not None else MassCMOptions())
+        opts = options if options is not None else MassCMOptions()
+        s = _start(opts)
         L = st.L[i] if st is not None and i < len(st.L) else None
         ef = L.prefilter(eps)[s:] if L is not None else eps[s:]
+        s += _transient(L, ef.size, opts)            # the prefilter's start-up, as in the moments
+        ef = ef[s - _start(opts):]
         lam = float(st.lam[i]) if st is not None and i < len(st.lam) else float("nan")
+        k = _stride(ef.size, max_points)
+        ef = ef[::k]
         std = np.full(ef.size, np.sqrt(lam)) if np.isfinite(lam) and lam > 0 else None
         res[f"equation_error_{tag}"] = residual(
-            t[s:], ef, "rad/s", std=std, label=f"prefiltered equation error, {tag}",
+            t[s:][::k], ef, "rad/s", std=std, label=f"prefiltered equation error, {tag}",
             title=f"Prefiltered equation error (42)-(43) of the {tag} dataset at the last iteration (the noise "
-                  "model's innovations, assumed white) with ±2√λ.")
+                  "model's innovations, assumed white) with ±2√λ." + _every(k))
     return ov, res
 
 
@@ -133,6 +154,9 @@ def inputs(datasets: Sequence) -> list[dict]:
 
 def attach(result, core: dict, prep, known, options=None, datasets=None, *, contour_n: int = CONTOUR_N) -> None:
     """Add the report series (overlays, equation errors, Fig. 4 map) and input summaries to ``result``.
+
+    ``contour_n = 0`` leaves the Fig. 4 map out (report-only work; :func:`estimate_mass_cm` asks for it
+    with ``cost_map=True``).
 
     Never raises: a part that fails is skipped with a warning in ``result.diagnostics["warnings"]``.
     """
@@ -234,5 +258,5 @@ def spread_result(summary: dict, outputs: Sequence[dict | None], *, command: str
                   diagnostics=diag, series=spread_series(summary, outputs), provenance=prov)
 
 
-__all__ = ["CONTOUR_N", "cost_map", "cost_contour", "model_overlays", "inputs", "attach", "spread_series",
+__all__ = ["CONTOUR_N", "MAX_SERIES_POINTS", "cost_map", "cost_contour", "model_overlays", "inputs", "attach", "spread_series",
            "spread_result"]

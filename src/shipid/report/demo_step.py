@@ -38,7 +38,7 @@ def _fallback_mass_cm(seed: int):
     d = simulate_datasets("fishing-vessel", seed=seed)
     known = KnownParams.from_vessel("fishing-vessel")
     z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
-    res = estimate_mass_cm(list(d.items()), known, z_f=z_f)
+    res = estimate_mass_cm(list(d.items()), known, z_f=z_f, cost_map=True)
     res.provenance.setdefault("seed", seed)
     res.provenance.setdefault("command", "shipid demo (report step: simulated fishing-vessel datasets)")
     try:  # Fig. 4: the cost over (m, zm_bar) on the same data, with the true value marked
