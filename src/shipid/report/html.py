@@ -25,16 +25,19 @@ from shipid.report.registry import load_method_sections, sections_for
 from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
                                   residual_stats_table)
 from shipid.report import figures as F
+from shipid.report.units import bis_to_si, pretty_unit, unit_of
+from shipid.report.verdict import NOT_DETERMINED, effective_status, rel_se, verdict_html
+from shipid.report.render import short_paths
 
 METHOD_TITLES = {
-    "mass-cm": ("Mass and centre of mass from IMU and rudder", "Linder et al. 2015 (seed 000)"),
-    "dp": ("DP low-frequency model, parallel EKF", "Fossen, Sagatun & Sørensen 1996 (seed 001)"),
-    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "Yoon & Rhee 2003 (seed 002)"),
+    "mass-cm": ("Mass and centre of mass from IMU and rudder", "after Linder et al. (2015)"),
+    "dp": ("DP low-frequency model, parallel EKF", "after Fossen, Sagatun & Sørensen (1996)"),
+    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "after Yoon & Rhee (2003)"),
     "ebm-study": ("Manoeuvring coefficients by EBM: paper reproduction study",
-                  "Yoon & Rhee 2003 (seed 002), Tables 3 and 5"),
+                  "after Yoon & Rhee (2003), Tables 3 and 5"),
     "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
-                "Yoon & Rhee 2003 (seed 002) adapted to the MMG model"),
-    "ebm-design": ("D-optimal PRBS input design for EBM", "Yoon & Rhee 2003 (seed 002), Figs 7–8"),
+                "after Yoon & Rhee (2003), adapted to the MMG model"),
+    "ebm-design": ("D-optimal PRBS input design for EBM", "after Yoon & Rhee (2003), Figs 7–8"),
 }
 
 GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
@@ -96,7 +99,20 @@ table.kv th{width:30%}
 main{overflow-wrap:break-word}
 .status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
 .status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
+.status.notdet{color:#fff;background:#8a5a00;border-color:#8a5a00}
 tr.notid td{color:var(--bad)}
+tr.notdet td{color:#8a5a00;background:#fff8ec}
+tr.notdet td.num{text-decoration:line-through;text-decoration-color:#d6b27a}
+.verdict{border:1px solid var(--line);border-left:5px solid var(--accent);background:var(--soft);padding:10px 14px;
+ margin:14px 0;border-radius:4px}
+.verdict h2{border:0;margin:0 0 4px;font-size:1.05rem;padding:0}
+.verdict ul{margin:4px 0 0 0;padding:0;list-style:none}
+.verdict li{margin:3px 0;padding-left:18px;position:relative}
+.verdict li:before{content:"•";position:absolute;left:4px;color:var(--muted)}
+.verdict li.ok:before{content:"✓";color:var(--ok)} .verdict li.bad:before{content:"✗";color:var(--bad)}
+.verdict li.warn:before{content:"!";color:#8a5a00;font-weight:700}
+.chan{white-space:nowrap;display:inline-block;margin-right:6px}
+table.data{width:100%}
 figure{margin:14px 0 22px;padding:0}
 figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
 figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}
@@ -119,6 +135,10 @@ class MatrixValue(list):
 
 class RecordsValue(list):
     """A short list of flat dicts shown as a nested table in key-value tables."""
+
+
+class VectorValue(list):
+    """A short numeric vector shown as a one-row table in key-value tables."""
 
 
 def _records(v) -> bool:
@@ -145,10 +165,36 @@ def _small_matrix(v) -> bool:
     return all(isinstance(x, (int, float)) and not isinstance(x, bool) for r in v for x in r)
 
 
+def _plain(v: Any) -> Any:
+    """numpy arrays/scalars as lists/floats; numpy's own text of an array (``"[[1. 2.]\\n [3. 4.]]"``,
+    left by an older JSON writer) parsed back into lists."""
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, str) and v.lstrip().startswith("[") and v.rstrip().endswith("]") and \
+            not any(c.isalpha() and c not in "eE" for c in v):
+        try:
+            import re
+
+            vals = [[float(x) for x in g.split()] for g in re.findall(r"\[([^\[\]]*)\]", v)]
+            vals = [r for r in vals if r]
+            if len(vals) == 1 and v.count("[") == 1:
+                return vals[0]
+            if vals and all(len(r) == len(vals[0]) for r in vals):
+                return vals
+        except ValueError:
+            return v
+    return v
+
+
 def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
     rows = []
     for k, v in d.items():
-        key = f"{prefix}{k}"
+        key = f"{prefix}{short_paths(str(k))}"
+        v = _plain(v)
+        if isinstance(v, (list, tuple)):
+            v = [_plain(x) for x in v]
         if _is_scalar(v):
             rows.append((key, v))
         elif _records_map(v):
@@ -161,8 +207,9 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             rows.append((key, MatrixValue(v)))
         elif _records(v):
             rows.append((key, RecordsValue(v)))
-        elif isinstance(v, (list, tuple)) and len(v) <= 8 and all(_is_scalar(x) for x in v):
-            rows.append((key, ", ".join(fmt_num(x) if not isinstance(x, str) else x for x in v)))
+        elif isinstance(v, (list, tuple)) and len(v) <= 12 and all(_is_scalar(x) for x in v):
+            rows.append((key, VectorValue(v) if all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                     for x in v) else "; ".join(str(x) for x in v)))
         elif isinstance(v, (list, tuple)):
             try:
                 a = np.asarray(v, dtype=float).ravel()
@@ -171,7 +218,7 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             except (TypeError, ValueError):
                 rows.append((key, f"{len(v)} items"))
         else:
-            rows.append((key, json.dumps(v, default=str)[:200]))
+            rows.append((key, short_paths(" ".join(str(v).split()))[:300]))
     return rows
 
 
@@ -183,6 +230,55 @@ def _fmt_duration(s: float) -> str:
     if s >= 120:
         return f"{s / 60:.1f} min ({fmt_num(s)} s)"
     return f"{fmt_num(s)} s"
+
+
+def _vessel(result) -> str | None:
+    v = (result.model or {}).get("vessel") or (result.provenance or {}).get("vessel")
+    return str(v) if v else None
+
+
+def _with_units(result, rows: list[tuple[str, Any]]) -> list[tuple[str, Any, str]]:
+    """(key, value, unit) rows; the unit from the vessel file or :data:`~shipid.report.units.KNOWN_UNITS`."""
+    vessel = _vessel(result)
+    bis = "bis" in str((result.model or {}).get("units", ""))
+    out = []
+    for k, v in rows:
+        u = unit_of(k, v, vessel=vessel)
+        if bis and k.split(".")[-1] in ("A_h", "A", "B", "M", "D", "K", "T", "theta", "theta_std"):
+            u = "bis (L, m, √(L/g))"
+        elif bis and k.split(".")[-1] in ("theta_true", "error", "error_sigma", "relative_error"):
+            u = {"error_sigma": "SE", "relative_error": "-"}.get(k.split(".")[-1], "bis")
+        out.append((k, v, u))
+    return out
+
+
+def _si_table(ctx: RenderContext, result) -> str:
+    """DP θ1…θ9 (bis) in SI: A_h entries as rates with time constants, K as forces (eqs. 26–29)."""
+    model = result.model or {}
+    try:
+        L, m, g = float(model["L"]), float(model["m"]), float(model.get("g", 9.81))
+    except (KeyError, TypeError, ValueError):
+        return ""
+    rows = []
+    for name, e in result.estimates.items():
+        if "bis" not in str(e.unit):
+            continue
+        conv = bis_to_si(name, float(e.value), float(e.std), L, m, g)
+        if conv is None:
+            continue
+        v, s, unit, note = conv
+        f = format_estimate(v, s)
+        sc = f' <span class="unit">{f.scale}</span>' if f.scale else ""
+        rows.append(f"<tr><td><b>{esc(name)}</b></td><td class='num'>{f.value}{sc}</td>"
+                    f"<td class='num'>{f.std}{sc if f.std != '—' else ''}</td><td>{esc(unit)}</td>"
+                    f"<td>{esc(note)}</td></tr>")
+    if not rows:
+        return ""
+    head = ("<tr><th>parameter</th><th class='num'>value (SI)</th><th class='num'>standard error</th>"
+            "<th>unit</th><th>meaning</th></tr>")
+    cap = ctx.table_caption(f"The bis-system parameters in SI units (L = {fmt_num(L)} m, m = {fmt_num(m)} kg, "
+                            f"g = {fmt_num(g)} m/s², time unit √(L/g) = {fmt_num((L / g) ** 0.5)} s).")
+    return f'<table class="est">{cap}<thead>{head}</thead><tbody>{"".join(rows)}</tbody></table>'
 
 
 # -- page sections --------------------------------------------------------------------------------------
@@ -217,8 +313,11 @@ def _badges(result) -> str:
         else:
             it = fmt_num(it)
         out.append(f'<div class="badge">iterations<b>{esc(it)}</b></div>')
-    n_est = sum(1 for e in result.estimates.values() if e.status == "estimated")
+    n_est = sum(1 for e in result.estimates.values() if effective_status(e) == "estimated")
     out.append(f'<div class="badge">estimated parameters<b>{n_est}</b></div>')
+    n_und = sum(1 for e in result.estimates.values() if effective_status(e) == NOT_DETERMINED)
+    if n_und:
+        out.append(f'<div class="badge bad">not determined<b>{n_und}</b></div>')
     n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
     if n_notid:
         out.append(f'<div class="badge bad">not identifiable<b>{n_notid}</b></div>')
@@ -228,7 +327,7 @@ def _badges(result) -> str:
         out.append(f'<div class="badge">input trials<b>{len(ins)}</b></div>')
     prov = result.provenance or {}
     if "seed" in prov:
-        out.append(f'<div class="badge">seed<b>{esc(str(prov["seed"]))}</b></div>')
+        out.append(f'<div class="badge">random seed<b>{esc(str(prov["seed"]))}</b></div>')
     return f'<div class="badges">{"".join(out)}</div>'
 
 
@@ -237,7 +336,7 @@ def _warnings(result, extra: list[str]) -> str:
     warns = d.get("warnings") or []
     if isinstance(warns, str):
         warns = [warns]
-    warns = [str(w) for w in warns]
+    warns = [short_paths(str(w)) for w in warns]
     if "converged" in d and not d["converged"]:
         warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
                         "must not be trusted.")
@@ -267,10 +366,10 @@ def _data_section(ctx: RenderContext, result) -> str:
     rows = []
     for item in ins:
         if not isinstance(item, Mapping):
-            rows.append(f"<tr><td><code>{esc(str(item))}</code></td><td></td><td></td><td></td><td></td>"
-                        "<td></td></tr>")
+            rows.append(f"<tr><td><code>{esc(short_paths(str(item)))}</code></td><td></td><td></td><td></td>"
+                        "<td></td><td></td></tr>")
             continue
-        name = item.get("name") or item.get("file") or item.get("path") or "—"
+        name = short_paths(str(item.get("name") or item.get("file") or item.get("path") or "—"))
         n = item.get("n_samples")
         dur = item.get("duration_s")
         dt = item.get("dt_s")
@@ -281,14 +380,15 @@ def _data_section(ctx: RenderContext, result) -> str:
             samp = f"{fmt_num(float(dt), 3)} s ({fmt_num(1.0 / float(dt), 3)} Hz)"
         ch = item.get("channels")
         if isinstance(ch, Mapping):
-            chs = ", ".join(f"{esc(str(k))} <span class='unit'>[{esc(str(u))}]</span>" for k, u in ch.items())
+            chs = " ".join(f"<span class='chan'>{esc(str(k))} <span class='unit'>[{esc(pretty_unit(str(u)))}]"
+                           "</span></span>" for k, u in ch.items())
         elif isinstance(ch, (list, tuple)):
-            chs = ", ".join(esc(str(c)) for c in ch)
+            chs = " ".join(f"<span class='chan'>{esc(str(c))}</span>" for c in ch)
         else:
             chs = "—" if ch is None else esc(str(ch))
         note_bits = [f"{k}: {item[k]}" for k in ("vessel", "manoeuvre", "seed") if k in item]
         if item.get("note"):
-            note_bits.append(str(item["note"]))
+            note_bits.append(short_paths(str(item["note"])))
         rows.append(f"<tr><td><code>{esc(str(name))}</code></td><td class='num'>{fmt_num(n) if n is not None else '—'}"
                     f"</td><td class='num'>{_fmt_duration(float(dur)) if dur is not None else '—'}</td>"
                     f"<td class='num'>{samp}</td><td>{chs}</td><td>{esc('; '.join(note_bits))}</td></tr>")
@@ -311,20 +411,31 @@ def _estimates_section(ctx: RenderContext, result) -> str:
     for name, e in result.estimates.items():
         f = format_estimate(e.value, e.std)
         notid = math.isinf(float(e.std)) if e.std is not None else False
+        st = effective_status(e)
         ci = "—" if f.ci_low == "—" else f"[{f.ci_low}, {f.ci_high}]"
         scale = f' <span class="unit">{f.scale}</span>' if f.scale else ""
-        tr = '<tr class="notid">' if notid else "<tr>"
+        tr = '<tr class="notid">' if notid else ('<tr class="notdet">' if st == NOT_DETERMINED else "<tr>")
+        st_cls = "notdet" if st == NOT_DETERMINED else st
+        st_title = (f' title="relative SE {f.rel}: the data do not determine it"' if st == NOT_DETERMINED
+                    and st != e.status else "")
         rows.append(
             f"{tr}<td><b>{esc(name)}</b></td><td class='num'>{f.value}{scale}</td>"
             f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
-            f"<td>{esc(e.unit)}</td><td><span class='status {esc(e.status)}'>{esc(e.status)}</span></td>"
+            f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
             + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(e.note)}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
+        cap = ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal "
+                                "approximation). Digits follow the SE.")
         foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(n)}</p>' for n, m in marks.items())
-        body = (f'<table class="est">{ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal approximation). Digits follow the SE.")}'
+        if any(effective_status(e) == NOT_DETERMINED for e in result.estimates.values()):
+            foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
+                     '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '
+                     'the value; the number is the last iterate, not an estimate.</p>')
+        foot += _si_table(ctx, result)
+        body = (f'<table class="est">{cap}'
                 f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
     cov_html = ""
     if result.covariance is not None and len(result.covariance_names) >= 2:
@@ -348,7 +459,8 @@ def _diagnostics_section(ctx: RenderContext, result) -> str:
     d = {k: v for k, v in (result.diagnostics or {}).items() if k != "warnings"}
     if not d:
         return ""
-    return f'<h2 id="diagnostics">Diagnostics</h2>{kv_table(ctx, _flatten(d), "Estimator diagnostics.")}'
+    return (f'<h2 id="diagnostics">Diagnostics</h2>'
+            f'{kv_table(ctx, _with_units(result, _flatten(d)), "Estimator diagnostics.")}')
 
 
 def _provenance_section(ctx: RenderContext, result) -> str:
@@ -356,9 +468,9 @@ def _provenance_section(ctx: RenderContext, result) -> str:
     model = result.model or {}
     out = '<h2 id="provenance">Model and provenance</h2>'
     if model:
-        out += kv_table(ctx, _flatten(model), "Model structure and vessel particulars.")
+        out += kv_table(ctx, _with_units(result, _flatten(model)), "Model structure and vessel particulars.")
     if prov:
-        out += kv_table(ctx, _flatten(prov), "Provenance.")
+        out += kv_table(ctx, _with_units(result, _flatten(prov)), "Provenance.")
     return out
 
 
@@ -496,10 +608,10 @@ def build_report(result) -> str:
         "series": _generic_sections(ctx, result),
         "provenance": _provenance_section(ctx, result),
     }
-    toc_names = {"warnings": "Warnings", "data": "Data", "estimates": "Estimates", "diagnostics": "Diagnostics",
+    toc_names = {"verdict": "Verdict", "warnings": "Warnings", "data": "Data", "estimates": "Estimates", "diagnostics": "Diagnostics",
                  "method": "Method figures", "series": "Time histories", "provenance": "Provenance"}
     warnings = _warnings(result, ctx.problems)
-    present = (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
+    present = ["verdict"] + (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
     toc = "".join(f'<a href="#{k}">{toc_names[k]}</a>' for k in present)
     now = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     title = METHOD_TITLES.get(result.method, (result.method, ""))[0]
@@ -510,7 +622,7 @@ def build_report(result) -> str:
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
         f"<meta name=\"generator\" content=\"shipid {esc(shipid.__version__)}\">"
         f"<title>{esc(doc_title)}</title><style>{CSS}</style></head>\n<body><main>\n"
-        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{warnings}\n"
+        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{verdict_html(result)}{warnings}\n"
         + "\n".join(v for v in parts.values() if v)
         + f"\n<footer>Report written by shipid {esc(shipid.__version__)} at {esc(now)} · {esc(title)} · "
           "self-contained: no network needed to view.</footer>\n</main></body></html>\n"

@@ -23,6 +23,40 @@ from shipid.report.stats import residual_stats
 
 esc = html.escape
 
+#: Authors and year of the paper each method follows (captions cite them, never "seed 00x").
+PAPERS = {"mass-cm": "Linder et al. 2015", "dp": "Fossen, Sagatun & Sørensen 1996",
+          "ebm": "Yoon & Rhee 2003", "ebm-study": "Yoon & Rhee 2003", "mmg-ebm": "Yoon & Rhee 2003",
+          "ebm-design": "Yoon & Rhee 2003"}
+
+_ABS_PATH = re.compile(r"(?<![\w.])(/[\w.\-+@]+)+/?")
+
+
+def short_path(p: str) -> str:
+    """``p`` relative to the working directory when it lies below it, else its file name."""
+    import os
+
+    try:
+        rel = os.path.relpath(p)
+    except ValueError:
+        rel = p
+    return rel if not rel.startswith("..") else os.path.basename(p.rstrip("/")) or p
+
+
+def short_paths(text: str) -> str:
+    """Every absolute path in ``text`` shortened by :func:`short_path` (reports never show the machine's
+    directory layout)."""
+    if "/" not in text:
+        return text
+    return _ABS_PATH.sub(lambda m: short_path(m.group(0)) if m.group(0).count("/") >= 2 else m.group(0), text)
+
+
+def paper_ref(method: str | None, ref: str | None) -> str:
+    """``"Yoon & Rhee 2003, Table 4"`` for ``ref = "Table 4"`` (the paper figure a caption reproduces)."""
+    if not ref:
+        return ""
+    who = PAPERS.get(method or "", "")
+    return f"{who}, {ref}" if who and not re.search(r"\d{4}", str(ref)) else str(ref)
+
 
 @dataclass
 class RenderContext:
@@ -32,6 +66,7 @@ class RenderContext:
     n_fig: int = 0
     n_tab: int = 0
     claimed: set = field(default_factory=set)
+    authors: str = ""
     problems: list = field(default_factory=list)
     residual_rows: list = field(default_factory=list)
 
@@ -87,7 +122,7 @@ class RenderContext:
                     if items:
                         out.append(render_group(self, fr.kind, items, fr.caption))
                 elif isinstance(fr, Mapping) and "columns" in fr and "rows" in fr:
-                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "")))
+                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "", method=self.result.method)))
                 elif fr == "residual-checks":
                     out.append(residual_stats_table(self))
                 elif isinstance(fr, str):
@@ -105,10 +140,19 @@ class RenderContext:
 
 # -- captions ----------------------------------------------------------------------------------------
 
-def caption_of(name: str, entry: Mapping, default: str, paper: str | None = None) -> str:
+def caption_of(name: str, entry: Mapping, default: str, paper: str | None = None,
+               method: str | None = None) -> str:
+    """Caption text: the title, then the paper figure or table it reproduces in parentheses.
+
+    The report's own number (``Figure 3.``, ``Table 2.``) is the only number in front; the paper's
+    reference follows as ``(Yoon & Rhee 2003, Table 4)``.
+    """
     paper = entry.get("paper") or paper  # the method's own reference wins over a default
-    title = entry.get("title") or default
-    return f"{paper} — {title}" if paper else title
+    title = str(entry.get("title") or default).strip()
+    if not paper:
+        return title
+    ref = paper_ref(method, str(paper))
+    return f"{title} ({ref})" if not title.endswith(".") else f"{title[:-1]} ({ref})."
 
 
 _PAPER_RE = re.compile(r"(fig|table)[a-z.]*\s*(\d+)", re.I)
@@ -133,6 +177,9 @@ def _cell(v: Any) -> tuple[str, str]:
                                         for k in keys) + "</tr>" for r in v)
         return (f'<div class="scroll"><table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody>'
                 f'</table></div>'), ""
+    if type(v).__name__ == "VectorValue":  # shipid.report.html.VectorValue: a short numeric vector
+        body = "".join(f"<td>{fmt_num(x)}</td>" for x in v)
+        return f'<table class="mat"><tbody><tr>{body}</tr></tbody></table>', ""
     if type(v).__name__ == "MatrixValue":  # shipid.report.html.MatrixValue: a small matrix
         body = "".join("<tr>" + "".join(f"<td>{fmt_num(x)}</td>" for x in row) + "</tr>" for row in v)
         return f'<table class="mat"><tbody>{body}</tbody></table>', ""
@@ -143,8 +190,8 @@ def _cell(v: Any) -> tuple[str, str]:
     if v is None:
         return "—", ""
     if isinstance(v, (list, tuple)):
-        return esc(", ".join(str(x) for x in v)), ""
-    return esc(str(v)), ""
+        return esc(", ".join(short_paths(str(x)) for x in v)), ""
+    return esc(short_paths(str(v))), ""
 
 
 def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
@@ -168,12 +215,17 @@ def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
             f'<tbody>{"".join(body)}</tbody></table>{note}')
 
 
-def kv_table(ctx: RenderContext | None, rows: Iterable[tuple[str, Any]], caption: str = "",
+def kv_table(ctx: RenderContext | None, rows: Iterable[tuple], caption: str = "",
              cls: str = "kv") -> str:
+    """Key–value table; rows are ``(key, value)`` or ``(key, value, unit)`` (unit shown after the value)."""
     body = []
-    for k, v in rows:
+    for row in rows:
+        k, v = row[0], row[1]
+        u = row[2] if len(row) > 2 else ""
         h, c = _cell(v)
-        body.append(f'<tr><th scope="row">{esc(str(k))}</th><td class="{c}">{h}</td></tr>')
+        unit = f' <span class="unit">{esc(u)}</span>' if u and u != "-" and not h.startswith("<") else \
+            (f'<div class="unit">[{esc(u)}]</div>' if u and u != "-" else "")
+        body.append(f'<tr><th scope="row">{esc(str(k))}</th><td class="{c}">{h}{unit}</td></tr>')
     cap = ctx.table_caption(caption) if (ctx is not None and caption) else ""
     return f'<table class="{cls}">{cap}<tbody>{"".join(body)}</tbody></table>'
 
@@ -243,34 +295,34 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
                 "data used for estimation"
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: measured and model ({what}); residual and its "
-                             f"autocorrelation with 95 % white-noise bounds.", paper)
+                             f"autocorrelation with 95 % white-noise bounds.", paper, ctx.result.method)
             return ctx.figure(F.overlay_figure(name, entry, resid, r, st.acf_bound), cap)
         if kind == "residuals":
             st, r = residual_stats(entry["values"], entry.get("std"))
             _residual_row(ctx, label, entry.get("unit", ""), st)
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: residual" + (" with predicted ±2σ" if entry.get("std") else "")
-                             + " and its autocorrelation.", paper)
+                             + " and its autocorrelation.", paper, ctx.result.method)
             return ctx.figure(F.residual_figure(name, entry, r, st.acf_bound), cap)
         if kind == "histories":
-            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper)
+            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper, ctx.result.method)
             return ctx.figure(F.histories_figure([(name, entry)], ncols=1), cap)
         if kind == "signals":
-            cap = caption_of(name, entry, default_title or f"{label} versus time.", paper)
+            cap = caption_of(name, entry, default_title or f"{label} versus time.", paper, ctx.result.method)
             return ctx.figure(F.signals_figure([(name, entry)]), cap)
         if kind == "matrices":
-            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            cap = caption_of(name, entry, default_title or f"{label}.", paper, ctx.result.method)
             return ctx.figure(F.matrix_figure(entry), cap)
         if kind == "tables":
             return data_table(ctx, entry, caption_of(name, entry, default_title or entry.get("caption") or
-                                                     name.replace("_", " "), paper))
+                                                     name.replace("_", " "), paper, ctx.result.method))
         if kind == "contours":
             cap = caption_of(name, entry, default_title or
                              f"{entry.get('z_label', name)} over ({entry.get('x_label', 'x')}, "
-                             f"{entry.get('y_label', 'y')}).", paper)
+                             f"{entry.get('y_label', 'y')}).", paper, ctx.result.method)
             return ctx.figure(F.contour_figure(entry), cap)
         if kind == "xy":
-            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            cap = caption_of(name, entry, default_title or f"{label}.", paper, ctx.result.method)
             return ctx.figure(F.xy_figure(entry), cap)
         raise ValueError(f"unknown series kind {kind!r}")
     except Exception as err:  # noqa: BLE001
