@@ -545,6 +545,14 @@ def _guess_unit(name: str) -> str | None:
     return None
 
 
+def _loose_unit(result, name: str) -> str:
+    """Unit of a loose series: that of the estimate of the same name, else of the standard channel, else "-"."""
+    e = result.estimates.get(name)
+    if e is not None and getattr(e, "unit", None):
+        return pretty_unit(str(e.unit))
+    return _guess_unit(name) or "-"
+
+
 LOOSE_X = ("t", "time", "t_s", "iteration", "iterations", "k")
 
 
@@ -579,13 +587,13 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
     html_parts = []
     for i in range(0, len(cols), 6):
         part = cols[i:i + 6]
-        items = [(k, {"t": x, "lines": {k: v}, "label": k, "unit": _guess_unit(k)}) for k, v in part]
+        items = [(k, {"t": x, "lines": {k: v}, "label": k, "unit": _loose_unit(result, k)}) for k, v in part]
         try:
             fig = F.signals_figure(items)
             fig.axes[-1].set_xlabel(xlabel)
             html_parts.append(ctx.figure(fig, f"{', '.join(k for k, _ in part)} versus {xkey} "
-                                              "(stored outside the report convention; units, where shown, "
-                                              "assumed from the standard channel names)."))
+                                              "(stored outside the report convention; units from the "
+                                              "estimates of the same name or the standard channel names)."))
         except Exception as err:  # noqa: BLE001
             html_parts.append(ctx.problem(f"series {', '.join(k for k, _ in part)}", err))
     return "".join(html_parts), {xkey, *(k for k, _ in cols)}
@@ -597,6 +605,9 @@ def build_report(result) -> str:
     Never raises for odd ``series`` content: a figure that cannot be drawn is
     replaced by a visible note and listed among the warnings.
     """
+    from shipid.report.sections.mmg import enrich
+
+    result = enrich(result)  # mmg-ebm runs of `shipid identify mmg`: data summary and fit overlays
     ctx = RenderContext(result)
     load_problems = load_method_sections(result.method)
     ctx.problems.extend(load_problems)

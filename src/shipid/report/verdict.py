@@ -196,6 +196,9 @@ def verdict_html(result) -> str:
     elif _real_data(result):
         lines.append(("warn", "<b>No held-out prediction error</b> is recorded with this result: check the model "
                               "on a run it was not fitted to (<code>shipid validate MODEL.json --trial RUN</code>)."))
+    setting = (result.provenance or {}).get("demo_setting")
+    if setting:
+        lines.append(("", f"<b>Demo setting:</b> {esc(str(setting))}"))
     items = "".join(f'<li class="{c}">{t}</li>' for c, t in lines)
     return f'<section class="verdict" id="verdict"><h2>Verdict</h2><ul>{items}</ul></section>'
 
