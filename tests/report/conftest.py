@@ -201,6 +201,10 @@ def example_reports(tmp_path_factory):
     return _build_reports(EXAMPLES, tmp_path_factory.mktemp("reports"))
 
 
+#: The results as the methods returned them (numpy arrays inside), before the JSON round trip.
+RAW: dict = {}
+
+
 def _build_reports(makers: dict, folder: Path) -> dict:
     """name -> (Result, html, path) for each ``make()`` in ``makers``: the Result goes through its JSON
     (as ``shipid report RESULT.json`` reads it) and the HTML is written to ``folder/report-NAME.html``."""
@@ -209,7 +213,9 @@ def _build_reports(makers: dict, folder: Path) -> dict:
 
     out = {}
     for name, make in makers.items():
-        r = Result.from_json(make().to_json())
+        raw = make()
+        RAW[name] = raw
+        r = Result.from_json(raw.to_json())
         html = build_report(r)
         path = folder / f"report-{name}.html"
         path.write_text(html, encoding="utf-8")
@@ -274,3 +280,9 @@ def method_reports(tmp_path_factory):
     The Result goes through its JSON (as ``shipid report RESULT.json`` reads it).
     """
     return _build_reports(METHOD_RUNS, tmp_path_factory.mktemp("method-reports"))
+
+
+@pytest.fixture(scope="session")
+def raw_results(method_reports):
+    """name -> the in-memory Result of each real method run (as ``shipid demo`` passes them to the report)."""
+    return {k: RAW[k] for k in method_reports}

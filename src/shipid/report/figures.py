@@ -321,7 +321,8 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
         if len(label) > 14 or ncols > 1:
             import textwrap
 
-            ax.set_title("\n".join(textwrap.wrap(label, 44)[:2]), loc="left", fontsize=9.0)
+            width = max(18, int(96 / ncols) - 6)  # characters that fit over one panel at 9 pt
+            ax.set_title("\n".join(textwrap.wrap(label, width)[:3]), loc="left", fontsize=9.0)
             ax.set_ylabel(f"[{su}]" if su else "")
         else:
             ax.set_ylabel(axis_label(label, su))

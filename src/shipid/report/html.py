@@ -232,6 +232,16 @@ def _fmt_duration(s: float) -> str:
     return f"{fmt_num(s)} s"
 
 
+_SCI = __import__("re").compile(r"(?<![\w.])(\d+(?:\.\d+)?)e([-+]?)0*(\d+)\b")
+_SUPS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _sci(text: str) -> str:
+    """``5.3e-05`` in a method's message shown as ``5.3×10⁻⁵`` (no Python float text in the report)."""
+    return _SCI.sub(lambda m: f"{m.group(1)}×10{(('-' if m.group(2) == '-' else '') + m.group(3)).translate(_SUPS)}",
+                    text)
+
+
 def _vessel(result) -> str | None:
     v = (result.model or {}).get("vessel") or (result.provenance or {}).get("vessel")
     return str(v) if v else None
@@ -336,7 +346,7 @@ def _warnings(result, extra: list[str]) -> str:
     warns = d.get("warnings") or []
     if isinstance(warns, str):
         warns = [warns]
-    warns = [short_paths(str(w)) for w in warns]
+    warns = [_sci(short_paths(str(w))) for w in warns]
     if "converged" in d and not d["converged"]:
         warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
                         "must not be trusted.")
