@@ -40,7 +40,9 @@ def count(caps: list[str], spec: str) -> int:
     ``"Fig. 4 — IV cost"`` counts captions "IV cost ... (Linder et al. 2015, Fig. 4)": the report's own
     number comes first, the paper's reference in parentheses (one numbering scheme).
     """
-    ref, _, text = spec.partition(" — ")
+    ref, sep, text = spec.partition(" — ")
+    if not sep:
+        return sum(c.startswith(spec) for c in caps)
     return sum(c.startswith(text) and re.search(r"\([^()]*\d{4}, " + re.escape(ref) + r"\)", c) is not None
                for c in caps)
 

@@ -178,10 +178,12 @@ def _cell(v: Any) -> tuple[str, str]:
         return (f'<div class="scroll"><table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody>'
                 f'</table></div>'), ""
     if type(v).__name__ == "VectorValue":  # shipid.report.html.VectorValue: a short numeric vector
-        body = "".join(f"<td>{fmt_num(x)}</td>" for x in v)
-        return f'<table class="mat"><tbody><tr>{body}</tr></tbody></table>', ""
+        body = "".join(f'<span class="vi">{fmt_num(x)}</span>' for x in v)
+        return f'<div class="vec">{body}</div>', ""
     if type(v).__name__ == "MatrixValue":  # shipid.report.html.MatrixValue: a small matrix
-        body = "".join("<tr>" + "".join(f"<td>{fmt_num(x)}</td>" for x in row) + "</tr>" for row in v)
+        big = max((abs(float(x)) for row in v for x in row), default=0.0) or 1.0
+        body = "".join("<tr>" + "".join(f"<td>{'0' if abs(float(x)) < 1e-12 * big else fmt_num(x)}</td>"
+                                        for x in row) + "</tr>" for row in v)  # rounding residue shown as 0
         return f'<table class="mat"><tbody>{body}</tbody></table>', ""
     if isinstance(v, bool):
         return ("yes" if v else "no"), ""

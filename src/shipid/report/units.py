@@ -14,7 +14,7 @@ from __future__ import annotations
 import functools
 import math
 import re
-from typing import Any, Mapping
+from typing import Any
 
 #: SI unit of common model and particulars keys (last dotted component), "-" = dimensionless.
 KNOWN_UNITS: dict[str, str] = {
@@ -112,3 +112,30 @@ def bis_to_si(name: str, value: float, std: float, L: float, m: float, g: float 
     if i == j and v != 0:
         note = f"time constant −1/A_h = {(-1.0 / v):.4g} s" if v < 0 else f"unstable: 1/A_h = {1.0 / v:.4g} s"
     return v, s, _AH_UNITS[(i, j)], note
+
+
+#: Units of M (ν̇ → force) and D (ν → force) in SI, row = force/moment, column = u, v, r.
+_M_UNITS = [["kg", "kg", "kg·m"], ["kg", "kg", "kg·m"], ["kg·m", "kg·m", "kg·m²"]]
+_D_UNITS = [["N·s/m", "N·s/m", "N·s"], ["N·s/m", "N·s/m", "N·s"], ["N·s", "N·s", "N·m·s"]]
+
+
+def dp_si_matrices(model) -> list[tuple[str, list, list]]:
+    """(title, 3 × 3 SI matrix, units) for the bis M'' and D'' of a DP result's model (eqs. 27–28)."""
+    import numpy as np
+
+    from shipid.models.bis import Bis
+
+    try:
+        b = Bis(L=float(model["L"]), m=float(model["m"]), g=float(model.get("g", 9.81)))
+    except (KeyError, TypeError, ValueError):
+        return []
+    out = []
+    for key, conv, units, title in (("M", b.M_from_bis, _M_UNITS, "inertia matrix M (rigid body + added mass)"),
+                                    ("D", b.D_from_bis, _D_UNITS, "linear damping matrix D")):
+        try:
+            a = np.asarray(model[key], dtype=float)
+        except (KeyError, TypeError, ValueError):
+            continue
+        if a.shape == (3, 3) and np.isfinite(a).all():
+            out.append((f"{key} — {title}", conv(a).tolist(), units))
+    return out

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import html
 import math
+import re
 from typing import Any, Mapping
 
 import numpy as np
@@ -137,7 +138,8 @@ def _real_data(result) -> bool:
     p = result.provenance or {}
     ins = p.get("inputs") or p.get("training_runs") or []
     names = [str(x.get("name") or x.get("file") or "") if isinstance(x, Mapping) else str(x) for x in ins]
-    return bool(names) and not any("simulat" in n or "seed" in n for n in names)
+    files = [n for n in names if re.search(r"\.(csv|dat|parquet|pq|txt|nmea|log)$", n, re.I)]
+    return bool(files) and not any("simulat" in n.lower() for n in names)
 
 
 def verdict_html(result) -> str:
@@ -167,6 +169,9 @@ def verdict_html(result) -> str:
             loose.append((n, r))
         else:
             poor.append((n, r))
+    weak = [(n, rel_se(e)) for n, e in result.estimates.items()
+            if effective_status(e) == "estimated" and re.search(r"weakly determined|biased|bias",
+                                                                 str(getattr(e, "note", "")), re.I)]
     if well:
         lines.append(("ok", f"<b>Well determined</b> (relative SE ≤ {100 * WELL:.0f} %): {_list(well)}."))
     if loose:
@@ -174,6 +179,9 @@ def verdict_html(result) -> str:
                           f"{_list(loose)}."))
     if poor:
         lines.append(("warn", f"<b>Poorly determined</b> (relative SE {100 * LOOSE:.0f}–100 %): {_list(poor)}."))
+    if weak:
+        lines.append(("warn", f"<b>Flagged by the method</b> as weakly determined or biased beyond their SE "
+                              f"(see the notes of the estimates): {_list(weak)}."))
     if undet:
         lines.append(("bad", f"<b>Not determined by these data</b> (relative SE above 100 % or flagged by the "
                              f"method; shown as <i>not determined</i> below, not as estimates): {_list(undet)}."))

@@ -19,6 +19,8 @@ from typing import Mapping
 
 import numpy as np
 
+from shipid.report.render import short_path
+
 #: (channel, label, unit) of the overlays, in the MMG state order [x, y, ψ, u, v, r].
 OVERLAY_CHANNELS = (("psi", "heading ψ", "rad"), ("r", "yaw rate r", "rad/s"), ("u", "surge speed u", "m/s"),
                     ("v", "sway speed v", "m/s"))
@@ -60,7 +62,7 @@ def enrich(result):
     model = None
     for k, run in enumerate(runs):
         path = str(run.get("file") if isinstance(run, Mapping) else run)
-        name = os.path.basename(path)
+        name = short_path(path) if os.path.isabs(path) else path
         if not os.path.isfile(path):
             inputs.append({"name": name, "note": "file not found where the report was built: no summary"})
             continue
