@@ -115,7 +115,7 @@ tr.notdet td.num{text-decoration:line-through;text-decoration-color:#d6b27a}
  padding:0 4px;width:fit-content;max-width:100%;font-size:.82rem}
 .vec .vi{display:inline-block;min-width:6.2em;text-align:right;padding:0 4px;white-space:nowrap}
 .chan{white-space:nowrap;display:inline-block;margin-right:6px}
-table.data{width:100%}
+table.data{width:100%} table.data.si{width:auto;min-width:60%}
 figure{margin:14px 0 22px;padding:0}
 figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
 figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}

@@ -234,8 +234,10 @@ def kv_table(ctx: RenderContext | None, rows: Iterable[tuple], caption: str = ""
 
 # -- residual statistics ------------------------------------------------------------------------------
 
-def _residual_row(ctx: RenderContext, name: str, unit: str, st) -> None:
-    ctx.residual_rows.append((name, unit, st))
+def _residual_row(ctx: RenderContext, name: str, unit: str, st, innovation: bool = True) -> None:
+    """Record one row of the residual-checks table; ``innovation=False`` for a simulation error
+    (measured − simulated), whose autocorrelation is expected and therefore not flagged."""
+    ctx.residual_rows.append((name, unit, st, innovation))
 
 
 def _pvalue(p: float) -> str:
@@ -252,10 +254,16 @@ def residual_stats_table(ctx: RenderContext) -> str:
     head = ("<tr><th>residual</th><th>N</th><th>mean</th><th>RMS</th><th>unit</th>"
             "<th>lags outside ±1.96/√N</th><th>Ljung–Box p</th><th>inside ±2σ</th></tr>")
     body = []
-    for name, unit, st in ctx.residual_rows:
+    sim_rows = False
+    for row in ctx.residual_rows:
+        name, unit, st = row[:3]
+        innovation = row[3] if len(row) > 3 else True
         frac = st.frac_outside
-        white_bad = np.isfinite(frac) and frac > 0.10
-        lb_bad = np.isfinite(st.ljung_box_p) and st.ljung_box_p < 0.01
+        white_bad = innovation and np.isfinite(frac) and frac > 0.10
+        lb_bad = innovation and np.isfinite(st.ljung_box_p) and st.ljung_box_p < 0.01
+        if not innovation:
+            sim_rows = True
+            name = f"{name} †"
         in2 = st.frac_in_2sigma
         in2_bad = np.isfinite(in2) and in2 < 0.90
         body.append(
@@ -267,8 +275,12 @@ def residual_stats_table(ctx: RenderContext) -> str:
             f"<td class='num{' flag' if in2_bad else ''}'>{'—' if not np.isfinite(in2) else f'{100 * in2:.1f} %'}"
             "</td></tr>")
     ctx.residual_rows = []
+    foot = ('<p class="small">† simulation error (measured − simulated by the identified model): it holds what the '
+            "model leaves out (disturbances, noise filtered by the dynamics), so it is autocorrelated even for a "
+            "correct model and is not flagged; whiteness is tested on innovations and equation errors.</p>"
+            if sim_rows else "")
     return (f'<table class="data">{ctx.table_caption("Residual checks. White residuals have about 5 % of lags outside the ±1.96/√N bounds and a Ljung–Box p above 0.01; innovations should lie inside their predicted ±2σ about 95 % of the time. Flagged cells in red.")}'
-            f"<thead>{head}</thead><tbody>{''.join(body)}</tbody></table>")
+            f"<thead>{head}</thead><tbody>{''.join(body)}</tbody></table>{foot}")
 
 
 # -- one convention entry -----------------------------------------------------------------------------
@@ -292,7 +304,8 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
             else:
                 resid, std = meas - mod, None
             st, r = residual_stats(resid, std)
-            _residual_row(ctx, label, entry.get("unit", ""), st)
+            _residual_row(ctx, label, entry.get("unit", ""), st, innovation=isinstance(res_entry, Mapping)
+                          and len(res_entry.get("values", [])) == t.size)
             what = "validation data, not used for estimation" if entry.get("kind") == "validation" else \
                 "data used for estimation"
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +

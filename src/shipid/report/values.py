@@ -166,17 +166,17 @@ def _si_table(ctx: RenderContext, result) -> str:
                     f"<td>{esc(note)}</td></tr>")
     if not rows:
         return ""
+    head = ("<tr><th>parameter</th><th class='num'>value (SI)</th><th class='num'>standard error</th>"
+            "<th>unit</th><th>meaning</th></tr>")
+    cap = ctx.table_caption(f"The bis-system parameters in SI units (L = {fmt_num(L)} m, m = {fmt_num(m)} kg, "
+                            f"g = {fmt_num(g)} m/s², time unit √(L/g) = {fmt_num((L / g) ** 0.5)} s).")
     mats = ""
     for title, mat, units in dp_si_matrices(model):
         big = max(abs(x) for r in mat for x in r) or 1.0
         body = "".join("<tr><th scope='row'>" + ("X", "Y", "N")[i] + "</th>" + "".join(
             f"<td class='num'>{'0' if abs(x) < 1e-12 * big else fmt_num(x)} <span class='unit'>{esc(u)}</span></td>"
             for x, u in zip(r, units[i])) + "</tr>" for i, r in enumerate(mat))
-        mats += (f'<table class="data">{ctx.table_caption(f"{title} in SI units (from the bis values, eqs. 27–28).")}'
+        mats += (f'<table class="data si">{ctx.table_caption(f"{title} in SI units (from the bis values, eqs. 27–28).")}'
                  "<thead><tr><th></th><th class='num'>u</th><th class='num'>v</th><th class='num'>r</th></tr></thead>"
                  f"<tbody>{body}</tbody></table>")
-    head = ("<tr><th>parameter</th><th class='num'>value (SI)</th><th class='num'>standard error</th>"
-            "<th>unit</th><th>meaning</th></tr>")
-    cap = ctx.table_caption(f"The bis-system parameters in SI units (L = {fmt_num(L)} m, m = {fmt_num(m)} kg, "
-                            f"g = {fmt_num(g)} m/s², time unit √(L/g) = {fmt_num((L / g) ** 0.5)} s).")
     return f'<table class="est">{cap}<thead>{head}</thead><tbody>{"".join(rows)}</tbody></table>{mats}'
