@@ -65,6 +65,36 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
     assert "Converged" in v2 and "80 % of 200" in v2 and "too small" in v2
 
 
+def test_a_coverage_table_published_by_the_method_module_is_used(monkeypatch):
+    import shipid.methods.ebm as mod
+
+    monkeypatch.setattr(mod, "COVERAGE", {"coverage": 0.95, "n": 100, "source": "tests: made up"}, raising=False)
+    html = build_report(_result({"a": Estimate(1.0, 0.01, "m")}, converged=True))
+    v = _text(re.search(r'<section class="verdict".*?</section>', html, re.S).group(0))
+    assert "95 % of 100" in v and "about right" in v and "source: tests: made up" in v
+
+
+def test_demo_masscm_setting_is_one_where_the_method_works():
+    """The demo's mass-cm data (white sensor noise): no warning, white equation errors, m near the truth."""
+    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.models.roll_reduced import KnownParams
+    from shipid.models.roll_sim import NoiseSpec, simulate_datasets
+    from shipid.report.demo_step import DEMO_MASSCM_NOISE
+    from shipid.report.stats import residual_stats
+    from shipid.vessels import load_vessel
+
+    v = load_vessel("fishing-vessel")
+    d = simulate_datasets("fishing-vessel", seed=0, noise=NoiseSpec(**DEMO_MASSCM_NOISE))
+    r = estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"),
+                         z_f=float(v.value("general", "z_f")))
+    assert r.diagnostics.get("converged") and not r.diagnostics.get("warnings")
+    m = r.estimates["m"]
+    assert abs(m.value - float(v.value("general", "m"))) < 3 * m.std
+    for name, e in r.series["residuals"].items():
+        st, _ = residual_stats(e["values"], e.get("std"))
+        assert st.frac_outside <= 0.10 and st.ljung_box_p > 0.01, name
+
+
 def test_held_out_error_is_in_the_verdict_for_real_data(method_reports):
     _, html, _ = method_reports["ebm"]
     v = _text(re.search(r'<section class="verdict".*?</section>', html, re.S).group(0))

@@ -1,7 +1,9 @@
 """Assemble the self-contained HTML report of a :class:`~shipid.result.Result`.
 
-Layout: header (method, vessel, provenance) → warnings → data used → estimates
-(value, SE, 95 % CI, unit, status, note; correlation heat map) → diagnostics →
+Layout: header (method, vessel, provenance) → verdict in plain words
+(:mod:`shipid.report.verdict`) → warnings → data used → estimates (value, SE, 95 % CI,
+unit, status — ``not determined`` above 100 % relative SE —, note; the DP bis values also
+in SI; correlation heat map) → diagnostics (with units, matrices as tables) →
 the method's sections (defaults in :mod:`shipid.report.sections`, then any the
 method registered) → entries carrying a ``"paper"`` reference → every other
 ``series`` entry under the generic convention → residual checks → provenance.
@@ -438,7 +440,7 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
             cols.append((k, v))
     if not cols:
         return "", set()
-    xlabel = "t [s]" if xkey in ("t", "time", "t_s") else xkey
+    xlabel = "t [s]" if xkey in ("t", "time", "t_s") else f"{xkey} [-]"
     html_parts = []
     for i in range(0, len(cols), 6):
         part = cols[i:i + 6]

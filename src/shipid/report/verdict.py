@@ -2,7 +2,8 @@
 
 Everything comes from the result: ``diagnostics["converged"]``, the estimates and their
 standard errors, ``diagnostics["warnings"]``, a recorded coverage study
-(``diagnostics["coverage"]`` or ``provenance["coverage"]``) and held-out validation
+(``diagnostics["coverage"]`` or ``provenance["coverage"]``, else the ``COVERAGE`` table a method
+module publishes, :func:`known_coverage`) and held-out validation
 (``series["overlays"]`` entries of ``kind = "validation"``, or ``diagnostics["validation"]``).
 
 A coefficient is *not determined* when its status says so, when its SE is infinite or when
@@ -66,6 +67,8 @@ def _coverage_text(result) -> tuple[str, str]:
     """(css class, sentence) about the coverage study of the stated uncertainty."""
     d, p = result.diagnostics or {}, result.provenance or {}
     cov = d.get("coverage", p.get("coverage"))
+    if cov is None:
+        cov = known_coverage(result.method)
     if isinstance(cov, Mapping) and cov:
         frac = next((cov[k] for k in ("coverage", "fraction", "coverage_2std", "value") if k in cov), None)
         n = cov.get("n") or cov.get("runs") or cov.get("realisations")
@@ -96,6 +99,30 @@ def _coverage_text(result) -> tuple[str, str]:
     if opt:
         text += "; the method itself calls its standard errors optimistic (see the notes of the estimates)"
     return "warn", text + "."
+
+
+def known_coverage(method: str) -> Mapping | None:
+    """A coverage study the method publishes as ``COVERAGE`` in its module (``shipid.methods.<m>``).
+
+    The mapping holds ``coverage`` (fraction of runs whose ±2 SE interval held the true value),
+    ``n`` (runs), optionally ``nominal``, ``note`` and ``source`` (the study that produced it).
+    """
+    import importlib
+
+    for stem in dict.fromkeys([method.replace("-", ""), method.replace("-", "_")]):
+        if not stem.isidentifier():
+            continue
+        try:
+            mod = importlib.import_module(f"shipid.methods.{stem}")
+        except Exception:  # noqa: BLE001 - no module, no published study
+            continue
+        cov = getattr(mod, "COVERAGE", None)
+        if isinstance(cov, Mapping) and cov:
+            out = dict(cov)
+            if out.get("source"):
+                out["note"] = "; ".join(x for x in (str(out.get("note") or ""), f"source: {out['source']}") if x)
+            return out
+    return None
 
 
 def _validation_text(result) -> list[str]:
