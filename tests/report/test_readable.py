@@ -115,6 +115,7 @@ def test_no_python_or_numpy_text_and_no_machine_paths(method_reports, raw_result
         for bad in REPR:
             assert bad not in text, (name, bad, text[max(0, text.find(bad) - 80):text.find(bad) + 80])
         assert str(REPO) not in text and "/tmp/" not in text and "/work/" not in text
+        assert not re.search(r"[Ss]eed 00\d", text)   # papers by authors and year
 
 
 def test_dp_matrices_are_tables_and_theta_also_in_si(method_reports):

@@ -29,7 +29,7 @@ from shipid.report import figures as F
 from shipid.report.units import pretty_unit
 from shipid.report.values import _flatten, _sci, _si_table, _with_units
 from shipid.report.verdict import NOT_DETERMINED, effective_status, verdict_html
-from shipid.report.render import short_paths
+from shipid.report.render import plain_text, short_paths
 
 METHOD_TITLES = {
     "mass-cm": ("Mass and centre of mass from IMU and rudder", "after Linder et al. (2015)"),
@@ -193,7 +193,7 @@ def _warnings(result, extra: list[str]) -> str:
     warns = d.get("warnings") or []
     if isinstance(warns, str):
         warns = [warns]
-    warns = [_sci(short_paths(str(w))) for w in warns]
+    warns = [_sci(plain_text(str(w))) for w in warns]
     if "converged" in d and not d["converged"]:
         warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
                         "must not be trusted.")
@@ -280,13 +280,13 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
             f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
-            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(e.note)}</td></tr>"))
+            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(plain_text(e.note))}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
         cap = ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal "
                                 "approximation). Digits follow the SE.")
-        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(n)}</p>' for n, m in marks.items())
+        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(plain_text(n))}</p>' for n, m in marks.items())
         if any(effective_status(e) == NOT_DETERMINED for e in result.estimates.values()):
             foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
                      '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '

@@ -42,6 +42,15 @@ def short_path(p: str) -> str:
     return rel if not rel.startswith("..") else os.path.basename(p.rstrip("/")) or p
 
 
+_SEED_REF = re.compile(r"\s*\(seed 00\d\)|,?\s*\bseed 00\d\b", re.I)
+
+
+def plain_text(text: str) -> str:
+    """Text of a method shown in the report: machine paths shortened, the project's internal paper
+    numbers ("seed 000") dropped (papers are named by authors and year)."""
+    return _SEED_REF.sub("", short_paths(text))
+
+
 def short_paths(text: str) -> str:
     """Every absolute path in ``text`` shortened by :func:`short_path` (reports never show the machine's
     directory layout)."""
@@ -87,13 +96,14 @@ class RenderContext:
         self.n_fig += 1
         uri = F.to_data_uri(fig)
         fig.clear()
+        caption = plain_text(caption) if caption else caption
         cap = f"<b>Figure {self.n_fig}.</b> {esc(caption)}" if caption else f"<b>Figure {self.n_fig}.</b>"
         return (f'<figure><img src="{uri}" alt="{esc(alt or caption or f"figure {self.n_fig}")}">'
                 f"<figcaption>{cap}</figcaption></figure>")
 
     def table_caption(self, caption: str) -> str:
         self.n_tab += 1
-        return f"<caption><b>Table {self.n_tab}.</b> {esc(caption)}</caption>" if caption else \
+        return f"<caption><b>Table {self.n_tab}.</b> {esc(plain_text(caption))}</caption>" if caption else \
             f"<caption><b>Table {self.n_tab}.</b></caption>"
 
     def problem(self, what: str, err: BaseException | str) -> str:
@@ -192,8 +202,8 @@ def _cell(v: Any) -> tuple[str, str]:
     if v is None:
         return "—", ""
     if isinstance(v, (list, tuple)):
-        return esc(", ".join(short_paths(str(x)) for x in v)), ""
-    return esc(short_paths(str(v))), ""
+        return esc(", ".join(plain_text(str(x)) for x in v)), ""
+    return esc(plain_text(str(v))), ""
 
 
 def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
