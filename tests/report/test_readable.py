@@ -123,7 +123,8 @@ def test_dp_matrices_are_tables_and_theta_also_in_si(method_reports):
     for key in ("A_h", "B", "T", "theta_true", "error"):
         m = re.search(rf"<th scope=\"row\">[^<]*{key}</th><td[^>]*>(.*?)</td></tr>", html, re.S)
         assert m, key
-        assert m.group(1).startswith(('<table class="mat">', '<div class="vec">')), (key, m.group(1)[:120])
+        assert m.group(1).startswith(('<table class="mat">', '<div class="vec">', '<div class="scroll"><table')), \
+            (key, m.group(1)[:120])
     text = _text(html)
     assert "in SI units" in text and "time constant −1/A_h" in text and " N " in text
 

@@ -184,6 +184,13 @@ def _short(label: str) -> str:
     return re.sub(r"\s*\(.*\)\s*$", "", label) or label
 
 
+def _ylabel(label: str, unit: str | None) -> str:
+    """``quantity [unit]`` when short; only ``[unit]`` for a long quantity (the axes title names it)."""
+    q = _short(label)
+    u = _pretty(unit)
+    return axis_label(q, u) if len(q) <= 24 else (f"[{u}]" if u and u not in ("-", "1") else "[-]")
+
+
 def _grid(n: int, ncols: int) -> tuple[int, int]:
     ncols = max(1, min(ncols, n))
     return int(math.ceil(n / ncols)), ncols
@@ -207,7 +214,7 @@ def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.nd
     ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
     ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(_short(label), su))
+    ax.set_ylabel(_ylabel(label, su))
     ax.legend(loc="upper right", ncols=2)
     ax.set_title(f"{label}: measured and model", loc="left")
     ax_r = fig.add_subplot(gs[1, :2])
@@ -248,7 +255,7 @@ def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: floa
                 ax.set_ylim(-lim / k, lim / k)
     ax.axhline(0.0, color="#888888", lw=0.7)
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(_short(label), su))
+    ax.set_ylabel(_ylabel(label, su))
     ax.set_title(f"{label}", loc="left")
     _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound, _dt(t))
     return fig
@@ -323,7 +330,7 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
 
             width = max(18, int(96 / ncols) - 6)  # characters that fit over one panel at 9 pt
             ax.set_title("\n".join(textwrap.wrap(label, width)[:3]), loc="left", fontsize=9.0)
-            ax.set_ylabel(f"[{su}]" if su else "")
+            ax.set_ylabel(f"[{_pretty(su)}]" if su else "")
         else:
             ax.set_ylabel(axis_label(label, su))
         ax.set_xlabel("t [s]")

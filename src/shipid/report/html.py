@@ -92,6 +92,7 @@ table.mat td{border:0;padding:1px 8px;text-align:right}
 table.rec{margin:0;font-size:.82rem}
 table.rec th{white-space:normal;overflow-wrap:anywhere;background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
 table.rec td{padding:1px 8px;border:0}
+table.rec.nv td,table.rec.nv th{padding:1px 3px;font-size:.76rem;white-space:nowrap}
 table.rec td:first-child{max-width:280px;overflow-wrap:break-word}
 .scroll{overflow-x:auto;max-width:100%}
 table.kv th{overflow-wrap:break-word}

@@ -187,6 +187,11 @@ def _cell(v: Any) -> tuple[str, str]:
                                         for k in keys) + "</tr>" for r in v)
         return (f'<div class="scroll"><table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody>'
                 f'</table></div>'), ""
+    if type(v).__name__ == "NamedVector":  # shipid.report.values.NamedVector: one value per estimate
+        head = "".join(f"<th>{esc(str(n))}</th>" for n in v.names)
+        body = "".join(f"<td>{fmt_num(x)}</td>" for x in v)
+        return (f'<div class="scroll"><table class="rec nv"><thead><tr>{head}</tr></thead><tbody><tr>{body}</tr>'
+                f'</tbody></table></div>'), ""
     if type(v).__name__ == "VectorValue":  # shipid.report.html.VectorValue: a short numeric vector
         body = "".join(f'<span class="vi">{fmt_num(x)}</span>' for x in v)
         return f'<div class="vec">{body}</div>', ""

@@ -76,6 +76,8 @@ def pretty_unit(u: str | None) -> str:
     """``kg*m^2`` → ``kg·m²`` (readable, same meaning)."""
     if not u:
         return ""
+    if str(u).strip() in ("- (bis)", "(bis)", "-(bis)"):
+        return "bis"  # dimensionless in the bis system; the report gives the SI values beside
     s = str(u).replace("*", "·").replace("^2", "²").replace("^3", "³").replace("^-1", "⁻¹")
     return s
 

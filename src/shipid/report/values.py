@@ -35,6 +35,12 @@ class VectorValue(list):
     """A short numeric vector shown as a one-row table in key-value tables."""
 
 
+class NamedVector(list):
+    """A numeric vector with one value per estimate: a two-row table (estimate names, values)."""
+
+    names: list = []
+
+
 def _records(v) -> bool:
     if not isinstance(v, (list, tuple)) or not v or len(v) > 30:
         return False
@@ -87,6 +93,8 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
         v = _plain(v)
         if isinstance(v, (list, tuple)):
             v = [_plain(x) for x in v]
+            if len(v) == 1 and _is_scalar(v[0]):
+                v = v[0]
         if _is_scalar(v):
             rows.append((key, v))
         elif _records_map(v):
@@ -134,8 +142,13 @@ def _with_units(result, rows: list[tuple[str, Any]]) -> list[tuple[str, Any, str
     vessel = _vessel(result)
     bis = "bis" in str((result.model or {}).get("units", ""))
     out = []
+    names = list(result.estimates)
     for k, v in rows:
         u = unit_of(k, v, vessel=vessel)
+        if isinstance(v, VectorValue) and len(v) == len(names) > 1:
+            nv = NamedVector(v)
+            nv.names = names
+            v = nv
         if bis and k.split(".")[-1] in ("A_h", "A", "B", "M", "D", "K", "T", "theta", "theta_std"):
             u = "bis (L, m, √(L/g))"
         elif bis and k.split(".")[-1] in ("theta_true", "error", "error_sigma", "relative_error"):
