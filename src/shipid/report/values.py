@@ -107,6 +107,9 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             rows.append((key, MatrixValue(v)))
         elif _records(v):
             rows.append((key, RecordsValue(v)))
+        elif isinstance(v, (list, tuple)) and 0 < len(v) <= 10 and all(isinstance(x, Mapping) for x in v):
+            for i, item in enumerate(v):  # one block of rows per item: trials[1].manoeuvre ...
+                rows.extend(_flatten(item, f"{key}[{i + 1}].", max(depth - 1, 0)))
         elif isinstance(v, (list, tuple)) and len(v) <= 12 and all(_is_scalar(x) for x in v):
             rows.append((key, VectorValue(v) if all(isinstance(x, (int, float)) and not isinstance(x, bool)
                                                      for x in v) else "; ".join(str(x) for x in v)))
@@ -118,8 +121,25 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             except (TypeError, ValueError):
                 rows.append((key, f"{len(v)} items"))
         else:
-            rows.append((key, short_paths(" ".join(str(v).split()))[:300]))
+            rows.append((key, _inline(v)[:400]))
     return rows
+
+
+def _inline(v: Any) -> str:
+    """Plain one-line text of a nested value: ``relative: n 17, min_rank 17; absolute: ...`` (no repr)."""
+    v = _plain(v)
+    if isinstance(v, Mapping):
+        return "; ".join(f"{k}: {_inline(x)}" if isinstance(x, Mapping) else f"{k} {_inline(x)}"
+                         for k, x in v.items())
+    if isinstance(v, (list, tuple)):
+        return ", ".join(_inline(x) for x in v)
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, (int, float)):
+        return fmt_num(v)
+    if v is None:
+        return "—"
+    return short_paths(" ".join(str(v).split()))
 
 
 _SCI = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)e([-+]?)0*(\d+)\b")
