@@ -281,7 +281,8 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
             f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
-            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(plain_text(e.note))}</td></tr>"))
+            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks
+               else f"<td>{esc(plain_text(e.note))}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
@@ -477,7 +478,8 @@ def build_report(result) -> str:
         "series": _generic_sections(ctx, result),
         "provenance": _provenance_section(ctx, result),
     }
-    toc_names = {"verdict": "Verdict", "warnings": "Warnings", "data": "Data", "estimates": "Estimates", "diagnostics": "Diagnostics",
+    toc_names = {"verdict": "Verdict", "warnings": "Warnings", "data": "Data", "estimates": "Estimates",
+                 "diagnostics": "Diagnostics",
                  "method": "Method figures", "series": "Time histories", "provenance": "Provenance"}
     warnings = _warnings(result, ctx.problems)
     present = ["verdict"] + (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]

@@ -132,7 +132,8 @@ class RenderContext:
                     if items:
                         out.append(render_group(self, fr.kind, items, fr.caption))
                 elif isinstance(fr, Mapping) and "columns" in fr and "rows" in fr:
-                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "", method=self.result.method)))
+                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "",
+                                                               method=self.result.method)))
                 elif fr == "residual-checks":
                     out.append(residual_stats_table(self))
                 elif isinstance(fr, str):
@@ -335,7 +336,8 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
                              + " and its autocorrelation.", paper, ctx.result.method)
             return ctx.figure(F.residual_figure(name, entry, r, st.acf_bound), cap)
         if kind == "histories":
-            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper, ctx.result.method)
+            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper,
+                             ctx.result.method)
             return ctx.figure(F.histories_figure([(name, entry)], ncols=1), cap)
         if kind == "signals":
             cap = caption_of(name, entry, default_title or f"{label} versus time.", paper, ctx.result.method)

@@ -209,7 +209,8 @@ def _si_table(ctx: RenderContext, result) -> str:
         body = "".join("<tr><th scope='row'>" + ("X", "Y", "N")[i] + "</th>" + "".join(
             f"<td class='num'>{'0' if abs(x) < 1e-12 * big else fmt_num(x)} <span class='unit'>{esc(u)}</span></td>"
             for x, u in zip(r, units[i])) + "</tr>" for i, r in enumerate(mat))
-        mats += (f'<table class="data si">{ctx.table_caption(f"{title} in SI units (from the bis values, eqs. 27–28).")}'
+        cap_m = ctx.table_caption(f"{title} in SI units (from the bis values, eqs. 27–28).")
+        mats += (f'<table class="data si">{cap_m}'
                  "<thead><tr><th></th><th class='num'>u</th><th class='num'>v</th><th class='num'>r</th></tr></thead>"
                  f"<tbody>{body}</tbody></table>")
     return f'<table class="est">{cap}<thead>{head}</thead><tbody>{"".join(rows)}</tbody></table>{mats}'
