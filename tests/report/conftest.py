@@ -157,6 +157,19 @@ def open_and_check(browser: Browser, html_path: Path, screenshot: Path, width: i
             tables: document.querySelectorAll('table').length,
             external: Array.from(document.querySelectorAll('[src],[href]')).map(e => e.getAttribute('src') ||
                       e.getAttribute('href')).filter(u => /^(https?:)?\\/\\//.test(u)),
+            overflow: (() => {
+                const main = document.querySelector('main') || document.body;
+                const right = main.getBoundingClientRect().right + 1;
+                const out = [];
+                for (const e of main.querySelectorAll('*')) {
+                    if (e.closest('.scroll')) continue;      // scrolls on purpose, inside its box
+                    const r = e.getBoundingClientRect();
+                    const what = e.tagName + ' "' + (e.textContent || '').trim().slice(0, 60) + '"';
+                    if (r.width > 0 && r.right > right) out.push(what + ' runs past the right edge');
+                    else if (e.clientWidth > 0 && e.scrollWidth > e.clientWidth + 1 &&
+                             getComputedStyle(e).overflowX === 'visible') out.push(what + ' overflows its box');
+                }
+                return out; })(),
             height: document.documentElement.scrollHeight,
             width: document.documentElement.scrollWidth, viewport: window.innerWidth})""")
         info = json.loads(info)
@@ -201,6 +214,10 @@ def example_reports(tmp_path_factory):
     return _build_reports(EXAMPLES, tmp_path_factory.mktemp("reports"))
 
 
+#: The results as the methods returned them (numpy arrays inside), before the JSON round trip.
+RAW: dict = {}
+
+
 def _build_reports(makers: dict, folder: Path) -> dict:
     """name -> (Result, html, path) for each ``make()`` in ``makers``: the Result goes through its JSON
     (as ``shipid report RESULT.json`` reads it) and the HTML is written to ``folder/report-NAME.html``."""
@@ -209,7 +226,9 @@ def _build_reports(makers: dict, folder: Path) -> dict:
 
     out = {}
     for name, make in makers.items():
-        r = Result.from_json(make().to_json())
+        raw = make()
+        RAW[name] = raw
+        r = Result.from_json(raw.to_json())
         html = build_report(r)
         path = folder / f"report-{name}.html"
         path.write_text(html, encoding="utf-8")
@@ -274,3 +293,41 @@ def method_reports(tmp_path_factory):
     The Result goes through its JSON (as ``shipid report RESULT.json`` reads it).
     """
     return _build_reports(METHOD_RUNS, tmp_path_factory.mktemp("method-reports"))
+
+
+@pytest.fixture(scope="session")
+def raw_results(method_reports):
+    """name -> the in-memory Result of each real method run (as ``shipid demo`` passes them to the report)."""
+    return {k: RAW[k] for k in method_reports}
+
+
+@pytest.fixture(scope="session")
+def esso_mmg_report(tmp_path_factory):
+    """``shipid identify mmg`` on two real Esso Osaka zig-zags, then its report: (Result, html, path, runs).
+
+    Skips when the shared data folder is absent.
+    """
+    import subprocess
+    import sys
+
+    from shipid.cli.report_cmds import load_result
+    from shipid.data.paths import data_root
+    from shipid.report import build_report
+
+    root = data_root()
+    zz = (root / "esso_osaka_3m" / "data" / "zigzag") if root else None
+    if zz is None or not zz.is_dir():
+        pytest.skip("the shared Esso Osaka data are not available")
+    runs = sorted(zz.glob("*.csv"))[:2]
+    folder = tmp_path_factory.mktemp("esso")
+    model = folder / "model.json"
+    cmd = [sys.executable, "-m", "shipid", "identify", "mmg", "--format", "esso", "--structure",
+           "hull+rudder+thrust", "-o", str(model)]
+    for r in runs:
+        cmd += ["--trial", str(r)]
+    subprocess.run(cmd, check=True, capture_output=True, cwd=folder)
+    res = load_result(model)
+    html = build_report(res)
+    path = folder / "report-esso-mmg.html"
+    path.write_text(html, encoding="utf-8")
+    return res, html, path, runs

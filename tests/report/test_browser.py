@@ -1,6 +1,9 @@
-"""The report renders in a real headless Chromium: no console errors, every image loads.
+"""The report renders in a real headless Chromium: no console errors, every image loads, no text
+runs out of its box or past the page's right edge.
 
-Screenshots are kept under ``test-artifacts/`` (git-ignored) as test artefacts.
+A full-page screenshot of each report is kept under ``test-artifacts/`` (git-ignored) as a test
+artefact: ``report-<method>.png`` (examples), ``report-run-<name>.png`` (real method runs) and
+``report-run-esso-mmg.png`` (``shipid identify mmg`` on real Esso Osaka runs).
 Skips cleanly when the ``chromium`` executable is absent (see conftest.py).
 """
 
@@ -22,6 +25,7 @@ def test_report_renders_in_chromium(browser, example_reports, artifacts, method)
         assert im["src"].startswith("data:image/png")
     assert info["external"] == []
     assert info["width"] <= info["viewport"], "the page must not scroll sideways"
+    assert info["overflow"] == []
     assert info["tables"] == len(re.findall(r"<table", html))
     assert info["title"].startswith(f"shipid report — {method}")
     png = (artifacts / f"report-{method}.png").read_bytes()
@@ -44,6 +48,20 @@ def test_method_report_renders_in_chromium(browser, method_reports, artifacts, n
         assert im["complete"] and im["w"] > 0 and im["h"] > 0, im
     assert info["external"] == []
     assert info["width"] <= info["viewport"], "the page must not scroll sideways"
+    assert info["overflow"] == []
+    assert (artifacts / f"report-run-{name}.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+def test_esso_mmg_report_renders_in_chromium(browser, esso_mmg_report, artifacts):
+    """The report of a real-data ``shipid identify mmg`` run (Esso Osaka zig-zags)."""
+    _, html, path, _ = esso_mmg_report
+    info = browser.check(path, artifacts / "report-run-esso-mmg.png")
+    assert info["errors"] == [] and info["external"] == [] and info["overflow"] == []
+    n_img = html.count("<img")
+    assert n_img >= 9 and len(info["images"]) == n_img          # correlation, 8 overlays, inputs
+    assert all(im["complete"] and im["w"] > 0 for im in info["images"])
+    assert info["width"] <= info["viewport"]
 
 
 def test_broken_image_would_be_detected(browser, tmp_path):
@@ -54,4 +72,9 @@ def test_broken_image_would_be_detected(browser, tmp_path):
                     '<script>console.error("boom")</script></body></html>', encoding="utf-8")
     info = browser.check(page, tmp_path / "broken.png")
     assert any("boom" in e for e in info["errors"])
+    wide = tmp_path / "wide.html"
+    wide.write_text('<!DOCTYPE html><html><head><title>t</title></head><body><main style="width:300px">'
+                    '<table><tr><td style="white-space:nowrap">' + "x" * 400 + "</td></tr></table>"
+                    "</main></body></html>", encoding="utf-8")
+    assert browser.check(wide, tmp_path / "wide.png")["overflow"]
     assert [im["w"] for im in info["images"]] == [0, 0]

@@ -34,8 +34,25 @@ def tables(html: str) -> list[str]:
     return [_html.unescape(c) for c in TAB_RE.findall(html)]
 
 
-def count(caps: list[str], prefix: str) -> int:
-    return sum(c.startswith(prefix) for c in caps)
+def count(caps: list[str], spec: str) -> int:
+    """Captions that start with the text after " — " and cite the paper figure before it.
+
+    ``"Fig. 4 — IV cost"`` counts captions "IV cost ... (Linder et al. 2015, Fig. 4)": the report's own
+    number comes first, the paper's reference in parentheses (one numbering scheme).
+    """
+    ref, sep, text = spec.partition(" — ")
+    if not sep:
+        return sum(c.startswith(spec) for c in caps)
+    return sum(c.startswith(text) and re.search(r"\([^()]*\d{4}, " + re.escape(ref) + r"\)", c) is not None
+               for c in caps)
+
+
+def test_captions_never_start_with_a_paper_number(method_reports):
+    """One numbering scheme: "Figure 3. <text> (Yoon & Rhee 2003, Fig. 7)", never "Figure 3. Fig. 7 —"."""
+    for name, (_, html, _) in method_reports.items():
+        for cap in figures(html) + tables(html):
+            assert not re.match(r"(Figs?\.?|Tables?) ?\d", cap), (name, cap)
+            assert "Seed 00" not in cap and "seed 00" not in cap, (name, cap)
 
 
 def frac_inside_2sigma(entry) -> float:
@@ -99,7 +116,7 @@ def test_masscm_study_report_table3(method_reports):
 def test_dp_report_innovation_checks(method_reports):
     res, html, _ = method_reports["dp"]
     caps = figures(html)
-    assert count(caps, "Fig. 8 — parameter estimates versus time") >= 1
+    assert count(caps, "Fig. 8 — Parameter estimates versus time") >= 1
     names = {"innovation_SI1_s"} | {f"innovation_SI{k}_{c}" for k in (2, 3) for c in ("x", "y", "psi")}
     assert set(res.series["residuals"]) == names
     assert count(caps, "Innovation of") == len(names)

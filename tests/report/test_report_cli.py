@@ -59,7 +59,7 @@ def test_subprocess_end_to_end(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
     html = out.read_text(encoding="utf-8")
-    assert html.count('<img src="data:image/png;base64,') == 4 and "Fig. 4 — " in html
+    assert html.count('<img src="data:image/png;base64,') == 4 and "Linder et al. 2015, Fig. 4)" in html
     proc = subprocess.run([sys.executable, "-m", "shipid", "report", str(tmp_path / "nope.json"), "--out",
                            str(tmp_path / "x.html")], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1

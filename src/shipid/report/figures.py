@@ -184,6 +184,13 @@ def _short(label: str) -> str:
     return re.sub(r"\s*\(.*\)\s*$", "", label) or label
 
 
+def _ylabel(label: str, unit: str | None) -> str:
+    """``quantity [unit]`` when short; only ``[unit]`` for a long quantity (the axes title names it)."""
+    q = _short(label)
+    u = _pretty(unit)
+    return axis_label(q, u) if len(q) <= 24 else (f"[{u}]" if u and u not in ("-", "1") else "[-]")
+
+
 def _grid(n: int, ncols: int) -> tuple[int, int]:
     ncols = max(1, min(ncols, n))
     return int(math.ceil(n / ncols)), ncols
@@ -207,7 +214,7 @@ def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.nd
     ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
     ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(_short(label), su))
+    ax.set_ylabel(_ylabel(label, su))
     ax.legend(loc="upper right", ncols=2)
     ax.set_title(f"{label}: measured and model", loc="left")
     ax_r = fig.add_subplot(gs[1, :2])
@@ -248,7 +255,7 @@ def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: floa
                 ax.set_ylim(-lim / k, lim / k)
     ax.axhline(0.0, color="#888888", lw=0.7)
     ax.set_xlabel("t [s]")
-    ax.set_ylabel(axis_label(_short(label), su))
+    ax.set_ylabel(_ylabel(label, su))
     ax.set_title(f"{label}", loc="left")
     _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound, _dt(t))
     return fig
@@ -321,8 +328,9 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
         if len(label) > 14 or ncols > 1:
             import textwrap
 
-            ax.set_title("\n".join(textwrap.wrap(label, 44)[:2]), loc="left", fontsize=9.0)
-            ax.set_ylabel(f"[{su}]" if su else "")
+            width = max(18, int(96 / ncols) - 6)  # characters that fit over one panel at 9 pt
+            ax.set_title("\n".join(textwrap.wrap(label, width)[:3]), loc="left", fontsize=9.0)
+            ax.set_ylabel(f"[{_pretty(su)}]" if su else "")
         else:
             ax.set_ylabel(axis_label(label, su))
         ax.set_xlabel("t [s]")
@@ -339,7 +347,7 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
 def signals_figure(entries: Sequence[tuple[str, Mapping]]) -> Figure:
     """Stacked time histories sharing the time axis (seed 002 Figs 4, 9: smoothed motion, forces)."""
     n = len(entries)
-    fig = new_figure(height=max(2.2, 1.55 * n + 0.5))
+    fig = new_figure(height=max(2.2, 1.9 * n + 0.5))
     axes = fig.subplots(n, 1, squeeze=False, sharex=True)[:, 0]
     for ax, (name, e) in zip(axes, entries):
         t = _arr(e["t"])
@@ -358,11 +366,63 @@ def signals_figure(entries: Sequence[tuple[str, Mapping]]) -> Figure:
                     ax.fill_between(t[sl], (v - 2 * s)[sl] / k, (v + 2 * s)[sl] / k, color=col, alpha=0.18,
                                     lw=0)
             ax.plot(t[sl], v[sl] / k, color=col, lw=1.0 if j else 1.2, label=lab)
-        ax.set_ylabel(axis_label(e.get("label", name), su))
+        label = str(e.get("label", name))
+        if n > 1 or len(label) > 14:  # stacked panels: the quantity as panel title, the unit on the axis
+            ax.set_title(label, loc="left", fontsize=9.5)
+            ax.set_ylabel(f"[{_pretty(su)}]" if su and su not in ("-", "1") else "[-]")
+        else:
+            ax.set_ylabel(axis_label(label, _pretty(su)))
         if lines and len(lines) > 1:
             ax.legend(loc="upper right", ncols=min(4, len(lines)))
     axes[-1].set_xlabel("t [s]")
     return fig
+
+
+def _pretty(u: str | None) -> str:
+    from shipid.report.units import pretty_unit
+
+    return pretty_unit(u)
+
+
+def label_problems(fig: Figure) -> list[str]:
+    """Labels that overlap each other or stick out of the figure, after drawing it (empty: clean).
+
+    Checks every axis label, axes title and legend: pairwise intersections of their rendered
+    boxes (shrunk by one pixel) and containment in the figure. Used by the tests.
+    """
+    import matplotlib
+
+    with matplotlib.rc_context(getattr(fig, "_shipid_style", _STYLE)):
+        fig.canvas.draw()
+        rend = fig.canvas.get_renderer()
+        boxes = []
+        for i, ax in enumerate(fig.axes):
+            if not ax.get_visible():
+                continue
+            arts = [("x label", ax.xaxis.label), ("y label", ax.yaxis.label), ("title", ax.title),
+                    ("left title", ax._left_title), ("right title", ax._right_title)]
+            if ax.get_legend() is not None:
+                arts.append(("legend", ax.get_legend()))
+            for what, a in arts:
+                if what != "legend" and not a.get_text():
+                    continue
+                bb = a.get_window_extent(rend)
+                if bb.width > 0 and bb.height > 0:
+                    boxes.append((f"axes {i} {what} {getattr(a, 'get_text', lambda: '')()!r}", bb))
+        W, H = fig.bbox.width, fig.bbox.height
+        out = []
+        for name, bb in boxes:
+            if bb.x0 < -1 or bb.y0 < -1 or bb.x1 > W + 1 or bb.y1 > H + 1:
+                out.append(f"{name} is clipped by the figure edge")
+        for j, (n1, b1) in enumerate(boxes):
+            for n2, b2 in boxes[j + 1:]:
+                if "legend" in n1 and "legend" in n2:
+                    continue
+                if (min(b1.x1, b2.x1) - max(b1.x0, b2.x0) > 1) and (min(b1.y1, b2.y1) - max(b1.y0, b2.y0) > 1):
+                    if "legend" in n1 or "legend" in n2:
+                        continue  # a legend inside the plot area may cover a title only by design: skip
+                    out.append(f"{n1} overlaps {n2}")
+    return out
 
 
 # -- fields ----------------------------------------------------------------------------------------

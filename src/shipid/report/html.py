@@ -1,7 +1,9 @@
 """Assemble the self-contained HTML report of a :class:`~shipid.result.Result`.
 
-Layout: header (method, vessel, provenance) → warnings → data used → estimates
-(value, SE, 95 % CI, unit, status, note; correlation heat map) → diagnostics →
+Layout: header (method, vessel, provenance) → verdict in plain words
+(:mod:`shipid.report.verdict`) → warnings → data used → estimates (value, SE, 95 % CI,
+unit, status — ``not determined`` above 100 % relative SE —, note; the DP bis values also
+in SI; correlation heat map) → diagnostics (with units, matrices as tables) →
 the method's sections (defaults in :mod:`shipid.report.sections`, then any the
 method registered) → entries carrying a ``"paper"`` reference → every other
 ``series`` entry under the generic convention → residual checks → provenance.
@@ -11,7 +13,6 @@ No JavaScript, no external resources: CSS inline, figures as data URIs.
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import math
 from pathlib import Path
 from typing import Any, Mapping
@@ -25,16 +26,20 @@ from shipid.report.registry import load_method_sections, sections_for
 from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
                                   residual_stats_table)
 from shipid.report import figures as F
+from shipid.report.units import pretty_unit
+from shipid.report.values import _flatten, _sci, _si_table, _with_units
+from shipid.report.verdict import NOT_DETERMINED, effective_status, verdict_html
+from shipid.report.render import plain_text, short_paths
 
 METHOD_TITLES = {
-    "mass-cm": ("Mass and centre of mass from IMU and rudder", "Linder et al. 2015 (seed 000)"),
-    "dp": ("DP low-frequency model, parallel EKF", "Fossen, Sagatun & Sørensen 1996 (seed 001)"),
-    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "Yoon & Rhee 2003 (seed 002)"),
+    "mass-cm": ("Mass and centre of mass from IMU and rudder", "after Linder et al. (2015)"),
+    "dp": ("DP low-frequency model, parallel EKF", "after Fossen, Sagatun & Sørensen (1996)"),
+    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "after Yoon & Rhee (2003)"),
     "ebm-study": ("Manoeuvring coefficients by EBM: paper reproduction study",
-                  "Yoon & Rhee 2003 (seed 002), Tables 3 and 5"),
+                  "after Yoon & Rhee (2003), Tables 3 and 5"),
     "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
-                "Yoon & Rhee 2003 (seed 002) adapted to the MMG model"),
-    "ebm-design": ("D-optimal PRBS input design for EBM", "Yoon & Rhee 2003 (seed 002), Figs 7–8"),
+                "after Yoon & Rhee (2003), adapted to the MMG model"),
+    "ebm-design": ("D-optimal PRBS input design for EBM", "after Yoon & Rhee (2003), Figs 7–8"),
 }
 
 GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
@@ -87,6 +92,7 @@ table.mat td{border:0;padding:1px 8px;text-align:right}
 table.rec{margin:0;font-size:.82rem}
 table.rec th{white-space:normal;overflow-wrap:anywhere;background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
 table.rec td{padding:1px 8px;border:0}
+table.rec.nv td,table.rec.nv th{padding:1px 3px;font-size:.76rem;white-space:nowrap}
 table.rec td:first-child{max-width:280px;overflow-wrap:break-word}
 .scroll{overflow-x:auto;max-width:100%}
 table.kv th{overflow-wrap:break-word}
@@ -96,7 +102,23 @@ table.kv th{width:30%}
 main{overflow-wrap:break-word}
 .status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
 .status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
+.status.notdet{color:#fff;background:#8a5a00;border-color:#8a5a00}
 tr.notid td{color:var(--bad)}
+tr.notdet td{color:#8a5a00;background:#fff8ec}
+tr.notdet td.num{text-decoration:line-through;text-decoration-color:#d6b27a}
+.verdict{border:1px solid var(--line);border-left:5px solid var(--accent);background:var(--soft);padding:10px 14px;
+ margin:14px 0;border-radius:4px}
+.verdict h2{border:0;margin:0 0 4px;font-size:1.05rem;padding:0}
+.verdict ul{margin:4px 0 0 0;padding:0;list-style:none}
+.verdict li{margin:3px 0;padding-left:18px;position:relative}
+.verdict li:before{content:"•";position:absolute;left:4px;color:var(--muted)}
+.verdict li.ok:before{content:"✓";color:var(--ok)} .verdict li.bad:before{content:"✗";color:var(--bad)}
+.verdict li.warn:before{content:"!";color:#8a5a00;font-weight:700}
+.vec{display:flex;flex-wrap:wrap;gap:2px 0;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2;
+ padding:0 4px;width:fit-content;max-width:100%;font-size:.82rem}
+.vec .vi{display:inline-block;min-width:6.2em;text-align:right;padding:0 4px;white-space:nowrap}
+.chan{white-space:nowrap;display:inline-block;margin-right:6px}
+table.data{width:100%} table.data.si{width:auto;min-width:60%}
 figure{margin:14px 0 22px;padding:0}
 figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
 figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}
@@ -105,74 +127,6 @@ code{font-family:"DejaVu Sans Mono",Menlo,Consolas,monospace;font-size:.84rem;ba
 footer{margin-top:40px;border-top:1px solid var(--line);padding-top:8px;font-size:.82rem;color:var(--muted)}
 @media print{main{max-width:none;padding:0} h2{break-after:avoid} figure{break-inside:avoid}}
 """
-
-
-# -- small helpers --------------------------------------------------------------------------------------
-
-def _is_scalar(v: Any) -> bool:
-    return v is None or isinstance(v, (str, int, float, bool, np.integer, np.floating))
-
-
-class MatrixValue(list):
-    """A small 2-D numeric list shown as a matrix in key-value tables."""
-
-
-class RecordsValue(list):
-    """A short list of flat dicts shown as a nested table in key-value tables."""
-
-
-def _records(v) -> bool:
-    if not isinstance(v, (list, tuple)) or not v or len(v) > 30:
-        return False
-    if not all(isinstance(r, Mapping) for r in v):
-        return False
-    return all(_is_scalar(x) or (isinstance(x, (list, tuple)) and len(x) <= 6 and all(_is_scalar(y) for y in x))
-               for r in v for x in r.values())
-
-
-def _records_map(v) -> bool:
-    """A dict of flat dicts ({mode: {kappa, R2, ...}}): shown as one table, a row per key."""
-    if not isinstance(v, Mapping) or not v or len(v) > 30:
-        return False
-    return _records(list(v.values())) and len({k for r in v.values() for k in r}) > 1
-
-
-def _small_matrix(v) -> bool:
-    if not isinstance(v, (list, tuple)) or not v or not all(isinstance(r, (list, tuple)) for r in v):
-        return False
-    if len(v) > 10 or any(len(r) != len(v[0]) or len(r) > 10 for r in v):
-        return False
-    return all(isinstance(x, (int, float)) and not isinstance(x, bool) for r in v for x in r)
-
-
-def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
-    rows = []
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if _is_scalar(v):
-            rows.append((key, v))
-        elif _records_map(v):
-            rows.append((key, RecordsValue([{"": str(n), **r} for n, r in v.items()])))
-        elif isinstance(v, Mapping) and depth > 0:
-            rows.extend(_flatten(v, key + ".", depth - 1))
-        elif isinstance(v, (list, tuple)) and not v:
-            rows.append((key, "none"))
-        elif _small_matrix(v):
-            rows.append((key, MatrixValue(v)))
-        elif _records(v):
-            rows.append((key, RecordsValue(v)))
-        elif isinstance(v, (list, tuple)) and len(v) <= 8 and all(_is_scalar(x) for x in v):
-            rows.append((key, ", ".join(fmt_num(x) if not isinstance(x, str) else x for x in v)))
-        elif isinstance(v, (list, tuple)):
-            try:
-                a = np.asarray(v, dtype=float).ravel()
-                rows.append((key, f"{a.size} values, from {fmt_num(np.nanmin(a))} to {fmt_num(np.nanmax(a))}"
-                             if a.size else "empty"))
-            except (TypeError, ValueError):
-                rows.append((key, f"{len(v)} items"))
-        else:
-            rows.append((key, json.dumps(v, default=str)[:200]))
-    return rows
 
 
 def _fmt_duration(s: float) -> str:
@@ -217,8 +171,11 @@ def _badges(result) -> str:
         else:
             it = fmt_num(it)
         out.append(f'<div class="badge">iterations<b>{esc(it)}</b></div>')
-    n_est = sum(1 for e in result.estimates.values() if e.status == "estimated")
+    n_est = sum(1 for e in result.estimates.values() if effective_status(e) == "estimated")
     out.append(f'<div class="badge">estimated parameters<b>{n_est}</b></div>')
+    n_und = sum(1 for e in result.estimates.values() if effective_status(e) == NOT_DETERMINED)
+    if n_und:
+        out.append(f'<div class="badge bad">not determined<b>{n_und}</b></div>')
     n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
     if n_notid:
         out.append(f'<div class="badge bad">not identifiable<b>{n_notid}</b></div>')
@@ -228,7 +185,7 @@ def _badges(result) -> str:
         out.append(f'<div class="badge">input trials<b>{len(ins)}</b></div>')
     prov = result.provenance or {}
     if "seed" in prov:
-        out.append(f'<div class="badge">seed<b>{esc(str(prov["seed"]))}</b></div>')
+        out.append(f'<div class="badge">random seed<b>{esc(str(prov["seed"]))}</b></div>')
     return f'<div class="badges">{"".join(out)}</div>'
 
 
@@ -237,7 +194,7 @@ def _warnings(result, extra: list[str]) -> str:
     warns = d.get("warnings") or []
     if isinstance(warns, str):
         warns = [warns]
-    warns = [str(w) for w in warns]
+    warns = [_sci(plain_text(str(w))) for w in warns]
     if "converged" in d and not d["converged"]:
         warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
                         "must not be trusted.")
@@ -267,10 +224,10 @@ def _data_section(ctx: RenderContext, result) -> str:
     rows = []
     for item in ins:
         if not isinstance(item, Mapping):
-            rows.append(f"<tr><td><code>{esc(str(item))}</code></td><td></td><td></td><td></td><td></td>"
-                        "<td></td></tr>")
+            rows.append(f"<tr><td><code>{esc(short_paths(str(item)))}</code></td><td></td><td></td><td></td>"
+                        "<td></td><td></td></tr>")
             continue
-        name = item.get("name") or item.get("file") or item.get("path") or "—"
+        name = short_paths(str(item.get("name") or item.get("file") or item.get("path") or "—"))
         n = item.get("n_samples")
         dur = item.get("duration_s")
         dt = item.get("dt_s")
@@ -281,14 +238,15 @@ def _data_section(ctx: RenderContext, result) -> str:
             samp = f"{fmt_num(float(dt), 3)} s ({fmt_num(1.0 / float(dt), 3)} Hz)"
         ch = item.get("channels")
         if isinstance(ch, Mapping):
-            chs = ", ".join(f"{esc(str(k))} <span class='unit'>[{esc(str(u))}]</span>" for k, u in ch.items())
+            chs = " ".join(f"<span class='chan'>{esc(str(k))} <span class='unit'>[{esc(pretty_unit(str(u)))}]"
+                           "</span></span>" for k, u in ch.items())
         elif isinstance(ch, (list, tuple)):
-            chs = ", ".join(esc(str(c)) for c in ch)
+            chs = " ".join(f"<span class='chan'>{esc(str(c))}</span>" for c in ch)
         else:
             chs = "—" if ch is None else esc(str(ch))
         note_bits = [f"{k}: {item[k]}" for k in ("vessel", "manoeuvre", "seed") if k in item]
         if item.get("note"):
-            note_bits.append(str(item["note"]))
+            note_bits.append(short_paths(str(item["note"])))
         rows.append(f"<tr><td><code>{esc(str(name))}</code></td><td class='num'>{fmt_num(n) if n is not None else '—'}"
                     f"</td><td class='num'>{_fmt_duration(float(dur)) if dur is not None else '—'}</td>"
                     f"<td class='num'>{samp}</td><td>{chs}</td><td>{esc('; '.join(note_bits))}</td></tr>")
@@ -311,20 +269,32 @@ def _estimates_section(ctx: RenderContext, result) -> str:
     for name, e in result.estimates.items():
         f = format_estimate(e.value, e.std)
         notid = math.isinf(float(e.std)) if e.std is not None else False
+        st = effective_status(e)
         ci = "—" if f.ci_low == "—" else f"[{f.ci_low}, {f.ci_high}]"
         scale = f' <span class="unit">{f.scale}</span>' if f.scale else ""
-        tr = '<tr class="notid">' if notid else "<tr>"
+        tr = '<tr class="notid">' if notid else ('<tr class="notdet">' if st == NOT_DETERMINED else "<tr>")
+        st_cls = "notdet" if st == NOT_DETERMINED else st
+        st_title = (f' title="relative SE {f.rel}: the data do not determine it"' if st == NOT_DETERMINED
+                    and st != e.status else "")
         rows.append(
             f"{tr}<td><b>{esc(name)}</b></td><td class='num'>{f.value}{scale}</td>"
             f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
-            f"<td>{esc(e.unit)}</td><td><span class='status {esc(e.status)}'>{esc(e.status)}</span></td>"
-            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks else f"<td>{esc(e.note)}</td></tr>"))
+            f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
+            + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks
+               else f"<td>{esc(plain_text(e.note))}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
-        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(n)}</p>' for n, m in marks.items())
-        body = (f'<table class="est">{ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal approximation). Digits follow the SE.")}'
+        cap = ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal "
+                                "approximation). Digits follow the SE.")
+        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(plain_text(n))}</p>' for n, m in marks.items())
+        if any(effective_status(e) == NOT_DETERMINED for e in result.estimates.values()):
+            foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
+                     '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '
+                     'the value; the number is the last iterate, not an estimate.</p>')
+        foot += _si_table(ctx, result)
+        body = (f'<table class="est">{cap}'
                 f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
     cov_html = ""
     if result.covariance is not None and len(result.covariance_names) >= 2:
@@ -348,7 +318,8 @@ def _diagnostics_section(ctx: RenderContext, result) -> str:
     d = {k: v for k, v in (result.diagnostics or {}).items() if k != "warnings"}
     if not d:
         return ""
-    return f'<h2 id="diagnostics">Diagnostics</h2>{kv_table(ctx, _flatten(d), "Estimator diagnostics.")}'
+    return (f'<h2 id="diagnostics">Diagnostics</h2>'
+            f'{kv_table(ctx, _with_units(result, _flatten(d)), "Estimator diagnostics.")}')
 
 
 def _provenance_section(ctx: RenderContext, result) -> str:
@@ -356,9 +327,9 @@ def _provenance_section(ctx: RenderContext, result) -> str:
     model = result.model or {}
     out = '<h2 id="provenance">Model and provenance</h2>'
     if model:
-        out += kv_table(ctx, _flatten(model), "Model structure and vessel particulars.")
+        out += kv_table(ctx, _with_units(result, _flatten(model)), "Model structure and vessel particulars.")
     if prov:
-        out += kv_table(ctx, _flatten(prov), "Provenance.")
+        out += kv_table(ctx, _with_units(result, _flatten(prov)), "Provenance.")
     return out
 
 
@@ -433,6 +404,14 @@ def _guess_unit(name: str) -> str | None:
     return None
 
 
+def _loose_unit(result, name: str) -> str:
+    """Unit of a loose series: that of the estimate of the same name, else of the standard channel, else "-"."""
+    e = result.estimates.get(name)
+    if e is not None and getattr(e, "unit", None):
+        return pretty_unit(str(e.unit))
+    return _guess_unit(name) or "-"
+
+
 LOOSE_X = ("t", "time", "t_s", "iteration", "iterations", "k")
 
 
@@ -463,17 +442,17 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
             cols.append((k, v))
     if not cols:
         return "", set()
-    xlabel = "t [s]" if xkey in ("t", "time", "t_s") else xkey
+    xlabel = "t [s]" if xkey in ("t", "time", "t_s") else f"{xkey} [-]"
     html_parts = []
     for i in range(0, len(cols), 6):
         part = cols[i:i + 6]
-        items = [(k, {"t": x, "lines": {k: v}, "label": k, "unit": _guess_unit(k)}) for k, v in part]
+        items = [(k, {"t": x, "lines": {k: v}, "label": k, "unit": _loose_unit(result, k)}) for k, v in part]
         try:
             fig = F.signals_figure(items)
             fig.axes[-1].set_xlabel(xlabel)
             html_parts.append(ctx.figure(fig, f"{', '.join(k for k, _ in part)} versus {xkey} "
-                                              "(stored outside the report convention; units, where shown, "
-                                              "assumed from the standard channel names)."))
+                                              "(stored outside the report convention; units from the "
+                                              "estimate with that name or the standard channel names)."))
         except Exception as err:  # noqa: BLE001
             html_parts.append(ctx.problem(f"series {', '.join(k for k, _ in part)}", err))
     return "".join(html_parts), {xkey, *(k for k, _ in cols)}
@@ -485,6 +464,9 @@ def build_report(result) -> str:
     Never raises for odd ``series`` content: a figure that cannot be drawn is
     replaced by a visible note and listed among the warnings.
     """
+    from shipid.report.sections.mmg import enrich
+
+    result = enrich(result)  # mmg-ebm runs of `shipid identify mmg`: data summary and fit overlays
     ctx = RenderContext(result)
     load_problems = load_method_sections(result.method)
     ctx.problems.extend(load_problems)
@@ -496,10 +478,11 @@ def build_report(result) -> str:
         "series": _generic_sections(ctx, result),
         "provenance": _provenance_section(ctx, result),
     }
-    toc_names = {"warnings": "Warnings", "data": "Data", "estimates": "Estimates", "diagnostics": "Diagnostics",
+    toc_names = {"verdict": "Verdict", "warnings": "Warnings", "data": "Data", "estimates": "Estimates",
+                 "diagnostics": "Diagnostics",
                  "method": "Method figures", "series": "Time histories", "provenance": "Provenance"}
     warnings = _warnings(result, ctx.problems)
-    present = (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
+    present = ["verdict"] + (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
     toc = "".join(f'<a href="#{k}">{toc_names[k]}</a>' for k in present)
     now = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     title = METHOD_TITLES.get(result.method, (result.method, ""))[0]
@@ -510,7 +493,7 @@ def build_report(result) -> str:
         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
         f"<meta name=\"generator\" content=\"shipid {esc(shipid.__version__)}\">"
         f"<title>{esc(doc_title)}</title><style>{CSS}</style></head>\n<body><main>\n"
-        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{warnings}\n"
+        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{verdict_html(result)}{warnings}\n"
         + "\n".join(v for v in parts.values() if v)
         + f"\n<footer>Report written by shipid {esc(shipid.__version__)} at {esc(now)} · {esc(title)} · "
           "self-contained: no network needed to view.</footer>\n</main></body></html>\n"

@@ -23,6 +23,49 @@ from shipid.report.stats import residual_stats
 
 esc = html.escape
 
+#: Authors and year of the paper each method follows (captions cite them, never "seed 00x").
+PAPERS = {"mass-cm": "Linder et al. 2015", "dp": "Fossen, Sagatun & Sørensen 1996",
+          "ebm": "Yoon & Rhee 2003", "ebm-study": "Yoon & Rhee 2003", "mmg-ebm": "Yoon & Rhee 2003",
+          "ebm-design": "Yoon & Rhee 2003"}
+
+_ABS_PATH = re.compile(r"(?<![\w.])(/[\w.\-+@]+)+/?")
+
+
+def short_path(p: str) -> str:
+    """``p`` relative to the working directory when it lies below it, else its file name."""
+    import os
+
+    try:
+        rel = os.path.relpath(p)
+    except ValueError:
+        rel = p
+    return rel if not rel.startswith("..") else os.path.basename(p.rstrip("/")) or p
+
+
+_SEED_REF = re.compile(r"\s*\(seed 00\d\)|,?\s*\bseed 00\d\b", re.I)
+
+
+def plain_text(text: str) -> str:
+    """Text of a method shown in the report: machine paths shortened, the project's internal paper
+    numbers ("seed 000") dropped (papers are named by authors and year)."""
+    return _SEED_REF.sub("", short_paths(text))
+
+
+def short_paths(text: str) -> str:
+    """Every absolute path in ``text`` shortened by :func:`short_path` (reports never show the machine's
+    directory layout)."""
+    if "/" not in text:
+        return text
+    return _ABS_PATH.sub(lambda m: short_path(m.group(0)) if m.group(0).count("/") >= 2 else m.group(0), text)
+
+
+def paper_ref(method: str | None, ref: str | None) -> str:
+    """``"Yoon & Rhee 2003, Table 4"`` for ``ref = "Table 4"`` (the paper figure a caption reproduces)."""
+    if not ref:
+        return ""
+    who = PAPERS.get(method or "", "")
+    return f"{who}, {ref}" if who and not re.search(r"\d{4}", str(ref)) else str(ref)
+
 
 @dataclass
 class RenderContext:
@@ -32,6 +75,7 @@ class RenderContext:
     n_fig: int = 0
     n_tab: int = 0
     claimed: set = field(default_factory=set)
+    authors: str = ""
     problems: list = field(default_factory=list)
     residual_rows: list = field(default_factory=list)
 
@@ -52,13 +96,14 @@ class RenderContext:
         self.n_fig += 1
         uri = F.to_data_uri(fig)
         fig.clear()
+        caption = plain_text(caption) if caption else caption
         cap = f"<b>Figure {self.n_fig}.</b> {esc(caption)}" if caption else f"<b>Figure {self.n_fig}.</b>"
         return (f'<figure><img src="{uri}" alt="{esc(alt or caption or f"figure {self.n_fig}")}">'
                 f"<figcaption>{cap}</figcaption></figure>")
 
     def table_caption(self, caption: str) -> str:
         self.n_tab += 1
-        return f"<caption><b>Table {self.n_tab}.</b> {esc(caption)}</caption>" if caption else \
+        return f"<caption><b>Table {self.n_tab}.</b> {esc(plain_text(caption))}</caption>" if caption else \
             f"<caption><b>Table {self.n_tab}.</b></caption>"
 
     def problem(self, what: str, err: BaseException | str) -> str:
@@ -87,7 +132,8 @@ class RenderContext:
                     if items:
                         out.append(render_group(self, fr.kind, items, fr.caption))
                 elif isinstance(fr, Mapping) and "columns" in fr and "rows" in fr:
-                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "")))
+                    out.append(data_table(self, fr, caption_of("", fr, fr.get("caption") or "",
+                                                               method=self.result.method)))
                 elif fr == "residual-checks":
                     out.append(residual_stats_table(self))
                 elif isinstance(fr, str):
@@ -105,10 +151,19 @@ class RenderContext:
 
 # -- captions ----------------------------------------------------------------------------------------
 
-def caption_of(name: str, entry: Mapping, default: str, paper: str | None = None) -> str:
+def caption_of(name: str, entry: Mapping, default: str, paper: str | None = None,
+               method: str | None = None) -> str:
+    """Caption text: the title, then the paper figure or table it reproduces in parentheses.
+
+    The report's own number (``Figure 3.``, ``Table 2.``) is the only number in front; the paper's
+    reference follows as ``(Yoon & Rhee 2003, Table 4)``.
+    """
     paper = entry.get("paper") or paper  # the method's own reference wins over a default
-    title = entry.get("title") or default
-    return f"{paper} — {title}" if paper else title
+    title = str(entry.get("title") or default).strip()
+    if not paper:
+        return title
+    ref = paper_ref(method, str(paper))
+    return f"{title} ({ref})" if not title.endswith(".") else f"{title[:-1]} ({ref})."
 
 
 _PAPER_RE = re.compile(r"(fig|table)[a-z.]*\s*(\d+)", re.I)
@@ -133,8 +188,18 @@ def _cell(v: Any) -> tuple[str, str]:
                                         for k in keys) + "</tr>" for r in v)
         return (f'<div class="scroll"><table class="rec"><thead><tr>{head}</tr></thead><tbody>{body}</tbody>'
                 f'</table></div>'), ""
+    if type(v).__name__ == "NamedVector":  # shipid.report.values.NamedVector: one value per estimate
+        head = "".join(f"<th>{esc(str(n))}</th>" for n in v.names)
+        body = "".join(f"<td>{fmt_num(x)}</td>" for x in v)
+        return (f'<div class="scroll"><table class="rec nv"><thead><tr>{head}</tr></thead><tbody><tr>{body}</tr>'
+                f'</tbody></table></div>'), ""
+    if type(v).__name__ == "VectorValue":  # shipid.report.html.VectorValue: a short numeric vector
+        body = "".join(f'<span class="vi">{fmt_num(x)}</span>' for x in v)
+        return f'<div class="vec">{body}</div>', ""
     if type(v).__name__ == "MatrixValue":  # shipid.report.html.MatrixValue: a small matrix
-        body = "".join("<tr>" + "".join(f"<td>{fmt_num(x)}</td>" for x in row) + "</tr>" for row in v)
+        big = max((abs(float(x)) for row in v for x in row), default=0.0) or 1.0
+        body = "".join("<tr>" + "".join(f"<td>{'0' if abs(float(x)) < 1e-12 * big else fmt_num(x)}</td>"
+                                        for x in row) + "</tr>" for row in v)  # rounding residue shown as 0
         return f'<table class="mat"><tbody>{body}</tbody></table>', ""
     if isinstance(v, bool):
         return ("yes" if v else "no"), ""
@@ -143,8 +208,8 @@ def _cell(v: Any) -> tuple[str, str]:
     if v is None:
         return "—", ""
     if isinstance(v, (list, tuple)):
-        return esc(", ".join(str(x) for x in v)), ""
-    return esc(str(v)), ""
+        return esc(", ".join(plain_text(str(x)) for x in v)), ""
+    return esc(plain_text(str(v))), ""
 
 
 def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
@@ -168,20 +233,27 @@ def data_table(ctx: RenderContext, entry: Mapping, caption: str) -> str:
             f'<tbody>{"".join(body)}</tbody></table>{note}')
 
 
-def kv_table(ctx: RenderContext | None, rows: Iterable[tuple[str, Any]], caption: str = "",
+def kv_table(ctx: RenderContext | None, rows: Iterable[tuple], caption: str = "",
              cls: str = "kv") -> str:
+    """Key–value table; rows are ``(key, value)`` or ``(key, value, unit)`` (unit shown after the value)."""
     body = []
-    for k, v in rows:
+    for row in rows:
+        k, v = row[0], row[1]
+        u = row[2] if len(row) > 2 else ""
         h, c = _cell(v)
-        body.append(f'<tr><th scope="row">{esc(str(k))}</th><td class="{c}">{h}</td></tr>')
+        unit = f' <span class="unit">{esc(u)}</span>' if u and u != "-" and not h.startswith("<") else \
+            (f'<div class="unit">[{esc(u)}]</div>' if u and u != "-" else "")
+        body.append(f'<tr><th scope="row">{esc(str(k))}</th><td class="{c}">{h}{unit}</td></tr>')
     cap = ctx.table_caption(caption) if (ctx is not None and caption) else ""
     return f'<table class="{cls}">{cap}<tbody>{"".join(body)}</tbody></table>'
 
 
 # -- residual statistics ------------------------------------------------------------------------------
 
-def _residual_row(ctx: RenderContext, name: str, unit: str, st) -> None:
-    ctx.residual_rows.append((name, unit, st))
+def _residual_row(ctx: RenderContext, name: str, unit: str, st, innovation: bool = True) -> None:
+    """Record one row of the residual-checks table; ``innovation=False`` for a simulation error
+    (measured − simulated), whose autocorrelation is expected and therefore not flagged."""
+    ctx.residual_rows.append((name, unit, st, innovation))
 
 
 def _pvalue(p: float) -> str:
@@ -198,10 +270,16 @@ def residual_stats_table(ctx: RenderContext) -> str:
     head = ("<tr><th>residual</th><th>N</th><th>mean</th><th>RMS</th><th>unit</th>"
             "<th>lags outside ±1.96/√N</th><th>Ljung–Box p</th><th>inside ±2σ</th></tr>")
     body = []
-    for name, unit, st in ctx.residual_rows:
+    sim_rows = False
+    for row in ctx.residual_rows:
+        name, unit, st = row[:3]
+        innovation = row[3] if len(row) > 3 else True
         frac = st.frac_outside
-        white_bad = np.isfinite(frac) and frac > 0.10
-        lb_bad = np.isfinite(st.ljung_box_p) and st.ljung_box_p < 0.01
+        white_bad = innovation and np.isfinite(frac) and frac > 0.10
+        lb_bad = innovation and np.isfinite(st.ljung_box_p) and st.ljung_box_p < 0.01
+        if not innovation:
+            sim_rows = True
+            name = f"{name} †"
         in2 = st.frac_in_2sigma
         in2_bad = np.isfinite(in2) and in2 < 0.90
         body.append(
@@ -213,8 +291,12 @@ def residual_stats_table(ctx: RenderContext) -> str:
             f"<td class='num{' flag' if in2_bad else ''}'>{'—' if not np.isfinite(in2) else f'{100 * in2:.1f} %'}"
             "</td></tr>")
     ctx.residual_rows = []
+    foot = ('<p class="small">† simulation error (measured − simulated by the identified model): it holds what the '
+            "model leaves out (disturbances, noise filtered by the dynamics), so it is autocorrelated even for a "
+            "correct model and is not flagged; whiteness is tested on innovations and equation errors.</p>"
+            if sim_rows else "")
     return (f'<table class="data">{ctx.table_caption("Residual checks. White residuals have about 5 % of lags outside the ±1.96/√N bounds and a Ljung–Box p above 0.01; innovations should lie inside their predicted ±2σ about 95 % of the time. Flagged cells in red.")}'
-            f"<thead>{head}</thead><tbody>{''.join(body)}</tbody></table>")
+            f"<thead>{head}</thead><tbody>{''.join(body)}</tbody></table>{foot}")
 
 
 # -- one convention entry -----------------------------------------------------------------------------
@@ -238,39 +320,41 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
             else:
                 resid, std = meas - mod, None
             st, r = residual_stats(resid, std)
-            _residual_row(ctx, label, entry.get("unit", ""), st)
+            _residual_row(ctx, label, entry.get("unit", ""), st, innovation=isinstance(res_entry, Mapping)
+                          and len(res_entry.get("values", [])) == t.size)
             what = "validation data, not used for estimation" if entry.get("kind") == "validation" else \
                 "data used for estimation"
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: measured and model ({what}); residual and its "
-                             f"autocorrelation with 95 % white-noise bounds.", paper)
+                             f"autocorrelation with 95 % white-noise bounds.", paper, ctx.result.method)
             return ctx.figure(F.overlay_figure(name, entry, resid, r, st.acf_bound), cap)
         if kind == "residuals":
             st, r = residual_stats(entry["values"], entry.get("std"))
             _residual_row(ctx, label, entry.get("unit", ""), st)
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: residual" + (" with predicted ±2σ" if entry.get("std") else "")
-                             + " and its autocorrelation.", paper)
+                             + " and its autocorrelation.", paper, ctx.result.method)
             return ctx.figure(F.residual_figure(name, entry, r, st.acf_bound), cap)
         if kind == "histories":
-            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper)
+            cap = caption_of(name, entry, default_title or f"{label} versus time with ±σ band.", paper,
+                             ctx.result.method)
             return ctx.figure(F.histories_figure([(name, entry)], ncols=1), cap)
         if kind == "signals":
-            cap = caption_of(name, entry, default_title or f"{label} versus time.", paper)
+            cap = caption_of(name, entry, default_title or f"{label} versus time.", paper, ctx.result.method)
             return ctx.figure(F.signals_figure([(name, entry)]), cap)
         if kind == "matrices":
-            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            cap = caption_of(name, entry, default_title or f"{label}.", paper, ctx.result.method)
             return ctx.figure(F.matrix_figure(entry), cap)
         if kind == "tables":
             return data_table(ctx, entry, caption_of(name, entry, default_title or entry.get("caption") or
-                                                     name.replace("_", " "), paper))
+                                                     name.replace("_", " "), paper, ctx.result.method))
         if kind == "contours":
             cap = caption_of(name, entry, default_title or
                              f"{entry.get('z_label', name)} over ({entry.get('x_label', 'x')}, "
-                             f"{entry.get('y_label', 'y')}).", paper)
+                             f"{entry.get('y_label', 'y')}).", paper, ctx.result.method)
             return ctx.figure(F.contour_figure(entry), cap)
         if kind == "xy":
-            cap = caption_of(name, entry, default_title or f"{label}.", paper)
+            cap = caption_of(name, entry, default_title or f"{label}.", paper, ctx.result.method)
             return ctx.figure(F.xy_figure(entry), cap)
         raise ValueError(f"unknown series kind {kind!r}")
     except Exception as err:  # noqa: BLE001

@@ -9,11 +9,12 @@ each ``residuals`` entry whose name starts with ``innovation`` with its predicte
 from __future__ import annotations
 
 from shipid.report.registry import Entry, Group, register_section
+from shipid.report.render import paper_ref
 from shipid.report.sections._util import entries
 
 
 def dp_section(result) -> list:
-    """Seed 001 (Fossen, Sagatun & Sørensen 1996): parameter histories and innovation checks"""
+    """Fossen, Sagatun & Sørensen (1996): parameter histories and innovation checks"""
     frags: list = []
     # every history, grouped by its own paper reference (default Fig. 8), 12 panels per figure
     groups: dict[str, list[str]] = {}
@@ -23,8 +24,9 @@ def dp_section(result) -> list:
         for i in range(0, len(hist), 12):
             names = tuple(hist[i:i + 12])
             frags.append(Group("histories", names,
-                               f"{ref} — parameter estimates versus time with ±σ bands (dashed: true value "
-                               "where known)" + (f", part {i // 12 + 1}." if len(hist) > 12 else ".")))
+                               "Parameter estimates versus time with ±σ bands (dashed: true value where known)"
+                               + (f", part {i // 12 + 1}" if len(hist) > 12 else "")
+                               + f" ({paper_ref('dp', ref)})."))
     innov = entries(result, "residuals", prefixes=("innovation",))
     for name, _ in innov:
         frags.append(Entry("residuals", name, title="Innovation check:"))

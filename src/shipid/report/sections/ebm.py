@@ -16,11 +16,12 @@ import numpy as np
 
 from shipid.report import figures as F
 from shipid.report.registry import Entry, Group, register_section
+from shipid.report.render import paper_ref
 from shipid.report.sections._util import entries
 
 
 def ebm_section(result) -> list:
-    """Seed 002 (Yoon & Rhee 2003): EBM stages, collinearity and validation"""
+    """Yoon & Rhee (2003): EBM stages, collinearity and validation"""
     frags: list = []
     # one figure per paper reference and trial: names "<trial>_<signal>" (shipid.methods.ebm_series)
     # share the prefix; a title common to the whole group becomes its caption
@@ -34,7 +35,8 @@ def ebm_section(result) -> list:
             titles = {e.get("title") for _, e in part}
             text = titles.pop() if len(titles) == 1 and None not in titles else \
                 "smoothed motion, estimated forces and current (shaded: ±2σ where given)."
-            frags.append(Group("signals", tuple(n for n, _ in part), f"{ref} — {text}"))
+            text = text.rstrip().rstrip(".")
+            frags.append(Group("signals", tuple(n for n, _ in part), f"{text} ({paper_ref(result.method, ref)})."))
     for name, _ in entries(result, "matrices", prefixes=("regressor_correlation",)):
         frags.append(Entry("matrices", name, paper="Tables 1–2",
                            title="Correlation of the regressors (|ρ| near 1: collinear, coefficients hard to "
@@ -74,8 +76,8 @@ def _correlation_from_diagnostics(result) -> list:
         entry = {"values": a.tolist(), "rows": labels, "cols": labels, "vmin": -1.0, "vmax": 1.0,
                  "unit": "correlation [-]"}
         fig = F.matrix_figure(entry)
-        frags.append((fig, f"Tables 1–2 — correlation of the {mode} regressors (from diagnostics; |ρ| near 1: "
-                           "collinear)."))
+        frags.append((fig, f"Correlation of the {mode} regressors (from diagnostics; |ρ| near 1: collinear) "
+                           f"({paper_ref(result.method, 'Tables 1–2')})."))
     return frags
 
 

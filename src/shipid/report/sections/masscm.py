@@ -12,7 +12,7 @@ from shipid.report.sections._util import entries
 
 
 def masscm_section(result) -> list:
-    """Seed 000 (Linder et al. 2015): cost map and spread of the estimates"""
+    """Linder et al. (2015): cost map and spread of the estimates"""
     frags: list = []
     for name, _ in entries(result, "contours", names=("cost",), prefixes=("cost_",)):
         frags.append(Entry("contours", name, paper="Fig. 4",
