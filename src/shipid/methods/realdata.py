@@ -645,9 +645,12 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
-    return build_result(f, cprior, runs, structure_name=structure, selection=selection,
-                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
-                        overrides=cands[structure].get("particulars"))
+    res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
+                       smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
+                       overrides=cands[structure].get("particulars"))
+    from shipid.methods.mmg_manoeuvres import training_conditions   # test conditions for simulate / imo
+    res.model["training_conditions"] = training_conditions(trials)
+    return res
 
 
 __all__ = ["SmoothConfig", "SmoothedRun", "smooth_run", "FitConfig", "CANDIDATES", "regression_data", "fit",
