@@ -44,9 +44,18 @@ def test_training_conditions_from_constructed_runs():
     tc = MM.training_conditions(runs)
     assert tc["rps_ahead"] == pytest.approx(np.median(np.r_[n1[n1 > 0], np.full(t.size, 12.0)]))
     assert tc["rps_astern"] == -4.0
-    assert np.degrees(tc["rudder_rate"]) == pytest.approx(5.0, rel=1e-9)
+    assert np.degrees(tc["rudder_rate"]) == pytest.approx(5.0, rel=1e-9)    # two 10-deg moves in 2 s
     assert tc["rps_rate"] is None                                    # one jump: fewer than 5 moving samples
     assert tc["runs"] == 2
+
+
+def test_rudder_move_rates_ignore_quantisation_and_drift():
+    t = np.arange(0.0, 30.0, 0.1)
+    q = np.deg2rad(0.56)
+    d = q * np.round(np.deg2rad(2.0) * np.sin(t) / q)          # a quantised 2-deg wobble: no large move
+    d[150:] += np.deg2rad(20.0) * np.clip((t[150:] - 15.0) / 1.0, 0, 1)     # one 20-deg move at 20 deg/s
+    r = MM.rudder_move_rates(d, t)
+    assert r.size == 1 and np.degrees(r[0]) == pytest.approx(20.0, rel=0.15)
 
 
 def test_conditions_need_speed_or_rps_without_training_data(kv):

@@ -193,7 +193,7 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     order = np.tile([k[1] for k in kinds], R)
     psw = np.tile([k[2] for k in kinds], R)
     side = np.tile([k[3] for k in kinds], R)
-    rec = MM.simulate_rudder_batch(model, ThB, order, psw, side, cond, dt=dt)
+    rec = MM.simulate_rudder_batch(model, ThB, order, psw, side, cond, dt=dt, exact_reversal=True)
     diverged = ~np.isfinite(rec.x).all(axis=(1, 2))
     vals_of: dict[str, np.ndarray] = {}
 

@@ -14,8 +14,8 @@ accelerates during the approach). With neither, ``n`` is taken from the training
 data recorded in the model (:func:`training_conditions`: the median propeller rate
 over the ahead samples of all training runs), because the Esso Osaka runs start from
 rest and execute the rudder within the first second, so their speed at execute is no
-approach speed. The steering-gear rate is the training runs' median rudder rate
-(95th percentile of |dδ/dt| where the rudder moves), the rudder limit 35°; the
+approach speed. The steering-gear rate is the median rate of the training runs' large rudder moves
+(:func:`rudder_move_rates`), the rudder limit 35°; the
 stopping test reverses to the most negative rate of the training runs at their
 median propeller acceleration.
 
@@ -45,11 +45,32 @@ T_APPROACH = 10.0
 
 
 # ----------------------------------------------------------------------------- conditions
-def rudder_rate(delta: np.ndarray, t: np.ndarray) -> float | None:
-    """Rudder rate of a run (rad/s): 95th percentile of |dδ/dt| where it exceeds 1°/s; None if it never moves."""
-    dd = np.abs(np.diff(delta)) / np.diff(t)
-    moving = dd[np.isfinite(dd) & (dd > np.deg2rad(1.0))]
-    return float(np.percentile(moving, 95)) if moving.size >= 5 else None
+def rudder_move_rates(delta: np.ndarray, t: np.ndarray, min_swing: float = np.deg2rad(5.0)) -> np.ndarray:
+    """Mean rates (rad/s) of the large rudder moves of a run.
+
+    A move is a maximal stretch of samples over which the rudder moves in one
+    direction (steps below 0.05° count as no motion and end it); its rate is its swing
+    over its duration. Only moves of at least ``min_swing`` count, so the logger's
+    quantisation steps (0.56° on the Esso Osaka logs) and slow drifts do not.
+    A move done within one sample gives swing/dt, a lower bound of a faster gear.
+    """
+    dd = np.diff(np.asarray(delta, float))
+    dt = np.diff(np.asarray(t, float))
+    sgn = np.where(np.abs(dd) > np.deg2rad(0.05), np.sign(dd), 0.0)
+    rates = []
+    i = 0
+    while i < sgn.size:
+        if sgn[i] == 0 or not np.isfinite(dd[i]):
+            i += 1
+            continue
+        j = i
+        while j + 1 < sgn.size and sgn[j + 1] == sgn[i]:
+            j += 1
+        swing = abs(float(np.sum(dd[i:j + 1])))
+        if swing >= min_swing:
+            rates.append(swing / float(np.sum(dt[i:j + 1])))
+        i = j + 1
+    return np.asarray(rates)
 
 
 def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
@@ -70,9 +91,7 @@ def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
         n_all.append(n[ok & (n > 0)])
         if ok.any():
             nmin = min(nmin, float(np.min(n[ok])))
-        rr = rudder_rate(np.asarray(tr["delta"], float), tr.t)
-        if rr is not None:
-            rates.append(rr)
+        rates.extend(rudder_move_rates(np.asarray(tr["delta"], float), tr.t).tolist())
         dn = np.abs(np.diff(n)) / np.diff(tr.t)
         dn = dn[np.isfinite(dn) & (dn > 0.1)]
         if dn.size >= 5:
@@ -279,7 +298,8 @@ class BatchRecord:
 def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], order: np.ndarray,
                           psi_switch: np.ndarray, side: np.ndarray, cond: Conditions, *, dt: float = 0.1,
                           t_max: float | None = None, t_approach: float = T_APPROACH,
-                          until_heading: float = np.deg2rad(200.0), until_reversals: int = 3) -> BatchRecord:
+                          until_heading: float = np.deg2rad(200.0), until_reversals: int = 3,
+                          exact_reversal: bool = False) -> BatchRecord:
     """Turning circles (``psi_switch = inf``) and zig-zags of many rows at once.
 
     Row ``i``: coefficients ``Th[mode][i]``, rudder order ``order[i]`` (rad, > 0) first to
@@ -289,6 +309,14 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
     ``cond.rps``. Stops when every row has turned ``until_heading`` (turning rows) or
     reversed ``until_reversals`` times (zig-zag rows), or at ``t_max`` (default the
     approach plus 100 L/U).
+
+    ``exact_reversal``: the heading reaches the switching angle between two samples, at
+    ``t* = t_{k-1} + f dt`` (linear interpolation); the sampled rule reverses at ``t_k``,
+    up to one step late, which makes an overshoot jump by up to ``r dt`` when a
+    coefficient changes a little (a noise floor of the Monte Carlo bands). With this
+    option the gear's travel at the reversal sample is ``rate dt (2 − f)`` instead of
+    ``rate dt``, i.e. it has moved as if reversed at ``t*`` (with the usual one-step lead
+    of the sampled gear), so the overshoots vary smoothly with the coefficients.
     """
     order, psi_switch, side = (np.asarray(a, float) for a in (order, psi_switch, side))
     B = order.size
@@ -308,23 +336,30 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
     psi0 = np.zeros(B)
     nrev = np.zeros(B, int)
     turning = ~np.isfinite(psi_switch)
+    a_prev = np.zeros(B)
     k = 0
     with np.errstate(all="ignore"):
         while True:
             X[:, k] = x
+            stp = step
             if k >= k_exec:
                 if k == k_exec:
                     psi0 = x[:, 2].copy()
+                    a_prev = np.zeros(B)
                 else:
                     a = x[:, 2] - psi0
                     a = np.where((a > -np.pi) & (a <= np.pi), a, np.pi - np.mod(np.pi - a, 2 * np.pi))
                     flip = ~turning & (d * a >= psi_switch)
+                    if exact_reversal and flip.any():
+                        f = np.clip((psi_switch - d * a_prev) / (d * a - d * a_prev), 0.0, 1.0)
+                        stp = np.where(flip, step * (2.0 - np.nan_to_num(f, nan=1.0)), step)
                     d = np.where(flip, -d, d)
                     nrev += flip
+                    a_prev = a
                 cmd = sign * d * order
             else:
                 cmd = np.zeros(B)
-            delta = np.clip(delta + np.clip(cmd - delta, -step, step), -cond.rudder_limit, cond.rudder_limit)
+            delta = np.clip(delta + np.clip(cmd - delta, -stp, stp), -cond.rudder_limit, cond.rudder_limit)
             C[:, k], D[:, k] = cmd, delta
             head = np.abs(x[:, 2] - psi0)
             done = np.where(turning, head >= until_heading, nrev >= until_reversals) | ~np.isfinite(x).all(axis=1)
@@ -376,4 +411,4 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
 
 __all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
-           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_rate", "RUDDER_LIMIT", "T_APPROACH"]
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "RUDDER_LIMIT", "T_APPROACH"]
