@@ -261,21 +261,33 @@ def theta_rows(model: mmg.MmgModel, names: Sequence[str] = (), values: np.ndarra
     return out
 
 
-def _deriv(model, Th, x, delta, n):
-    b = mmg.basis(model, x[:, 3], x[:, 4], x[:, 5], delta, n)
+def rows_deriv(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, wind=None):
+    """:func:`shipid.models.mmg.dynamics` for rows with their own coefficients ``Th[mode]`` (B, p).
+
+    ``x`` (B, 6); ``delta``, ``n`` (B,); ``wind``: None (calm) or the true wind ``(U_T, γ_T)`` (B,) each.
+    """
+    if wind is None:
+        UA, gA = 0.0, 0.0
+    else:
+        UA, gA = mmg.apparent_wind(wind[0], wind[1], x[:, 2], x[:, 3], x[:, 4])
+    b = mmg.basis(model, x[:, 3], x[:, 4], x[:, 5], delta, n, UA, gA)
     F = [np.einsum("bp,bp->b", b[m][0], Th[m]) + b[m][1] for m in mmg.MODES]
     du, dv, dr = mmg.accelerations(model, x[:, 3], x[:, 4], x[:, 5], *F)
     c, s = np.cos(x[:, 2]), np.sin(x[:, 2])
     return np.stack([x[:, 3] * c - x[:, 4] * s, x[:, 3] * s + x[:, 4] * c, x[:, 5], du, dv, dr], axis=-1)
 
 
-def _rk4(model, Th, x, delta, n, h):
-    k1 = _deriv(model, Th, x, delta, n)
-    k2 = _deriv(model, Th, x + 0.5 * h * k1, delta, n)
-    k3 = _deriv(model, Th, x + 0.5 * h * k2, delta, n)
-    k4 = _deriv(model, Th, x + h * k3, delta, n)
+def rows_rk4(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, h, wind=None):
+    """One RK4 step of every row (inputs held), as :func:`shipid.models.mmg.simulate_batch`; ``h`` scalar or (B, 1).
+    A state beyond 1e6 becomes NaN (a diverging row)."""
+    k1 = rows_deriv(model, Th, x, delta, n, wind)
+    k2 = rows_deriv(model, Th, x + 0.5 * h * k1, delta, n, wind)
+    k3 = rows_deriv(model, Th, x + 0.5 * h * k2, delta, n, wind)
+    k4 = rows_deriv(model, Th, x + h * k3, delta, n, wind)
     x = x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
     return np.where(np.abs(x) < 1e6, x, np.nan)
+
+
 
 
 @dataclass(frozen=True)
@@ -365,7 +377,7 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
             done = np.where(turning, head >= until_heading, nrev >= until_reversals) | ~np.isfinite(x).all(axis=1)
             if k == nmax - 1 or (k > k_exec and done.all()):
                 break
-            x = _rk4(model, Th, x, delta, nn, dt)
+            x = rows_rk4(model, Th, x, delta, nn, dt)
             k += 1
     n_used = k + 1
     t = np.arange(n_used) * dt
@@ -401,7 +413,7 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
             done = (x[:, 3] <= 0) | ~np.isfinite(x).all(axis=1)
             if k == nmax - 1 or (k > k_exec and done.all()):
                 break
-            x = _rk4(model, Th, x, zero, n, dt)
+            x = rows_rk4(model, Th, x, zero, n, dt)
             k += 1
     m = k + 1
     cmd = np.zeros((B, m))
@@ -411,4 +423,4 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
 
 __all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
-           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "RUDDER_LIMIT", "T_APPROACH"]
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH"]

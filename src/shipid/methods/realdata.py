@@ -519,7 +519,8 @@ def cross_validate(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, candidates:
 def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior: mmg.MmgModel,
                      candidates: Mapping[str, Mapping[str, Sequence[str]]] | None = None, *,
                      config: FitConfig = FitConfig(), folds: int | None = None,
-                     horizon: float = 60.0, decimate: int = 2, progress=None) -> tuple[str, dict[str, dict]]:
+                     horizon: float = 60.0, decimate: int = 2, progress=None,
+                     batched: bool = True) -> tuple[str, dict[str, dict]]:
     """Leave-one-run-out (or ``folds``-fold) cross-validation over the TRAINING runs.
 
     Each candidate is fitted without the fold's runs and simulated on them over 60-s
@@ -527,9 +528,16 @@ def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior
     sample); the squared heading and position errors are pooled over all folds'
     horizons, and the score is :func:`horizon_score` of the pooled RMS. Returns the
     candidate with the lowest score (the first listed on a tie) and the table
-    (``psi_rms`` in deg, ``pos_rms`` in m).
+    (``psi_rms`` in deg, ``pos_rms`` in m). ``batched``: compute the same table with all
+    horizons of all folds simulated together (:func:`shipid.methods.cv_fast.cross_validate_horizons`);
+    False runs the reference loop below.
     """
     cands = candidates or CANDIDATES[prior.structure]
+    if batched:
+        from shipid.methods.cv_fast import cross_validate_horizons
+        table = cross_validate_horizons(trials, runs, prior, cands, config=config, folds=folds, horizon=horizon,
+                                        decimate=decimate, progress=progress)
+        return min(table, key=lambda c: table[c]["score"]), table
 
     def fold_errors(model, test_idx, train_idx):
         return horizon_sse(model, [trials[i] for i in test_idx], horizon, decimate)
