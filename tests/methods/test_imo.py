@@ -62,6 +62,8 @@ def test_stopping_only_where_the_model_has_an_astern_propeller():
     assert stop["name"] == "stopping track reach"
     assert 0.5 < stop["value"] < 20.0 and stop["verdict"] in ("pass", "fail")
     assert rep["L_over_V_full_scale_s"] == pytest.approx(3.0 / rep["conditions"]["speed"] * np.sqrt(325 / 3.0))
+    # with the ship's length the steering gear is SOLAS's slowest, Froude-scaled
+    assert rep["conditions"]["rudder_rate_deg_s"] == pytest.approx(65 / 28 * np.sqrt(325 / 3.0))
     kv = mmg.load_published("kvlcc2_hsva")
     rep = I.assess({"model": kv.to_dict()}, samples=0, rps=10.23, rudder_rate_deg_s=15.0)
     stop = rep["criteria"][-1]

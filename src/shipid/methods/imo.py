@@ -21,7 +21,12 @@ Scale: the criteria in ship lengths hold at any Froude-similar scale; the oversh
 limits depend on the *full-scale* L/V in seconds, ``(L/V)_ship = (L/U)_model √λ``
 with ``λ = L_ship / L_model``. Without ``ship_length`` the scale is unknown and an
 overshoot criterion is decided only when it passes the strictest limit (pass) or
-fails the most lenient one (fail); otherwise it reads "depends on L/V".
+fails the most lenient one (fail); otherwise it reads "depends on L/V". With
+``ship_length`` the steering gear is the slowest SOLAS allows (2.32°/s: 35° to 30°
+the other side in 28 s, II-1 reg. 29.3.2) at model scale, ``2.32 √λ`` °/s, unless a
+rate is given; without it, the training runs' rudder rate (often far faster: the
+3 m Esso Osaka's servo swings 30° within one 0.1-s sample). The stopping test uses
+the training runs' propeller reversal, so its track reach is the model's.
 
 Uncertainty: ``samples`` coefficient vectors are drawn (seeded) from N(θ̂, Σ) of the
 identified model's free coefficients (``covariance``, ``covariance_names`` of
@@ -50,6 +55,8 @@ from shipid.simulate.metrics import turning_metrics, zigzag_metrics
 BAND = (2.275, 97.725)
 #: Maximum stopping track reach (ship lengths).
 STOPPING_LIMIT = 15.0
+#: Slowest steering gear SOLAS II-1 reg. 29.3.2 allows (deg/s): 35° one side to 30° the other in 28 s.
+SOLAS_RUDDER_RATE = 65.0 / 28.0
 
 
 def overshoot_limits(l_over_v: float | None) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -174,11 +181,19 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     if samples < 0:
         raise InputError(f"--samples must be >= 0, got {samples}")
     model = model_from_result(result)
-    cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s)
     L = float(model.particulars["L"])
-    lu = L / cond.speed
     if ship_length is not None and not ship_length > 0:
         raise InputError(f"--ship-length must be positive, got {ship_length:g}")
+    gear_note = None
+    if ship_length is not None and rudder_rate_deg_s is None:
+        rudder_rate_deg_s = SOLAS_RUDDER_RATE * np.sqrt(ship_length / L)
+        gear_note = (f"rudder rate {rudder_rate_deg_s:.3g} deg/s: the SOLAS minimum {SOLAS_RUDDER_RATE:.3g} deg/s "
+                     f"(35 deg to 30 deg the other side in 28 s) at scale {ship_length / L:.4g} (Froude)")
+    cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s)
+    if gear_note:
+        from dataclasses import replace
+        cond = replace(cond, notes=cond.notes + (gear_note,))
+    lu = L / cond.speed
     lv = None if ship_length is None else lu * np.sqrt(ship_length / L)
     names, vals = sample_coefficients(result, samples, seed)
     Th = MM.theta_rows(model, names, vals)
@@ -238,7 +253,9 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
         srec = MM.simulate_stopping_batch(model, Th, cond, dt=dt)
         reach = np.array([stopping_reach(srec, r) / L if np.isfinite(srec.x[r]).all() else np.nan
                           for r in range(R)])
-        note = f"full astern {cond.rps_astern:g} rev/s (the training runs' most negative rate)"
+        note = (f"full astern {cond.rps_astern:g} rev/s (the training runs' most negative rate), reversed at "
+                + (f"{cond.rps_rate:.3g} rev/s^2" if cond.rps_rate else "once") + " as in the training runs; a "
+                "full-scale engine reverses far more slowly, so this is the model's, not the ship's, track reach")
         crit.append(_criterion("stopping track reach", "L", reach, (STOPPING_LIMIT, STOPPING_LIMIT), note))
     else:
         stop_note = ("not available: model has no astern propeller" if not model.structure.startswith("esso")
