@@ -4,8 +4,9 @@ The same numbers as :func:`shipid.methods.realdata.cross_validate` with
 :func:`shipid.methods.realdata.horizon_sse` as fold errors (the reference path,
 kept and tested against this one), computed in far fewer numpy calls:
 
-1. every candidate is fitted on every fold's training runs (the ridge regressions are
-   cheap);
+1. every candidate is fitted on every fold's training runs, stacking per-run regression
+   blocks computed once per candidate (the same arrays :func:`shipid.methods.realdata.regression_data`
+   builds for the fold);
 2. every restarted horizon of every test run, of every fold, of every candidate that
    shares a structure and particulars, becomes one row of a single batch with the
    coefficients of its fold's model; all rows are integrated together by RK4 with
@@ -96,12 +97,21 @@ def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRu
         cprior, free = R.apply_candidate(prior, cand)
         cfg = R.candidate_config(config, cand)
         fitted[cname], failed[cname] = [], False
+        try:       # each run's regression block once; a fold stacks its training runs' blocks
+            blocks = [R.regression_data([run], cprior, free, cfg) for run in runs]
+        except (ShipidError, np.linalg.LinAlgError, ValueError):
+            blocks = None
         for g in groups:
             tr_idx = [i for i in range(len(runs)) if i not in g]
             if not tr_idx:
                 continue
             try:
-                m = R.fit([runs[i] for i in tr_idx], cprior, free, cfg).model
+                if blocks is None:
+                    raise ValueError("regression data failed")
+                data = {md: R.ModeData(H=np.concatenate([blocks[i][md].H for i in tr_idx]),
+                                       y=np.concatenate([blocks[i][md].y for i in tr_idx]),
+                                       names=blocks[0][md].names) for md in mmg.MODES}
+                m = R.fit([runs[i] for i in tr_idx], cprior, free, cfg, data=data).model
             except (ShipidError, np.linalg.LinAlgError, ValueError):
                 failed[cname], m = True, None
             if bad.intersection(g):

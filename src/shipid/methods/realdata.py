@@ -374,15 +374,18 @@ class MmgFit:
 
 
 def fit(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
-        config: FitConfig = FitConfig(), name: str = "mmg-identified") -> MmgFit:
+        config: FitConfig = FitConfig(), name: str = "mmg-identified",
+        data: Mapping[str, ModeData] | None = None) -> MmgFit:
     """Ridge regression of every mode (module docstring, step 2).
 
     A free coefficient whose regressor is identically zero in the data (a regime
     never visited, e.g. astern propeller side force in runs without reversing) cannot
-    be estimated: it is kept at the prior value and listed in ``dropped``.
+    be estimated: it is kept at the prior value and listed in ``dropped``. ``data``: the
+    :func:`regression_data` of ``runs`` when the caller has it already (cross-validation
+    stacks per-run blocks once instead of once per fold).
     """
     free = {m: tuple(free[m]) for m in mmg.MODES}
-    data = regression_data(runs, prior, free, config)
+    data = regression_data(runs, prior, free, config) if data is None else data
     new, fits, dropped, used = {}, {}, {}, {}
     for mode in mmg.MODES:
         d = data[mode]
