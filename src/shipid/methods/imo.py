@@ -263,6 +263,13 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
         crit.append(Criterion("stopping track reach", "L", float("nan"), float("nan"), (float("nan"),) * 2,
                               None, stop_note, float("nan"), 0, stop_note))
     warnings = []
+    for c in crit:
+        if c.limit is None:
+            continue
+        if not np.isfinite(c.value):
+            warnings.append(f"{c.name}: not reached by the nominal model within the simulated time")
+        elif samples and c.n_valid < samples:
+            warnings.append(f"{c.name}: {samples - c.n_valid} of {samples} draws gave no value (left out of the band)")
     if diverged.any():
         warnings.append(f"{int(diverged.sum())} of {diverged.size} simulated manoeuvres diverged "
                         "(left out of the bands)")
