@@ -133,3 +133,39 @@ def test_bands_shrink_with_more_runs(tmp_path):
     w3, w13 = _widths(r3), _widths(r13)
     for k in w3:
         assert w13[k] < w3[k], (k, w3[k], w13[k])
+
+
+def test_stopping_batch_equals_the_generic_simulator_and_reach_is_interpolated():
+    """The stopping rows are mmg.simulate_batch with the same propeller schedule; the reach is the
+    track length up to u = 0 (linear interpolation between the samples around it)."""
+    need()
+    from shipid.methods import mmg_manoeuvres as MM
+
+    m = mmg.load_published("esso_osaka_3m")
+    cond = MM.Conditions(speed=MM.equilibrium_speed(m, 10.0), rps=10.0, rudder_rate=1.0, rps_astern=-10.0,
+                         rps_rate=20.0)
+    rec = MM.simulate_stopping_batch(m, MM.theta_rows(m), cond)
+    t = rec.t
+    U = np.zeros((t.size, 4))
+    U[:, 1] = rec.n[0]
+    ref = mmg.simulate_batch(m, t, np.array([[0, 0, 0, cond.speed, 0, 0]]), U)[0]
+    np.testing.assert_allclose(rec.x[0], ref, rtol=1e-10, atol=1e-12)
+    k0 = int(np.flatnonzero(rec.delta_cmd[0] > 0)[0])
+    assert rec.n[0, k0] == pytest.approx(10.0 - 20.0 * 0.1)              # the ramp starts at execute
+    assert rec.x[0, -1, 3] <= 0 < rec.x[0, -2, 3]                          # stopped at the first u <= 0
+    reach = I.stopping_reach(rec, 0)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(ref[k0:, 0]), np.diff(ref[k0:, 1])))])
+    assert s[-2] <= reach <= s[-1]
+
+
+def test_initial_turning_on_a_constructed_track():
+    from shipid.methods.mmg_manoeuvres import BatchRecord
+
+    t = np.arange(0.0, 30.0, 0.1)
+    x = np.zeros((1, t.size, 6))
+    x[0, :, 0] = 2.0 * t                                   # 2 m/s straight (track = 2 t)
+    x[0, :, 2] = np.where(t > 5.0, np.deg2rad(1.0) * (t - 5.0), 0.0)   # 1 deg/s after execute at 5 s
+    cmd = np.where(t >= 5.0, 0.1, 0.0)[None]
+    rec = BatchRecord(t, x, cmd, cmd, np.zeros((1, t.size)))
+    # heading change 10 deg at t = 15 s, 10 s after execute: 20 m of track
+    assert I.initial_turning(rec, 0) == pytest.approx(20.0, rel=1e-9)

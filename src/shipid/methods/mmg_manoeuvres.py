@@ -2,13 +2,14 @@
 
 An identified model (MODEL.json of ``shipid identify mmg``) is run through the
 definitive manoeuvres of ITTC 7.5-04-02-01 / IMO MSC.137(76) — turning circles,
-zig-zags, the stopping test — in calm water (no wind), in the MMG rudder convention
+zig-zags, the stopping test — in calm water and still air (no true wind; the air drag of
+the ship's own motion stays, as in :func:`shipid.models.mmg.dynamics`), in the MMG rudder convention
 (positive δ turns the ship to starboard; :func:`rudder_turn_sign` checks it on the model).
 
 **Test conditions** (:func:`resolve_conditions`). The approach is steady straight
 motion with the rudder amidships. Given a propeller rate ``n`` the approach speed is
 the model's own straight-line equilibrium ``X(u, 0, 0; δ = 0, n) = 0``
-(:func:`equilibrium_speed`, surge only); given a speed the rate is solved the same
+(:func:`equilibrium_speed`, surge only, air drag included); given a speed the rate is solved the same
 way (:func:`equilibrium_rps`); given both, both are used as given (the model then
 accelerates during the approach). With neither, ``n`` is taken from the training
 data recorded in the model (:func:`training_conditions`: the median propeller rate
@@ -108,7 +109,9 @@ def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
 
 
 def _straight_du(model: mmg.MmgModel, u: float, n: float) -> float:
-    X, _, _ = mmg.forces(model, np.array([u]), np.array([0.0]), np.array([0.0]), np.array([0.0]), np.array([n]))
+    UA, gA = mmg.apparent_wind(0.0, 0.0, 0.0, np.array([u]), np.array([0.0]))    # still air: the ship's own speed
+    X, _, _ = mmg.forces(model, np.array([u]), np.array([0.0]), np.array([0.0]), np.array([0.0]), np.array([n]),
+                         UA, gA)
     return float(X[0] / mmg.mass_terms(model)[0])
 
 
@@ -217,7 +220,8 @@ def resolve_conditions(model: mmg.MmgModel, result: Mapping[str, Any] | None = N
 def rudder_turn_sign(model: mmg.MmgModel, cond: Conditions) -> float:
     """+1 if positive δ turns the model to starboard at the approach (``∂ṙ/∂δ > 0``), else −1."""
     def rdot(d):
-        X, Y, N = mmg.forces(model, *(np.array([a]) for a in (cond.speed, 0.0, 0.0, d, cond.rps)))
+        UA, gA = mmg.apparent_wind(0.0, 0.0, 0.0, np.array([cond.speed]), np.array([0.0]))
+        X, Y, N = mmg.forces(model, *(np.array([a]) for a in (cond.speed, 0.0, 0.0, d, cond.rps)), UA, gA)
         return mmg.accelerations(model, cond.speed, 0.0, 0.0, X, Y, N)[2][0]
     s = rdot(np.deg2rad(5.0)) - rdot(-np.deg2rad(5.0))
     if not np.isfinite(s) or s == 0:
@@ -264,12 +268,12 @@ def theta_rows(model: mmg.MmgModel, names: Sequence[str] = (), values: np.ndarra
 def rows_deriv(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, wind=None):
     """:func:`shipid.models.mmg.dynamics` for rows with their own coefficients ``Th[mode]`` (B, p).
 
-    ``x`` (B, 6); ``delta``, ``n`` (B,); ``wind``: None (calm) or the true wind ``(U_T, γ_T)`` (B,) each.
+    ``x`` (B, 6); ``delta``, ``n`` (B,); ``wind``: the true wind ``(U_T, γ_T)`` (B,) each, None for still
+    air (the ship still meets the apparent wind of its own motion, as :func:`shipid.models.mmg.dynamics`
+    with zero true wind).
     """
-    if wind is None:
-        UA, gA = 0.0, 0.0
-    else:
-        UA, gA = mmg.apparent_wind(wind[0], wind[1], x[:, 2], x[:, 3], x[:, 4])
+    w0, w1 = (0.0, 0.0) if wind is None else wind
+    UA, gA = mmg.apparent_wind(w0, w1, x[:, 2], x[:, 3], x[:, 4])
     b = mmg.basis(model, x[:, 3], x[:, 4], x[:, 5], delta, n, UA, gA)
     F = [np.einsum("bp,bp->b", b[m][0], Th[m]) + b[m][1] for m in mmg.MODES]
     du, dv, dr = mmg.accelerations(model, x[:, 3], x[:, 4], x[:, 5], *F)
