@@ -34,7 +34,8 @@ MODEL.json; fixed coefficients stay fixed) and every manoeuvre is simulated for 
 (one batch, :mod:`shipid.methods.mmg_manoeuvres`). Each criterion reports the
 nominal value (the point estimate), the Monte Carlo standard deviation and the
 2.275 %–97.725 % quantile band (the ±2-std band of a normal; quantiles rather than
-nominal ± 2 std so that a skewed response shows), and P(pass) over the draws. The
+nominal ± 2 std so that a skewed response shows), and P(pass) over the draws (against
+the strictest limit where the limit is a range). The
 ridge standard errors of ``identify mmg`` assume independent residuals, so the
 bands are optimistic in the same measure.
 """
@@ -129,7 +130,7 @@ def _criterion(name, unit, vals, limit, note="") -> Criterion:
     else:
         lo, hi = limit
         verdict = "pass" if nominal <= lo else "fail" if nominal > hi else "depends on L/V (give --ship-length)"
-        p = float(np.mean(vals[1:] <= lo)) if vals.size > 1 and lo == hi else float("nan")
+        p = float(np.mean(vals[1:] <= lo)) if vals.size > 1 else float("nan")   # strictest limit if a range
     return Criterion(name, unit, nominal, std, band, None if limit is None else tuple(limit), verdict, p,
                      int(mc.size), note)
 
