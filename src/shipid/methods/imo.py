@@ -49,7 +49,6 @@ import numpy as np
 
 from shipid.errors import InputError
 from shipid.methods import mmg_manoeuvres as MM
-from shipid.models import mmg
 from shipid.simulate.metrics import turning_metrics, zigzag_metrics
 
 #: Quantiles of the band (the ±2-std probabilities of a normal).
