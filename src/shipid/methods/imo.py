@@ -290,7 +290,8 @@ def format_report(rep: Mapping[str, Any]) -> str:
              f"approach {c['speed']:.4g} m/s, {c['rps']:.4g} rev/s, rudder {c['rudder_rate_deg_s']:.3g} deg/s; "
              f"L/U = {rep['L_over_U_model_s']:.3g} s (model); full-scale L/V = "
              + (f"{lv:.3g} s" if lv is not None else "unknown (give --ship-length)"),
-             f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']}",
+             f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']} "
+             "(ridge standard errors assume independent residuals: the bands are optimistic)",
              f"{'criterion':<52} {'value':>8} {'std':>7} {'band (+-2 std)':>19} {'limit':>11} {'P(pass)':>8}  verdict"]
     for k in rep["criteria"]:
         lim = k["limit"]
