@@ -147,3 +147,21 @@ def test_batched_simulator_agrees_with_run_manoeuvre_with_air_drag():
                                    t_max=60.0, until_reversals=99)
     for j, c in enumerate(mmg.STATE_NAMES):
         np.testing.assert_allclose(rec.x[0, :, j], ref[c], rtol=1e-10, atol=1e-10)
+
+
+def test_conditions_of_an_older_model_file_come_from_its_training_runs(tmp_path, kv):
+    """A MODEL.json without training_conditions: they are computed from the training run files it names."""
+    from shipid.data import write_trial
+
+    t = np.arange(0.0, 30.0, 0.1)
+    d = np.deg2rad(10.0) * np.clip((t - 5.0) / 1.0, 0.0, 1.0)
+    ch = {"x": 0 * t, "y": 0 * t, "psi": 0 * t, "u": np.full(t.size, 1.0), "v": 0 * t, "r": 0 * t,
+          "delta": d, "n": np.full(t.size, 9.5)}
+    run = tmp_path / "run.csv"
+    write_trial(Trial(t, ch, {}, {}), run)
+    res = {"model": kv.to_dict(), "provenance": {"training_runs": [{"file": str(run)}], "rudder_sign": -1}}
+    c = MM.resolve_conditions(kv, res)
+    assert c.rps == 9.5 and np.degrees(c.rudder_rate) == pytest.approx(10.0, rel=1e-9)
+    res["provenance"]["training_runs"].append({"file": str(tmp_path / "gone.csv")})
+    with pytest.raises(InputError, match="--speed or --rps"):
+        MM.resolve_conditions(kv, res)
