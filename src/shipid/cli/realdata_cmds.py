@@ -41,8 +41,10 @@ def _read_run(path, fmt=None, channels=None):
 @click.option("--json", "as_json", is_flag=True, help="Print the error table as JSON.")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
               help="Write a figure of measured vs predicted motion (PNG/PDF/SVG).")
-@click.option("--force", is_flag=True, help="Overwrite the plot file.")
-def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, force):
+@click.option("--out", "out_path", default=None, type=click.Path(dir_okay=False),
+              help="Write the whole-run open-loop prediction beside the measured channels (CSV/Parquet).")
+@click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
+def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
     """Simulate MODEL open loop on a measured run and report RMS/max errors.
 
     MODEL is a JSON file written by 'shipid identify mmg --json' (or 'identify
@@ -59,11 +61,23 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         raise ShipidError("--horizon must be positive")
     if rudder_sign not in (1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
+    if out_path and not force:
+        from pathlib import Path
+
+        from shipid.errors import OutputExistsError
+        if Path(out_path).exists():          # before the simulation, not after
+            raise OutputExistsError(out_path)
     m = V.load_model(model)
     tr = _read_run(trial_path, fmt, channels)
     if rudder_sign == -1 and "delta" in tr:
         tr = tr.with_channels(delta=-tr["delta"])
     v = V.validate(m, tr, horizon=horizon)
+    if out_path:
+        from shipid.methods.predict_export import write_prediction
+        _, pt = write_prediction(v, tr, out_path, rudder_sign=rudder_sign, force=force)
+        if pt.meta["diverged_from_s"] is not None:
+            click.echo(f"warning: the prediction diverged at t = {pt.meta['diverged_from_s']:g} s; "
+                       f"{out_path} has empty predicted cells from there", err=True)
     if plot_path:
         V.plot(v, plot_path, force=force)
     if as_json:
@@ -72,6 +86,8 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         click.echo(V.format_table(v))
         if plot_path:
             click.echo(f"plot written to {plot_path}")
+        if out_path:
+            click.echo(f"prediction written to {out_path}")
 
 
 # ----------------------------------------------------------------------------- identify

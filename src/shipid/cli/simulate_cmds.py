@@ -27,18 +27,23 @@ _SUFFIXES = (".csv", ".parquet", ".pq")
               help="Seed of every random draw (PRBS, --noise).")
 @click.option("--speed", type=float, default=None, help="Approach speed in m/s [default: service speed].")
 @click.option("--noise", is_flag=True, help="Add default sensor noise (shipid.simulate.noise.DEFAULT_NOISE).")
+@click.option("--rps", type=float, default=None,
+              help="Identified MMG models only: propeller rate, rev/s [default: from the training data].")
+@click.option("--rudder-rate", type=float, default=None,
+              help="Identified MMG models only: steering-gear rate, deg/s [default: from the training data].")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
 @click.option("--change-at", type=float, default=None,
               help="mass-cm-stream: time of the load change (s) [default: no change].")
 @click.option("--to", "to", type=str, default=None,
               help="mass-cm-stream: the load after the change, 'M,ZM' (kg, m) [default: 0.7,-0.14].")
 def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, dt: float,
-                 seed: int, speed: float | None, noise: bool, force: bool, change_at: float | None = None,
-                 to: str | None = None) -> None:
+                 seed: int, speed: float | None, rps: float | None, rudder_rate: float | None,
+                 noise: bool, force: bool, change_at: float | None = None, to: str | None = None) -> None:
     """Simulate VESSEL through MANOEUVRE and write the trial.
 
     \b
-    VESSEL     a packaged vessel (see `shipid vessels`) or `nomoto`
+    VESSEL     a packaged vessel (see `shipid vessels`), `nomoto`, or an identified
+               MMG model: MODEL.json of `shipid identify mmg` (or published:NAME)
     MANOEUVRE  straight | turning-35[-port] | zigzag-20 | zigzag-10-5 | prbs-10[-T]
                | dp-surge | dp-sway-yaw | dp-azimuth
                | mass-cm-stream (fishing-vessel: a 50-Hz loaded IMU + rudder stream with a load
@@ -49,6 +54,15 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
         from shipid.simulate.masscm_stream import simulate_stream_cmd
         simulate_stream_cmd(vessel, out, duration=duration, seed=seed, change_at=change_at, to=to, force=force)
         return
+    from shipid.cli.imo_cmds import is_model_spec, simulate_identified
+
+    if is_model_spec(vessel):
+        if seed < 0:
+            raise ShipidError(f"--seed must be >= 0, got {seed}")
+        return simulate_identified(vessel, manoeuvre, out, duration=duration, dt=dt, seed=seed, speed=speed,
+                                   rps=rps, rudder_rate=rudder_rate, noise=noise, force=force)
+    if rps is not None or rudder_rate is not None:
+        raise ShipidError("--rps and --rudder-rate apply to identified MMG models (MODEL.json) only")
     from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
     from shipid.simulate.registry import get_ship_model
 

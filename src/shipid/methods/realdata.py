@@ -374,15 +374,18 @@ class MmgFit:
 
 
 def fit(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
-        config: FitConfig = FitConfig(), name: str = "mmg-identified") -> MmgFit:
+        config: FitConfig = FitConfig(), name: str = "mmg-identified",
+        data: Mapping[str, ModeData] | None = None) -> MmgFit:
     """Ridge regression of every mode (module docstring, step 2).
 
     A free coefficient whose regressor is identically zero in the data (a regime
     never visited, e.g. astern propeller side force in runs without reversing) cannot
-    be estimated: it is kept at the prior value and listed in ``dropped``.
+    be estimated: it is kept at the prior value and listed in ``dropped``. ``data``: the
+    :func:`regression_data` of ``runs`` when the caller has it already (cross-validation
+    stacks per-run blocks once instead of once per fold).
     """
     free = {m: tuple(free[m]) for m in mmg.MODES}
-    data = regression_data(runs, prior, free, config)
+    data = regression_data(runs, prior, free, config) if data is None else data
     new, fits, dropped, used = {}, {}, {}, {}
     for mode in mmg.MODES:
         d = data[mode]
@@ -519,7 +522,8 @@ def cross_validate(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, candidates:
 def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior: mmg.MmgModel,
                      candidates: Mapping[str, Mapping[str, Sequence[str]]] | None = None, *,
                      config: FitConfig = FitConfig(), folds: int | None = None,
-                     horizon: float = 60.0, decimate: int = 2, progress=None) -> tuple[str, dict[str, dict]]:
+                     horizon: float = 60.0, decimate: int = 2, progress=None,
+                     batched: bool = True) -> tuple[str, dict[str, dict]]:
     """Leave-one-run-out (or ``folds``-fold) cross-validation over the TRAINING runs.
 
     Each candidate is fitted without the fold's runs and simulated on them over 60-s
@@ -527,9 +531,16 @@ def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior
     sample); the squared heading and position errors are pooled over all folds'
     horizons, and the score is :func:`horizon_score` of the pooled RMS. Returns the
     candidate with the lowest score (the first listed on a tie) and the table
-    (``psi_rms`` in deg, ``pos_rms`` in m).
+    (``psi_rms`` in deg, ``pos_rms`` in m). ``batched``: compute the same table with all
+    horizons of all folds simulated together (:func:`shipid.methods.cv_fast.cross_validate_horizons`);
+    False runs the reference loop below.
     """
     cands = candidates or CANDIDATES[prior.structure]
+    if batched:
+        from shipid.methods.cv_fast import cross_validate_horizons
+        table = cross_validate_horizons(trials, runs, prior, cands, config=config, folds=folds, horizon=horizon,
+                                        decimate=decimate, progress=progress)
+        return min(table, key=lambda c: table[c]["score"]), table
 
     def fold_errors(model, test_idx, train_idx):
         return horizon_sse(model, [trials[i] for i in test_idx], horizon, decimate)
@@ -645,9 +656,12 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
-    return build_result(f, cprior, runs, structure_name=structure, selection=selection,
-                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
-                        overrides=cands[structure].get("particulars"))
+    res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
+                       smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
+                       overrides=cands[structure].get("particulars"))
+    from shipid.methods.mmg_manoeuvres import training_conditions   # test conditions for simulate / imo
+    res.model["training_conditions"] = training_conditions(trials)
+    return res
 
 
 __all__ = ["SmoothConfig", "SmoothedRun", "smooth_run", "FitConfig", "CANDIDATES", "regression_data", "fit",

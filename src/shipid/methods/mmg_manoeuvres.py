@@ -1,0 +1,430 @@
+"""Standard manoeuvres of identified MMG models: test conditions and a batched simulator.
+
+An identified model (MODEL.json of ``shipid identify mmg``) is run through the
+definitive manoeuvres of ITTC 7.5-04-02-01 / IMO MSC.137(76) — turning circles,
+zig-zags, the stopping test — in calm water and still air (no true wind; the air drag of
+the ship's own motion stays, as in :func:`shipid.models.mmg.dynamics`), in the MMG rudder convention
+(positive δ turns the ship to starboard; :func:`rudder_turn_sign` checks it on the model).
+
+**Test conditions** (:func:`resolve_conditions`). The approach is steady straight
+motion with the rudder amidships. Given a propeller rate ``n`` the approach speed is
+the model's own straight-line equilibrium ``X(u, 0, 0; δ = 0, n) = 0``
+(:func:`equilibrium_speed`, surge only, air drag included); given a speed the rate is solved the same
+way (:func:`equilibrium_rps`); given both, both are used as given (the model then
+accelerates during the approach). With neither, ``n`` is taken from the training
+data recorded in the model (:func:`training_conditions`: the median propeller rate
+over the ahead samples of all training runs), because the Esso Osaka runs start from
+rest and execute the rudder within the first second, so their speed at execute is no
+approach speed. The steering-gear rate is the median rate of the training runs' large rudder moves
+(:func:`rudder_move_rates`), the rudder limit 35°; the
+stopping test reverses to the most negative rate of the training runs at their
+median propeller acceleration.
+
+**Batched simulation** (:func:`simulate_rudder_batch`, :func:`simulate_stopping_batch`):
+many rows at once — one per (parameter sample, manoeuvre) — each with its own
+coefficient vector, by the same RK4 with zero-order-hold inputs and the same
+rate-limited steering gear and Kempf reversal rule as
+:func:`shipid.simulate.manoeuvres.run_manoeuvre` (for one row the two agree to
+round-off; tested). The simulation stops when every row has what its criteria need.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError, ShipidError
+from shipid.models import mmg
+
+#: Rudder limit (rad) of the manoeuvres (35° hard over, MSC.137(76) 4.2.1).
+RUDDER_LIMIT = np.deg2rad(35.0)
+#: Straight approach before execute (s), as :data:`shipid.simulate.manoeuvres.T_EXECUTE`.
+T_APPROACH = 10.0
+
+
+# ----------------------------------------------------------------------------- conditions
+def rudder_move_rates(delta: np.ndarray, t: np.ndarray, min_swing: float = np.deg2rad(5.0)) -> np.ndarray:
+    """Mean rates (rad/s) of the large rudder moves of a run.
+
+    A move is a maximal stretch of samples over which the rudder moves in one
+    direction (steps below 0.05° count as no motion and end it); its rate is its swing
+    over its duration. Only moves of at least ``min_swing`` count, so the logger's
+    quantisation steps (0.56° on the Esso Osaka logs) and slow drifts do not.
+    A move done within one sample gives swing/dt, a lower bound of a faster gear.
+    """
+    dd = np.diff(np.asarray(delta, float))
+    dt = np.diff(np.asarray(t, float))
+    sgn = np.where(np.abs(dd) > np.deg2rad(0.05), np.sign(dd), 0.0)
+    rates = []
+    i = 0
+    while i < sgn.size:
+        if sgn[i] == 0 or not np.isfinite(dd[i]):
+            i += 1
+            continue
+        j = i
+        while j + 1 < sgn.size and sgn[j + 1] == sgn[i]:
+            j += 1
+        swing = abs(float(np.sum(dd[i:j + 1])))
+        if swing >= min_swing:
+            rates.append(swing / float(np.sum(dt[i:j + 1])))
+        i = j + 1
+    return np.asarray(rates)
+
+
+def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
+    """What the training runs say about the test conditions (recorded in MODEL.json).
+
+    ``rps_ahead``: median propeller rate over all samples with ``n > 0`` (rev/s);
+    ``rps_astern``: the most negative rate (None if no run reversed); ``rps_rate``:
+    median over runs of the 95th percentile of |dn/dt| where the rate changes by more
+    than 0.1 rev/s² (None if constant); ``rudder_rate``: median over runs of
+    :func:`rudder_rate` (rad/s); ``speed_p95``: median over runs of the 95th
+    percentile of u (m/s, for reference); rudder in the MMG convention.
+    """
+    n_all, rates, nrates, speeds = [], [], [], []
+    nmin = np.inf
+    for tr in trials:
+        n = np.asarray(tr["n"], float)
+        ok = np.isfinite(n)
+        n_all.append(n[ok & (n > 0)])
+        if ok.any():
+            nmin = min(nmin, float(np.min(n[ok])))
+        rates.extend(rudder_move_rates(np.asarray(tr["delta"], float), tr.t).tolist())
+        dn = np.abs(np.diff(n)) / np.diff(tr.t)
+        dn = dn[np.isfinite(dn) & (dn > 0.1)]
+        if dn.size >= 5:
+            nrates.append(float(np.percentile(dn, 95)))
+        if "u" in tr:
+            speeds.append(float(np.nanpercentile(tr["u"], 95)))
+    pooled = np.concatenate(n_all) if n_all else np.array([])
+    return {"rps_ahead": float(np.median(pooled)) if pooled.size else None,
+            "rps_astern": float(nmin) if np.isfinite(nmin) and nmin < 0 else None,
+            "rps_rate": float(np.median(nrates)) if nrates else None,
+            "rudder_rate": float(np.median(rates)) if rates else None,
+            "speed_p95": float(np.median(speeds)) if speeds else None,
+            "runs": len(trials)}
+
+
+def _straight_du(model: mmg.MmgModel, u: float, n: float) -> float:
+    UA, gA = mmg.apparent_wind(0.0, 0.0, 0.0, np.array([u]), np.array([0.0]))    # still air: the ship's own speed
+    X, _, _ = mmg.forces(model, np.array([u]), np.array([0.0]), np.array([0.0]), np.array([0.0]), np.array([n]),
+                         UA, gA)
+    return float(X[0] / mmg.mass_terms(model)[0])
+
+
+def equilibrium_speed(model: mmg.MmgModel, rps: float) -> float:
+    """Straight-line speed (m/s) at which the model's surge force vanishes at ``rps`` (δ = 0, v = r = 0)."""
+    from scipy.optimize import brentq
+
+    L = model.particulars["L"]
+    lo, hi = 1e-3, 3.0 * np.sqrt(9.81 * L)            # up to Froude number 3
+    flo, fhi = _straight_du(model, lo, rps), _straight_du(model, hi, rps)
+    if not (flo > 0 > fhi):
+        raise ShipidError(f"model {model.name!r} has no straight-line equilibrium speed at {rps:g} rev/s "
+                          f"(surge acceleration {flo:.3g} at {lo:g} m/s, {fhi:.3g} at {hi:.3g} m/s); give --speed")
+    return float(brentq(lambda u: _straight_du(model, u, rps), lo, hi, xtol=1e-10))
+
+
+def equilibrium_rps(model: mmg.MmgModel, speed: float) -> float:
+    """Propeller rate (rev/s) that holds the straight-line speed ``speed`` (δ = 0, v = r = 0)."""
+    from scipy.optimize import brentq
+
+    lo, hi = 1e-3, 200.0
+    flo, fhi = _straight_du(model, speed, lo), _straight_du(model, speed, hi)
+    if not (flo < 0 < fhi):
+        raise ShipidError(f"model {model.name!r}: no propeller rate in (0, {hi:g}] rev/s holds {speed:g} m/s; "
+                          "give --rps")
+    return float(brentq(lambda n: _straight_du(model, speed, n), lo, hi, xtol=1e-10))
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """Test conditions of the manoeuvres (SI: m/s, rev/s, rad, rad/s, rev/s²)."""
+
+    speed: float
+    rps: float
+    rudder_rate: float
+    rudder_limit: float = RUDDER_LIMIT
+    rps_astern: float | None = None
+    rps_rate: float | None = None
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"speed": self.speed, "rps": self.rps, "rudder_rate_deg_s": float(np.degrees(self.rudder_rate)),
+                "rudder_limit_deg": float(np.degrees(self.rudder_limit)), "rps_astern": self.rps_astern,
+                "rps_rate": self.rps_rate, "notes": list(self.notes)}
+
+
+def recorded_conditions(d: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The training conditions of a MODEL.json dict: recorded ones, else from its training run files if readable."""
+    tc = (d.get("model") or {}).get("training_conditions")
+    if tc:
+        return dict(tc)
+    runs = (d.get("provenance") or {}).get("training_runs") or []
+    from pathlib import Path
+
+    from shipid.data.io import read_trial
+    trials = []
+    for r in runs:
+        f = r.get("file") if isinstance(r, Mapping) else None
+        if not f or not Path(f).is_file():
+            return None
+        try:
+            tr = read_trial(f, trim_empty_rows=True, interpolate_gaps=1.0)
+        except ShipidError:
+            return None
+        if int((d.get("provenance") or {}).get("rudder_sign", 1)) == -1:
+            tr = tr.with_channels(delta=-tr["delta"])
+        trials.append(tr)
+    return training_conditions(trials) if trials else None
+
+
+def resolve_conditions(model: mmg.MmgModel, result: Mapping[str, Any] | None = None, *,
+                       speed: float | None = None, rps: float | None = None,
+                       rudder_rate_deg_s: float | None = None) -> Conditions:
+    """The test conditions from the options and the model's training data (module docstring)."""
+    tc = recorded_conditions(result) if result is not None else None
+    notes = []
+    for name, v in (("--speed", speed), ("--rps", rps), ("--rudder-rate", rudder_rate_deg_s)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise InputError(f"{name} must be positive, got {v:g}")
+    if speed is None and rps is None:
+        if not tc or tc.get("rps_ahead") is None:
+            raise InputError("the model records no training conditions: give --speed or --rps")
+        rps = float(tc["rps_ahead"])
+        notes.append(f"propeller rate {rps:.4g} rev/s: median ahead rate of the {tc.get('runs')} training runs")
+    if speed is None:
+        speed = equilibrium_speed(model, rps)
+        notes.append(f"approach speed {speed:.4g} m/s: the model's straight-line equilibrium at {rps:.4g} rev/s")
+    elif rps is None:
+        rps = equilibrium_rps(model, speed)
+        notes.append(f"propeller rate {rps:.4g} rev/s: the model's straight-line equilibrium at {speed:.4g} m/s")
+    else:
+        du = _straight_du(model, speed, rps)
+        notes.append(f"speed and rate as given; the model's surge acceleration at the approach is {du:.3g} m/s^2")
+    if rudder_rate_deg_s is not None:
+        rate = float(np.deg2rad(rudder_rate_deg_s))
+    elif tc and tc.get("rudder_rate"):
+        rate = float(tc["rudder_rate"])
+        notes.append(f"rudder rate {np.degrees(rate):.3g} deg/s: median of the training runs")
+    else:
+        raise InputError("the model records no rudder rate: give --rudder-rate (deg/s)")
+    return Conditions(speed=float(speed), rps=float(rps), rudder_rate=rate,
+                      rps_astern=(tc or {}).get("rps_astern"), rps_rate=(tc or {}).get("rps_rate"),
+                      notes=tuple(notes))
+
+
+def rudder_turn_sign(model: mmg.MmgModel, cond: Conditions) -> float:
+    """+1 if positive δ turns the model to starboard at the approach (``∂ṙ/∂δ > 0``), else −1."""
+    def rdot(d):
+        UA, gA = mmg.apparent_wind(0.0, 0.0, 0.0, np.array([cond.speed]), np.array([0.0]))
+        X, Y, N = mmg.forces(model, *(np.array([a]) for a in (cond.speed, 0.0, 0.0, d, cond.rps)), UA, gA)
+        return mmg.accelerations(model, cond.speed, 0.0, 0.0, X, Y, N)[2][0]
+    s = rdot(np.deg2rad(5.0)) - rdot(-np.deg2rad(5.0))
+    if not np.isfinite(s) or s == 0:
+        raise ShipidError(f"model {model.name!r}: the yaw rate does not respond to the rudder")
+    return float(np.sign(s))
+
+
+def ship_model(model: mmg.MmgModel, cond: Conditions):
+    """:class:`shipid.simulate.model.ShipModel` of an identified MMG model in calm water at ``cond``."""
+    from shipid.simulate.model import ShipModel
+
+    def outputs(t, X, U):
+        return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
+                "delta": U[:, 0], "n": U[:, 1]}
+
+    return ShipModel(name=model.name, f=mmg.dynamics, theta=model, state_names=mmg.STATE_NAMES,
+                     input_names=mmg.INPUT_NAMES, x0=lambda s: np.array([0.0, 0.0, 0.0, s, 0.0, 0.0]),
+                     outputs=outputs, service_speed=cond.speed, heading_index=2,
+                     rudder_limit=cond.rudder_limit, rudder_rate_limit=cond.rudder_rate,
+                     u0=lambda s: np.array([0.0, cond.rps, 0.0, 0.0]))
+
+
+def default_duration(model: mmg.MmgModel, cond: Conditions) -> float:
+    """Record length for ``shipid simulate``: the approach plus 60 L/U."""
+    return T_APPROACH + 60.0 * model.particulars["L"] / cond.speed
+
+
+# ----------------------------------------------------------------------------- batched simulation
+def theta_rows(model: mmg.MmgModel, names: Sequence[str] = (), values: np.ndarray | None = None) -> dict:
+    """Per-mode coefficient arrays ``{mode: (B, p)}``: the model's coefficients with ``names`` set per row."""
+    values = np.zeros((1, 0)) if values is None else np.atleast_2d(np.asarray(values, float))
+    B = values.shape[0]
+    out = {}
+    for m in mmg.MODES:
+        cols = mmg.COEFS[model.structure][m]
+        T = np.tile(model.theta(m), (B, 1))
+        for j, c in enumerate(cols):
+            if c in names:
+                T[:, j] = values[:, list(names).index(c)]
+        out[m] = T
+    return out
+
+
+def rows_deriv(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, wind=None):
+    """:func:`shipid.models.mmg.dynamics` for rows with their own coefficients ``Th[mode]`` (B, p).
+
+    ``x`` (B, 6); ``delta``, ``n`` (B,); ``wind``: the true wind ``(U_T, γ_T)`` (B,) each, None for still
+    air (the ship still meets the apparent wind of its own motion, as :func:`shipid.models.mmg.dynamics`
+    with zero true wind).
+    """
+    w0, w1 = (0.0, 0.0) if wind is None else wind
+    UA, gA = mmg.apparent_wind(w0, w1, x[:, 2], x[:, 3], x[:, 4])
+    b = mmg.basis(model, x[:, 3], x[:, 4], x[:, 5], delta, n, UA, gA)
+    F = [np.einsum("bp,bp->b", b[m][0], Th[m]) + b[m][1] for m in mmg.MODES]
+    du, dv, dr = mmg.accelerations(model, x[:, 3], x[:, 4], x[:, 5], *F)
+    c, s = np.cos(x[:, 2]), np.sin(x[:, 2])
+    return np.stack([x[:, 3] * c - x[:, 4] * s, x[:, 3] * s + x[:, 4] * c, x[:, 5], du, dv, dr], axis=-1)
+
+
+def rows_rk4(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, h, wind=None):
+    """One RK4 step of every row (inputs held), as :func:`shipid.models.mmg.simulate_batch`; ``h`` scalar or (B, 1).
+    A state beyond 1e6 becomes NaN (a diverging row)."""
+    k1 = rows_deriv(model, Th, x, delta, n, wind)
+    k2 = rows_deriv(model, Th, x + 0.5 * h * k1, delta, n, wind)
+    k3 = rows_deriv(model, Th, x + 0.5 * h * k2, delta, n, wind)
+    k4 = rows_deriv(model, Th, x + h * k3, delta, n, wind)
+    x = x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+    return np.where(np.abs(x) < 1e6, x, np.nan)
+
+
+
+
+@dataclass(frozen=True)
+class BatchRecord:
+    """Histories of a batch: ``t`` (n,), ``x`` (B, n, 6), ``delta``, ``delta_cmd``, ``n`` (B, n)."""
+
+    t: np.ndarray
+    x: np.ndarray
+    delta: np.ndarray
+    delta_cmd: np.ndarray
+    n: np.ndarray
+
+    def trial(self, i: int, meta: Mapping | None = None) -> Trial:
+        """Row ``i`` as a Trial (channels of :func:`shipid.simulate.manoeuvres.run_manoeuvre`)."""
+        ch = {c: self.x[i, :, j] for j, c in enumerate(mmg.STATE_NAMES)}
+        ch.update(delta=self.delta[i], n=self.n[i], delta_cmd=self.delta_cmd[i])
+        return Trial(self.t, ch, {}, dict(meta or {}))
+
+
+def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], order: np.ndarray,
+                          psi_switch: np.ndarray, side: np.ndarray, cond: Conditions, *, dt: float = 0.1,
+                          t_max: float | None = None, t_approach: float = T_APPROACH,
+                          until_heading: float = np.deg2rad(200.0), until_reversals: int = 3,
+                          exact_reversal: bool = False) -> BatchRecord:
+    """Turning circles (``psi_switch = inf``) and zig-zags of many rows at once.
+
+    Row ``i``: coefficients ``Th[mode][i]``, rudder order ``order[i]`` (rad, > 0) first to
+    ``side[i]`` (+1 starboard), reversed (Kempf) when the heading change from the heading
+    at execute reaches ``psi_switch[i]`` in the direction of the turn. The steering gear
+    moves at ``cond.rudder_rate`` within ``±cond.rudder_limit``; the propeller is held at
+    ``cond.rps``. Stops when every row has turned ``until_heading`` (turning rows) or
+    reversed ``until_reversals`` times (zig-zag rows), or at ``t_max`` (default the
+    approach plus 100 L/U).
+
+    ``exact_reversal``: the heading reaches the switching angle between two samples, at
+    ``t* = t_{k-1} + f dt`` (linear interpolation); the sampled rule reverses at ``t_k``,
+    up to one step late, which makes an overshoot jump by up to ``r dt`` when a
+    coefficient changes a little (a noise floor of the Monte Carlo bands). With this
+    option the gear's travel at the reversal sample is ``rate dt (2 − f)`` instead of
+    ``rate dt``, i.e. it has moved as if reversed at ``t*`` (with the usual one-step lead
+    of the sampled gear), so the overshoots vary smoothly with the coefficients.
+    """
+    order, psi_switch, side = (np.asarray(a, float) for a in (order, psi_switch, side))
+    B = order.size
+    L = model.particulars["L"]
+    t_max = t_approach + 100.0 * L / cond.speed if t_max is None else float(t_max)
+    nmax = int(round(t_max / dt)) + 1
+    sign = rudder_turn_sign(model, cond)
+    k_exec = int(np.searchsorted(np.arange(nmax) * dt, min(t_approach, 0.1 * t_max) - 1e-9 * dt))
+    step = cond.rudder_rate * dt
+    x = np.tile([0.0, 0.0, 0.0, cond.speed, 0.0, 0.0], (B, 1))
+    nn = np.full(B, cond.rps)
+    X = np.full((B, nmax, 6), np.nan)
+    D = np.zeros((B, nmax))
+    C = np.zeros((B, nmax))
+    d = side.copy()
+    delta = np.zeros(B)
+    psi0 = np.zeros(B)
+    nrev = np.zeros(B, int)
+    turning = ~np.isfinite(psi_switch)
+    a_prev = np.zeros(B)
+    k = 0
+    with np.errstate(all="ignore"):
+        while True:
+            X[:, k] = x
+            stp = step
+            if k >= k_exec:
+                if k == k_exec:
+                    psi0 = x[:, 2].copy()
+                    a_prev = np.zeros(B)
+                else:
+                    a = x[:, 2] - psi0
+                    a = np.where((a > -np.pi) & (a <= np.pi), a, np.pi - np.mod(np.pi - a, 2 * np.pi))
+                    flip = ~turning & (d * a >= psi_switch)
+                    if exact_reversal and flip.any():
+                        f = np.clip((psi_switch - d * a_prev) / (d * a - d * a_prev), 0.0, 1.0)
+                        stp = np.where(flip, step * (2.0 - np.nan_to_num(f, nan=1.0)), step)
+                    d = np.where(flip, -d, d)
+                    nrev += flip
+                    a_prev = a
+                cmd = sign * d * order
+            else:
+                cmd = np.zeros(B)
+            delta = np.clip(delta + np.clip(cmd - delta, -stp, stp), -cond.rudder_limit, cond.rudder_limit)
+            C[:, k], D[:, k] = cmd, delta
+            head = np.abs(x[:, 2] - psi0)
+            done = np.where(turning, head >= until_heading, nrev >= until_reversals) | ~np.isfinite(x).all(axis=1)
+            if k == nmax - 1 or (k > k_exec and done.all()):
+                break
+            x = rows_rk4(model, Th, x, delta, nn, dt)
+            k += 1
+    n_used = k + 1
+    t = np.arange(n_used) * dt
+    return BatchRecord(t, X[:, :n_used], D[:, :n_used], C[:, :n_used], np.tile(nn[:, None], (1, n_used)))
+
+
+def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], cond: Conditions, *,
+                            dt: float = 0.1, t_max: float | None = None,
+                            t_approach: float = T_APPROACH) -> BatchRecord:
+    """Full-astern stopping test of many rows: rudder amidships, the propeller ordered to
+    ``cond.rps_astern`` at execute and moving at ``cond.rps_rate`` (instantly if None);
+    stops when every row has lost its ahead speed (u ≤ 0) or at ``t_max`` (approach + 200 L/U)."""
+    if cond.rps_astern is None:
+        raise ShipidError("no astern propeller rate (the training runs never reversed)")
+    B = next(iter(Th.values())).shape[0]
+    L = model.particulars["L"]
+    t_max = t_approach + 200.0 * L / cond.speed if t_max is None else float(t_max)
+    nmax = int(round(t_max / dt)) + 1
+    k_exec = int(round(min(t_approach, 0.1 * t_max) / dt))
+    nstep = np.inf if cond.rps_rate is None else cond.rps_rate * dt
+    x = np.tile([0.0, 0.0, 0.0, cond.speed, 0.0, 0.0], (B, 1))
+    X = np.full((B, nmax, 6), np.nan)
+    Nn = np.zeros((B, nmax))
+    n = np.full(B, cond.rps)
+    zero = np.zeros(B)
+    k = 0
+    with np.errstate(all="ignore"):
+        while True:
+            X[:, k] = x
+            if k >= k_exec:
+                n = n + np.clip(cond.rps_astern - n, -nstep, nstep)
+            Nn[:, k] = n
+            done = (x[:, 3] <= 0) | ~np.isfinite(x).all(axis=1)
+            if k == nmax - 1 or (k > k_exec and done.all()):
+                break
+            x = rows_rk4(model, Th, x, zero, n, dt)
+            k += 1
+    m = k + 1
+    cmd = np.zeros((B, m))
+    cmd[:, k_exec:] = 1.0                    # marks the execute for the metrics
+    return BatchRecord(np.arange(m) * dt, X[:, :m], np.zeros((B, m)), cmd, Nn[:, :m])
+
+
+__all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
+           "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH"]
