@@ -11,6 +11,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
+from shipid.cli._common import loud, strict_option
 from shipid.errors import ShipidError
 
 
@@ -30,9 +31,18 @@ def _check_vessel(vessel: str) -> str:
     return v.name
 
 
+def _converged_line(res) -> str:
+    """``converged: yes`` or ``converged: NO (...)``: the text output never hides non-convergence."""
+    d = res.diagnostics
+    if d.get("converged", True):
+        return f"converged: yes (ridge iterations {d.get('iterations')})"
+    return f"converged: NO (ridge iterations {d.get('iterations')}); do not trust these estimates"
+
+
 def _print_coefficients(res) -> None:
     from shipid.models import abkowitz as ab
 
+    click.echo(_converged_line(res))
     click.echo(f"{'coefficient':<12}{'estimate':>13}{'std':>12}")
     for name in ab.THETA_X_NAMES + ab.THETA_Y_NAMES + ab.THETA_N_NAMES:
         e = res.estimates[name]
@@ -57,6 +67,7 @@ def _print_coefficients(res) -> None:
 @click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
 @click.option("--figures", is_flag=True,
               help="Also store a coarse D-optimal input map (Fig. 7; ~12 simulations) for `shipid report`.")
+@strict_option
 def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
@@ -73,6 +84,7 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     if figures:  # opt-in: the coarse Fig. 7 map of this vessel (shipid.methods.ebm_series)
         from shipid.methods.ebm_series import coarse_d_optimal
         res.series.setdefault("contours", {})["d_optimal"] = coarse_d_optimal(vessel)
+    loud(res, trials=data)
     if as_json:
         click.echo(res.to_json())
     else:
@@ -87,6 +99,7 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
               help="Scale the trial durations (quick runs < 1).")
 @click.option("--json", "as_json", is_flag=True)
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
+@strict_option
 def study_ebm(kind, seed, scale, as_json, paper):
     """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
     from shipid.methods.ebm_study import make_trials, study as run_study
@@ -95,11 +108,13 @@ def study_ebm(kind, seed, scale, as_json, paper):
     n = 3 if kind == "standard" else 1
     with progress_bar(n, f"EBM study ({kind})") as advance:
         res = run_study(kind, seed, scale=scale, config=_config(paper), progress=advance)
+    loud(res)
     if as_json:
         click.echo(res.to_json())
         return
     d = res.diagnostics
     click.echo(f"EBM study, ESSO OSAKA, input {kind}, seed {seed} ({d['paper_table']})")
+    click.echo(_converged_line(res))
     click.echo(f"{'coefficient':<12}{'true':>12}{'estimated':>12}{'std':>11}{'error %':>9}"
                f"{'paper':>12}{'paper err %':>12}")
     for row in d["table"]:
@@ -148,6 +163,7 @@ def study_ebm(kind, seed, scale, as_json, paper):
 @click.option("--out", "out", default=None, type=click.Path(dir_okay=False), metavar="RESULT.json",
               help="Also write the map as a shipid Result for `shipid report` (Fig. 7).")
 @click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
+@strict_option
 def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
     """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7)."""
     from pathlib import Path
@@ -176,6 +192,7 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_j
            f"--periods {','.join(f'{x:g}' for x in T)} --duration {duration:g} --seeds {seeds} --dt {dt:g}"
            + (f" --currents {','.join(f'{x:g}' for x in C)}" if C else ""))
     res = design_result(g, command=cmd, sweep=sweep)
+    loud(res)
     if out is not None:
         path = res.write_json(out, force=force)
         click.echo(f"wrote {path} (shipid report {path} --out report.html)", err=as_json)
