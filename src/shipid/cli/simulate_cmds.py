@@ -117,6 +117,7 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     rows = []
     steps = demo_steps()
     for mod, why in SKIPPED.items():
+        ctx.skip(f"demo step of {mod}", why)
         click.echo(f"[skipped] {mod}: {why}")
     for step in steps:
         click.echo(f"[{step.name}] {step.description}")
@@ -126,4 +127,8 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
             click.echo("    " + line)
         click.echo(f"    ({time.perf_counter() - ts:.1f} s)")
         rows += got
-    click.echo(f"demo done in {time.perf_counter() - t0:.1f} s; {len(ctx.files)} files in {target}")
+    for what, why in ctx.skipped:
+        click.echo(f"[skipped] {what}: {why}")
+    n = len(ctx.skipped)
+    click.echo(f"demo done in {time.perf_counter() - t0:.1f} s; {len(ctx.files)} files in {target}"
+               + (f"; {n} part{'s' if n > 1 else ''} skipped (listed above)" if n else "; nothing skipped"))
