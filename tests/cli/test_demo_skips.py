@@ -46,10 +46,9 @@ def test_report_step_without_real_data_names_the_skipped_real_data_step(tmp_path
         p = tmp_path / f"result-{m}.json"
         example(m).write_json(p)
         ctx.files.append(p)
-    rows = RS.report_step(ctx)
+    RS.report_step(ctx)
     assert [w for w, _ in ctx.skipped] == ["real-data MMG identification (KVLCC2 HSVA zig-zags) and its report"]
     assert "real data not found" in ctx.skipped[0][1]
-    assert any(r.get("report") == "skipped: no real data" for r in rows)
 
 
 def test_demo_help_states_a_measured_time(capsys):

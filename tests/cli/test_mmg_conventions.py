@@ -61,8 +61,8 @@ def test_first_step_yaw_sign_is_0_without_a_step():
 def test_validate_warns_when_the_trial_contradicts_the_convention(tmp_path, capsys):
     need()
     good, bad = tmp_path / "good.csv", tmp_path / "flipped.csv"
-    write_trial(_sim(), good)
-    write_trial(_sim(flip=True), bad)
+    write_trial(_sim(40.0), good)
+    write_trial(_sim(40.0, flip=True), bad)
     assert main(["validate", "published:esso_osaka_3m", "--trial", str(good), "--json"]) == 0
     cap = capsys.readouterr()
     assert _warnings(cap.err) == [] and json.loads(cap.out)["warnings"] == []
