@@ -153,3 +153,17 @@ def test_hsva_model_is_self_describing_and_validate_needs_no_rudder_sign(tmp_pat
     assert "differs from the rudder sign of the model's training runs (-1)" in w
     assert "contradicts the model's convention" in w
     assert json.loads(cap.out)["windows"]["whole"]["psi"]["rms"] > 20.0
+
+
+@pytest.mark.realdata
+def test_validate_names_the_data_repair_of_a_defective_run(capsys):
+    """zigzag_31-Jul-2020_13_50_28.csv ends in 327 empty rows: trimmed, and said so (one line, --strict 3)."""
+    run = ZZ.format("13_50_28")
+    need(run)
+    assert main(["validate", "published:esso_osaka_3m", "--trial", str(ROOT / run), "--json"]) == 0
+    cap = capsys.readouterr()
+    w = _warnings(cap.err)
+    assert len(w) == 1 and "data repaired in" in w[0] and "removed 327 empty rows 1702-2028" in w[0]
+    assert json.loads(cap.out)["warnings"] == [w[0][len("shipid: warning: "):]]
+    assert main(["--strict", "validate", "published:esso_osaka_3m", "--trial", str(ROOT / run)]) == 3
+    capsys.readouterr()
