@@ -1,18 +1,120 @@
-"""Suite-wide checks.
+"""Suite-wide fixtures and checks.
 
 With ``CI`` set to a true value (``.ci/run`` sets ``CI=true``), a missing real-data folder
 (``../shared/data`` or ``$SHIPID_DATA``, see :func:`shipid.data.paths.data_root`) stops the run
 at once instead of letting the real-data tests skip: a CI run that skipped them would stay green
 while checking less than it claims.
+
+``no_raw_warnings``: a command must never let Python print its own warning text
+(``/path/to/module.py:123: RuntimeWarning: ...`` and the code line) on stderr; every
+warning is one ``shipid: warning: ...`` line (:mod:`shipid.cli._common`). The fixture
+fails a test when
+
+* the stderr of a ``shipid`` subprocess (``subprocess.run``) or the stderr read
+  through ``capsys`` / ``capfd`` holds raw warning text, or
+* a Python warning escapes ``shipid.cli.main`` (inside pytest such a warning is
+  recorded rather than printed; in a real process Python would print it raw).
+
+It is used automatically by every test module that imports ``shipid.cli.main`` and by
+every test under ``tests/cli/``.
 """
 
 from __future__ import annotations
 
 import os
+import re
+import subprocess
+import warnings
+from pathlib import Path
 
 import pytest
 
 from shipid.data.paths import data_root
+
+#: Python's warning format: "<file>.py:<line>: <Category>Warning: <message>" (and friends).
+RAW_WARNING = re.compile(r":\d+: \w*Warning\b|^\s*warnings\.warn\(")
+_QUIET = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+_CLI_DIR = Path(__file__).parent / "cli"
+
+
+def assert_no_raw_warning(text: str, where: str = "stderr") -> None:
+    """Fail if ``text`` holds Python's own warning format (a source path with a line number)."""
+    for line in (text or "").splitlines():
+        if RAW_WARNING.search(line):
+            pytest.fail(f"raw Python warning text on {where}: {line.strip()!r}", pytrace=False)
+
+
+def _uses_cli(request) -> bool:
+    mod = request.module
+    if mod is None:
+        return False
+    try:
+        from shipid.cli import main
+    except Exception:  # pragma: no cover - the suite cannot run at all then
+        return False
+    if getattr(mod, "main", None) is main:
+        return True
+    path = Path(getattr(mod, "__file__", "") or "")
+    return _CLI_DIR in path.parents
+
+
+@pytest.fixture
+def no_raw_warnings(request, monkeypatch):
+    """Fail the test on raw Python warning text from the CLI (module docstring)."""
+    real_run = subprocess.run
+
+    def run(*args, **kwargs):
+        proc = real_run(*args, **kwargs)
+        err = getattr(proc, "stderr", None)
+        if isinstance(err, bytes):
+            err = err.decode("utf-8", "replace")
+        if isinstance(err, str):
+            assert_no_raw_warning(err, "the stderr of a subprocess")
+        return proc
+
+    monkeypatch.setattr(subprocess, "run", run)
+    for name in ("capsys", "capfd"):
+        if name in request.fixturenames:
+            cap = request.getfixturevalue(name)
+            real_read = cap.readouterr
+
+            def readouterr(_real=real_read, _name=name):
+                res = _real()
+                assert_no_raw_warning(res.err, f"stderr ({_name})")
+                return res
+
+            monkeypatch.setattr(cap, "readouterr", readouterr)
+    import shipid.cli as cli_mod
+
+    escaped: list = []
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        for cat in _QUIET:
+            warnings.simplefilter("ignore", cat)
+        real_inner = cli_mod._run
+
+        def inner(*args, **kwargs):  # what reaches this recorder while main runs escaped main's own
+            i = len(rec)
+            try:
+                return real_inner(*args, **kwargs)
+            finally:
+                escaped.extend(w for w in rec[i:] if not issubclass(w.category, _QUIET))
+
+        monkeypatch.setattr(cli_mod, "_run", inner)
+        yield
+    if escaped:
+        w = escaped[0]
+        pytest.fail(f"{len(escaped)} Python warning(s) escaped shipid.cli.main and would be printed raw, e.g. "
+                    f"{w.category.__name__}: {' '.join(str(w.message).split())} "
+                    f"({Path(w.filename).name}:{w.lineno})", pytrace=False)
+
+
+@pytest.fixture(autouse=True)
+def _cli_tests_use_no_raw_warnings(request):
+    """Every CLI test (module imports ``shipid.cli.main``, or lives under tests/cli) gets ``no_raw_warnings``."""
+    if _uses_cli(request):
+        request.getfixturevalue("no_raw_warnings")
+    yield
 
 
 def _ci() -> bool:

@@ -15,7 +15,9 @@ decorator::
 Steps run in ``order`` (ties by name). Modules are discovered by importing every
 module of :mod:`shipid.methods` (and :mod:`shipid.cli`, which imports the command
 modules), so a method registers its step simply by being in the package. Every
-step must be quick (the whole demo runs in well under a minute on a laptop).
+step must be quick (see ``shipid demo --help`` for the measured time). A step that
+leaves out a part of its work (real data missing, an optional package absent)
+says so with ``ctx.skip(what, why)``; the demo lists every skipped part at the end.
 
 The first step, ``simulate`` (order 0), simulates every packaged vessel on a
 representative manoeuvre (:data:`DEMO_MANOEUVRES`).
@@ -45,6 +47,12 @@ class DemoContext:
     seed: int = 0
     echo: Callable[[str], None] = print
     files: list[Path] = field(default_factory=list)
+    #: (what, why) of every part a step did not run; ``shipid demo`` lists them at the end.
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+
+    def skip(self, what: str, why: str) -> None:
+        """Record that ``what`` was not run and why (printed in the demo's summary, never silent)."""
+        self.skipped.append((what, " ".join(str(why).split())))
 
 
 @dataclass(frozen=True)
@@ -120,6 +128,7 @@ def simulate_vessels(ctx: DemoContext) -> list[dict]:
             model = get_ship_model(entry.name)
         except ShipidError as err:
             row["file"] = f"skipped: {err}"
+            ctx.skip(f"simulate {entry.name}", str(err))
             rows.append(row)
             continue
         trial = run_manoeuvre(model, man, duration=duration, dt=dt, seed=ctx.seed)

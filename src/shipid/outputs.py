@@ -3,6 +3,9 @@
 A result is first written to a temporary file in the destination folder and then
 moved over the target with :func:`os.replace`, which is atomic on POSIX and
 Windows: a reader sees either the old file or the complete new one, never half.
+The finished file gets the mode a plain ``open(path, "w")`` would give it
+(``0o666`` less the process umask, so 0644 under umask 022), not the 0600 of
+:func:`tempfile.mkstemp`.
 """
 
 from __future__ import annotations
@@ -13,6 +16,20 @@ from pathlib import Path
 from typing import Callable
 
 from shipid.errors import OutputExistsError
+
+
+def _umask() -> int:
+    """The process umask, read without changing it where the OS allows (Linux ``/proc``)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    old = os.umask(0o022)  # elsewhere: set and restore (process-wide, but only for an instant)
+    os.umask(old)
+    return old
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], *, force: bool = False) -> Path:
@@ -37,6 +54,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[Path], None], *, forc
     tmp_path = Path(tmp)
     try:
         write(tmp_path)
+        os.chmod(tmp_path, 0o666 & ~_umask())
         os.replace(tmp_path, dest)
     finally:
         if tmp_path.exists():

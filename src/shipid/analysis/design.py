@@ -17,6 +17,28 @@ current only if the approach is defined over the ground, as in a tank with a
 current generator where the carriage speed is set: :func:`current_sweep` fixes
 the approach speed over ground at U0 (heading 0), so the speed through the water
 is ``U0 − U_c cos ψ_c`` (the propeller rate follows it).
+
+The optimum is the best point of a stated grid (:data:`DEFAULT_AMPLITUDES` ×
+:data:`DEFAULT_PERIODS`, the defaults of :func:`prbs_grid` and of ``shipid design
+prbs``), and :func:`paper_comparison` says, from the computed map, whether the
+paper's optimum is the same point or within 2 standard errors of the
+PRBS-realisation spread. A continuous optimisation is not used: the criterion of
+one realisation jumps from period to period (see below), so its maximiser over a
+continuum would be chosen by the noise.
+
+Agreement with Fig. 7 (35°, 105 s), measured on 1200-s runs, dt = 1 s, the
+packaged ESSO OSAKA, current 2 kn (``shipid design prbs --amplitudes 35 --periods
+15:200:5 --seeds 8`` and an amplitude scan 5–35° at eight periods, 2 seeds):
+
+* amplitude: the criterion grows with the amplitude from 20° up at every period but
+  15 s, so the optimum is the largest amplitude allowed, 35°, as in the paper;
+* period: it does **not** agree. On the 35° row, periods 15–200 s in steps of 5 s,
+  8 PRBS seeds, the best period is 40 s (log10 |WᵀW| = −9.81 ± 0.17, mean ± SE over
+  the seeds); at 105 s it is −10.38 ± 0.27, lower by 0.57 ± 0.26 (paired over the
+  seeds, 2.2 SE). Resampling the 8 seeds (2000 bootstrap draws) puts the argmax at
+  40 s in 70 % of the draws, at 45–50 s in 18 %, near 90 s in 5 % and never at 105 s.
+  The row is flat within about 2 SE from 40 to 95 s; the paper's 105 s lies just
+  beyond that plateau on this simulated criterion.
 """
 
 from __future__ import annotations
@@ -75,6 +97,8 @@ class DesignGrid:
     current_speed: float
     dt: float = 1.0                 # s, simulation / sampling step
     vessel: str = "esso-osaka"
+    sway_seeds: np.ndarray | None = None    # (n_amp, n_per, n_seeds): the value of each PRBS realisation
+    surge_seeds: np.ndarray | None = None
 
     def optimum(self, mode: str = "sway") -> tuple[float, float, float]:
         """(amplitude deg, period s, log10 |WᵀW|) of the best grid point for ``mode``
@@ -91,24 +115,101 @@ class DesignGrid:
                 "optimum_sway": {"amplitude_deg": a, "period_s": T, "log10_det": v}}
 
 
-def prbs_grid(amplitudes=(5, 10, 15, 20, 25, 30, 35), periods=(15, 30, 45, 60, 75, 90, 105, 120, 150, 200),
+#: Default grid of :func:`prbs_grid` and ``shipid design prbs``: amplitudes 5–35° in steps of 10°
+#: (the criterion grows with the amplitude, module docstring), periods 15–200 s in steps of 5 s.
+DEFAULT_AMPLITUDES = (5.0, 15.0, 25.0, 35.0)
+DEFAULT_PERIODS = tuple(float(p) for p in range(15, 205, 5))
+
+
+def prbs_grid(amplitudes=DEFAULT_AMPLITUDES, periods=DEFAULT_PERIODS,
               *, duration: float = 1200.0, seeds=(0, 1, 2), current_speed: float | None = None,
               dt: float = 1.0, vessel: str = "esso-osaka", progress=None) -> DesignGrid:
-    """Evaluate the D-criterion on an amplitude × period grid (Fig. 7)."""
+    """Evaluate the D-criterion on an amplitude × period grid (Fig. 7).
+
+    Every grid point is the mean over the PRBS register ``seeds`` of
+    :func:`prbs_criterion`; the per-seed values are kept (``sway_seeds``,
+    ``surge_seeds``) for the standard errors of :func:`paper_comparison`.
+    """
     A = np.asarray(amplitudes, dtype=float)
     T = np.asarray(periods, dtype=float)
-    S = np.empty((A.size, T.size)); W = np.empty((A.size, T.size))
+    seeds = tuple(int(s) for s in seeds)
+    Ss = np.empty((A.size, T.size, len(seeds))); Ws = np.empty((A.size, T.size, len(seeds)))
     tc = ab.trial_conditions(vessel)
     cs = tc["current_speed"] if current_speed is None else float(current_speed)
     for i, a in enumerate(A):
         for j, per in enumerate(T):
-            vals = [prbs_criterion(a, per, duration=duration, seed=s, current_speed=cs, dt=dt, vessel=vessel)
-                    for s in seeds]
-            S[i, j] = np.mean([v["surge"] for v in vals])
-            W[i, j] = np.mean([v["sway"] for v in vals])
+            for k, s in enumerate(seeds):
+                v = prbs_criterion(a, per, duration=duration, seed=s, current_speed=cs, dt=dt, vessel=vessel)
+                Ss[i, j, k], Ws[i, j, k] = v["surge"], v["sway"]
             if progress is not None:
                 progress()
-    return DesignGrid(A, T, S, W, tuple(int(s) for s in seeds), float(duration), cs, float(dt), vessel)
+    return DesignGrid(A, T, Ss.mean(axis=2), Ws.mean(axis=2), seeds, float(duration), cs, float(dt), vessel,
+                      sway_seeds=Ws, surge_seeds=Ss)
+
+
+#: The optimum of seed 002's Fig. 7 (Yoon & Rhee 2003 §5.1.4): amplitude 35°, clock period 105 s.
+PAPER_FIG7 = (35.0, 105.0)
+
+
+def paper_comparison(grid: DesignGrid, paper: tuple[float, float] = PAPER_FIG7) -> dict:
+    """Does the grid's sway optimum agree with the paper's Fig. 7 optimum? Computed, not asserted.
+
+    The criterion of one PRBS realisation is a noisy sample, so the comparison is
+    made against the realisation spread: with several seeds the difference between
+    the optimum and the paper's point (both on the grid) is paired over the seeds and
+    its standard error is ``std(differences) / sqrt(n_seeds)``.
+
+    Returns
+    -------
+    dict
+        ``paper`` (amplitude, period), ``optimum`` (amplitude, period), ``same_point``,
+        ``on_grid`` (the paper's point is a grid point), ``log10_det_optimum``,
+        ``log10_det_paper`` (or None), ``difference`` and ``difference_se`` (None
+        without per-seed values or with one seed), ``verdict`` (``"same point"``,
+        ``"within 2 SE"``, ``"differs"``, ``"differs (one seed, no SE)"`` or
+        ``"not on the grid"``) and ``text``, one sentence for a caption.
+    """
+    a, per, val = grid.optimum("sway")
+    pa, pp = float(paper[0]), float(paper[1])
+    ia = np.flatnonzero(np.isclose(grid.amplitudes, pa))
+    ip = np.flatnonzero(np.isclose(grid.periods, pp))
+    out = {"paper": [pa, pp], "optimum": [a, per], "same_point": bool(np.isclose(a, pa) and np.isclose(per, pp)),
+           "on_grid": bool(ia.size and ip.size), "log10_det_optimum": val, "log10_det_paper": None,
+           "difference": None, "difference_se": None}
+    if not out["on_grid"]:
+        out["verdict"] = "not on the grid"
+        out["text"] = (f"the paper's Fig. 7 optimum {pa:g}° / {pp:g} s is not a point of this grid, so this map "
+                       f"neither confirms nor contradicts it (optimum here {a:g}° / {per:g} s)")
+        return out
+    i, j = int(ia[0]), int(ip[0])
+    vp = float(grid.sway[i, j])
+    out["log10_det_paper"] = vp
+    out["difference"] = float(val - vp)
+    if out["same_point"]:
+        out["verdict"] = "same point"
+        out["text"] = f"the optimum {a:g}° / {per:g} s is the paper's Fig. 7 optimum"
+        return out
+    ib = int(np.flatnonzero(np.isclose(grid.amplitudes, a))[0])
+    jb = int(np.flatnonzero(np.isclose(grid.periods, per))[0])
+    se = None
+    if grid.sway_seeds is not None and grid.sway_seeds.shape[2] > 1:
+        d = grid.sway_seeds[ib, jb] - grid.sway_seeds[i, j]
+        se = float(np.std(d, ddof=1) / np.sqrt(d.size))
+    out["difference_se"] = se
+    head = (f"the optimum {a:g}° / {per:g} s is not the paper's Fig. 7 optimum {pa:g}° / {pp:g} s, where "
+            f"log10 |WᵀW| is {out['difference']:.2f} lower")
+    if se is None:
+        out["verdict"] = "differs (one seed, no SE)"
+        out["text"] = head + " (one PRBS seed: no standard error of the difference)"
+    elif out["difference"] <= 2.0 * se:
+        out["verdict"] = "within 2 SE"
+        out["text"] = (head + f", within 2 standard errors ({se:.2f}, {grid.sway_seeds.shape[2]} PRBS seeds): "
+                       "the map does not distinguish the two")
+    else:
+        out["verdict"] = "differs"
+        out["text"] = (head + f", more than 2 standard errors ({se:.2f}, {grid.sway_seeds.shape[2]} PRBS seeds): "
+                       "on this map the paper's point is not optimal")
+    return out
 
 
 def current_sweep(amplitude_deg: float, period: float, speeds=(-4.0, -2.0, 0.0, 2.0, 4.0), *,
@@ -135,6 +236,14 @@ def _neighbours(values: np.ndarray, v: float) -> str:
     lo = f"{vals[i - 1]:g}" if i > 0 else "grid edge"
     hi = f"{vals[i + 1]:g}" if i + 1 < vals.size else "grid edge"
     return f"{lo} … {hi}"
+
+
+def _axis_text(values: np.ndarray) -> str:
+    """A grid axis as ``start–stop step d`` when evenly spaced, else the list of values."""
+    v = np.asarray(values, dtype=float)
+    if v.size > 2 and np.allclose(np.diff(v), v[1] - v[0]):
+        return f"{v[0]:g}–{v[-1]:g} in steps of {v[1] - v[0]:g}"
+    return ", ".join(f"{x:g}" for x in v)
 
 
 def _grid_table(grid: DesignGrid, values: np.ndarray, what: str, paper: str | None) -> dict:
@@ -176,8 +285,10 @@ def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict |
 
     a, per, val = grid.optimum("sway")
     a_s, per_s, val_s = grid.optimum("surge")
+    comp = paper_comparison(grid)
     shape = f"{grid.amplitudes.size} × {grid.periods.size}"
-    setting = (f"{shape} grid, {grid.duration:g} s runs at dt = {grid.dt:g} s, mean over {len(grid.seeds)} "
+    setting = (f"{shape} grid: amplitudes {_axis_text(grid.amplitudes)}°, periods {_axis_text(grid.periods)} s; "
+               f"{grid.duration:g} s runs at dt = {grid.dt:g} s, mean over {len(grid.seeds)} "
                f"PRBS seed(s), current {grid.current_speed:.3g} m/s")
     common = dict(x_label="PRBS clock period", x_unit="s", y_label="PRBS amplitude", y_unit="deg")
     contours = {
@@ -186,7 +297,7 @@ def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict |
                              points=[{"x": per, "y": a, "label": f"optimum {a:g}° / {per:g} s"}], paper="Fig. 7",
                              title=f"D-optimality of the PRBS rudder input: log10 |WᵀW| of the sway (= yaw) "
                                    f"regressors over amplitude × clock period ({setting}); optimum {a:g}° / "
-                                   f"{per:g} s on this grid (paper: 35° / 105 s)."),
+                                   f"{per:g} s on this grid (log10 |WᵀW| = {val:.2f}); {comp['text']}."),
         "d_optimal_surge": contour(grid.periods, grid.amplitudes, grid.surge, **common,
                                    z_label="log10 |WᵀW| (surge regressors)",
                                    points=[{"x": per_s, "y": a_s, "label": f"surge optimum {a_s:g}° / {per_s:g} s"}],
@@ -224,6 +335,7 @@ def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict |
                    "optimum_surge": f"{a_s:g} deg / {per_s:g} s (log10 |WᵀW| = {val_s:.3f})",
                    "resolution": f"amplitudes {', '.join(f'{v:g}' for v in grid.amplitudes)} deg; periods "
                                  f"{', '.join(f'{v:g}' for v in grid.periods)} s",
+                   "paper_fig7": comp,
                    "warnings": warnings}
     provenance = {"seed": int(grid.seeds[0]) if grid.seeds else None, "prbs_seeds": list(grid.seeds),
                   "command": command or "shipid.analysis.design.design_result",
@@ -240,4 +352,5 @@ def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict |
                   diagnostics=diagnostics, series=series, provenance=provenance)
 
 
-__all__ = ["log_det_criterion", "prbs_criterion", "DesignGrid", "prbs_grid", "current_sweep", "design_result"]
+__all__ = ["log_det_criterion", "prbs_criterion", "DesignGrid", "prbs_grid", "current_sweep", "design_result",
+           "paper_comparison", "PAPER_FIG7", "DEFAULT_AMPLITUDES", "DEFAULT_PERIODS"]

@@ -13,6 +13,10 @@ groups below with the usual click decorators, e.g.::
 
 Errors: anything derived from :class:`shipid.errors.ShipidError` is printed as one
 line on stderr (``shipid: error: ...``) and the process exits with status 2.
+Warnings (non-convergence, implausible or undetermined estimates, data repairs,
+Python warnings of a method) are one line each, ``shipid: warning: ...``, and in
+the JSON; with ``--strict`` a command that warned exits with status 3
+(:mod:`shipid.cli._common`).
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import sys
 import click
 
 import shipid
+from shipid.cli import _common
 from shipid.errors import ShipidError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
@@ -32,6 +37,9 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 @click.group(context_settings=CONTEXT)
 @click.version_option(shipid.__version__, "-V", "--version", prog_name="shipid")
+@click.option("--strict", is_flag=True, expose_value=False, callback=_common.set_strict,
+              help="Exit with status 3 if the command warns (non-convergence, implausible or undetermined "
+                   "estimates, data repairs).")
 def cli() -> None:
     """Identify ship dynamics from motion data.
 
@@ -72,6 +80,13 @@ _load_commands()
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script: run the CLI, turning known errors into one line."""
+    _common.begin()
+    with _common.recording():
+        rv = _run(argv)
+        return _common.finish(rv)
+
+
+def _run(argv: list[str] | None) -> int:
     try:
         rv = cli.main(args=argv, prog_name="shipid", standalone_mode=False)
     except ShipidError as err:

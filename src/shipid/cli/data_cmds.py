@@ -47,11 +47,13 @@ def _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
 def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, as_json, skip_bad):
     """Read and validate a trial FILE; print what it holds (exit 2 with one line if it is bad)."""
     trial = _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, skip_bad)
+    derived = trial.meta.get("derived") or {}
     summary = {
         "file": file, "format": trial.meta.get("format"), "profile": trial.meta.get("profile"),
         "samples": len(trial), "dt": trial.dt, "t0": float(trial.t[0]), "duration": trial.duration,
         "channels": {name: {"unit": trial.units[name], "unit_in_file": trial.meta["units_in"].get(name),
                             "column": trial.meta["columns"].get(name),
+                            "derived": derived.get(name) if trial.meta["columns"].get(name) is None else None,
                             "min": float(np.min(v)), "max": float(np.max(v))}
                      for name, v in trial.channels.items()},
         "repairs": [r["text"] for r in trial.meta.get("repairs", [])],
@@ -64,11 +66,21 @@ def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
                f"t {trial.t[0]:.6g}..{trial.t[-1]:.6g} s ({trial.duration:.6g} s)")
     width = max(len(n) for n in trial.channels)
     for name, c in summary["channels"].items():
-        src = f"{c['column']} [{c['unit_in_file']}]"
-        click.echo(f"  {name:<{width}}  {c['unit']:<7} {c['min']:>12.6g} .. {c['max']:<12.6g}  from {src}")
+        src = _source_text(c)
+        click.echo(f"  {name:<{width}}  {c['unit']:<7} {c['min']:>12.6g} .. {c['max']:<12.6g}  {src}")
     for text in summary["repairs"]:
         click.echo(f"  repaired: {text}")
     return 0
+
+
+def _source_text(c: dict) -> str:
+    """Where a channel came from: ``column [unit]``, or how it was derived (never ``None``)."""
+    if c["column"] is not None:
+        unit = f" [{c['unit_in_file']}]" if c["unit_in_file"] else ""
+        return f"from {c['column']}{unit}"
+    if c.get("derived"):
+        return f"derived: {' '.join(str(c['derived']).split())}"
+    return "derived by the reader"
 
 
 @cli.command("convert")

@@ -12,6 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
+from shipid.cli._common import loud, strict_option
 from shipid.errors import ShipidError
 
 #: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
@@ -84,8 +85,6 @@ def _print_table(result, theta_true=None) -> None:
         nis = ", ".join(f"{v:.2f}" for v in st["nis_mean"])
         click.echo(f"{name}: converged={st['converged']} trials={len(st['samples'])} "
                    f"samples={st['samples']} NIS mean=[{nis}] (dof {st['nis_dof'][0]}) {st['seconds']:.1f} s")
-    for w in d.get("warnings", []):
-        click.echo(f"warning: {w}", err=True)
 
 
 @identify.command("dp", context_settings=CONTEXT)
@@ -102,6 +101,7 @@ def _print_table(result, theta_true=None) -> None:
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
 @click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
+@strict_option
 def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
     """Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).
 
@@ -129,7 +129,7 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
     res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, opt,
                       provenance={"inputs": [str(p) for p in (*surge, *sway_yaw, *azimuth)],
                                   "command": "shipid identify dp"})
-    _emit(res, as_json, out, plot, force)
+    _emit(res, as_json, out, plot, force, trials=[tr for k in trials for tr in trials[k]])
 
 
 def _check_outputs(out, plot, force):
@@ -142,7 +142,8 @@ def _check_outputs(out, plot, force):
             raise OutputExistsError(p)
 
 
-def _emit(res, as_json, out, plot, force, theta_true=None):
+def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
+    loud(res, trials=trials)
     if out is not None:
         res.write_json(out, force=force)
     if plot is not None:
@@ -164,6 +165,7 @@ def _emit(res, as_json, out, plot, force, theta_true=None):
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
 @click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
+@strict_option
 def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     """Simulate the six trials of §4.2 for the supply vessel and identify it.
 

@@ -11,6 +11,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
+from shipid.cli._common import loud, strict_option
 from shipid.errors import ShipidError
 
 
@@ -30,9 +31,18 @@ def _check_vessel(vessel: str) -> str:
     return v.name
 
 
+def _converged_line(res) -> str:
+    """``converged: yes`` or ``converged: NO (...)``: the text output never hides non-convergence."""
+    d = res.diagnostics
+    if d.get("converged", True):
+        return f"converged: yes (ridge iterations {d.get('iterations')})"
+    return f"converged: NO (ridge iterations {d.get('iterations')}); do not trust these estimates"
+
+
 def _print_coefficients(res) -> None:
     from shipid.models import abkowitz as ab
 
+    click.echo(_converged_line(res))
     click.echo(f"{'coefficient':<12}{'estimate':>13}{'std':>12}")
     for name in ab.THETA_X_NAMES + ab.THETA_Y_NAMES + ab.THETA_N_NAMES:
         e = res.estimates[name]
@@ -57,6 +67,7 @@ def _print_coefficients(res) -> None:
 @click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
 @click.option("--figures", is_flag=True,
               help="Also store a coarse D-optimal input map (Fig. 7; ~12 simulations) for `shipid report`.")
+@strict_option
 def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
@@ -73,6 +84,7 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     if figures:  # opt-in: the coarse Fig. 7 map of this vessel (shipid.methods.ebm_series)
         from shipid.methods.ebm_series import coarse_d_optimal
         res.series.setdefault("contours", {})["d_optimal"] = coarse_d_optimal(vessel)
+    loud(res, trials=data)
     if as_json:
         click.echo(res.to_json())
     else:
@@ -87,6 +99,7 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
               help="Scale the trial durations (quick runs < 1).")
 @click.option("--json", "as_json", is_flag=True)
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
+@strict_option
 def study_ebm(kind, seed, scale, as_json, paper):
     """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
     from shipid.methods.ebm_study import make_trials, study as run_study
@@ -95,11 +108,13 @@ def study_ebm(kind, seed, scale, as_json, paper):
     n = 3 if kind == "standard" else 1
     with progress_bar(n, f"EBM study ({kind})") as advance:
         res = run_study(kind, seed, scale=scale, config=_config(paper), progress=advance)
+    loud(res)
     if as_json:
         click.echo(res.to_json())
         return
     d = res.diagnostics
     click.echo(f"EBM study, ESSO OSAKA, input {kind}, seed {seed} ({d['paper_table']})")
+    click.echo(_converged_line(res))
     click.echo(f"{'coefficient':<12}{'true':>12}{'estimated':>12}{'std':>11}{'error %':>9}"
                f"{'paper':>12}{'paper err %':>12}")
     for row in d["table"]:
@@ -134,13 +149,33 @@ def study_ebm(kind, seed, scale, as_json, paper):
     click.echo(f"current: {cs.value:.4f} m/s (true {np.hypot(*d['current_true']):.4f})")
 
 
+def _values(text: str) -> list[float]:
+    """``"5,10,35"`` or ``"15:200:5"`` (start, stop inclusive, step) as a list of floats."""
+    out: list[float] = []
+    for part in (p.strip() for p in text.split(",")):
+        if not part:
+            continue
+        if ":" in part:
+            a, b, d = (float(x) for x in part.split(":"))
+            if d <= 0 or b < a:
+                raise ValueError(part)
+            n = int(np.floor((b - a) / d + 1e-9))
+            out += [float(np.round(a + k * d, 10)) for k in range(n + 1)]
+        else:
+            out.append(float(part))
+    return out
+
+
 @design.command("prbs", context_settings=CONTEXT)
 @click.option("--vessel", default="esso-osaka", show_default=True)
-@click.option("--amplitudes", default="5,10,15,20,25,30,35", show_default=True, help="deg, comma-separated")
-@click.option("--periods", default="15,30,60,105,150,200", show_default=True, help="s, comma-separated")
+@click.option("--amplitudes", default="5:35:10", show_default=True,
+              help="deg: comma-separated values or START:STOP:STEP (stop included).")
+@click.option("--periods", default="15:200:5", show_default=True,
+              help="s: comma-separated values or START:STOP:STEP (stop included).")
 @click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000))
-@click.option("--seeds", default=2, show_default=True, type=click.IntRange(1, 50),
-              help="PRBS realisations averaged per grid point.")
+@click.option("--seeds", default=3, show_default=True, type=click.IntRange(1, 50),
+              help="PRBS realisations averaged per grid point (with 2 or more, the comparison with the "
+                   "paper's optimum carries a standard error).")
 @click.option("--currents", default="", help="Also sweep the current speed (knots, comma-separated) at the optimum (Fig. 8).")
 @click.option("--dt", default=1.0, show_default=True, type=click.FloatRange(0.05, 5.0),
               help="Simulation / sampling step of each PRBS run [s].")
@@ -148,8 +183,15 @@ def study_ebm(kind, seed, scale, as_json, paper):
 @click.option("--out", "out", default=None, type=click.Path(dir_okay=False), metavar="RESULT.json",
               help="Also write the map as a shipid Result for `shipid report` (Fig. 7).")
 @click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
+@strict_option
 def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
-    """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7)."""
+    """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7).
+
+    The optimum is the best point of the stated grid (default 4 amplitudes x 38
+    periods, 5 s apart, x 3 PRBS seeds: 456 noise-free 1200-s simulations), and the
+    output says whether the paper's optimum (35 deg, 105 s) agrees with it within 2
+    standard errors of the PRBS-realisation spread. A quick look: --periods 15,60,105,200.
+    """
     from pathlib import Path
 
     from shipid.analysis.design import current_sweep, design_result, prbs_grid
@@ -161,11 +203,11 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_j
 
     vessel = _check_vessel(vessel)
     try:
-        A = [float(a) for a in amplitudes.split(",") if a.strip()]
-        T = [float(a) for a in periods.split(",") if a.strip()]
+        A, T = _values(amplitudes), _values(periods)
         C = [float(a) for a in currents.split(",") if a.strip()]
     except ValueError:
-        raise ShipidError("amplitudes, periods and currents must be comma-separated numbers") from None
+        raise ShipidError("amplitudes and periods must be comma-separated numbers or START:STOP:STEP, "
+                          "currents comma-separated numbers") from None
     if not A or not T or min(A) <= 0 or min(T) <= 0 or max(A) > 35:
         raise ShipidError("need amplitudes in (0, 35] deg and positive periods")
     with progress_bar(len(A) * len(T), "D-optimality grid") as advance:
@@ -176,6 +218,7 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_j
            f"--periods {','.join(f'{x:g}' for x in T)} --duration {duration:g} --seeds {seeds} --dt {dt:g}"
            + (f" --currents {','.join(f'{x:g}' for x in C)}" if C else ""))
     res = design_result(g, command=cmd, sweep=sweep)
+    loud(res)
     if out is not None:
         path = res.write_json(out, force=force)
         click.echo(f"wrote {path} (shipid report {path} --out report.html)", err=as_json)
@@ -187,6 +230,7 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_j
     for i, amp in enumerate(g.amplitudes):
         click.echo(f"{amp:>8g}" + "".join(f"{v:>9.2f}" for v in g.sway[i]))
     click.echo(f"optimum: amplitude {a:g} deg, period {per:g} s (log10 |W'W| = {val:.2f})")
+    click.echo(f"paper (Fig. 7): {res.diagnostics['paper_fig7']['text']}")
     if sweep is not None:
         cs = sweep
         click.echo("current (kn): " + ", ".join(f"{s:g}: {v:.2f}" for s, v in zip(cs["speeds_knot"], cs["sway"])))

@@ -24,6 +24,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
+from shipid.cli._common import loud, loud_lines, strict_option
 from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import InputError, ShipidError
 
@@ -103,6 +104,7 @@ def _fmt(v: float) -> str:
                    "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
+@strict_option
 def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
                      as_json):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
@@ -124,6 +126,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
                            z_f_prior=kn["z_f_prior"], options=opts,
                            init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
     res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm_series)
+    loud(res, trials=[tr for _, tr in datasets])
     if as_json:
         d = res.to_dict()
         flat = {k: e.value for k, e in res.estimates.items()}
@@ -137,8 +140,6 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
                f"after {res.diagnostics['iterations']} iterations, z_f {res.diagnostics['z_f_mode']}")
     for k, e in res.estimates.items():
         click.echo(f"  {k:8s} = {_fmt(e.value):>11s} ± {_fmt(e.std):<10s} {e.unit:10s} {e.note}")
-    for w in res.diagnostics["warnings"]:
-        click.echo(f"warning: {w}", err=True)
 
 
 @study.command("mass-cm-sensitivity")
@@ -152,6 +153,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
 @click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
               help="Also write the study as a result JSON (Table 3 spread) for `shipid report`.")
 @click.option("--force", is_flag=True, help="Overwrite --out.")
+@strict_option
 @campaign_options
 def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
     """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
@@ -176,6 +178,8 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
+    s["warnings"] = loud_lines([f"{s['flagged']} of {s['runs']} runs flagged implausible or not converged "
+                                "(left out of the means)"] if s["flagged"] else [])
     if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report` (issue 8)
         from shipid.methods.masscm_series import spread_result
         spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
@@ -246,6 +250,7 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
 @click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True)
 @click.option("--data-seed", type=int, default=0, show_default=True)
 @click.option("--force", is_flag=True, help="Overwrite an existing figure.")
+@strict_option
 def mass_cm_contour(out, zf_mode, data_seed, force):
     """Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate."""
     from shipid.methods.masscm_contour import contour_figure

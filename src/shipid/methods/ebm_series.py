@@ -261,23 +261,24 @@ def coarse_d_optimal(vessel: str = "esso-osaka", *, amplitudes: Sequence[float] 
     :data:`COARSE_DURATION` s at ``dt`` = 2 s: 12 noise-free simulations, a few seconds)."""
     from shipid.analysis.design import prbs_grid
 
+    from shipid.analysis.design import paper_comparison
+
     grid = prbs_grid(COARSE_AMPLITUDES if amplitudes is None else amplitudes,
                      COARSE_PERIODS if periods is None else periods,
                      duration=COARSE_DURATION if duration is None else duration, seeds=(0,), dt=dt, vessel=vessel)
     c = d_optimal_contour(grid)
     # caption: say loudly that this is a coarse preview, so that its optimum is not read as the paper's answer
     a, per, _ = grid.optimum("sway")
+    comp = paper_comparison(grid)
     c["points"][0]["label"] = "coarse-grid optimum"
     c["title"] = (f"COARSE preview only ({grid.amplitudes.size} × {grid.periods.size} grid: amplitudes "
                   f"{', '.join(f'{v:g}' for v in grid.amplitudes)}°, periods {', '.join(f'{v:g}' for v in grid.periods)} s; "
                   f"{grid.duration:g} s runs at dt = {grid.dt:g} s, {len(grid.seeds)} PRBS seed): log10 |WᵀW| of the "
-                  f"sway (= yaw) regressors. Its best point, {a:g}° / {per:g} s, "
-                  + ("is NOT the D-optimal input: the " if (a, per) != (35.0, 105.0) else
-                     "agrees with the full map here, but a coarse grid is not evidence of it: the ")
-                  + "criterion depends on how many rudder switches a run holds, so short runs favour short clock periods "
-                  "(at 1200 s the 35° row peaks at 105 s), and one PRBS realisation is a noisy sample. The paper's "
-                  "Fig. 7 optimum is 35° / 105 s; the full map (by default 7 × 6 grid of 1200-s runs, 2 seeds: "
-                  "35° / 105 s) comes from `shipid design prbs --out RESULT.json` and `shipid report RESULT.json`.")
+                  f"sway (= yaw) regressors. Its best point is {a:g}° / {per:g} s; {comp['text']}. A coarse grid "
+                  "of one PRBS realisation is no evidence of the D-optimal input: the criterion depends on how "
+                  "many rudder switches a run holds and one realisation is a noisy sample. The map on a fine "
+                  "grid with several seeds comes from `shipid design prbs --out RESULT.json` and "
+                  "`shipid report RESULT.json`.")
     return c
 
 

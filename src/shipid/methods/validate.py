@@ -46,9 +46,20 @@ def model_from_result(d: Mapping[str, Any]) -> mmg.MmgModel:
 
 def load_model(spec: str | Path) -> mmg.MmgModel:
     """A model from a MODEL.json path, or ``published:esso_osaka_3m`` / ``published:kvlcc2_L7``."""
+    return load_model_document(spec)[0]
+
+
+def load_model_document(spec: str | Path) -> tuple[mmg.MmgModel, dict | None]:
+    """The model of ``spec`` and the whole MODEL.json document (``None`` for a ``published:`` set).
+
+    The document carries what ``validate`` needs besides the coefficients: the
+    training runs' rudder sign convention and reading settings (``model.validate``,
+    ``model.conventions``) and whether the identification converged
+    (``diagnostics.converged``).
+    """
     s = str(spec)
     if s.startswith("published:"):
-        return mmg.load_published(s.split(":", 1)[1])
+        return mmg.load_published(s.split(":", 1)[1]), None
     p = Path(s)
     if not p.is_file():
         raise InputError("no such model file", file=s)
@@ -56,8 +67,10 @@ def load_model(spec: str | Path) -> mmg.MmgModel:
         d = json.loads(p.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as err:
         raise InputError(f"not a JSON model file ({err})", file=s) from None
+    if not isinstance(d, dict):
+        raise InputError("not a MODEL.json object", file=s)
     try:
-        return model_from_result(d)
+        return model_from_result(d), d
     except InputError as err:
         raise InputError(str(err.args[0]) if err.args else str(err), file=s) from None
     except (KeyError, TypeError, ValueError) as err:
@@ -86,6 +99,56 @@ def _check_finite(trial: Trial, Z: np.ndarray, U: np.ndarray) -> None:
         k = int(np.flatnonzero(bad)[0])
         raise InputError("missing values in the states or inputs (read the run with interpolate_gaps "
                          "or trim_empty_rows)", file=trial.meta.get("source"), row=k + 1)
+
+
+# ----------------------------------------------------------------------------- conventions
+def first_step_yaw_sign(trial: Trial, *, max_window: float = 10.0) -> dict[str, Any]:
+    """Sign of the yaw response to the first rudder step of a run (the run's rudder convention).
+
+    The first step is the first sample where the rudder has moved from its initial
+    value (median of the first second) by more than ``max(3 deg, half its largest
+    excursion)``. The response is the change of the measured yaw rate from the second
+    before the step to the last second of the step (at most ``max_window`` s, until the
+    rudder returns). With the MMG convention (rudder positive turns the ship to
+    starboard, yaw rate positive to starboard) the product of the step's sign and the
+    response's sign is +1; a log whose rudder is positive to port gives -1.
+
+    Returns
+    -------
+    dict
+        ``sign`` (+1, -1, or 0 when the run has no clear step or no clear response),
+        ``t_step`` (s from the start), ``delta_step_deg``, ``dr_deg_s``.
+    """
+    t = np.asarray(trial.t, dtype=float)
+    out: dict[str, Any] = {"sign": 0, "t_step": None, "delta_step_deg": None, "dr_deg_s": None}
+    if "delta" not in trial or "r" not in trial or t.size < 10:
+        return out
+    d, r = np.asarray(trial["delta"], float), np.asarray(trial["r"], float)
+    dt = float(np.median(np.diff(t)))
+    n1 = max(int(round(1.0 / dt)), 1)
+    d0 = float(np.nanmedian(d[:n1]))
+    exc = np.abs(d - d0)
+    if not np.isfinite(exc).any():
+        return out
+    thr = max(np.deg2rad(3.0), 0.5 * float(np.nanmax(exc)))
+    above = np.flatnonzero(exc > thr)
+    if above.size == 0:
+        return out
+    k = int(above[0])
+    s = float(np.sign(d[k] - d0))
+    stop = min(t.size, k + int(round(max_window / dt)))
+    back = np.flatnonzero((np.sign(d[k:stop] - d0) != s) | (exc[k:stop] < 0.5 * thr))
+    j = k + (int(back[0]) if back.size else stop - k)
+    if (j - k) * dt < 2.0:
+        return out
+    before = float(np.nanmean(r[max(k - n1, 0):k + 1]))
+    after = float(np.nanmean(r[max(j - n1, k):j]))
+    dr = after - before
+    scale = float(np.nanmax(np.abs(r))) if np.isfinite(r).any() else 0.0
+    out.update(t_step=float(t[k] - t[0]), delta_step_deg=float(np.degrees(d[k] - d0)), dr_deg_s=float(np.degrees(dr)))
+    if scale > 0 and abs(dr) > 0.1 * scale:
+        out["sign"] = int(s * np.sign(dr))
+    return out
 
 
 # ----------------------------------------------------------------------------- metrics
@@ -241,4 +304,5 @@ def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
 
 
 __all__ = ["validate", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",
+           "first_step_yaw_sign", "load_model_document",
            "format_table", "plot", "horizon_starts", "QUANTITIES", "UNITS"]

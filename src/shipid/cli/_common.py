@@ -1,0 +1,200 @@
+"""Loud failures on the command line: one mechanism for every command.
+
+Whatever a user must not miss about a result — the estimator did not converge, an
+estimate is implausible or flagged, a coefficient the data do not determine, a
+repair made to the input data, any Python warning raised inside a method — is
+
+* printed as one line on stderr, ``shipid: warning: <text>`` (never Python's
+  ``file.py:123: RuntimeWarning: ...`` with a source path and a code line),
+* recorded in the result's JSON (``result.diagnostics["warnings"]``, or the
+  ``"warnings"`` list of a command whose output is a plain table), and
+* under ``shipid --strict`` or a command's own ``--strict`` turned into exit
+  status 3 once the command has written its output.
+
+:func:`shipid.cli.main` records every Python warning of the command
+(:func:`recording`); a command hands its :class:`~shipid.result.Result` to
+:func:`loud` before it writes or prints it, which moves the warnings recorded so
+far into the result, adds those the result itself implies and prints each one
+once. Warnings recorded but never claimed by a command are printed by ``main``
+at the end, in the same format.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Iterator
+
+import click
+
+#: Exit status of a command that warned under ``--strict``.
+STRICT_EXIT = 3
+PREFIX = "shipid: warning: "
+#: Estimate statuses that are not an estimate a user may quote.
+UNDETERMINED = ("not determined", "not identifiable", "implausible", "flagged")
+#: Warning categories meant for developers, not for users of the command (not shown, as Python's defaults).
+_QUIET = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+@dataclass
+class _Session:
+    strict: bool = False
+    emitted: list[str] = field(default_factory=list)
+    recorded: list | None = None
+    claimed: int = 0
+
+
+_S = _Session()
+
+
+def one_line(text: Any) -> str:
+    """``text`` on one line (runs of whitespace, newlines included, become one space)."""
+    return " ".join(str(text).split())
+
+
+def set_strict(ctx: click.Context | None = None, param: Any = None, value: bool = True) -> bool:
+    """Turn ``--strict`` on for this invocation (a click callback for the global and per-command flag)."""
+    if value:
+        _S.strict = True
+    return value
+
+
+#: ``--strict`` for a single command (same effect as ``shipid --strict CMD``).
+strict_option = click.option("--strict", is_flag=True, expose_value=False, is_eager=True, callback=set_strict,
+                             help="Exit with status 3 if the command warns (non-convergence, implausible or "
+                                  "undetermined estimates, data repairs).")
+
+
+def warn(text: str) -> None:
+    """Print ``shipid: warning: text`` on stderr (once per distinct text) and count it for ``--strict``."""
+    line = one_line(text)
+    if line in _S.emitted:
+        return
+    _S.emitted.append(line)
+    click.echo(PREFIX + line, err=True)
+
+
+@contextmanager
+def recording() -> Iterator[None]:
+    """Record every Python warning raised inside (used by :func:`shipid.cli.main` around a command)."""
+    prev, prev_claimed = _S.recorded, _S.claimed
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        for cat in _QUIET:
+            warnings.simplefilter("ignore", cat)
+        _S.recorded, _S.claimed = rec, 0
+        try:
+            yield
+        finally:
+            _S.recorded, _S.claimed = prev, prev_claimed
+
+
+def take_python_warnings() -> list[str]:
+    """The Python warnings recorded since the last call, as distinct one-line texts (counts appended)."""
+    rec = _S.recorded
+    if rec is None:
+        return []
+    new = rec[_S.claimed:]
+    _S.claimed = len(rec)
+    counts: dict[str, int] = {}
+    for w in new:
+        if issubclass(w.category, _QUIET):
+            continue
+        t = one_line(w.message)
+        counts[t] = counts.get(t, 0) + 1
+    return [t if n == 1 else f"{t} ({n} times)" for t, n in counts.items()]
+
+
+def implied_warnings(res) -> list[str]:
+    """What a :class:`~shipid.result.Result` says a user must know, beyond its own warning list.
+
+    Non-convergence (``diagnostics["converged"]`` False, or a stage / mode of it), and
+    every estimate whose status is one of :data:`UNDETERMINED` or whose standard error
+    is infinite (the data do not determine it).
+    """
+    d = res.diagnostics or {}
+    own = " ".join(str(w) for w in d.get("warnings", []) or []).lower()
+    out = []
+    if d.get("converged") is False and not ("converge" in own or "settled" in own):
+        parts = []
+        for key, label in (("stages", "stage"), ("ridge", "mode"), ("modes", "mode")):
+            sub = d.get(key)
+            if isinstance(sub, dict):
+                parts += [f"{label} {k}" for k, v in sub.items() if isinstance(v, dict) and v.get("converged") is False]
+        where = f" ({', '.join(parts)} not converged)" if parts else ""
+        out.append(f"{res.method}: the estimator did not converge{where}; do not trust these estimates")
+    for name, e in (res.estimates or {}).items():
+        status = str(getattr(e, "status", "")).lower()
+        std = getattr(e, "std", float("nan"))
+        if status in UNDETERMINED or (isinstance(std, float) and math.isinf(std)):
+            label = status if status in UNDETERMINED else "not determined by the data"
+            note = f" ({one_line(e.note)})" if getattr(e, "note", "") else ""
+            out.append(f"{name}: {label}{note}")
+    return out
+
+
+def repair_warnings(trials: Iterable) -> list[str]:
+    """One line per data repair recorded by the reader (``trial.meta["repairs"]``), naming the file."""
+    out = []
+    for tr in trials:
+        meta = getattr(tr, "meta", {}) or {}
+        src = meta.get("source", "")
+        for r in meta.get("repairs", []) or []:
+            text = r.get("text", r) if isinstance(r, dict) else r
+            out.append(f"data repaired in {src}: {one_line(text)}" if src else f"data repaired: {one_line(text)}")
+    return out
+
+
+def loud(res, *, trials: Iterable = (), extra: Iterable[str] = ()) -> list[str]:
+    """Move recorded Python warnings, implied warnings and data repairs into ``res`` and print them.
+
+    Call it before the result is written or printed, so that its JSON carries every
+    warning. Returns the full warning list of the result.
+    """
+    d = res.diagnostics
+    lst = [one_line(w) for w in (d.get("warnings") or [])]
+    for w in [*take_python_warnings(), *repair_warnings(trials), *extra, *implied_warnings(res)]:
+        w = one_line(w)
+        if w not in lst:
+            lst.append(w)
+    d["warnings"] = lst
+    for w in lst:
+        warn(w)
+    return lst
+
+
+def loud_lines(lines: Iterable[str], *, trials: Iterable = ()) -> list[str]:
+    """:func:`loud` for a command whose output is not a Result: returns the list for its JSON."""
+    lst: list[str] = []
+    for w in [*take_python_warnings(), *repair_warnings(trials), *lines]:
+        w = one_line(w)
+        if w not in lst:
+            lst.append(w)
+    for w in lst:
+        warn(w)
+    return lst
+
+
+def begin(strict: bool = False) -> None:
+    """Reset the per-invocation state (``main`` calls it first)."""
+    _S.strict = bool(strict)
+    _S.emitted = []
+
+
+def finish(rv: int) -> int:
+    """Print the Python warnings no command claimed; exit 3 under ``--strict`` if anything warned."""
+    for w in take_python_warnings():
+        warn(w)
+    if rv == 0 and _S.strict and _S.emitted:
+        n = len(_S.emitted)
+        click.echo(f"shipid: error: {n} warning{'s' if n > 1 else ''} and --strict: exit status {STRICT_EXIT}",
+                   err=True)
+        return STRICT_EXIT
+    return rv
+
+
+def emitted() -> list[str]:
+    """The warning lines printed so far in this invocation."""
+    return list(_S.emitted)
