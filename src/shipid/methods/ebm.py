@@ -72,6 +72,16 @@ class EbmConfig:
         :mod:`shipid.estimate.cd_ekf_fast` (same algorithm and numbers to ~1e-11 as the
         reference :func:`~shipid.estimate.cd_ekf.cd_ekf` path, tested; ~8× faster than
         filterpy, ``benchmarks/bench_ebm_filter.py``). False runs the reference path.
+    approach_s : float
+        Seconds at the start of each trial over which the approach speed and propeller
+        rate are averaged (:func:`approach_condition`).
+    approach_speed, approach_rate : float or None
+        The approach speed through the water (m/s) and propeller rate (1/s) when the user
+        measured them otherwise; None takes them from the trials.
+    se : str
+        ``"hac"`` (default): Newey–West standard errors of the ridge estimate with the
+        ridge bias added in quadrature (:func:`shipid.estimate.ridge.ridge`); ``"iid"``: the
+        textbook ridge covariance, which assumes independent residuals.
     """
 
     q_force: tuple[float, float, float] = (1e8, 1e9, 1e13)
@@ -84,6 +94,10 @@ class EbmConfig:
     rudder_q_gain: float = 100.0
     rudder_q_halo: int = 3
     compiled: bool = True
+    approach_s: float = 10.0
+    approach_speed: float | None = None
+    approach_rate: float | None = None
+    se: str = "hac"
 
 
 def process_noise(model: EbmModel, delta: np.ndarray, config: EbmConfig) -> np.ndarray:
@@ -221,18 +235,19 @@ class RegressionData:
     N: np.ndarray
     v: np.ndarray
     r: np.ndarray
+    seg: np.ndarray | None = None
 
 
 def regression_data(states: Sequence[StateEstimate], p: ab.AbkowitzParams, *, skip: int = 0
                     ) -> RegressionData:
     """Build the regressors of eq. 14 from smoothed states and the known inputs."""
-    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r")}
-    for st in states:
+    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r", "seg")}
+    for i, st in enumerate(states):
         x = st.smooth.x[skip:]
         tr = st.trial
         HX, HY, HN = ab.regressors(x[:, 0], x[:, 1], x[:, 2], tr["delta"][skip:], tr["n"][skip:], p)
         for k, val in (("HX", HX), ("HY", HY), ("HN", HN), ("X", x[:, 6]), ("Y", x[:, 9]),
-                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2])):
+                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2]), ("seg", np.full(x.shape[0], i))):
             parts[k].append(val)
     return RegressionData(**{k: np.concatenate(v) for k, v in parts.items()})
 
@@ -264,40 +279,111 @@ def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
     """Step 2: ridge regression per mode on all trials together (§5.1.2)."""
     pp = replace(p, yaw_rudder_variant=config.yaw_rudder_variant)
     d = regression_data(states, pp)
-    fx = ridge(d.HX, d.X, config.ridge_k)
-    fy = ridge(d.HY, d.Y, config.ridge_k)
-    fn = ridge(d.HN, d.N, config.ridge_k)
+    import warnings
+
+    kw = dict(cov=config.se, segments=d.seg)
+    with warnings.catch_warnings():  # non-convergence is reported by build_result's warnings
+        warnings.simplefilter("ignore", RuntimeWarning)
+        fx = ridge(d.HX, d.X, config.ridge_k, **kw)
+        fy = ridge(d.HY, d.Y, config.ridge_k, **kw)
+        fn = ridge(d.HN, d.N, config.ridge_k, **kw)
     return EbmFit(surge=fx, sway=fy, yaw=fn, alpha=slope_alpha(d.v, d.r, p.L), data=d)
 
 
-def identify(trials: Sequence[Trial], vessel: str = "esso-osaka", *,
-             config: EbmConfig = EbmConfig(), progress=None) -> Result:
-    """Both EBM steps on ``trials``; returns a :class:`~shipid.result.Result`.
+def approach_condition(states: Sequence[StateEstimate], config: EbmConfig = EbmConfig()
+                       ) -> tuple[float, float, list[dict]]:
+    """Approach speed ``U0`` (m/s through the water) and propeller rate ``n0`` (1/s) from the trials.
 
-    Estimates: the 26 coefficients of eq. 13 (non-dimensional, with standard errors),
-    the current speed (m/s) and direction (rad) per trial and averaged. Diagnostics:
-    κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
-    combined coefficients of eq. 21 and the step-1 consistency (mean NIS).
+    ``c0`` of the rudder regressor (eq. 15; :mod:`shipid.models.abkowitz`) is the rudder
+    inflow speed of the straight approach run. It is measured, not derived from packaged
+    coefficients: per trial, the smoothed ``u_r`` (step 1, which uses no hydrodynamic
+    coefficient) and the measured propeller-rate channel ``n`` averaged over the first
+    ``config.approach_s`` seconds, then averaged over the trials.
+    ``config.approach_speed`` / ``config.approach_rate`` (a user's measured values) replace them.
+    Returns ``(U0, n0, per_trial)``.
+    """
+    per = []
+    for st in states:
+        t = st.smooth.t - st.smooth.t[0]
+        w = t <= max(float(config.approach_s), 0.0)
+        w[0] = True
+        per.append({"U0": float(np.mean(st.smooth.x[w, 0])), "n0": float(np.mean(np.asarray(st.trial["n"])[w]))})
+    U0 = float(np.mean([d["U0"] for d in per])) if config.approach_speed is None else float(config.approach_speed)
+    n0 = float(np.mean([d["n0"] for d in per])) if config.approach_rate is None else float(config.approach_rate)
+    if not (np.isfinite(U0) and U0 > 0 and np.isfinite(n0) and n0 > 0):
+        raise InputError(f"EBM needs a straight approach run ahead at positive speed and propeller rate "
+                         f"(found u_r {U0:.3g} m/s, n {n0:.3g} 1/s at the start of the trial)", channel="n")
+    return U0, n0, per
+
+
+def identify_states(trials: Sequence[Trial], vessel="esso-osaka", *, config: EbmConfig = EbmConfig(),
+                    progress=None):
+    """Step 1 on every trial, the approach condition and step 2: ``(states, fit, params)``.
+
+    ``params`` is :func:`shipid.models.abkowitz.particulars_from_vessel` (no packaged coefficient)
+    with the approach of :func:`approach_condition`; ``vessel`` is a name or a
+    :class:`shipid.vessels.Vessel`.
     """
     if not trials:
         raise InputError("no trial given")
-    p = ab.params_from_vessel(vessel)
+    from shipid.methods.ebm_verdict import check_excitation
+
+    check_excitation(trials)
+    p0 = ab.particulars_from_vessel(vessel)
     states = []
     for tr in trials:
-        states.append(estimate_states(tr, p, vessel=vessel, config=config))
+        states.append(estimate_states(tr, p0, vessel=vessel, config=config))
         if progress is not None:
             progress()
+    U0, n0, _ = approach_condition(states, config)
+    p = ab.with_approach(p0, U0, n0)
     fit = fit_coefficients(states, p, config)
+    return states, fit, p
+
+
+def identify(trials: Sequence[Trial], vessel="esso-osaka", *,
+             config: EbmConfig = EbmConfig(), progress=None) -> Result:
+    """Both EBM steps on ``trials``; returns a :class:`~shipid.result.Result`.
+
+    Estimates: the 26 coefficients of eq. 13 (non-dimensional, with HAC standard errors
+    and a verdict ``estimated`` / ``not determined``, :mod:`shipid.methods.ebm_verdict`),
+    the current speed (m/s) and direction (rad) per trial and averaged. Diagnostics:
+    κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
+    combined coefficients of eq. 21, the step-1 consistency (mean NIS), the approach
+    condition taken from the trials and ``warnings``. Nothing of the vessel file's
+    [abkowitz] coefficients enters (:func:`identify_states`).
+    """
+    states, fit, p = identify_states(trials, vessel, config=config, progress=progress)
     return build_result(states, fit, p, config, vessel)
 
 
 def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Result:
+    from shipid.methods.ebm_verdict import coefficient_verdicts
+
     est: dict[str, Estimate] = {}
+    warn: list[str] = []
     names = {"surge": ab.THETA_X_NAMES, "sway": ab.THETA_Y_NAMES, "yaw": ab.THETA_N_NAMES}
-    se_note = "ridge SE assuming independent residuals (optimistic: smoothed forces are correlated)"
+    obs = [observability_report(s) if s.model is not None else None for s in states]
+    observable = all(o is None or o["relative"]["min_rank"] == o["relative"]["n"] for o in obs)
+    if not observable:
+        warn.append("EBM step 1: the 17-state model is not observable along the trajectory (eq. 11 rank test)")
+    verdict = coefficient_verdicts(fit, names, observable)
+    se_note = ("Newey-West (HAC) std of the ridge estimate with the ridge bias in quadrature"
+               if config.se == "hac" else
+               "ridge std assuming independent residuals (optimistic: smoothed forces are correlated)")
     for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
         for nm, th, se in zip(names[mode], f.theta, f.se):
-            est[nm] = Estimate(float(th), float(se), "-", "estimated", se_note)
+            v = verdict[nm]
+            note = se_note if v["status"] == "estimated" else "not determined by the data: " + "; ".join(v["reasons"])
+            est[nm] = Estimate(float(th), float(se), "-", v["status"], note)
+    und = [nm for nm, v in verdict.items() if v["status"] != "estimated"]
+    if und:
+        warn.append(f"EBM: {len(und)} of {len(verdict)} coefficients not determined by these trials: "
+                    + ", ".join(und))
+    for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
+        if not f.converged:
+            warn.append(f"EBM {mode}: Hoerl-Kennard iteration for the ridge parameter did not converge "
+                        f"(k = {f.k:.3g} used)")
     cs = np.array([s.current for s in states])
     cstd = np.array([s.current_std for s in states])
     w = 1.0 / np.maximum(cstd ** 2, 1e-300)
@@ -313,7 +399,6 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
     thY = fit.sway.theta
     thN = fit.yaw.theta
     comb = combined_coefficients(thY, thN, fit.alpha)
-    comb_true = combined_coefficients(p.theta_Y, p.theta_N, fit.alpha)
     diag = {
         "converged": bool(fit.surge.converged and fit.sway.converged and fit.yaw.converged),
         "iterations": {m: f.iterations for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
@@ -322,20 +407,27 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
                   for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
         "correlation": {"surge": fit.surge.correlation, "sway": fit.sway.correlation},
         "alpha": fit.alpha,
-        "combined_eq21": {"Yv+Yr/alpha": comb[0], "Nv*alpha+Nr": comb[1],
-                          "packaged_true": {"Yv+Yr/alpha": comb_true[0], "Nv*alpha+Nr": comb_true[1]}},
+        "combined_eq21": {"Yv+Yr/alpha": comb[0], "Nv*alpha+Nr": comb[1]},
+        "approach": {"U0": p.U0, "n0": p.n0, "c0": p.c0,
+                     "source": "measured values given by the user" if config.approach_speed is not None
+                     else f"trials: smoothed u_r and channel n over the first {config.approach_s:g} s"},
         "trials": [{"source": s.trial.meta.get("source", ""), "manoeuvre": s.trial.meta.get("manoeuvre", ""),
                     "n": int(s.trial.t.size), "mean_nis": float(np.nanmean(s.filt.nis)),
                     "current": s.current.tolist(), "passes": s.passes,
                     "first_pass_current": None if s.first_pass_current is None else s.first_pass_current.tolist(),
-                    "observability_eq11": observability_report(s) if s.model is not None else None}
-                   for s in states],
+                    "observability_eq11": o}
+                   for s, o in zip(states, obs)],
+        "verdicts": verdict,
+        "se_method": config.se,
+        "hac_bandwidth": {m: f.bandwidth for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
+        "warnings": warn,
     }
     st0 = states[0]
     series = {"t": st0.smooth.t[::5], "u_r": st0.smooth.x[::5, 0], "v_r": st0.smooth.x[::5, 1],
               "r": st0.smooth.x[::5, 2], "X": st0.smooth.x[::5, 6], "Y": st0.smooth.x[::5, 9],
               "N": st0.smooth.x[::5, 12]}
-    model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15", "vessel": vessel,
+    model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15",
+             "vessel": vessel if isinstance(vessel, str) else vessel.name,
              "L": p.L, "rho": p.rho, "c0": p.c0, "U0": p.U0, "n0": p.n0,
              "nondimensionalisation": "X, Y by rho/2 L^2, N by rho/2 L^3 (eq. 14)",
              "yaw_rudder_variant": config.yaw_rudder_variant}
