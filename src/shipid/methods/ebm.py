@@ -82,6 +82,15 @@ class EbmConfig:
         ``"hac"`` (default): Newey–West standard errors of the ridge estimate with the
         ridge bias added in quadrature (:func:`shipid.estimate.ridge.ridge`); ``"iid"``: the
         textbook ridge covariance, which assumes independent residuals.
+    weights : str
+        ``"smoother"`` (default): step 2 weights each sample by ``1/σ`` of the smoothed force
+        (the smoother's marginal standard deviation); ``"none"``: the paper's unweighted fit.
+    bias_threshold : float
+        The correction is applied to the coefficients whose bias exceeds this many std.
+    hac_bandwidth : int or None
+        Newey–West lag window (samples); None: Andrews' (1991) rule.
+    bias_correction : bool
+        Subtract the pipeline's own bias at the identified ship (:mod:`shipid.methods.ebm_bias`).
     """
 
     q_force: tuple[float, float, float] = (1e8, 1e9, 1e13)
@@ -98,6 +107,10 @@ class EbmConfig:
     approach_speed: float | None = None
     approach_rate: float | None = None
     se: str = "hac"
+    weights: str = "yaw"
+    bias_correction: bool = True
+    hac_bandwidth: int | None = None
+    bias_threshold: float = 0.5
 
 
 def process_noise(model: EbmModel, delta: np.ndarray, config: EbmConfig) -> np.ndarray:
@@ -236,18 +249,23 @@ class RegressionData:
     v: np.ndarray
     r: np.ndarray
     seg: np.ndarray | None = None
+    sX: np.ndarray | None = None
+    sY: np.ndarray | None = None
+    sN: np.ndarray | None = None
 
 
 def regression_data(states: Sequence[StateEstimate], p: ab.AbkowitzParams, *, skip: int = 0
                     ) -> RegressionData:
     """Build the regressors of eq. 14 from smoothed states and the known inputs."""
-    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r", "seg")}
+    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r", "seg", "sX", "sY", "sN")}
     for i, st in enumerate(states):
         x = st.smooth.x[skip:]
+        sd = st.smooth.std[skip:]
         tr = st.trial
         HX, HY, HN = ab.regressors(x[:, 0], x[:, 1], x[:, 2], tr["delta"][skip:], tr["n"][skip:], p)
         for k, val in (("HX", HX), ("HY", HY), ("HN", HN), ("X", x[:, 6]), ("Y", x[:, 9]),
-                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2]), ("seg", np.full(x.shape[0], i))):
+                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2]), ("seg", np.full(x.shape[0], i)),
+                       ("sX", sd[:, 6]), ("sY", sd[:, 9]), ("sN", sd[:, 12])):
             parts[k].append(val)
     return RegressionData(**{k: np.concatenate(v) for k, v in parts.items()})
 
@@ -272,6 +290,8 @@ class EbmFit:
     yaw: RidgeFit
     alpha: float
     data: RegressionData
+    bias: tuple | None = None
+    note: str = ""
 
 
 def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
@@ -281,12 +301,22 @@ def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
     d = regression_data(states, pp)
     import warnings
 
-    kw = dict(cov=config.se, segments=d.seg)
+    kw = dict(cov=config.se, segments=d.seg, bandwidth=config.hac_bandwidth)
+
+    def wls(H, y, s, mode):
+        # rows weighted by 1/σ of the smoothed force (step 1's own uncertainty): the samples where the
+        # smoother cannot follow the force (rudder moving, Q raised) count less (module docstring)
+        if not (config.weights == "smoother" or config.weights == mode):
+            return ridge(H, y, config.ridge_k, **kw)
+        w = 1.0 / np.maximum(s, 1e-300)
+        w = w / np.mean(w)
+        return ridge(H * w[:, None], y * w, config.ridge_k, **kw)
+
     with warnings.catch_warnings():  # non-convergence is reported by build_result's warnings
         warnings.simplefilter("ignore", RuntimeWarning)
-        fx = ridge(d.HX, d.X, config.ridge_k, **kw)
-        fy = ridge(d.HY, d.Y, config.ridge_k, **kw)
-        fn = ridge(d.HN, d.N, config.ridge_k, **kw)
+        fx = wls(d.HX, d.X, d.sX, "surge")
+        fy = wls(d.HY, d.Y, d.sY, "sway")
+        fn = wls(d.HN, d.N, d.sN, "yaw")
     return EbmFit(surge=fx, sway=fy, yaw=fn, alpha=slope_alpha(d.v, d.r, p.L), data=d)
 
 
@@ -338,6 +368,16 @@ def identify_states(trials: Sequence[Trial], vessel="esso-osaka", *, config: Ebm
     U0, n0, _ = approach_condition(states, config)
     p = ab.with_approach(p0, U0, n0)
     fit = fit_coefficients(states, p, config)
+    if config.bias_correction:
+        from shipid.methods.ebm_bias import corrected, pipeline_bias
+
+        try:
+            bias = pipeline_bias(trials, states, fit, p, vessel, config)
+        except (FloatingPointError, ShipidError, NotPositiveDefiniteError, np.linalg.LinAlgError) as err:
+            fit = replace(fit, note=f"EBM: no bias correction (the identified ship could not be re-identified: {err})")
+        else:
+            cf, applied = corrected(fit, bias, config.bias_threshold)
+            fit = replace(cf, bias=applied)
     return states, fit, p
 
 
@@ -380,6 +420,8 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
     if und:
         warn.append(f"EBM: {len(und)} of {len(verdict)} coefficients not determined by these trials: "
                     + ", ".join(und))
+    if fit.note:
+        warn.append(fit.note)
     for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
         if not f.converged:
             warn.append(f"EBM {mode}: Hoerl-Kennard iteration for the ridge parameter did not converge "
