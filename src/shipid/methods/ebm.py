@@ -85,6 +85,9 @@ class EbmConfig:
     weights : str
         ``"smoother"`` (default): step 2 weights each sample by ``1/σ`` of the smoothed force
         (the smoother's marginal standard deviation); ``"none"``: the paper's unweighted fit.
+    sensors : (x_D, y_D, y_S) or None
+        DGPS antenna and speed-log positions in body axes (m) for trials that do not state them
+        (:func:`_sensor_positions`); None: the body origin.
     bias_threshold : float
         The correction is applied to the coefficients whose bias exceeds this many std.
     hac_bandwidth : int or None
@@ -111,6 +114,7 @@ class EbmConfig:
     bias_correction: bool = True
     hac_bandwidth: int | None = None
     bias_threshold: float = 0.5
+    sensors: tuple[float, float, float] | None = None
 
 
 def process_noise(model: EbmModel, delta: np.ndarray, config: EbmConfig) -> np.ndarray:
@@ -149,12 +153,27 @@ class StateEstimate:
         return self.smooth.x[:, STATE_NAMES.index(name)]
 
 
-def _sensor_positions(trial: Trial, vessel: str) -> dict[str, float]:
-    conds = ab.trial_conditions(vessel)
-    out = {}
-    for k in ("x_D", "y_D", "y_S"):
-        out[k] = float(trial.meta.get(k, conds[k]))
-    return out
+def _sensor_positions(trial: Trial, vessel=None, config=None) -> dict[str, float]:
+    """Body-axis positions of the DGPS antenna (``x_D, y_D``) and speed log (``y_S``) of eq. 8, in m.
+
+    From the trial's metadata (simulated §5.1 records carry them), else from
+    ``config.sensors`` (what the user states), else the body origin: the shipid channel
+    convention for ``x, y, x_dot, y_dot, U`` (``shipid simulate`` records the origin). The
+    vessel file's [trials] positions belong to the §5.1 simulation set-up, not to a user's
+    trial, and are not used: a wrong lever arm moves the reference point of every velocity
+    and biases all coefficients without any sign in the innovations.
+    """
+    given = {} if config is None or config.sensors is None else dict(zip(("x_D", "y_D", "y_S"), config.sensors))
+    return {k: float(trial.meta.get(k, given.get(k, 0.0))) for k in ("x_D", "y_D", "y_S")}
+
+
+def sensor_source(trial: Trial, config=None) -> str:
+    """Where :func:`_sensor_positions` took the lever arms from (for the Result)."""
+    if all(k in trial.meta for k in ("x_D", "y_D", "y_S")):
+        return "trial metadata"
+    if config is not None and config.sensors is not None:
+        return "given by the user"
+    return "not stated: body origin assumed"
 
 
 def measurements(trial: Trial) -> np.ndarray:
@@ -176,7 +195,7 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
     """Step 1 for one trial: EKF + fixed-interval smoother, ``config.passes`` passes (§5.1.1)."""
     z = measurements(trial)
     t = trial.t - trial.t[0]
-    sens = _sensor_positions(trial, vessel)
+    sens = _sensor_positions(trial, vessel, config)
     conds = ab.trial_conditions(vessel)
     sig = {k: float(trial.meta.get(k, conds[k])) for k in ("sigma_xy", "sigma_xy_dot", "sigma_psi", "sigma_u_log")}
     R = measurement_noise(sig["sigma_xy"], sig["sigma_xy_dot"], sig["sigma_psi"], sig["sigma_u_log"])
@@ -422,6 +441,10 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
                     + ", ".join(und))
     if fit.note:
         warn.append(fit.note)
+    for s_ in states:
+        if sensor_source(s_.trial, config).startswith("not stated"):
+            warn.append(f"EBM: {s_.trial.meta.get('source') or 'a trial'} states no sensor positions: DGPS antenna "
+                        "and speed log taken at the body origin (give them with --antenna X,Y --log-offset Y)")
     for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
         if not f.converged:
             warn.append(f"EBM {mode}: Hoerl-Kennard iteration for the ridge parameter did not converge "
@@ -455,6 +478,8 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
                      else f"trials: smoothed u_r and channel n over the first {config.approach_s:g} s"},
         "trials": [{"source": s.trial.meta.get("source", ""), "manoeuvre": s.trial.meta.get("manoeuvre", ""),
                     "n": int(s.trial.t.size), "mean_nis": float(np.nanmean(s.filt.nis)),
+                    "sensors": _sensor_positions(s.trial, vessel, config),
+                    "sensors_from": sensor_source(s.trial, config),
                     "current": s.current.tolist(), "passes": s.passes,
                     "first_pass_current": None if s.first_pass_current is None else s.first_pass_current.tolist(),
                     "observability_eq11": o}

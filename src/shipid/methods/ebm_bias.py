@@ -61,7 +61,7 @@ def pipeline_bias(trials, states, fit, p: ab.AbkowitzParams, vessel, config):
     ph = p.with_theta(fit.surge.theta, fit.sway.theta, fit.yaw.theta)
     syn = []
     for tr, st in zip(trials, states):
-        sens = ebm._sensor_positions(tr, vessel)
+        sens = ebm._sensor_positions(tr, vessel, config)
         syn.append(synthetic_trial(tr, st, ph, sens))
     cfg = replace(config, bias_correction=False, approach_speed=p.U0, approach_rate=p.n0)
     s_states = [ebm.estimate_states(tr, p, vessel=vessel, config=cfg) for tr in syn]
