@@ -12,6 +12,35 @@ regressors of eqs. 14–15 for all trials together, and ridge regression with th
 Hoerl–Kennard biasing parameter (:mod:`shipid.estimate.ridge`) fits θ_X, θ_Y, θ_N
 (eq. 13) to the smoothed X, Y, N.
 
+What the pipeline knows (:func:`identify_states`): the vessel file's mass, inertia,
+added masses (M of eq. 6, known in the paper), length and propeller particulars
+(:func:`shipid.models.abkowitz.particulars_from_vessel`, whose coefficients are NaN); the
+approach speed and propeller rate that fix ``c0`` of the rudder regressor come from the
+trials (:func:`approach_condition`) and the sensor lever arms of eq. 8 from the trial or
+the user (:func:`_sensor_positions`). Nothing of the packaged Table 3 enters.
+
+Standard errors. The residuals of step 2 are smoothed-force errors: serially correlated
+over tens of samples (the Gauss–Markov model of eq. 4 makes them smooth), so the textbook
+ridge covariance, which assumes independent residuals, is optimistic. We use the
+Newey–West sandwich on the ridge normal equations with Andrews' bandwidth, lags kept
+within each trial (``cov="hac"`` of :func:`shipid.estimate.ridge.ridge`), plus the ridge
+bias in quadrature. It was chosen over (a) propagating the smoother covariance, which
+needs the N × N cross-covariance of the smoothed forces and still misses the regressors'
+own errors, and (b) a moving-block bootstrap, which resamples the same residual
+information at B times the cost: the HAC sandwich uses the residuals themselves, so it
+sees force errors, regressor errors and model error alike. Two systematic parts that no
+residual-based variance covers are treated separately: the yaw fit is weighted by
+``1/σ`` of the smoothed moment (where the rudder moves, the smoother cannot follow the
+moment's jump and its σ is larger), and the pipeline's own bias at the identified ship is
+estimated by re-identifying it from a noise-free simulation with the trial's inputs and
+subtracted where it exceeds half a std (:mod:`shipid.methods.ebm_bias`). The coverage of
+the result is measured by ``shipid study ebm-coverage`` (:mod:`shipid.methods.ebm_coverage`).
+
+Verdicts (:mod:`shipid.methods.ebm_verdict`): trials without rudder or speed excitation
+are refused; each coefficient is ``estimated`` or ``not determined`` (relative std,
+variance inflation, ridge-bias share, R² of the mode, eq. 11 observability), and the
+undetermined ones are named in ``diagnostics["warnings"]``.
+
 Required trial channels: ``x, y`` (DGPS antenna, m), ``x_dot, y_dot`` (m/s),
 ``psi`` (rad), ``U`` (speed log, m/s), ``delta`` (rad), ``n`` (1/s).
 """
