@@ -17,6 +17,14 @@ The trial is the D-optimal PRBS of :data:`shipid.methods.ebm_study.OPTIMAL_PRBS`
 measured channels and the vessel's particulars. :func:`summarise` gives per coefficient
 the bias and spread of the relative error, the mean |z| and the coverage of ±2 std, over
 the runs where the coefficient is ``estimated`` (and how often it is).
+
+Seeds. Tuning (the choice of the yaw weighting, the bias correction and its threshold, the
+rudder-aware Q gain, the HAC bandwidth rule and the verdict thresholds) used campaign seed 1,
+runs 0–11, and ``SeedSequence([9999, i])``, i = 0–2, for diagnosis. Reported: campaign seed
+100, runs 0–49 (``shipid study ebm-coverage --runs 50 --seed 100 --workers 1``): pooled ±2-std
+coverage of the six linear coefficients 0.923, lowest 0.88 (N_v, N_r), Y_r `estimated` in 48
+of 50, largest current-speed error 0.0024 m/s; the intercepts Y_0, N_0 are not covered
+(0.0 over 4 runs, 0.72 over 18). Tests use campaign seed 7 and ``SeedSequence([16, ·])``.
 """
 
 from __future__ import annotations
