@@ -15,7 +15,8 @@ from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
 
 
 def _fmt(x, spec):
-    return "-" if x is None else format(x, spec)
+    width = int(spec.split(".")[0]) if spec.split(".")[0].isdigit() else 0
+    return f"{'-':>{width}}" if x is None else format(x, spec)
 
 
 @study.command("ebm-coverage")

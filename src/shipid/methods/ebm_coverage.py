@@ -95,7 +95,7 @@ def run_one(i: int, seed=0, *, duration: float = 1200.0) -> dict:
     tr, current, ns = simulate_unknown(q, rng, duration=duration)
     res = ebm.identify([tr])
     truth = dict(zip(NAMES, q.theta_X + q.theta_Y + q.theta_N))
-    out = {"coefficients": {}, "noise_scale": ns, "current_true": list(current), "n0_true": q.n0,
+    out = {"coefficients": {}, "factors": dict(zip(NAMES, map(float, fac))), "noise_scale": ns, "current_true": list(current), "n0_true": q.n0,
            "n0_used": res.model["n0"], "c0_true": q.c0, "c0_used": res.model["c0"],
            "converged": bool(res.diagnostics["converged"]), "warnings": list(res.diagnostics.get("warnings", []))}
     for nm in NAMES:
