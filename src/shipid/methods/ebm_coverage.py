@@ -23,8 +23,10 @@ rudder-aware Q gain, the HAC bandwidth rule and the verdict thresholds) used cam
 runs 0–11, and ``SeedSequence([9999, i])``, i = 0–2, for diagnosis. Reported: campaign seed
 100, runs 0–49 (``shipid study ebm-coverage --runs 50 --seed 100 --workers 1``): pooled ±2-std
 coverage of the six linear coefficients 0.923, lowest 0.88 (N_v, N_r), Y_r `estimated` in 48
-of 50, largest current-speed error 0.0024 m/s; the intercepts Y_0, N_0 are not covered
-(0.0 over 4 runs, 0.72 over 18). Tests use campaign seed 7 and ``SeedSequence([16, ·])``.
+of 50, largest current-speed error 0.0024 m/s. The offset terms Y_0, N_0 were not covered
+(0.0 over 4 runs, 0.72 over 18); since then they are always `not determined`
+(:data:`shipid.methods.ebm_verdict.OFFSET_TERMS`, a rule added after this run). Tests use
+campaign seed 7 and ``SeedSequence([16, ·])``.
 """
 
 from __future__ import annotations
