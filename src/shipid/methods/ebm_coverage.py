@@ -26,7 +26,9 @@ coverage of the six linear coefficients 0.923, lowest 0.88 (N_v, N_r), Y_r `esti
 of 50, largest current-speed error 0.0024 m/s. The offset terms Y_0, N_0 were not covered
 (0.0 over 4 runs, 0.72 over 18); since then they are always `not determined`
 (:data:`shipid.methods.ebm_verdict.OFFSET_TERMS`, a rule added after this run). Tests use
-campaign seed 7 and ``SeedSequence([16, ·])``.
+campaign seed 7 and ``SeedSequence([16, ·])``. A second fresh campaign with the final code,
+``--runs 30 --seed 200``: pooled 0.911, lowest 0.833 (N_v and N_r, bias +0.3 % against a
+spread of 0.9 %), Y_r estimated in 29 of 30, current error at most 0.0017 m/s.
 """
 
 from __future__ import annotations
