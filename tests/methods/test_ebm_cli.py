@@ -17,7 +17,7 @@ def trial_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("ebm")
     paths = []
     for i, (m, dur) in enumerate([("turning-35", 300.0), ("zigzag-20", 400.0)]):
-        p = d / f"t{i}.csv"
+        p = d / f"t{i}.parquet"  # Parquet keeps the trial metadata (the DGPS antenna and log positions)
         write_trial(simulate_trial(m, dur, seed=i), p)
         paths.append(str(p))
     return paths
@@ -73,3 +73,28 @@ def test_study_cli_quick(capsys, monkeypatch):
     assert main(["study", "ebm-esso-osaka", "--input", "standard", "--seed", "3", "--scale", "0.3"]) == 0
     out = capsys.readouterr().out
     assert "Table 2 analogue" in out and "eq. 21 combined coefficients" in out and "Y_delta" in out
+
+
+def test_identify_ebm_text_prints_verdicts_converged_and_warnings(tmp_path, capsys, monkeypatch):
+    """Issue 16: verdicts, converged and the warnings in the text output; a coefficient that is
+    not determined is printed without a value. A short zig-zag alone leaves the cubic terms open."""
+    monkeypatch.setenv("SHIPID_NO_PROGRESS", "1")
+    p = tmp_path / "z.parquet"
+    write_trial(simulate_trial("zigzag-20", 400.0, seed=5), p)
+    assert main(["identify", "ebm", "--trial", str(p)]) == 0
+    out = capsys.readouterr().out
+    assert "converged: " in out
+    lines = [ln for ln in out.splitlines() if "not determined (" in ln]
+    assert lines, out
+    for ln in lines:  # no number in the estimate and std columns
+        name, est, std = ln.split()[:3]
+        assert est == "-" and std == "-"
+    assert any(ln.startswith("warning: EBM:") and "not determined" in ln for ln in out.splitlines())
+
+
+def test_identify_ebm_constant_rudder_is_refused_with_one_line(tmp_path, capsys):
+    p = tmp_path / "s.parquet"
+    write_trial(simulate_trial("straight", 200.0, seed=0), p)
+    assert main(["identify", "ebm", "--trial", str(p)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "rudder barely varies" in err

@@ -1,6 +1,6 @@
 """EBM commands (seed 002, Yoon & Rhee 2003).
 
-* ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--json]``
+* ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--antenna X,Y --log-offset Y] [--json]``
 * ``shipid study ebm-esso-osaka --input standard|optimal-prbs [--seed S] [--json]``
 * ``shipid design prbs --vessel esso-osaka [--json] [--out RESULT.json [--force]]``
 """
@@ -43,10 +43,14 @@ def _print_coefficients(res) -> None:
     from shipid.models import abkowitz as ab
 
     click.echo(_converged_line(res))
-    click.echo(f"{'coefficient':<12}{'estimate':>13}{'std':>12}")
+    click.echo(f"{'coefficient':<12}{'estimate':>13}{'std':>12}  verdict")
     for name in ab.THETA_X_NAMES + ab.THETA_Y_NAMES + ab.THETA_N_NAMES:
         e = res.estimates[name]
-        click.echo(f"{name:<12}{e.value:>13.4e}{e.std:>12.2e}")
+        if e.status == "estimated":
+            click.echo(f"{name:<12}{e.value:>13.4e}{e.std:>12.2e}  estimated")
+        else:  # never printed as an estimate
+            why = e.note.split(": ", 1)[-1]
+            click.echo(f"{name:<12}{'-':>13}{'-':>12}  not determined ({why})")
     cs, cd = res.estimates["current_speed"], res.estimates["current_direction"]
     click.echo(f"current: {cs.value:.4f} ± {cs.std:.4f} m/s towards {np.rad2deg(cd.value):.2f} ± "
                f"{np.rad2deg(cd.std):.2f} deg")
@@ -56,6 +60,10 @@ def _print_coefficients(res) -> None:
     c = res.diagnostics["combined_eq21"]
     click.echo(f"alpha (eq. 20) = {res.diagnostics['alpha']:.4f};  eq. 21: Y'v+Y'r/alpha = "
                f"{c['Yv+Yr/alpha']:.4e},  N'v alpha+N'r = {c['Nv*alpha+Nr']:.4e}")
+    a = res.diagnostics.get("approach", {})
+    if a:
+        click.echo(f"approach (from {a['source']}): U0 {a['U0']:.4f} m/s, n0 {a['n0']:.4f} 1/s, c0 {a['c0']:.4f} m/s")
+    # the warnings (not-determined coefficients among them) follow on stderr, one line each (cli._common.loud)
 
 
 @identify.command("ebm", context_settings=CONTEXT)
@@ -67,8 +75,12 @@ def _print_coefficients(res) -> None:
 @click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
 @click.option("--figures", is_flag=True,
               help="Also store a coarse D-optimal input map (Fig. 7; ~12 simulations) for `shipid report`.")
+@click.option("--antenna", default=None, metavar="X,Y",
+              help="DGPS antenna position in body axes [m] for trials that do not state it [default: body origin].")
+@click.option("--log-offset", "log_offset", default=None, type=float, metavar="Y",
+              help="Speed-log athwartship position [m] for trials that do not state it [default: 0].")
 @strict_option
-def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
+def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures, antenna, log_offset):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
 
@@ -79,6 +91,12 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures):
     vessel = _check_vessel(vessel)
     data = [read_trial(p, required=list(ebm.REQUIRED), method="ebm", vessel=vessel) for p in trials]
     cfg = replace(_config(paper), yaw_rudder_variant=yaw_variant)
+    if antenna is not None or log_offset is not None:
+        try:
+            xa, ya = (float(v) for v in (antenna or "0,0").split(","))
+        except ValueError:
+            raise ShipidError(f"--antenna needs X,Y in metres, got {antenna!r}") from None
+        cfg = replace(cfg, sensors=(xa, ya, float(log_offset or 0.0)))
     with progress_bar(len(data), "EBM step 1 (EKF + smoother)") as advance:
         res = ebm.identify(data, vessel, config=cfg, progress=advance)
     if figures:  # opt-in: the coarse Fig. 7 map of this vessel (shipid.methods.ebm_series)

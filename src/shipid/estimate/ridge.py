@@ -21,8 +21,9 @@ response ``y`` (N):
   (Mallows 1973; equals p for k = 0), and standard errors from
   ``Cov(b) = σ̂² (WᵀW + kI)⁻¹ WᵀW (WᵀW + kI)⁻¹``.
 
-The standard errors assume independent residuals; smoothed force histories are
-serially correlated, so they are optimistic (stated in every Result that uses them).
+The textbook standard errors (``cov="iid"``) assume independent residuals; smoothed
+force histories are serially correlated, so they are optimistic. ``cov="hac"`` gives the
+Newey–West (1987) sandwich with Andrews' (1991) bandwidth and adds the ridge bias.
 """
 
 from __future__ import annotations
@@ -109,6 +110,12 @@ class RidgeFit:
     cov_theta: np.ndarray
     n: int
     p: int
+    se_iid: np.ndarray | None = None
+    cov_kind: str = "iid"
+    bandwidth: int = 0
+    bias: np.ndarray | None = None
+    se_sampling: np.ndarray | None = None
+    vif: np.ndarray | None = None
 
 
 def _solve(C: np.ndarray, g: np.ndarray, k: float) -> np.ndarray:
@@ -147,8 +154,51 @@ def hoerl_kennard_k(C: np.ndarray, g: np.ndarray, sigma2: float, *, tol: float =
     return k, max_iter, False
 
 
+def andrews_bandwidth(g: np.ndarray, segments: np.ndarray | None = None, *, cap: float = 0.25) -> int:
+    """Bartlett-kernel bandwidth of Andrews (1991, eq. 6.4, AR(1) plug-in) for the scores ``g`` (n, p).
+
+    ``α̂ = Σ_a 4 ρ_a² σ_a⁴ / ((1 − ρ_a)⁶ (1 + ρ_a)²) / Σ_a σ_a⁴ / (1 − ρ_a)⁴`` from AR(1) fits of each
+    column, ``S = 1.1447 (α̂ n)^{1/3}``; capped at ``cap`` times the shortest segment (ρ → 1 would
+    give an unbounded lag window).
+    """
+    g = np.asarray(g, float)
+    n = g.shape[0]
+    seg = np.zeros(n, int) if segments is None else np.asarray(segments)
+    same = seg[1:] == seg[:-1]
+    num = den = 0.0
+    for a in range(g.shape[1]):
+        x0, x1 = g[:-1, a][same], g[1:, a][same]
+        d = float(x0 @ x0)
+        if d <= 0:
+            continue
+        rho = float(np.clip(x1 @ x0 / d, -0.999, 0.999))
+        s2 = float(np.mean((x1 - rho * x0) ** 2))
+        num += 4 * rho ** 2 * s2 ** 2 / ((1 - rho) ** 6 * (1 + rho) ** 2)
+        den += s2 ** 2 / (1 - rho) ** 4
+    alpha = num / den if den > 0 else 0.0
+    shortest = min(np.bincount(np.unique(seg, return_inverse=True)[1]))
+    return int(max(1, min(np.ceil(1.1447 * (alpha * n) ** (1.0 / 3.0)), cap * shortest)))
+
+
+def newey_west(g: np.ndarray, bandwidth: int, segments: np.ndarray | None = None) -> np.ndarray:
+    """Long-run covariance ``Γ₀ + Σ_{j=1}^{L} (1 − j/(L+1)) (Γ_j + Γ_jᵀ)`` of the scores ``g`` (n, p),
+    ``Γ_j = Σ_t g_t g_{t−j}ᵀ`` over pairs in the same segment (Newey & West 1987, Bartlett kernel)."""
+    g = np.asarray(g, float)
+    n = g.shape[0]
+    seg = np.zeros(n, int) if segments is None else np.asarray(segments)
+    S = g.T @ g
+    for j in range(1, int(bandwidth) + 1):
+        if j >= n:
+            break
+        m = (seg[j:] == seg[:-j])[:, None]
+        G = (g[j:] * m).T @ g[:-j]
+        S += (1.0 - j / (bandwidth + 1.0)) * (G + G.T)
+    return 0.5 * (S + S.T)
+
+
 def ridge(H: np.ndarray, y: np.ndarray, k: float | None = None, *, tol: float = 1e-6,
-          max_iter: int = 200) -> RidgeFit:
+          max_iter: int = 200, cov: str = "iid", segments: np.ndarray | None = None,
+          bandwidth: int | None = None) -> RidgeFit:
     """Ridge regression of ``y`` on ``H`` with unit-length scaling (eqs. 16–18).
 
     Parameters
@@ -158,6 +208,17 @@ def ridge(H: np.ndarray, y: np.ndarray, k: float | None = None, *, tol: float = 
     k : float, optional
         Biasing parameter; ``None`` chooses it by the Hoerl–Kennard iteration;
         ``0`` gives ordinary least squares.
+    cov : str
+        ``"iid"``: ``Cov(b) = σ̂² A⁻¹ WᵀW A⁻¹`` (``A = WᵀW + kI``), which assumes independent
+        residuals. ``"hac"``: the sandwich ``A⁻¹ S A⁻¹ · n/(n − p)`` with ``S`` the Newey–West
+        long-run covariance of the scores ``W_i e_i`` (:func:`newey_west`), which stays valid
+        when the residuals are serially correlated; the reported ``se`` then also adds the
+        estimated ridge bias ``−k A⁻¹ b`` in quadrature (a root-mean-square error), so that
+        ``±2 se`` covers the truth and not only ``E[b]``. ``se_sampling`` keeps the HAC part alone.
+    segments : ndarray of int, optional
+        Segment label of each row (one per trial): lags never pair rows of different segments.
+    bandwidth : int, optional
+        Newey–West lag window; default :func:`andrews_bandwidth`.
 
     Returns
     -------
@@ -194,15 +255,35 @@ def ridge(H: np.ndarray, y: np.ndarray, k: float | None = None, *, tol: float = 
     R2u = 1.0 - sse / float(ys @ ys)
     tr_hat = float(np.sum(eig / (eig + k)))
     Cp = sse / sigma2 - n + 2.0 * tr_hat
-    cov_b = sigma2 * Ainv @ C @ Ainv
+    cov_b_iid = sigma2 * Ainv @ C @ Ainv
     scale = np.sqrt(sc.S_yy / sc.S_jj)
     theta = b * scale
-    cov_theta = cov_b * np.outer(scale, scale)
-    se = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
+    sc2 = np.outer(scale, scale)
+    se_iid = np.sqrt(np.maximum(np.diag(cov_b_iid * sc2), 0.0))
+    bias = -k * (Ainv @ b) * scale
+    try:
+        Cinv_diag = np.diag(np.linalg.inv(C))
+    except np.linalg.LinAlgError:
+        Cinv_diag = np.full(p, np.inf)
+    bw = 0
+    if cov == "iid":
+        cov_theta = cov_b_iid * sc2
+        se = se_sampling = se_iid
+    elif cov == "hac":
+        gsc = W * res[:, None]
+        bw = andrews_bandwidth(gsc, segments) if bandwidth is None else int(bandwidth)
+        S = newey_west(gsc, bw, segments)
+        cov_b = Ainv @ S @ Ainv * (n / (n - p))
+        cov_theta = cov_b * sc2
+        se_sampling = np.sqrt(np.maximum(np.diag(cov_theta), 0.0))
+        se = np.sqrt(se_sampling ** 2 + bias ** 2)
+    else:
+        raise ValueError(f"cov must be 'iid' or 'hac', not {cov!r}")
     return RidgeFit(theta=theta, se=se, b=b, k=float(k), iterations=iters, converged=conv,
                     kappa=kappa, R2=float(R2), R2_uncentred=float(R2u), Cp=float(Cp),
                     sigma2=float(sigma2), correlation=C, response_correlation=g,
-                    cov_theta=cov_theta, n=n, p=p)
+                    cov_theta=cov_theta, n=n, p=p, se_iid=se_iid, cov_kind=cov, bandwidth=bw,
+                    bias=bias, se_sampling=se_sampling, vif=Cinv_diag)
 
 
 def ols(H: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -210,4 +291,4 @@ def ols(H: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(np.asarray(H, float), np.asarray(y, float), rcond=None)[0]
 
 
-__all__ = ["Scaled", "RidgeFit", "unit_length_scale", "hoerl_kennard_k", "ridge", "ols"]
+__all__ = ["Scaled", "RidgeFit", "unit_length_scale", "hoerl_kennard_k", "ridge", "ols", "newey_west", "andrews_bandwidth"]

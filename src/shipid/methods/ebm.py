@@ -12,6 +12,35 @@ regressors of eqs. 14–15 for all trials together, and ridge regression with th
 Hoerl–Kennard biasing parameter (:mod:`shipid.estimate.ridge`) fits θ_X, θ_Y, θ_N
 (eq. 13) to the smoothed X, Y, N.
 
+What the pipeline knows (:func:`identify_states`): the vessel file's mass, inertia,
+added masses (M of eq. 6, known in the paper), length and propeller particulars
+(:func:`shipid.models.abkowitz.particulars_from_vessel`, whose coefficients are NaN); the
+approach speed and propeller rate that fix ``c0`` of the rudder regressor come from the
+trials (:func:`approach_condition`) and the sensor lever arms of eq. 8 from the trial or
+the user (:func:`_sensor_positions`). Nothing of the packaged Table 3 enters.
+
+Standard errors. The residuals of step 2 are smoothed-force errors: serially correlated
+over tens of samples (the Gauss–Markov model of eq. 4 makes them smooth), so the textbook
+ridge covariance, which assumes independent residuals, is optimistic. We use the
+Newey–West sandwich on the ridge normal equations with Andrews' bandwidth, lags kept
+within each trial (``cov="hac"`` of :func:`shipid.estimate.ridge.ridge`), plus the ridge
+bias in quadrature. It was chosen over (a) propagating the smoother covariance, which
+needs the N × N cross-covariance of the smoothed forces and still misses the regressors'
+own errors, and (b) a moving-block bootstrap, which resamples the same residual
+information at B times the cost: the HAC sandwich uses the residuals themselves, so it
+sees force errors, regressor errors and model error alike. Two systematic parts that no
+residual-based variance covers are treated separately: the yaw fit is weighted by
+``1/σ`` of the smoothed moment (where the rudder moves, the smoother cannot follow the
+moment's jump and its σ is larger), and the pipeline's own bias at the identified ship is
+estimated by re-identifying it from a noise-free simulation with the trial's inputs and
+subtracted where it exceeds half a std (:mod:`shipid.methods.ebm_bias`). The coverage of
+the result is measured by ``shipid study ebm-coverage`` (:mod:`shipid.methods.ebm_coverage`).
+
+Verdicts (:mod:`shipid.methods.ebm_verdict`): trials without rudder or speed excitation
+are refused; each coefficient is ``estimated`` or ``not determined`` (relative std,
+variance inflation, ridge-bias share, R² of the mode, eq. 11 observability), and the
+undetermined ones are named in ``diagnostics["warnings"]``.
+
 Required trial channels: ``x, y`` (DGPS antenna, m), ``x_dot, y_dot`` (m/s),
 ``psi`` (rad), ``U`` (speed log, m/s), ``delta`` (rad), ``n`` (1/s).
 """
@@ -72,6 +101,28 @@ class EbmConfig:
         :mod:`shipid.estimate.cd_ekf_fast` (same algorithm and numbers to ~1e-11 as the
         reference :func:`~shipid.estimate.cd_ekf.cd_ekf` path, tested; ~8× faster than
         filterpy, ``benchmarks/bench_ebm_filter.py``). False runs the reference path.
+    approach_s : float
+        Seconds at the start of each trial over which the approach speed and propeller
+        rate are averaged (:func:`approach_condition`).
+    approach_speed, approach_rate : float or None
+        The approach speed through the water (m/s) and propeller rate (1/s) when the user
+        measured them otherwise; None takes them from the trials.
+    se : str
+        ``"hac"`` (default): Newey–West standard errors of the ridge estimate with the
+        ridge bias added in quadrature (:func:`shipid.estimate.ridge.ridge`); ``"iid"``: the
+        textbook ridge covariance, which assumes independent residuals.
+    weights : str
+        ``"smoother"`` (default): step 2 weights each sample by ``1/σ`` of the smoothed force
+        (the smoother's marginal standard deviation); ``"none"``: the paper's unweighted fit.
+    sensors : (x_D, y_D, y_S) or None
+        DGPS antenna and speed-log positions in body axes (m) for trials that do not state them
+        (:func:`_sensor_positions`); None: the body origin.
+    bias_threshold : float
+        The correction is applied to the coefficients whose bias exceeds this many std.
+    hac_bandwidth : int or None
+        Newey–West lag window (samples); None: Andrews' (1991) rule.
+    bias_correction : bool
+        Subtract the pipeline's own bias at the identified ship (:mod:`shipid.methods.ebm_bias`).
     """
 
     q_force: tuple[float, float, float] = (1e8, 1e9, 1e13)
@@ -84,6 +135,15 @@ class EbmConfig:
     rudder_q_gain: float = 100.0
     rudder_q_halo: int = 3
     compiled: bool = True
+    approach_s: float = 10.0
+    approach_speed: float | None = None
+    approach_rate: float | None = None
+    se: str = "hac"
+    weights: str = "yaw"
+    bias_correction: bool = True
+    hac_bandwidth: int | None = None
+    bias_threshold: float = 0.5
+    sensors: tuple[float, float, float] | None = None
 
 
 def process_noise(model: EbmModel, delta: np.ndarray, config: EbmConfig) -> np.ndarray:
@@ -122,12 +182,27 @@ class StateEstimate:
         return self.smooth.x[:, STATE_NAMES.index(name)]
 
 
-def _sensor_positions(trial: Trial, vessel: str) -> dict[str, float]:
-    conds = ab.trial_conditions(vessel)
-    out = {}
-    for k in ("x_D", "y_D", "y_S"):
-        out[k] = float(trial.meta.get(k, conds[k]))
-    return out
+def _sensor_positions(trial: Trial, vessel=None, config=None) -> dict[str, float]:
+    """Body-axis positions of the DGPS antenna (``x_D, y_D``) and speed log (``y_S``) of eq. 8, in m.
+
+    From the trial's metadata (simulated §5.1 records carry them), else from
+    ``config.sensors`` (what the user states), else the body origin: the shipid channel
+    convention for ``x, y, x_dot, y_dot, U`` (``shipid simulate`` records the origin). The
+    vessel file's [trials] positions belong to the §5.1 simulation set-up, not to a user's
+    trial, and are not used: a wrong lever arm moves the reference point of every velocity
+    and biases all coefficients without any sign in the innovations.
+    """
+    given = {} if config is None or config.sensors is None else dict(zip(("x_D", "y_D", "y_S"), config.sensors))
+    return {k: float(trial.meta.get(k, given.get(k, 0.0))) for k in ("x_D", "y_D", "y_S")}
+
+
+def sensor_source(trial: Trial, config=None) -> str:
+    """Where :func:`_sensor_positions` took the lever arms from (for the Result)."""
+    if all(k in trial.meta for k in ("x_D", "y_D", "y_S")):
+        return "trial metadata"
+    if config is not None and config.sensors is not None:
+        return "given by the user"
+    return "not stated: body origin assumed"
 
 
 def measurements(trial: Trial) -> np.ndarray:
@@ -149,7 +224,7 @@ def estimate_states(trial: Trial, p: ab.AbkowitzParams, *, vessel: str = "esso-o
     """Step 1 for one trial: EKF + fixed-interval smoother, ``config.passes`` passes (§5.1.1)."""
     z = measurements(trial)
     t = trial.t - trial.t[0]
-    sens = _sensor_positions(trial, vessel)
+    sens = _sensor_positions(trial, vessel, config)
     conds = ab.trial_conditions(vessel)
     sig = {k: float(trial.meta.get(k, conds[k])) for k in ("sigma_xy", "sigma_xy_dot", "sigma_psi", "sigma_u_log")}
     R = measurement_noise(sig["sigma_xy"], sig["sigma_xy_dot"], sig["sigma_psi"], sig["sigma_u_log"])
@@ -221,18 +296,24 @@ class RegressionData:
     N: np.ndarray
     v: np.ndarray
     r: np.ndarray
+    seg: np.ndarray | None = None
+    sX: np.ndarray | None = None
+    sY: np.ndarray | None = None
+    sN: np.ndarray | None = None
 
 
 def regression_data(states: Sequence[StateEstimate], p: ab.AbkowitzParams, *, skip: int = 0
                     ) -> RegressionData:
     """Build the regressors of eq. 14 from smoothed states and the known inputs."""
-    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r")}
-    for st in states:
+    parts = {k: [] for k in ("HX", "HY", "HN", "X", "Y", "N", "v", "r", "seg", "sX", "sY", "sN")}
+    for i, st in enumerate(states):
         x = st.smooth.x[skip:]
+        sd = st.smooth.std[skip:]
         tr = st.trial
         HX, HY, HN = ab.regressors(x[:, 0], x[:, 1], x[:, 2], tr["delta"][skip:], tr["n"][skip:], p)
         for k, val in (("HX", HX), ("HY", HY), ("HN", HN), ("X", x[:, 6]), ("Y", x[:, 9]),
-                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2])):
+                       ("N", x[:, 12]), ("v", x[:, 1]), ("r", x[:, 2]), ("seg", np.full(x.shape[0], i)),
+                       ("sX", sd[:, 6]), ("sY", sd[:, 9]), ("sN", sd[:, 12])):
             parts[k].append(val)
     return RegressionData(**{k: np.concatenate(v) for k, v in parts.items()})
 
@@ -257,6 +338,8 @@ class EbmFit:
     yaw: RidgeFit
     alpha: float
     data: RegressionData
+    bias: tuple | None = None
+    note: str = ""
 
 
 def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
@@ -264,40 +347,137 @@ def fit_coefficients(states: Sequence[StateEstimate], p: ab.AbkowitzParams,
     """Step 2: ridge regression per mode on all trials together (§5.1.2)."""
     pp = replace(p, yaw_rudder_variant=config.yaw_rudder_variant)
     d = regression_data(states, pp)
-    fx = ridge(d.HX, d.X, config.ridge_k)
-    fy = ridge(d.HY, d.Y, config.ridge_k)
-    fn = ridge(d.HN, d.N, config.ridge_k)
+    import warnings
+
+    kw = dict(cov=config.se, segments=d.seg, bandwidth=config.hac_bandwidth)
+
+    def wls(H, y, s, mode):
+        # rows weighted by 1/σ of the smoothed force (step 1's own uncertainty): the samples where the
+        # smoother cannot follow the force (rudder moving, Q raised) count less (module docstring)
+        if not (config.weights == "smoother" or config.weights == mode):
+            return ridge(H, y, config.ridge_k, **kw)
+        w = 1.0 / np.maximum(s, 1e-300)
+        w = w / np.mean(w)
+        return ridge(H * w[:, None], y * w, config.ridge_k, **kw)
+
+    with warnings.catch_warnings():  # non-convergence is reported by build_result's warnings
+        warnings.simplefilter("ignore", RuntimeWarning)
+        fx = wls(d.HX, d.X, d.sX, "surge")
+        fy = wls(d.HY, d.Y, d.sY, "sway")
+        fn = wls(d.HN, d.N, d.sN, "yaw")
     return EbmFit(surge=fx, sway=fy, yaw=fn, alpha=slope_alpha(d.v, d.r, p.L), data=d)
 
 
-def identify(trials: Sequence[Trial], vessel: str = "esso-osaka", *,
-             config: EbmConfig = EbmConfig(), progress=None) -> Result:
-    """Both EBM steps on ``trials``; returns a :class:`~shipid.result.Result`.
+def approach_condition(states: Sequence[StateEstimate], config: EbmConfig = EbmConfig()
+                       ) -> tuple[float, float, list[dict]]:
+    """Approach speed ``U0`` (m/s through the water) and propeller rate ``n0`` (1/s) from the trials.
 
-    Estimates: the 26 coefficients of eq. 13 (non-dimensional, with standard errors),
-    the current speed (m/s) and direction (rad) per trial and averaged. Diagnostics:
-    κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
-    combined coefficients of eq. 21 and the step-1 consistency (mean NIS).
+    ``c0`` of the rudder regressor (eq. 15; :mod:`shipid.models.abkowitz`) is the rudder
+    inflow speed of the straight approach run. It is measured, not derived from packaged
+    coefficients: per trial, the smoothed ``u_r`` (step 1, which uses no hydrodynamic
+    coefficient) and the measured propeller-rate channel ``n`` averaged over the first
+    ``config.approach_s`` seconds, then averaged over the trials.
+    ``config.approach_speed`` / ``config.approach_rate`` (a user's measured values) replace them.
+    Returns ``(U0, n0, per_trial)``.
+    """
+    per = []
+    for st in states:
+        t = st.smooth.t - st.smooth.t[0]
+        w = t <= max(float(config.approach_s), 0.0)
+        w[0] = True
+        per.append({"U0": float(np.mean(st.smooth.x[w, 0])), "n0": float(np.mean(np.asarray(st.trial["n"])[w]))})
+    U0 = float(np.mean([d["U0"] for d in per])) if config.approach_speed is None else float(config.approach_speed)
+    n0 = float(np.mean([d["n0"] for d in per])) if config.approach_rate is None else float(config.approach_rate)
+    if not (np.isfinite(U0) and U0 > 0 and np.isfinite(n0) and n0 > 0):
+        raise InputError(f"EBM needs a straight approach run ahead at positive speed and propeller rate "
+                         f"(found u_r {U0:.3g} m/s, n {n0:.3g} 1/s at the start of the trial)", channel="n")
+    return U0, n0, per
+
+
+def identify_states(trials: Sequence[Trial], vessel="esso-osaka", *, config: EbmConfig = EbmConfig(),
+                    progress=None):
+    """Step 1 on every trial, the approach condition and step 2: ``(states, fit, params)``.
+
+    ``params`` is :func:`shipid.models.abkowitz.particulars_from_vessel` (no packaged coefficient)
+    with the approach of :func:`approach_condition`; ``vessel`` is a name or a
+    :class:`shipid.vessels.Vessel`.
     """
     if not trials:
         raise InputError("no trial given")
-    p = ab.params_from_vessel(vessel)
+    from shipid.methods.ebm_verdict import check_excitation
+
+    check_excitation(trials)
+    p0 = ab.particulars_from_vessel(vessel)
     states = []
     for tr in trials:
-        states.append(estimate_states(tr, p, vessel=vessel, config=config))
+        states.append(estimate_states(tr, p0, vessel=vessel, config=config))
         if progress is not None:
             progress()
+    U0, n0, _ = approach_condition(states, config)
+    p = ab.with_approach(p0, U0, n0)
     fit = fit_coefficients(states, p, config)
+    if config.bias_correction:
+        from shipid.methods.ebm_bias import corrected, pipeline_bias
+
+        try:
+            bias = pipeline_bias(trials, states, fit, p, vessel, config)
+        except (FloatingPointError, ShipidError, NotPositiveDefiniteError, np.linalg.LinAlgError) as err:
+            fit = replace(fit, note=f"EBM: no bias correction (the identified ship could not be re-identified: {err})")
+        else:
+            cf, applied = corrected(fit, bias, config.bias_threshold)
+            fit = replace(cf, bias=applied)
+    return states, fit, p
+
+
+def identify(trials: Sequence[Trial], vessel="esso-osaka", *,
+             config: EbmConfig = EbmConfig(), progress=None) -> Result:
+    """Both EBM steps on ``trials``; returns a :class:`~shipid.result.Result`.
+
+    Estimates: the 26 coefficients of eq. 13 (non-dimensional, with HAC standard errors
+    and a verdict ``estimated`` / ``not determined``, :mod:`shipid.methods.ebm_verdict`),
+    the current speed (m/s) and direction (rad) per trial and averaged. Diagnostics:
+    κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
+    combined coefficients of eq. 21, the step-1 consistency (mean NIS), the approach
+    condition taken from the trials and ``warnings``. Nothing of the vessel file's
+    [abkowitz] coefficients enters (:func:`identify_states`).
+    """
+    states, fit, p = identify_states(trials, vessel, config=config, progress=progress)
     return build_result(states, fit, p, config, vessel)
 
 
 def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Result:
+    from shipid.methods.ebm_verdict import coefficient_verdicts
+
     est: dict[str, Estimate] = {}
+    warn: list[str] = []
     names = {"surge": ab.THETA_X_NAMES, "sway": ab.THETA_Y_NAMES, "yaw": ab.THETA_N_NAMES}
-    se_note = "ridge SE assuming independent residuals (optimistic: smoothed forces are correlated)"
+    obs = [observability_report(s) if s.model is not None else None for s in states]
+    observable = all(o is None or o["relative"]["min_rank"] == o["relative"]["n"] for o in obs)
+    if not observable:
+        warn.append("EBM step 1: the 17-state model is not observable along the trajectory (eq. 11 rank test)")
+    verdict = coefficient_verdicts(fit, names, observable)
+    se_note = ("Newey-West (HAC) std of the ridge estimate with the ridge bias in quadrature"
+               if config.se == "hac" else
+               "ridge std assuming independent residuals (optimistic: smoothed forces are correlated)")
     for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
         for nm, th, se in zip(names[mode], f.theta, f.se):
-            est[nm] = Estimate(float(th), float(se), "-", "estimated", se_note)
+            v = verdict[nm]
+            note = se_note if v["status"] == "estimated" else "not determined by the data: " + "; ".join(v["reasons"])
+            est[nm] = Estimate(float(th), float(se), "-", v["status"], note)
+    und = [nm for nm, v in verdict.items() if v["status"] != "estimated"]
+    if und:
+        warn.append(f"EBM: {len(und)} of {len(verdict)} coefficients not determined by these trials: "
+                    + ", ".join(und))
+    if fit.note:
+        warn.append(fit.note)
+    for s_ in states:
+        if sensor_source(s_.trial, config).startswith("not stated"):
+            warn.append(f"EBM: {s_.trial.meta.get('source') or 'a trial'} states no sensor positions: DGPS antenna "
+                        "and speed log taken at the body origin (give them with --antenna X,Y --log-offset Y)")
+    for mode, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw)):
+        if not f.converged:
+            warn.append(f"EBM {mode}: Hoerl-Kennard iteration for the ridge parameter did not converge "
+                        f"(k = {f.k:.3g} used)")
     cs = np.array([s.current for s in states])
     cstd = np.array([s.current_std for s in states])
     w = 1.0 / np.maximum(cstd ** 2, 1e-300)
@@ -313,7 +493,6 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
     thY = fit.sway.theta
     thN = fit.yaw.theta
     comb = combined_coefficients(thY, thN, fit.alpha)
-    comb_true = combined_coefficients(p.theta_Y, p.theta_N, fit.alpha)
     diag = {
         "converged": bool(fit.surge.converged and fit.sway.converged and fit.yaw.converged),
         "iterations": {m: f.iterations for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
@@ -322,20 +501,29 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
                   for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
         "correlation": {"surge": fit.surge.correlation, "sway": fit.sway.correlation},
         "alpha": fit.alpha,
-        "combined_eq21": {"Yv+Yr/alpha": comb[0], "Nv*alpha+Nr": comb[1],
-                          "packaged_true": {"Yv+Yr/alpha": comb_true[0], "Nv*alpha+Nr": comb_true[1]}},
+        "combined_eq21": {"Yv+Yr/alpha": comb[0], "Nv*alpha+Nr": comb[1]},
+        "approach": {"U0": p.U0, "n0": p.n0, "c0": p.c0,
+                     "source": "measured values given by the user" if config.approach_speed is not None
+                     else f"trials: smoothed u_r and channel n over the first {config.approach_s:g} s"},
         "trials": [{"source": s.trial.meta.get("source", ""), "manoeuvre": s.trial.meta.get("manoeuvre", ""),
                     "n": int(s.trial.t.size), "mean_nis": float(np.nanmean(s.filt.nis)),
+                    "sensors": _sensor_positions(s.trial, vessel, config),
+                    "sensors_from": sensor_source(s.trial, config),
                     "current": s.current.tolist(), "passes": s.passes,
                     "first_pass_current": None if s.first_pass_current is None else s.first_pass_current.tolist(),
-                    "observability_eq11": observability_report(s) if s.model is not None else None}
-                   for s in states],
+                    "observability_eq11": o}
+                   for s, o in zip(states, obs)],
+        "verdicts": verdict,
+        "se_method": config.se,
+        "hac_bandwidth": {m: f.bandwidth for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
+        "warnings": warn,
     }
     st0 = states[0]
     series = {"t": st0.smooth.t[::5], "u_r": st0.smooth.x[::5, 0], "v_r": st0.smooth.x[::5, 1],
               "r": st0.smooth.x[::5, 2], "X": st0.smooth.x[::5, 6], "Y": st0.smooth.x[::5, 9],
               "N": st0.smooth.x[::5, 12]}
-    model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15", "vessel": vessel,
+    model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15",
+             "vessel": vessel if isinstance(vessel, str) else vessel.name,
              "L": p.L, "rho": p.rho, "c0": p.c0, "U0": p.U0, "n0": p.n0,
              "nondimensionalisation": "X, Y by rho/2 L^2, N by rho/2 L^3 (eq. 14)",
              "yaw_rudder_variant": config.yaw_rudder_variant}

@@ -79,7 +79,7 @@ def add_measurements(truth: Trial, conds: dict, seed: int, *, noise: bool = True
 def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float | None = None,
                    current: tuple[float, float] | None = None, theta: ab.AbkowitzParams | None = None,
                    noise: bool = True, vessel: str = "esso-osaka", oversample: int = 5,
-                   speed: float | None = None) -> Trial:
+                   speed: float | None = None, noise_scale: float = 1.0) -> Trial:
     """Simulate one measured ESSO OSAKA trial.
 
     Parameters
@@ -96,7 +96,9 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
     current : (speed m/s, direction rad), optional
         Default the §5.1 current (2 kn towards 45°).
     theta : AbkowitzParams, optional
-        Coefficients to simulate with (default the true ones of Table 3).
+        Coefficients to simulate with (default the true ones of Table 3); the approach
+        propeller rate is ``theta.n0`` (scaled with ``speed / theta.U0``), so a ship from
+        :func:`shipid.models.abkowitz.with_coefficients` starts in its own straight run.
     noise : bool
         Add the eq. 19 measurement noise.
     oversample : int
@@ -108,6 +110,8 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
         previous interval by half a sample — an artefact that biases step 2.
     speed : float, optional
         Approach speed through the water (m/s), default the vessel's U0.
+    noise_scale : float
+        Multiplies every standard deviation of eq. 19 (the estimator is not told).
     """
     from dataclasses import replace
 
@@ -120,8 +124,10 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
     model = ab.ship_model(vessel, current_speed=current[0], current_dir=current[1])
     if theta is not None:
         th = theta.with_current(*current)
+        # the approach propeller rate is theta's (it balances theta's resistance at theta.U0)
         model = replace(model, theta=th, f=ab.make_dynamics(th),
-                        outputs=lambda t, X, U, _p=th: ab.outputs(t, X, U, _p))
+                        outputs=lambda t, X, U, _p=th: ab.outputs(t, X, U, _p),
+                        u0=lambda s, _p=th: np.array([0.0, _p.n0 * float(s) / _p.U0]))
     ov = max(1, int(oversample))
     fine = run_manoeuvre(model, manoeuvre, duration=duration, dt=dt / ov, seed=seed, speed=speed)
     if ov > 1:
@@ -130,7 +136,10 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
                       dict(fine.meta, dt=dt, oversample=ov))
     else:
         truth = fine
-    out = add_measurements(truth, conds, seed + 1000, noise=noise)
+    mconds = dict(conds)
+    for k in ("sigma_xy", "sigma_xy_dot", "sigma_psi", "sigma_u_log"):
+        mconds[k] = conds[k] * float(noise_scale)
+    out = add_measurements(truth, mconds, seed + 1000, noise=noise)
     meta = dict(out.meta)
     meta.update({"current_speed": float(current[0]), "current_dir": float(current[1])})
     return Trial(out.t, out.channels, out.units, meta)

@@ -273,27 +273,58 @@ def service_rpm(U0: float, thX, L: float) -> float:
     return float(s * U0 / L)
 
 
-def params_from_vessel(vessel: Vessel | str = "esso-osaka") -> AbkowitzParams:
-    """Build :class:`AbkowitzParams` from a packaged vessel (default ESSO OSAKA)."""
+def particulars_from_vessel(vessel: Vessel | str = "esso-osaka") -> AbkowitzParams:
+    """What a user knows of the ship, without any hydrodynamic coefficient of eq. 13.
+
+    Mass, inertia and centre of gravity ([particulars]), the added masses of eq. 6
+    ([added_mass]; EBM takes M as known, seed 002 §2) and the propeller particulars
+    used by the rudder-inflow model ([propulsion]). ``theta_X/Y/N`` are NaN and so are
+    the approach condition ``U0, n0, c0``: identification must take those from the
+    trial (:func:`with_approach`), never from the packaged Table 3 — any use of a
+    packaged coefficient would turn the estimate into NaN.
+    """
     v = load_vessel(vessel) if isinstance(vessel, str) else vessel
     P = v.values("particulars")
     A = v.values("added_mass")
     R = v.values("propulsion")
-    C = v.values("abkowitz")
-    thX = tuple(float(C[k]) for k in THETA_X_NAMES)
-    thY = tuple(float(C[k]) for k in THETA_Y_NAMES)
-    thN = tuple(float(C[k]) for k in THETA_N_NAMES)
-    L = float(P["L"])
-    U0 = float(P["U0"])
-    n0 = service_rpm(U0, thX, L)
-    base = AbkowitzParams(L=L, rho=float(P["rho"]), m=float(P["m"]), x_G=float(P["x_G"]),
+    nan = float("nan")
+    return AbkowitzParams(L=float(P["L"]), rho=float(P["rho"]), m=float(P["m"]), x_G=float(P["x_G"]),
                           I_z=float(P["I_z"]), X_udot=float(A["X_udot"]), Y_vdot=float(A["Y_vdot"]),
                           Y_rdot=float(A["Y_rdot"]), N_vdot=float(A["N_vdot"]), N_rdot=float(A["N_rdot"]),
                           D=float(R["D"]), w=float(R["w"]),
                           kt=(float(R["kt0"]), float(R["kt1"]), float(R["kt2"])),
-                          theta_X=thX, theta_Y=thY, theta_N=thN, U0=U0, n0=n0, c0=1.0)
-    _, c0 = rudder_inflow(U0, n0, base)
+                          theta_X=(nan,) * len(THETA_X_NAMES), theta_Y=(nan,) * len(THETA_Y_NAMES),
+                          theta_N=(nan,) * len(THETA_N_NAMES), U0=nan, n0=nan, c0=nan)
+
+
+def with_approach(p: AbkowitzParams, U0: float, n0: float) -> AbkowitzParams:
+    """A copy with the approach condition (speed ``U0`` m/s through the water, propeller rate
+    ``n0`` 1/s) and the rudder inflow speed ``c0`` it gives (module docstring)."""
+    base = replace(p, U0=float(U0), n0=float(n0), c0=1.0)
+    _, c0 = rudder_inflow(float(U0), float(n0), base)
     return replace(base, c0=float(c0))
+
+
+def params_from_vessel(vessel: Vessel | str = "esso-osaka") -> AbkowitzParams:
+    """The simulator's ship: :func:`particulars_from_vessel` plus the packaged coefficients of
+    [abkowitz] (Table 3) and the approach at [particulars].U0 with the propeller rate that
+    balances it (:func:`service_rpm`). For simulation and for comparing with the truth only;
+    identification uses :func:`particulars_from_vessel`."""
+    v = load_vessel(vessel) if isinstance(vessel, str) else vessel
+    C = v.values("abkowitz")
+    thX = tuple(float(C[k]) for k in THETA_X_NAMES)
+    thY = tuple(float(C[k]) for k in THETA_Y_NAMES)
+    thN = tuple(float(C[k]) for k in THETA_N_NAMES)
+    base = replace(particulars_from_vessel(v), theta_X=thX, theta_Y=thY, theta_N=thN)
+    U0 = float(v.value("particulars", "U0"))
+    return with_approach(base, U0, service_rpm(U0, thX, base.L))
+
+
+def with_coefficients(p: AbkowitzParams, theta_X, theta_Y, theta_N) -> AbkowitzParams:
+    """Another ship of the same hull particulars: coefficients ``theta_*`` and the approach at
+    ``p.U0`` with the propeller rate that balances them (a perturbed "unknown" ship)."""
+    q = p.with_theta(theta_X, theta_Y, theta_N)
+    return with_approach(q, p.U0, service_rpm(p.U0, q.theta_X, p.L))
 
 
 def trial_conditions(vessel: Vessel | str = "esso-osaka") -> dict[str, float]:
@@ -342,5 +373,6 @@ def ship_model(vessel: Vessel | str = "esso-osaka", *, current_speed: float = 0.
 
 __all__ = ["AbkowitzParams", "THETA_X_NAMES", "THETA_Y_NAMES", "THETA_N_NAMES", "REGRESSORS_X",
            "REGRESSORS_Y", "STATE_NAMES", "rudder_inflow", "regressors", "forces", "dynamics",
-           "make_dynamics", "outputs", "params_from_vessel", "service_rpm", "ship_model",
+           "make_dynamics", "outputs", "params_from_vessel", "particulars_from_vessel", "with_approach",
+           "with_coefficients", "service_rpm", "ship_model",
            "trial_conditions", "absolute_velocities", "KNOT"]
