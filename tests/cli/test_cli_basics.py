@@ -24,3 +24,16 @@ def test_unknown_command_is_one_line_exit_2():
     assert proc.returncode == 2
     assert len(proc.stderr.strip().splitlines()) == 1
     assert "Traceback" not in proc.stderr
+
+
+def test_bare_shipid_and_bare_group_print_their_help(capsys):
+    from shipid.cli import main
+
+    assert main([]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("Usage: shipid") and "Commands:" in out and "shipid: error" not in out
+    assert main(["study"]) == 0
+    out = capsys.readouterr().out
+    # summaries whole: click cut them at 45 characters and at "Fig." (issue 14)
+    line = next(ln for ln in out.splitlines() if ln.strip().startswith("mass-cm-contour"))
+    assert "Fig. 4: cost" in line and "..." not in out

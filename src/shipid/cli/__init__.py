@@ -35,7 +35,27 @@ from shipid.errors import ShipidError
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
-@click.group(context_settings=CONTEXT)
+class Group(click.Group):
+    """A click group whose command list shows each summary whole (click cuts them at 45 characters,
+    and at the first '. ', which turned "Fig. 4 ..." into "Fig.")."""
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        rows = []
+        for name in self.list_commands(ctx):
+            cmd = self.get_command(ctx, name)
+            if cmd is None or cmd.hidden:
+                continue
+            text = cmd.short_help or " ".join((cmd.help or "").split("\b")[0].split("\n\n")[0].split())
+            rows.append((name, text))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+click.Group.group_class = Group     # sub-groups made with @cli.group are Groups too
+
+
+@click.group(cls=Group, context_settings=CONTEXT)
 @click.version_option(shipid.__version__, "-V", "--version", prog_name="shipid")
 @click.option("--strict", is_flag=True, expose_value=False, callback=_common.set_strict,
               help="Exit with status 3 if the command warns (non-convergence, implausible or undetermined "
@@ -89,6 +109,9 @@ def main(argv: list[str] | None = None) -> int:
 def _run(argv: list[str] | None) -> int:
     try:
         rv = cli.main(args=argv, prog_name="shipid", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as err:     # bare `shipid` or `shipid study`: the help, not an error
+        click.echo(err.ctx.get_help() if err.ctx is not None else cli.get_help(click.Context(cli)))
+        return 0
     except ShipidError as err:
         click.echo(f"shipid: error: {err}", err=True)
         return err.exit_code
