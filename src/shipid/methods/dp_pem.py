@@ -245,6 +245,7 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
     H = _hessian(f, z, h, fz)
     newton = []
     success = False
+    n_hess = 0
     for it in range(max_newton):
         g = _gradient(f, z, 0.1 * h)
         Hm = _modified(H)
@@ -264,8 +265,9 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
         else:
             break
         z, fz = zn, fn
-        if len(newton) >= 2 and dec > 0.5 and dec > 0.3 * newton[-2]:  # slow: the curvature has changed, take it again
+        if len(newton) >= 2 and dec > 0.3 * newton[-2] and n_hess < 3:  # slow: curvature changed, take it again
             H = _hessian(f, z, _steps(H, h), fz)
+            n_hess += 1
     # noise scales pinned at a bound are held there (the data do not determine them)
     at_bound = [j for j in range(m) if abs(abs(z[p + j]) - A_BOUND) < 1e-9]
     act = [i for i in range(p + m) if i - p not in at_bound]
@@ -278,16 +280,34 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
     # covariance Hessian at the optimum, steps about 0.3 std of each coordinate
     h1 = _steps(H, h)[act]
     H = _hessian(fa, zact, h1, f0)
-    g = _gradient(fa, zact, 0.1 * h1)
     try:
         np.linalg.cholesky(0.5 * (H + H.T))
         pd = True
-        dec = float(np.sqrt(max(g @ np.linalg.solve(H, g), 0.0)))
     except np.linalg.LinAlgError:
         pd = False
-        dec = np.inf
-    newton.append(dec)
-    opt_success = success
+    dec = np.inf
+    for _ in range(4):  # Newton steps on the final Hessian until the decrement is small
+        g = _gradient(fa, zact, 0.1 * h1)
+        if not pd:
+            break
+        step = -np.linalg.solve(H, g)
+        dec = float(np.sqrt(max(-(g @ step), 0.0)))
+        newton.append(dec)
+        if dec < 0.05:
+            break
+        lam, moved = 1.0, False
+        for _ in range(6):
+            yn = zact + lam * step
+            yn = np.clip(yn, lo[act], hi[act])
+            fn = fa(yn)
+            if fn < f0:
+                zact, f0, moved = yn, fn, True
+                break
+            lam *= 0.5
+        if not moved:
+            break
+    z = _full(z, act, zact)
+    opt_success = success or dec < 0.05
     settled = bool(opt_success and pd and dec < 0.1)
     th_hat, a_hat = unpack(z)
     nact = len(act)
