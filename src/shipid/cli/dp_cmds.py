@@ -84,8 +84,16 @@ def _print_table(result, theta_true=None) -> None:
     d = result.diagnostics
     for name, st in d["stages"].items():
         nis = ", ".join(f"{v:.2f}" for v in st["nis_mean"])
-        click.echo(f"{name}: converged={st['converged']} trials={len(st['samples'])} "
+        click.echo(f"{name}: converged={st['converged']} settled={st['settled']} trials={len(st['samples'])} "
                    f"samples={st['samples']} NIS mean=[{nis}] (dof {st['nis_dof'][0]}) {st['seconds']:.1f} s")
+        if not st["settled"]:
+            click.echo(f"{name}: NOT SETTLED -- the std of its parameters are unreliable")
+        if "noise" in st:
+            click.echo(f"{name} noise (estimated): " + "; ".join(
+                f"{k} = {v['value']:.3g} +- {v['std']:.2g} {v['unit'].split(' ')[0]} ({v['scale_vs_nominal']:.2f} x nominal)"
+                for k, v in st["noise"].items()))
+    if d.get("covariance"):
+        click.echo(f"std: {d['covariance']}")
     for w in d.get("warnings", []):
         click.echo(f"warning: {w}", err=True)
 

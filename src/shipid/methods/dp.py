@@ -342,14 +342,18 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     pem_on = options.covariance == "observed" and not options.current_states
     if options.covariance not in ("observed", "ekf"):
         raise InputError(f"unknown covariance {options.covariance!r} (observed, ekf)")
+    data = [_prepare(tr, vessel, kind) for tr in trials]
     ns = dict(noise_start or {})
+    if pem_on:
+        from shipid.methods.dp_pem import measurement_log_scales
+
+        ns.update(measurement_log_scales(kind, data, vessel, options))
     if pem_on and ns:
         options = replace(options, q_h=options.q_h * np.exp(2 * ns.get("q_h", 0.0)),
                           q_b=options.q_b * np.exp(2 * ns.get("q_b", 0.0)),
                           sigma_pos=options.sigma_pos * np.exp(ns.get("sigma_pos", 0.0)),
                           sigma_psi=options.sigma_psi * np.exp(ns.get("sigma_psi", 0.0)))
     b = vessel.bis
-    data = [_prepare(tr, vessel, kind) for tr in trials]
     relevant = (0, 5, 8) if kind == "surge" else tuple(range(9))
     cov_prev = np.zeros((9, 9)) if theta_cov is None else np.asarray(theta_cov, dtype=float)
     consider = [i for i in relevant if i not in free and cov_prev[i, i] > 0]
