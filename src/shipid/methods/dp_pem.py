@@ -377,10 +377,30 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
                      log_scales_std=a_std, loglik=-float(f0), settled=settled, diagnostics=diag)
 
 
+def noise_report(lik: StageLikelihood, pem: PEMResult, vessel) -> dict:
+    """Estimated noise levels with std and units (bis and SI; yaw components are × ``yaw_arm``)."""
+    b = vessel.bis
+    nz = lik.noise(pem.log_scales)
+    F2 = (b.m * b.g) ** 2
+    conv = {"q_h": (F2 * b.time, "N^2 s (surge/sway force; yaw moment x (yaw_arm L)^2)"),
+            "q_b": (F2 / b.time, "N^2/s (surge/sway force; yaw moment x (yaw_arm L)^2)"),
+            "sigma_pos": (b.L, "m"), "sigma_psi": (float(np.rad2deg(1.0)), "deg")}
+    out = {}
+    for j, k in enumerate(lik.noise_names):
+        sc, sd = float(np.exp(pem.log_scales[j])), float(pem.log_scales_std[j])
+        power = 2 if k.startswith("q") else 1  # intensities scale as scale², std as scale
+        fac, unit = conv[k]
+        val = float(nz[k]) * fac
+        out[k] = {"value": val, "std": val * power * sd, "unit": unit, "value_bis": float(nz[k]),
+                  "scale_vs_nominal": sc, "log_scale_std": sd,
+                  "at_bound": k in pem.diagnostics["noise_at_bound"]}
+    return out
+
+
 def _full(z: np.ndarray, act: list[int], y: np.ndarray) -> np.ndarray:
     out = z.copy()
     out[act] = y
     return out
 
 
-__all__ = ["measurement_log_scales", "NOISE_NAMES", "PEMResult", "StageLikelihood", "pem_stage", "thrust_force"]
+__all__ = ["measurement_log_scales", "NOISE_NAMES", "PEMResult", "StageLikelihood", "pem_stage", "thrust_force", "noise_report"]
