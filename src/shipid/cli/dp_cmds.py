@@ -228,7 +228,8 @@ def study_dp_coverage(runs, duration, covariance, as_json, campaign):
         raise ShipidError("--duration must be >= 60 s")
     res = replace(campaign, progress=not as_json).run(
         "shipid.methods.dp_coverage:run_one", runs, kwargs={"duration": duration, "covariance": covariance},
-        name=f"dp-coverage-{covariance}", warm_up="shipid.methods.dp_coverage:warm_up")
+        name=f"dp-coverage-{covariance}", warm_up="shipid.methods.dp_coverage:warm_up",
+        chunk_size=1)  # runs of ~30 s: each is stored as soon as it is done
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
