@@ -40,11 +40,13 @@ def si2_errors_over_std(supply, n_real: int, covariance: str, seed: int = 3, dur
     return np.array(out)
 
 
+@pytest.mark.slow  # ~10 s per realisation on an idle core (PEM: ~900 filter evaluations)
 def test_si2_std_cover_the_error_with_unknown_noise(supply):
     """5 realisations, 30 errors/std: RMS within [0.55, 1.6] and ≥ 80 % inside ±2 std.
 
     The bound fails for the filter's P_θθ with assumed noise (``covariance="ekf"``, the method
-    before issue 15): RMS of error/std 3.9 and 50 % inside ±2 std on these realisations.
+    before issue 15): RMS of error/std 4.2 and 40 % inside ±2 std on these realisations; with
+    ``"observed"`` it measured RMS 1.11 and 93 %.
     """
     z = si2_errors_over_std(supply, 5, "observed")
     rms = float(np.sqrt(np.mean(z ** 2)))

@@ -105,8 +105,8 @@ def _print_table(result, theta_true=None) -> None:
 @click.option("--azimuth", cls=_ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
 @click.option("--vessel", default="supply", show_default=True,
               help="Packaged vessel giving M'', the thruster arms, L and m.")
-@click.option("--sigma-pos", type=float, default=None, help="Position noise, m [default 0.5].")
-@click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg [default 0.25].")
+@click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")
+@click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg: the starting value (estimated from the data) [default 0.25].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
