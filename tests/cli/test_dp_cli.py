@@ -82,3 +82,45 @@ def test_study_dp_supply_subprocess():
                           "--duration", "240"], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert "theta9" in out.stdout and "true" in out.stdout and "A'' = M''^-1" in out.stdout
+
+
+def test_identify_dp_prints_noise_and_an_unsettled_scheme(trial_files, capsys, monkeypatch):
+    """Text output: the estimated noise levels; a scheme that has not settled is printed and its std marked."""
+    from dataclasses import replace
+
+    import shipid.methods.dp_pem as pem
+
+    real = pem.pem_stage
+
+    def stalls_in_si2(lik, *a, **k):
+        out = real(lik, *a, **k)
+        return replace(out, settled=False) if lik.kind == "momentum" and len(a[1]) == 6 else out
+
+    monkeypatch.setattr(pem, "pem_stage", stalls_in_si2)
+    _, files = trial_files
+    assert main(_args(files)) == 0
+    cap = capsys.readouterr()
+    assert "SI2: NOT SETTLED" in cap.out and "SI1: NOT SETTLED" not in cap.out
+    assert "SI1 noise (estimated): q_h = " in cap.out and "sigma_psi" in cap.out
+    assert "SI2: parameter estimate has not settled" in cap.err
+    assert main(_args(files) + ["--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    status = {k: v["status"] for k, v in res["estimates"].items()}
+    assert status["theta1"] == status["theta6"] == "estimated"
+    assert all(status[f"theta{i}"] == "std unreliable" for i in (2, 3, 4, 5, 7, 8, 9))
+    assert any("SI2" in w and "unreliable" in w for w in res["diagnostics"]["warnings"])
+
+
+def test_study_dp_coverage_json(tmp_path, capsys):
+    """One short realisation through the campaign engine: per-θ coverage table and the stored run."""
+    store = tmp_path / "cov.sqlite"
+    rc = main(["study", "dp-coverage", "--runs", "1", "--duration", "240", "--seed", "3", "--workers", "1",
+               "--store", str(store), "--json"])
+    assert rc == 0
+    d = json.loads(capsys.readouterr().out)
+    s = d["summary"]
+    assert s["ok"] == 1 and set(s["parameters"]) == {f"theta{i}" for i in range(1, 10)}
+    run = d["runs"][0]
+    assert run["s_m"] in (0.5, 1.0, 2.0) and run["s_p"] in (0.5, 1.0, 2.0)
+    assert set(run["noise_scale_estimates"]) == {"SI1", "SI2", "SI3"}
+    assert store.exists()

@@ -1,7 +1,8 @@
 """DP identification commands (seed 001, Fossen, Sagatun & Sørensen 1996).
 
 ``shipid identify dp --surge S1.csv S2.csv --sway-yaw Y1.csv Y2.csv --azimuth A1.csv A2.csv``
-and ``shipid study dp-supply [--seed S]``.
+``shipid study dp-supply [--seed S]`` and
+``shipid study dp-coverage --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR] [--json]``.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
 from shipid.cli._common import loud, strict_option
+from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import ShipidError
 
 #: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
@@ -83,8 +85,17 @@ def _print_table(result, theta_true=None) -> None:
     d = result.diagnostics
     for name, st in d["stages"].items():
         nis = ", ".join(f"{v:.2f}" for v in st["nis_mean"])
-        click.echo(f"{name}: converged={st['converged']} trials={len(st['samples'])} "
+        click.echo(f"{name}: converged={st['converged']} settled={st['settled']} trials={len(st['samples'])} "
                    f"samples={st['samples']} NIS mean=[{nis}] (dof {st['nis_dof'][0]}) {st['seconds']:.1f} s")
+        if not st["settled"]:
+            click.echo(f"{name}: NOT SETTLED -- the std of its parameters are unreliable")
+        if "noise" in st:
+            click.echo(f"{name} noise (estimated): " + "; ".join(
+                f"{k} = {v['value']:.3g} +- {v['std']:.2g} {v['unit'].split(' ')[0]} ({v['scale_vs_nominal']:.2f} x nominal)"
+                for k, v in st["noise"].items()))
+    if d.get("covariance"):
+        click.echo(f"std: {d['covariance']}")
+    # the warnings follow on stderr, one line each (shipid.cli._common.loud)
 
 
 @identify.command("dp", context_settings=CONTEXT)
@@ -94,8 +105,8 @@ def _print_table(result, theta_true=None) -> None:
 @click.option("--azimuth", cls=_ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
 @click.option("--vessel", default="supply", show_default=True,
               help="Packaged vessel giving M'', the thruster arms, L and m.")
-@click.option("--sigma-pos", type=float, default=None, help="Position noise, m [default 0.5].")
-@click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg [default 0.25].")
+@click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")
+@click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg: the starting value (estimated from the data) [default 0.25].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 @click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
@@ -193,3 +204,53 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
                                   "noise": noise.as_dict(), "duration_s": duration, "trials_per_kind": n_trials})
     res.diagnostics["simulation_seconds"] = t_sim
     _emit(res, as_json, out, plot, force, theta_true=v.theta)
+
+
+@study.command("dp-coverage", context_settings=CONTEXT)
+@click.option("--runs", type=click.IntRange(min=1), default=24, show_default=True, help="Realisations.")
+@click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
+@click.option("--covariance", type=click.Choice(["observed", "ekf"]), default="observed", show_default=True,
+              help="observed: noise levels and std from the likelihood (default); ekf: the paper's P_theta.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary (and every run) as JSON.")
+@campaign_options
+def study_dp_coverage(runs, duration, covariance, as_json, campaign):
+    """Coverage of the DP std over realisations with unknown noise levels (issue 15).
+
+    Each run: the six trials of `study dp-supply` (1 Hz) with its own noise seed, measurement
+    noise (0.5 m, 0.2 deg) and process noise (white force, wandering bias) each scaled by a
+    factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
+    of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
+    """
+    import json
+    from dataclasses import replace
+
+    from shipid.cli.campaign_cmds import echo_campaign_summary
+    from shipid.methods.dp_coverage import summarise
+
+    if duration < 60:
+        raise ShipidError("--duration must be >= 60 s")
+    res = replace(campaign, progress=not as_json).run(
+        "shipid.methods.dp_coverage:run_one", runs, kwargs={"duration": duration, "covariance": covariance},
+        name=f"dp-coverage-{covariance}", warm_up="shipid.methods.dp_coverage:warm_up",
+        chunk_size=1)  # runs of ~30 s: each is stored as soon as it is done
+    outs = [r.outputs if r.status == "ok" else None for r in res.records]
+    s = summarise(outs)
+    s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
+    if as_json:
+        click.echo(json.dumps({"summary": s, "runs": outs}, indent=1, allow_nan=True))
+        return
+    echo_campaign_summary(res)
+    click.echo(f"dp-coverage: {s['ok']} realisations (seed {campaign.seed}), covariance {covariance}, "
+               f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
+               f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
+    click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "
+               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'no std':>6s} {'unreliable':>10s}")
+    for nm, p in s["parameters"].items():
+        click.echo(f"  {nm:8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
+                   f"{p['rms_error_over_std']:9.2f} {p['mean_rel_error_pct']:9.2f} {p['rms_rel_error_pct']:9.2f} "
+                   f"{p['max_abs_rel_error_pct']:9.2f} {p['no_std']:6d} {p['std_unreliable']:10d}")
+    if "pooled" in s:
+        p = s["pooled"]
+        click.echo(f"  {'pooled':8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
+                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {p['no_std']:6d}")
+    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses)")

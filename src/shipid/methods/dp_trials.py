@@ -68,6 +68,11 @@ class TrialNoise:
         the paper's estimator model (eqs. 35–38) has only the body-fixed bias b_h, which
         cannot follow a current force that turns with the heading in the sway-yaw and
         azimuth trials; see :class:`shipid.methods.dp.DPOptions.current_states`.
+    bias_tau : float or None
+        None (default): the bias is the random walk of eq. 37 (intensity ``q_b``). A time in s:
+        the bias wanders as a first-order Gauss-Markov process with that correlation time and
+        stationary std ``b0`` (``q_b`` unused), a disturbance the estimator's random-walk model
+        (eq. 37) does not describe exactly (``shipid study dp-coverage``).
     """
 
     sigma_pos: float = 0.5
@@ -76,6 +81,7 @@ class TrialNoise:
     q_b: float = 1e-10
     b0: float = 3e-4
     current_speed: float = 0.0
+    bias_tau: float | None = None
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -154,7 +160,11 @@ def simulate_dp_trial(vessel: dp.DPVessel, kind: str, duration: float, seed: int
         h = dt / substeps
         for s in range(substeps):
             x = rk4_step(dp.lf_dynamics, t[k] + s * h, x, u, par, h)
-        bias = bias + rng.normal(scale=np.sqrt(noise.q_b * dtb), size=3) * _COMP
+        if noise.bias_tau is None:
+            bias = bias + rng.normal(scale=np.sqrt(noise.q_b * dtb), size=3) * _COMP
+        else:
+            rho = np.exp(-dt / noise.bias_tau)
+            bias = rho * bias + rng.normal(scale=noise.b0 * np.sqrt(1.0 - rho ** 2), size=3) * _COMP
     if kind == "surge":
         P[-1, 4] = P[-2, 4]
     saturated = float(np.mean(np.abs(P[:, 4]) >= 1.0)) if kind == "surge" else 0.0
