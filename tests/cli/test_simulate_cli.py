@@ -122,11 +122,14 @@ def test_demo_writes_overwrites_with_force_and_does_not_clobber(tmp_path, capsys
     for f in files:
         if f.endswith(".csv"):  # the demo also writes result JSON and HTML reports (issue 8)
             assert len(read_trial(d / f)) > 100
-    # the reports show the papers' figures and tables (issue 8; details in tests/report)
+    # the reports show the papers' figures and tables (issue 8; details in tests/report), each caption
+    # numbered by the report and naming the paper's figure or table at its end (issue 20)
     html = {m: (d / f"report-{m}.html").read_text(encoding="utf-8") for m in ("mass-cm", "dp", "ebm")}
-    for m, marks in {"mass-cm": ("Fig. 4 —", "Table 3 —", "Roll rate p of the loaded dataset"),
-                     "dp": ("Fig. 8 —", "Innovation of heading ψ"),
-                     "ebm": ("Figs 4, 9 —", "Table 1 —", "Table 4 —", "Fig. 7 —", "Figs 6, 10 —")}.items():
+    L, F, Y = "(Linder et al. 2015, ", "(Fossen, Sagatun &amp; Sørensen 1996, ", "(Yoon &amp; Rhee 2003, "
+    for m, marks in {"mass-cm": (L + "Fig. 4)", L + "Table 3)", "Roll rate p of the loaded dataset"),
+                     "dp": (F + "Fig. 8)", "Innovation of heading ψ"),
+                     "ebm": (Y + "Figs 4, 9)", Y + "Table 1)", Y + "Table 4)", Y + "Fig. 7)",
+                             Y + "Figs 6, 10)")}.items():
         for mark in marks:
             assert mark in html[m], (m, mark)
     before = {p.name: p.stat().st_mtime_ns for p in d.iterdir()}

@@ -26,8 +26,8 @@ def _text(html: str) -> str:
     return _html.unescape(re.sub(r"<[^>]+>", " ", s))
 
 
-def _result(estimates: dict, **diag) -> Result:
-    return Result(method="ebm", estimates=estimates, diagnostics=dict(diag), provenance={}, model={})
+def _result(estimates: dict, method: str = "ebm", **diag) -> Result:
+    return Result(method=method, estimates=estimates, diagnostics=dict(diag), provenance={}, model={})
 
 
 # -- verdict and status ----------------------------------------------------------------------------
@@ -58,8 +58,11 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
     assert "Well determined" in v and "a (1 %)" in v
     assert "Loosely determined" in v and "b (30 %)" in v
     assert "Not determined" in v and "c (500 %)" in v
-    assert "No coverage study" in v
+    # EBM publishes its last coverage study (shipid.methods.ebm.COVERAGE): the verdict quotes it with its source
+    assert "ebm-coverage" in v and "No coverage study" not in v
     assert "1 warning" in v
+    html = build_report(_result(est, method="toy", converged=True))     # a method with no published study
+    assert "No coverage study" in _text(re.search(r'<section class="verdict".*?</section>', html, re.S).group(0))
     cov = build_report(_result(est, converged=True, coverage={"coverage": 0.80, "n": 200, "nominal": 0.954}))
     v2 = _text(re.search(r'<section class="verdict".*?</section>', cov, re.S).group(0))
     assert "Converged" in v2 and "80 % of 200" in v2 and "too small" in v2

@@ -45,10 +45,20 @@ def short_path(p: str) -> str:
 _SEED_REF = re.compile(r"\s*\(seed 00\d\)|,?\s*\bseed 00\d\b", re.I)
 
 
+_SCI = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)e([-+]?)0*(\d+)\b")
+_SUPS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def sci_text(text: str) -> str:
+    """``5.3e-05`` in a method's message shown as ``5.3×10⁻⁵`` (no Python float text in the report)."""
+    return _SCI.sub(lambda m: f"{m.group(1)}×10{(('-' if m.group(2) == '-' else '') + m.group(3)).translate(_SUPS)}",
+                    text)
+
+
 def plain_text(text: str) -> str:
     """Text of a method shown in the report: machine paths shortened, the project's internal paper
-    numbers ("seed 000") dropped (papers are named by authors and year)."""
-    return _SEED_REF.sub("", short_paths(text))
+    numbers ("seed 000") dropped (papers are named by authors and year), Python's 1.5e+08 as 1.5×10⁸."""
+    return sci_text(_SEED_REF.sub("", short_paths(text)))
 
 
 def short_paths(text: str) -> str:

@@ -15,7 +15,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from shipid.report.formatting import fmt_num, format_estimate
-from shipid.report.render import RenderContext, esc, short_paths
+from shipid.report.render import RenderContext, esc, sci_text, short_paths
 from shipid.report.units import bis_to_si, dp_si_matrices, unit_of
 
 
@@ -139,17 +139,10 @@ def _inline(v: Any) -> str:
         return fmt_num(v)
     if v is None:
         return "—"
-    return short_paths(" ".join(str(v).split()))
+    return _sci(short_paths(" ".join(str(v).split())))
 
 
-_SCI = re.compile(r"(?<![\w.])(\d+(?:\.\d+)?)e([-+]?)0*(\d+)\b")
-_SUPS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
-
-
-def _sci(text: str) -> str:
-    """``5.3e-05`` in a method's message shown as ``5.3×10⁻⁵`` (no Python float text in the report)."""
-    return _SCI.sub(lambda m: f"{m.group(1)}×10{(('-' if m.group(2) == '-' else '') + m.group(3)).translate(_SUPS)}",
-                    text)
+_sci = sci_text
 
 
 def _vessel(result) -> str | None:
