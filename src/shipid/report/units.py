@@ -32,11 +32,15 @@ KNOWN_UNITS: dict[str, str] = {
     "a_H": "-", "eps_R": "-", "kx_R": "-", "kx_R_reverse": "-", "gamma_R_minus": "-", "gamma_R_plus": "-",
     "C_rY": "-", "C_rN": "-", "C_PR": "-", "k_0": "-", "k_1": "-", "k_2": "-", "c_0": "-", "c_1": "-",
     "c_2": "-", "R2": "-", "kappa": "-", "Cp": "-",
+    # DP options and diagnostics (Fossen, Sagatun & Sørensen 1996 eqs. 35-38; methods.dp.DPOptions)
+    "q_h": "bis force²·bis time", "q_b": "bis force²/bis time", "yaw_arm": "L", "q_theta": "1/bis time",
+    "h0_std": "bis momentum", "b0_std": "bis force", "current0_std": "m/s", "q_c": "(m/s)²/s",
+    "nis_mean": "-", "loglik": "-", "max_late_deviation_sigma": "σ", "noise_log_scales": "ln(scale)",
 }
 
 #: Keys whose value is never a physical quantity (counts, flags, names).
 UNITLESS_KEYS = {"iterations", "n", "p", "count", "folds", "samples", "n_samples", "seed", "max_iter",
-                 "min_iter", "ar_order", "decimate", "k"}
+                 "min_iter", "ar_order", "decimate", "k", "nis_dof", "passes"}
 
 
 @functools.lru_cache(maxsize=16)
