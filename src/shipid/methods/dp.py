@@ -28,7 +28,10 @@ log-likelihood at its optimum (θ block, the noise levels' uncertainty included)
 own P_θθ assumes the noise known and ignores that the gain depends on θ; on data whose noise
 levels differed from the assumed ones by factors 0.5–2 it covered the error within ±2σ in
 44 % of cases (issue 15). The estimated noise levels are in ``diagnostics["noise"]`` (SI
-units). A scheme whose likelihood maximisation has not settled gets a line in
+units). A noise level the data do not determine (at or next to the bound of its scale, or with
+a likelihood flat or concave along it, e.g. q_h under large measurement noise) is held at its
+optimum when the Hessian is formed, marked ``"determined": False`` and warned about; θ's std
+then comes from the rest of the Hessian. A scheme whose likelihood maximisation has not settled gets a line in
 ``diagnostics["warnings"]`` and its parameters (and those of later schemes) the status
 ``"std unreliable"``. ``covariance="ekf"`` is the paper's procedure (EKF estimate and P_θθ).
 

@@ -30,6 +30,12 @@ paper (fixed at their values) and their uncertainty is propagated to first order
 ``J = −H⁻¹ ∂²(−ℓ)/∂φ∂θ_c`` (the sensitivity of the optimum to θ_c),
 ``cov(θ̂_f) += J Σ_c Jᵀ`` and ``cov(θ̂_f, θ_c) = J Σ_c``.
 
+Noise levels the data do not determine -- at a bound of the log-scale, within 0.25 of it, or
+with a curvature that is not positive (the likelihood flat or concave along it) -- are held
+at their optimum when H is formed (:func:`_undetermined`), so ``cov(θ̂_f)`` comes from the θ
+block and the noise directions the data do determine; they are listed in
+``diagnostics["noise_at_bound"]`` and reported as not determined.
+
 A scheme has *settled* when the optimiser stopped on its gradient test, H is positive
 definite and the Newton decrement ``sqrt(gᵀ H⁻¹ g)`` at the final point is below 0.1 (the
 optimum is within 0.1 std of where it stopped). Otherwise the caller warns and marks the
@@ -303,11 +309,15 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
     # covariance Hessian at the optimum, steps about 0.3 std of each coordinate
     h1 = _steps(H, h)[act]
     H = _hessian(fa, zact, h1, f0)
-    try:
-        np.linalg.cholesky(0.5 * (H + H.T))
-        pd = True
-    except np.linalg.LinAlgError:
-        pd = False
+    # noise directions the data do not determine (curvature not positive, or the optimum next
+    # to a bound) are held at their optimum too, so θ's covariance comes from the rest
+    held = _undetermined(H, z[act], p)
+    if held:
+        keep = [k for k in range(len(act)) if k not in held]
+        at_bound = sorted(at_bound + [act[k] - p for k in held])
+        act, h1, H = [act[k] for k in keep], h1[keep], H[np.ix_(keep, keep)]
+        zact = z[act]
+    pd = _is_pd(H)
     dec = np.inf
     for _ in range(4):  # Newton steps on the final Hessian until the decrement is small
         g = _gradient(fa, zact, 0.1 * h1)
@@ -371,7 +381,9 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
             a_std[j] = np.nan
     diag = {"optimizer": {"success": bool(opt_success), "iterations": len(newton) - 1},
             "newton_decrement": newton, "hessian_positive_definite": pd,
-            "noise_at_bound": [lik.noise_names[j] for j in at_bound], "evaluations": lik.n_eval,
+            "noise_at_bound": [lik.noise_names[j] for j in at_bound],
+            "noise_held": [lik.noise_names[j] for j in at_bound if abs(abs(z[p + j]) - A_BOUND) >= 1e-9],
+            "evaluations": lik.n_eval,
             "loglik_start": -float(f_start), "loglik": -float(f0)}
     return PEMResult(theta=th_hat[free], cov_free=0.5 * (cov_free + cov_free.T), cross=cross, log_scales=a_hat,
                      log_scales_std=a_std, loglik=-float(f0), settled=settled, diagnostics=diag)
@@ -393,8 +405,42 @@ def noise_report(lik: StageLikelihood, pem: PEMResult, vessel) -> dict:
         val = float(nz[k]) * fac
         out[k] = {"value": val, "std": val * power * sd, "unit": unit, "value_bis": float(nz[k]),
                   "scale_vs_nominal": sc, "log_scale_std": sd,
-                  "at_bound": k in pem.diagnostics["noise_at_bound"]}
+                  "at_bound": k in pem.diagnostics["noise_at_bound"],
+                  "determined": k not in pem.diagnostics["noise_at_bound"]}
     return out
+
+
+def _is_pd(H: np.ndarray) -> bool:
+    try:
+        np.linalg.cholesky(0.5 * (H + H.T))
+        return True
+    except np.linalg.LinAlgError:
+        return False
+
+
+def _undetermined(H: np.ndarray, y: np.ndarray, p: int, margin: float = 0.25) -> list[int]:
+    """Noise coordinates (index ≥ ``p`` of ``H``) to hold fixed when forming the observed information.
+
+    First every noise log-scale whose own curvature ``H[k, k]`` is not positive or whose value
+    lies within ``margin`` of the bound ±``A_BOUND`` (the likelihood is flat there: the level
+    is not determined, and a finite-difference Hessian across it is not a curvature). Then,
+    while the rest of ``H`` is not positive definite, the noise coordinate with the largest
+    weight in the eigenvector of the most negative eigenvalue. θ coordinates (index < ``p``)
+    are never held: if ``H`` restricted to θ is indefinite, the scheme stays unsettled.
+    """
+    n = H.shape[0]
+    Hs = 0.5 * (H + H.T)
+    held = [k for k in range(p, n) if Hs[k, k] <= 0 or abs(y[k]) > A_BOUND - margin]
+    while True:
+        keep = [k for k in range(n) if k not in held]
+        if _is_pd(Hs[np.ix_(keep, keep)]):
+            return held
+        noise = [i for i, k in enumerate(keep) if k >= p]
+        if not noise:
+            return held
+        w, V = np.linalg.eigh(Hs[np.ix_(keep, keep)])
+        i = max(noise, key=lambda i: abs(V[i, 0]))
+        held.append(keep[i])
 
 
 def _full(z: np.ndarray, act: list[int], y: np.ndarray) -> np.ndarray:
