@@ -37,3 +37,14 @@ def test_bare_shipid_and_bare_group_print_their_help(capsys):
     # summaries whole: click cut them at 45 characters and at "Fig." (issue 14)
     line = next(ln for ln in out.splitlines() if ln.strip().startswith("mass-cm-contour"))
     assert "Fig. 4: cost" in line and "..." not in out.split("Commands:")[1]
+
+
+def test_format_is_a_choice_everywhere(capsys):
+    from shipid.cli import main
+
+    for argv in (["identify", "mmg", "--trial", "x.csv", "--format", "foo"],
+                 ["validate", "m.json", "--trial", "x.csv", "--format", "foo"],
+                 ["check", "x.csv", "--format", "foo"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "'foo' is not one of" in err and "kvlcc2" in err, argv

@@ -20,6 +20,7 @@ import click
 
 from shipid.cli import CONTEXT, cli, identify, study
 from shipid.cli._common import loud, loud_lines, strict_option
+from shipid.data.io import FORMATS
 from shipid.errors import ShipidError
 
 
@@ -62,8 +63,8 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.argument("model")
 @click.option("--trial", "trial_path", required=True, type=click.Path(dir_okay=False),
               help="Measured run (CSV/Parquet/Esso CSV/KVLCC2 .dat).")
-@click.option("--format", "fmt", default=None,
-              help="Trial format (csv, parquet, esso, kvlcc2) [default: from the file, else MODEL.json's].")
+@click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
+              help="Trial format [default: from the file, else MODEL.json's].")
 @click.option("--channels", default=None,
               help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
 @click.option("--horizon", default=None, type=float,
@@ -246,7 +247,8 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
 
 
 _ID_OPTS = [
-    click.option("--format", "fmt", default=None, help="Trial format: csv, parquet, esso, kvlcc2."),
+    click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
+                 help="Trial format [default: from the file]."),
     click.option("--channels", default=None,
                  help="Column map for own column names, e.g. 'x=x_position_mid,u=u_velo,psi=hdg[deg]'."),
     click.option("--prior", default=None,
