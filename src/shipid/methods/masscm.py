@@ -149,11 +149,11 @@ from typing import Sequence
 
 import numpy as np
 from scipy.optimize import least_squares
-from threadpoolctl import threadpool_limits
 from scipy.signal import lfilter
 
 from shipid.data.trial import Trial
 from shipid.errors import InputError
+from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import fit_ar, hannan_rissanen
 from shipid.estimate.iv import (arx_fit, arx_simulate, iv_compress, iv_compress_products,
                                 iv_compress_products_compiled, lag_gram, lag_matrix)
@@ -1322,7 +1322,7 @@ def estimate_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, 
     th0 = DEFAULT_THETA0 if theta0 is None else np.asarray(theta0, dtype=float)
     if th0.size != len(THETA_NAMES):
         raise InputError(f"theta0 needs {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})")
-    with warnings.catch_warnings(), threadpool_limits(1):     # small matrices: BLAS threads only cost here
+    with warnings.catch_warnings(), one_blas_thread():     # small matrices; and thread-count-free results
         warnings.simplefilter("ignore", RuntimeWarning)
         init = init or ("linear" if theta0 is None else "given")
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options, init=init)
@@ -1351,7 +1351,7 @@ NOISE_CHECK_Z = 1.5
 def _noise_model_check(res: Result, prep, known, th0, z_f, z_f_prior, options: MassCMOptions, init: str) -> None:
     """Cross-check the AR(40) estimate of m against the structured AR noise model (see :func:`estimate_mass_cm`)."""
     alt = replace(options, noise_model="ar-structured")
-    with warnings.catch_warnings(), threadpool_limits(1):
+    with warnings.catch_warnings(), one_blas_thread():
         warnings.simplefilter("ignore", RuntimeWarning)
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=alt, init=init)
     cov, names, _ = _covariance(core)

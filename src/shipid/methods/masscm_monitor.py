@@ -89,10 +89,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import lfilter
-from threadpoolctl import threadpool_limits
 
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
+from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm import DEFAULT_THETA0, MassCMOptions, iterate, prepare
@@ -261,7 +261,7 @@ class MassCMMonitor:
         self._t_next = float(t_expected[-1] + self.T)
         self._pending.append(X)
         self._npending += X.shape[1]
-        with threadpool_limits(1):          # small matrices: BLAS threads only cost here (as in masscm)
+        with one_blas_thread():            # small matrices; and thread-count-free results (as in masscm)
             return self._drain()
 
     def _drain(self) -> list[MonitorUpdate]:

@@ -159,8 +159,6 @@ def _state0(data_seed: int, vessel: str, options: MassCMOptions):
     return _CACHE[_key(data_seed, vessel, options)][2]
 
 
-_one_thread = one_blas_thread
-
 
 def draw_initial(rng: np.random.Generator, vessel: str = "fishing-vessel") -> np.ndarray:
     """Initial values uniform between the Table 3 bounds, in :data:`THETA_NAMES` order."""
@@ -182,12 +180,12 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
     rng = np.random.default_rng(ss)
     # the paper's noise-free protocol with the AR(40) noise model (the fused compiled path; Table 3 as measured)
     options = MassCMOptions(max_iter=max_iter, compute=compute, noise_model="ar")
-    with _one_thread():      # the cached datasets too: their AR fits must not depend on the BLAS threads
+    with one_blas_thread():      # the cached datasets too: their AR fits must not depend on the BLAS threads
         prep, known = _prepared(data_seed, vessel, options)
         state0 = _state0(data_seed, vessel, options)
     theta0 = draw_initial(rng, vessel)
     z_f = _zf_true(vessel) if zf_mode == "known" else None
-    with warnings.catch_warnings(), _one_thread():
+    with warnings.catch_warnings(), one_blas_thread():
         warnings.simplefilter("ignore")
         try:
             core = iterate(prep, known, theta0, z_f=z_f, options=options, init=init,

@@ -27,7 +27,7 @@ from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, 
                                   residual_stats_table)
 from shipid.report import figures as F
 from shipid.report.units import pretty_unit
-from shipid.report.values import _flatten, _sci, _si_table, _with_units
+from shipid.report.values import _flatten, _si_table, _with_units
 from shipid.report.verdict import NOT_DETERMINED, effective_status, verdict_html
 from shipid.report.render import plain_text, short_paths
 
@@ -194,7 +194,7 @@ def _warnings(result, extra: list[str]) -> str:
     warns = d.get("warnings") or []
     if isinstance(warns, str):
         warns = [warns]
-    warns = [_sci(plain_text(str(w))) for w in warns]
+    warns = [plain_text(str(w)) for w in warns]
     if "converged" in d and not d["converged"]:
         warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
                         "must not be trusted.")
@@ -282,13 +282,13 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
             f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
             + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks
-               else f"<td>{esc(_sci(plain_text(e.note)))}</td></tr>"))
+               else f"<td>{esc(plain_text(e.note))}</td></tr>"))
     if not rows:
         body = '<p class="small">No estimates.</p>'
     else:
         cap = ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal "
                                 "approximation). Digits follow the SE.")
-        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(_sci(plain_text(n)))}</p>' for n, m in marks.items())
+        foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(plain_text(n))}</p>' for n, m in marks.items())
         if any(effective_status(e) == NOT_DETERMINED for e in result.estimates.values()):
             foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
                      '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '

@@ -139,10 +139,8 @@ def _inline(v: Any) -> str:
         return fmt_num(v)
     if v is None:
         return "—"
-    return _sci(short_paths(" ".join(str(v).split())))
+    return sci_text(short_paths(" ".join(str(v).split())))
 
-
-_sci = sci_text
 
 
 def _vessel(result) -> str | None:

@@ -21,13 +21,13 @@ import socket
 import time
 import warnings
 from collections import deque
-from contextlib import nullcontext
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
 from shipid.errors import ShipidError
+from shipid.estimate.linalg import one_blas_thread
 from shipid.studies.seeding import run_entropy
 
 MAX_DASK_ATTEMPTS = 3    # Dask: tries per chunk when the cluster (not the task) fails it
@@ -358,11 +358,8 @@ def iter_dask(client, chunks, args, seed: int) -> Iterator[list[dict]]:
 # Context managers for the executors
 # --------------------------------------------------------------------------------------
 def threads_limited():
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover
-        return nullcontext()
-    return threadpool_limits(limits=1)
+    """One BLAS thread for in-process runs, as the workers have (:func:`shipid.estimate.linalg.one_blas_thread`)."""
+    return one_blas_thread()
 
 
 def _import_distributed():
