@@ -39,6 +39,8 @@ class Group(click.Group):
     """A click group whose command list shows each summary whole (click cuts them at 45 characters,
     and at the first '. ', which turned "Fig. 4 ..." into "Fig.")."""
 
+    group_class = type      # sub-groups made with @cli.group are of this class too (not a change to click's Group)
+
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         rows = []
         for name in self.list_commands(ctx):
@@ -52,7 +54,6 @@ class Group(click.Group):
                 formatter.write_dl(rows)
 
 
-click.Group.group_class = Group     # sub-groups made with @cli.group are Groups too
 
 
 @click.group(cls=Group, context_settings=CONTEXT)
