@@ -3,7 +3,7 @@
 Issue 7 asks for the 10 000-run Table-3 study (seed 000, Linder et al. 2015, §5) timed
 with 1 and 2 local workers and with a 2-worker LocalCluster, goal <= 60 s and >= 1.8x
 from 1 to 2 workers on a 2-core machine. The per-run function of that study is looked
-up in :mod:`shipid.methods.masscm` (``--task`` names another); when none exists the
+up in :mod:`shipid.methods.masscm.estimator` (``--task`` names another); when none exists the
 benchmark falls back to the toy task (:func:`shipid.studies.toy.toy_run`) and says so.
 
 The three executions must give identical outputs (checked here, bit for bit); the
@@ -33,8 +33,8 @@ from shipid.studies.engine import available_cpus, run_campaign
 
 # where the Table-3 per-run function may live (first found wins), with the kwargs of
 # `shipid study mass-cm-sensitivity` defaults (z_f known, initial values as drawn, data seed 0)
-TABLE3_CANDIDATES = (("shipid.methods.masscm_study", "run_one"),
-                     ("shipid.methods.masscm", "table3_run"), ("shipid.methods.masscm", "sensitivity_run"))
+TABLE3_CANDIDATES = (("shipid.methods.masscm.study", "run_one"),
+                     ("shipid.methods.masscm.estimator", "table3_run"), ("shipid.methods.masscm.estimator", "sensitivity_run"))
 TABLE3_KWARGS = {"zf_mode": "known", "data_seed": 0, "init": "given"}
 TOY = "shipid.studies.toy:toy_run"
 

@@ -28,8 +28,8 @@ def main() -> None:
     from scipy.linalg import block_diag
 
     from shipid.estimate.ekf_augmented import parallel_augmented_ekf
-    from shipid.methods import dp as m
-    from shipid.methods.dp_trials import simulate_dp_trial
+    from shipid.methods.dp import estimator as m
+    from shipid.methods.dp.trials import simulate_dp_trial
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
 

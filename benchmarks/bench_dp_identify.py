@@ -1,11 +1,11 @@
 """Benchmark: ``identify dp`` with estimated noise and observed information vs the EKF alone, same run.
 
 Six simulated trials (surge ×2, sway–yaw ×2, azimuth ×2, ``--duration`` s each, 1 Hz; the
-noise of :func:`shipid.methods.dp_coverage.study_noise` at nominal scales). Timed, on one
+noise of :func:`shipid.methods.dp.coverage.study_noise` at nominal scales). Timed, on one
 thread (BLAS/numba threads set to 1 before NumPy is imported):
 
-* ``observed`` — :func:`shipid.methods.dp.identify_dp` with its defaults (EKF passes, then the
-  likelihood maximisation over θ and the noise levels and the Hessian, :mod:`shipid.methods.dp_pem`);
+* ``observed`` — :func:`shipid.methods.dp.estimator.identify_dp` with its defaults (EKF passes, then the
+  likelihood maximisation over θ and the noise levels and the Hessian, :mod:`shipid.methods.dp.pem`);
 * ``ekf`` — the same with ``covariance="ekf"`` (the paper's method, two EKF passes per scheme,
   noise levels assumed): the method before issue 15;
 * ``floor`` — ``covariance="ekf", passes=1``: one EKF pass per scheme, the least any
@@ -37,10 +37,10 @@ def main() -> None:
 
     import numpy as np
 
-    import shipid.estimate.dp_loglik  # noqa: F401  (compile / load the kernels before timing)
-    from shipid.methods.dp import DPOptions, identify_dp
-    from shipid.methods.dp_coverage import study_noise
-    from shipid.methods.dp_trials import simulate_dp_trials
+    import shipid.methods.dp.loglik  # noqa: F401  (compile / load the kernels before timing)
+    from shipid.methods.dp.estimator import DPOptions, identify_dp
+    from shipid.methods.dp.coverage import study_noise
+    from shipid.methods.dp.trials import simulate_dp_trials
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
 

@@ -2,7 +2,7 @@
 
 100 noise realisations of three 300-s datasets (gyro noise 0.002 rad/s, a_s noise 0.02 m/s^2, biases
 0.001 rad/s and 0.01 m/s^2, 0.5 deg wave roll), z_f known. Prints, for zm_bar, rho and m: the CRLB
-(shipid.analysis.crlb_masscm), the spread and mean of the estimates, the ratio spread/bound, and
+(shipid.methods.masscm.crlb), the spread and mean of the estimates, the ratio spread/bound, and
 the same for the named peer "plain IV" (Algorithm 1 without the ARMA prefilters (42)–(43)).
 Issue target: spread within 1.3 x the bound, means within one spread of the truth.
 
@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from shipid.analysis.crlb_masscm import crlb
+from shipid.methods.masscm.crlb import crlb
 from shipid.models.roll_sim import NoiseSpec
 from shipid.studies.engine import run_campaign
 
@@ -27,7 +27,7 @@ def main():
     rows = {}
     for label, pf in (("Algorithm 1 (ARMA prefilters)", True), ("peer: plain IV (no prefilter)", False)):
         t0 = time.perf_counter()
-        res = run_campaign("shipid.methods.masscm_study:efficiency_run", runs, seed=11,
+        res = run_campaign("shipid.methods.masscm.study:efficiency_run", runs, seed=11,
                            kwargs={"duration": duration, "prefilter": pf}, workers=workers, progress=False)
         wall = time.perf_counter() - t0
         outs = [r.outputs for r in res.records if r.status == "ok" and r.outputs["converged"]]

@@ -8,7 +8,7 @@ Each code tree is measured in a fresh process, one after the other (one core: BL
 * ``this tree``: the ``shipid`` this script imports (``PYTHONPATH``);
 * ``peer``: another checkout's ``src`` (default ``/work/main/src``, the code before this change), if present.
 
-Printed per tree: wall time of :func:`shipid.methods.masscm.estimate_mass_cm`, the peak of memory allocated
+Printed per tree: wall time of :func:`shipid.methods.masscm.estimator.estimate_mass_cm`, the peak of memory allocated
 during it (``tracemalloc``, numpy included), the process's peak resident set, the size of the result JSON, and
 the estimate of m; then the ratios this/peer. Targets of issue 17 for 1 h: <= 5 s, <= 400 MB, JSON <= 2 MB.
 
@@ -33,7 +33,7 @@ import numpy as np
 import shipid
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.models.roll_reduced import KnownParams
-from shipid.methods.masscm import estimate_mass_cm
+from shipid.methods.masscm.estimator import estimate_mass_cm
 warnings.simplefilter("ignore")
 T = float(sys.argv[1])
 d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=T, noise=NoiseSpec.issue3())

@@ -8,7 +8,7 @@ with a load change at 900 s from 0.4 kg at -0.182 m to 0.7 kg at -0.14 m, and wi
 are independent campaigns, seeds SEED and SEED+1): detection delays, false alarms, per-stream coverage of
 ±2 std of m and zm_bar from 300 s after the change (no change: from 300 s).
 ``speed``: processor time of the monitor on one 1800-s stream against the named peer, the offline
-Algorithm 1 (:func:`shipid.methods.masscm.estimate_mass_cm`, noise check off) re-run on the 300-s window at
+Algorithm 1 (:func:`shipid.methods.masscm.estimator.estimate_mass_cm`, noise check off) re-run on the 300-s window at
 every update, timed on 5 updates and scaled to the 168 updates of the stream; real-time factor.
 ``memory``: tracemalloc peak while monitoring 600-, 1800- and 3600-s streams (flat = independent of length).
 ``tradeoff``: window 150 / 300 / 600 s on the same streams (std of the updates, coverage, delay).
@@ -27,13 +27,13 @@ import numpy as np
 
 from shipid.studies.engine import run_campaign
 
-TASK = "shipid.methods.masscm_monitor_study:monitor_run"
+TASK = "shipid.methods.monitor.study:monitor_run"
 
 
 def study(runs: int, seed: int, noise: str = "issue3") -> None:
     for label, kw, sd in (("change at 900 s", {"change_at": 900.0, "noise": noise}, seed),
                           ("no change", {"change_at": None, "noise": noise}, seed + 1)):
-        from shipid.methods.masscm_monitor_study import summarise
+        from shipid.methods.monitor.study import summarise
         res = run_campaign(TASK, runs, seed=sd, kwargs=kw, workers=1, progress=False)
         recs = [r.outputs for r in res.records if r.status == "ok"]
         failed = runs - len(recs)
@@ -47,8 +47,8 @@ def study(runs: int, seed: int, noise: str = "issue3") -> None:
 
 def speed() -> None:
     from shipid.data.trial import Trial
-    from shipid.methods.masscm import MassCMOptions, estimate_mass_cm
-    from shipid.methods.masscm_monitor import run_monitor
+    from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
+    from shipid.methods.monitor.estimator import run_monitor
     from shipid.models.roll_reduced import KnownParams
     from shipid.simulate.masscm_stream import StreamSpec, simulate_stream
 
@@ -77,7 +77,7 @@ def speed() -> None:
 
 
 def memory() -> None:
-    from shipid.methods.masscm_monitor import MassCMMonitor
+    from shipid.methods.monitor.estimator import MassCMMonitor
     from shipid.models.roll_reduced import KnownParams
     from shipid.simulate.masscm_stream import StreamSpec, simulate_stream
 
@@ -101,7 +101,7 @@ def memory() -> None:
 
 
 def tradeoff(runs: int) -> None:
-    from shipid.methods.masscm_monitor_study import summarise
+    from shipid.methods.monitor.study import summarise
     for w in (150.0, 300.0, 600.0):
         for label, kw, sd in (("change", {"change_at": 900.0}, 31), ("no change", {"change_at": None}, 32)):
             res = run_campaign(TASK, runs, seed=sd, kwargs={**kw, "window": w}, workers=1, progress=False)

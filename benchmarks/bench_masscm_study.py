@@ -4,7 +4,7 @@ Not a test: it prints timings and ratios, asserts nothing about speed.
 
 1. Per run, single process, interleaved in blocks so that both see the same machine load
    (``os.getloadavg()`` printed alongside; the machine is shared):
-   * ``shipid`` Algorithm 1, compiled path (:func:`shipid.methods.masscm_study.run_one`,
+   * ``shipid`` Algorithm 1, compiled path (:func:`shipid.methods.masscm.study.run_one`,
      ``compute="fast"``, the default: numba kernels for the FIR moments, AR fits and searches);
    * the same Algorithm 1 on the straightforward numpy/scipy path (``compute="reference"``: the
      "before" implementation, kept as the reference the tests compare against);
@@ -40,14 +40,14 @@ import numpy as np
 from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
-from shipid.methods.masscm import MassCMOptions
-from shipid.methods.masscm_study import _prepared, draw_initial, run_one, summarise, warm_up
+from shipid.methods.masscm.estimator import MassCMOptions
+from shipid.methods.masscm.study import _prepared, draw_initial, run_one, summarise, warm_up
 from shipid.models.roll_reduced import THETA_NAMES, discrete_coeffs, from_moment, to_moment
 from shipid.studies.engine import run_campaign
 
 ZF = -0.028
-TASK = "shipid.methods.masscm_study:run_one"
-WARM_UP = "shipid.methods.masscm_study:warm_up"
+TASK = "shipid.methods.masscm.study:run_one"
+WARM_UP = "shipid.methods.masscm.study:warm_up"
 
 
 def peer_run(i, seed, prep, known):

@@ -26,7 +26,7 @@ import time
 
 
 def _runs(limit: int | None):
-    from shipid.studies import realdata_study as S
+    from shipid.methods.mmg import study as S
 
     d = S._esso_dir(None)
     test = set(S.SPLITS["miyauchi2022"]["test"]) | set(S.SPLITS["wakita2022"]["test"])
@@ -50,9 +50,9 @@ def main() -> None:
     ap.add_argument("--loo", action="store_true", help="Also time the batched leave-one-run-out CV.")
     a = ap.parse_args()
 
-    from shipid.methods import realdata as R
+    from shipid.methods.mmg import estimator as R
     from shipid.models import mmg
-    from shipid.studies import realdata_study as S
+    from shipid.methods.mmg import study as S
 
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     names = _runs(a.runs)

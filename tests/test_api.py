@@ -5,8 +5,8 @@ import pytest
 
 import shipid
 from shipid.errors import InputError
-from shipid.methods import ebm
-from shipid.methods.masscm import estimate_mass_cm
+from shipid.methods.ebm import estimator as ebm
+from shipid.methods.masscm.estimator import estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import simulate_datasets
 from shipid.vessels import load_vessel

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from shipid.analysis.observability import ebm_observability, numerical_rank, observability_matrix
-from shipid.methods.ebm_trials import simulate_trial
+from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
 from shipid.models.ebm_state import EbmModel
 

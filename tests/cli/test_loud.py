@@ -118,6 +118,6 @@ def test_the_fixture_catches_raw_warning_text_of_a_subprocess():
 
 
 def test_the_fixture_catches_raw_warning_text_read_through_capsys(capsys):
-    sys.stderr.write("/x/shipid/methods/realdata.py:497: RuntimeWarning: mode N: k did not converge\n")
+    sys.stderr.write("/x/shipid/methods/mmg/estimator.py:497: RuntimeWarning: mode N: k did not converge\n")
     with pytest.raises(pytest.fail.Exception, match="raw Python warning text"):
         capsys.readouterr()

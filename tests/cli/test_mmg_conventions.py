@@ -12,7 +12,7 @@ import pytest
 from shipid.cli import main
 from shipid.data import data_root, write_trial
 from shipid.data.trial import Trial
-from shipid.methods import validate as V
+from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 
 ROOT = data_root()

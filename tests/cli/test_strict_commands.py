@@ -10,7 +10,7 @@ import pytest
 
 from shipid.cli import main
 from shipid.data.io import write_trial
-from shipid.methods.ebm_trials import simulate_trial
+from shipid.methods.ebm.trials import simulate_trial
 from shipid.models.roll_sim import simulate_datasets
 
 KNOWN_FREE_ZF = """U = 1.0
@@ -83,7 +83,7 @@ def test_ebm_converged_reaches_the_text_output(ebm_files, capsys, monkeypatch):
     conv = [ln for ln in cap.out.splitlines() if ln.startswith("converged:")]
     assert conv and conv[0].startswith("converged: yes")
 
-    from shipid.methods import ebm
+    from shipid.methods.ebm import estimator as ebm
 
     real = ebm.identify
 

@@ -237,7 +237,7 @@ def _build_reports(makers: dict, folder: Path) -> dict:
 
 
 def _masscm_result():
-    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.methods.masscm.estimator import estimate_mass_cm
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import simulate_datasets
     from shipid.vessels import load_vessel
@@ -248,8 +248,8 @@ def _masscm_result():
 
 
 def _spread_result():
-    from shipid.methods.masscm_series import spread_result
-    from shipid.methods.masscm_study import run_one, summarise
+    from shipid.methods.masscm.series import spread_result
+    from shipid.methods.masscm.study import run_one, summarise
 
     outs = [run_one(i, 1) for i in range(4)]
     s = summarise(outs)
@@ -258,8 +258,8 @@ def _spread_result():
 
 
 def _dp_result():
-    from shipid.methods.dp import identify_dp
-    from shipid.methods.dp_trials import TrialNoise, simulate_dp_trials
+    from shipid.methods.dp.estimator import identify_dp
+    from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
 
@@ -269,9 +269,10 @@ def _dp_result():
 
 
 def _ebm_result():
-    from shipid.analysis.design import prbs_grid
-    from shipid.methods import ebm, ebm_series
-    from shipid.methods.ebm_trials import simulate_trial
+    from shipid.methods.ebm.design import prbs_grid
+    from shipid.methods.ebm import estimator as ebm
+    from shipid.methods.ebm import series as ebm_series
+    from shipid.methods.ebm.trials import simulate_trial
 
     res = ebm.identify([simulate_trial("zigzag-20", 300.0, seed=11)])
     # the opt-in extras, small: held-out validation (Figs 6, 10) and a 2 x 2 D-optimal map (Fig. 7)

@@ -3,7 +3,7 @@
 
 import re
 
-from shipid.analysis.design import design_result, prbs_grid
+from shipid.methods.ebm.design import design_result, prbs_grid
 from shipid.cli import main
 
 
@@ -23,7 +23,7 @@ def test_report_renders_the_design_map(tmp_path, capsys):
 
 
 def test_coarse_map_caption_says_coarse_and_points_to_the_full_map():
-    from shipid.methods.ebm_series import coarse_d_optimal
+    from shipid.methods.ebm.series import coarse_d_optimal
 
     c = coarse_d_optimal(amplitudes=(10.0, 35.0), periods=(30.0, 105.0), duration=200.0)
     assert c["paper"] == "Fig. 7"

@@ -174,8 +174,8 @@ def test_identify_ebm_figures_flag_adds_fig7(tmp_path, capsys, monkeypatch):
 
     from shipid.cli import main
     from shipid.data.io import write_trial
-    from shipid.methods import ebm_series
-    from shipid.methods.ebm_trials import simulate_trial
+    from shipid.methods.ebm import series as ebm_series
+    from shipid.methods.ebm.trials import simulate_trial
 
     monkeypatch.setattr(ebm_series, "COARSE_AMPLITUDES", (10.0, 35.0))   # 2 x 2 grid of 200-s runs: quick
     monkeypatch.setattr(ebm_series, "COARSE_PERIODS", (30.0, 105.0))

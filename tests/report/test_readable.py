@@ -58,7 +58,7 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
     assert "Well determined" in v and "a (1 %)" in v
     assert "Loosely determined" in v and "b (30 %)" in v
     assert "Not determined" in v and "c (500 %)" in v
-    # EBM publishes its last coverage study (shipid.methods.ebm.COVERAGE): the verdict quotes it with its source
+    # EBM publishes its last coverage study (shipid.methods.ebm.estimator.COVERAGE): the verdict quotes it with its source
     assert "ebm-coverage" in v and "No coverage study" not in v
     assert "1 warning" in v
     html = build_report(_result(est, method="toy", converged=True))     # a method with no published study
@@ -69,7 +69,7 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
 
 
 def test_a_coverage_table_published_by_the_method_module_is_used(monkeypatch):
-    import shipid.methods.ebm as mod
+    import shipid.methods.ebm as mod   # the package publishes COVERAGE (shipid.registry reads it there)
 
     monkeypatch.setattr(mod, "COVERAGE", {"coverage": 0.95, "n": 100, "source": "tests: made up"}, raising=False)
     html = build_report(_result({"a": Estimate(1.0, 0.01, "m")}, converged=True))
@@ -79,7 +79,7 @@ def test_a_coverage_table_published_by_the_method_module_is_used(monkeypatch):
 
 def test_demo_masscm_setting_is_one_where_the_method_works():
     """The demo's mass-cm data (white sensor noise): no warning, white equation errors, m near the truth."""
-    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.methods.masscm.estimator import estimate_mass_cm
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
     from shipid.report.demo_step import DEMO_MASSCM_NOISE

@@ -17,8 +17,8 @@ import pytest
 from shipid.data import data_root
 from shipid.data.trial import Trial
 from shipid.errors import InputError
-from shipid.methods import realdata as R
-from shipid.studies import realdata_study as S
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import study as S
 
 ROOT = data_root()
 
@@ -74,7 +74,7 @@ def test_split_files_exist():
 
 def test_configuration_is_the_frozen_one():
     """Candidates, fitting weights, hyper-parameters and splits are those committed before the held-out
-    evaluation (shipid.studies.realdata_study docstring). Changing any of them changes the fingerprint:
+    evaluation (shipid.methods.mmg.study docstring). Changing any of them changes the fingerprint:
     then the held-out numbers in the docstring no longer belong to the code, and must be recomputed."""
     assert S.config_fingerprint() == S.FROZEN_FINGERPRINT
 

@@ -70,13 +70,13 @@ def test_mass_cm_study_warm_workers_equal_in_process_bit_for_bit():
     without :func:`shipid.estimate.linalg.one_blas_thread` around every computation (the cached datasets
     included) 219 fields differed by ~1e-9 relative (k 10.379489411238223 vs 10.37948941371897)."""
     out = _in_fresh_process("""
-        res = run_campaign("shipid.methods.masscm_study:run_one", 24, 5, workers=2, progress=False,
-                           kwargs={"data_seed": 0}, warm_up="shipid.methods.masscm_study:warm_up")
+        res = run_campaign("shipid.methods.masscm.study:run_one", 24, 5, workers=2, progress=False,
+                           kwargs={"data_seed": 0}, warm_up="shipid.methods.masscm.study:warm_up")
         print(json.dumps([r.outputs for r in res.records]))
         """)
     here = _in_fresh_process("""
         import numpy as np
-        from shipid.methods.masscm_study import run_one
+        from shipid.methods.masscm.study import run_one
         print(json.dumps([run_one(i, np.random.SeedSequence([5, i]), data_seed=0) for i in range(24)]))
         """, env={"OPENBLAS_NUM_THREADS": "4", "OMP_NUM_THREADS": "4"})
     assert out == here

@@ -91,9 +91,19 @@ def design() -> None:
 
 
 def _load_commands() -> None:
+    """Import the shared command modules of this package, then each method's ``cli*`` modules."""
     for mod in pkgutil.iter_modules(__path__):
         if not mod.name.startswith("_"):
             importlib.import_module(f"{__name__}.{mod.name}")
+    import shipid.methods as methods_pkg
+
+    for pkg in pkgutil.iter_modules(methods_pkg.__path__):
+        if not pkg.ispkg:
+            continue
+        sub = importlib.import_module(f"shipid.methods.{pkg.name}")
+        for mod in pkgutil.iter_modules(sub.__path__):
+            if mod.name == "cli" or mod.name.startswith("cli_"):
+                importlib.import_module(f"shipid.methods.{pkg.name}.{mod.name}")
 
 
 _load_commands()

@@ -12,7 +12,7 @@ and take its execution options from :func:`campaign_options`::
     @click.option("--json", "as_json", is_flag=True)
     @campaign_options
     def mass_cm_sensitivity(runs, as_json, campaign):
-        res = campaign.run("shipid.methods.masscm:sensitivity_run", runs,
+        res = campaign.run("shipid.methods.masscm.estimator:sensitivity_run", runs,
                            kwargs={...}, name="mass-cm-sensitivity")
         ...  # res.outputs (run order, None where failed), res.failed, res.wall_s
 

@@ -57,7 +57,7 @@ def report_cmd(result_json: str, out: str, force: bool, truth: str | None = None
     m(t), zm_bar(t) with ±2 std bands, the alarms, and the truth with --truth.
     """
     from shipid.report.html import write_report
-    from shipid.report.monitor import is_monitor_jsonl, write_monitor_report
+    from shipid.methods.monitor.report import is_monitor_jsonl, write_monitor_report
 
     if Path(out).exists() and not force:
         raise OutputExistsError(out)

@@ -54,7 +54,7 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
         from shipid.simulate.masscm_stream import simulate_stream_cmd
         simulate_stream_cmd(vessel, out, duration=duration, seed=seed, change_at=change_at, to=to, force=force)
         return
-    from shipid.cli.imo_cmds import is_model_spec, simulate_identified
+    from shipid.methods.mmg.cli_imo import is_model_spec, simulate_identified
 
     if is_model_spec(vessel):
         if seed < 0:

@@ -81,7 +81,7 @@ class FilterResult:
         """Output arrays for ``N`` samples, ``n`` states and ``m`` measurements, for a filter
         to fill in place (innovations and NIS start as NaN = no measurement; ``loglik`` is NaN until
         set with :func:`dataclasses.replace`). Shared by :func:`cd_ekf` and the compiled
-        :func:`shipid.estimate.cd_ekf_fast.ebm_cd_ekf`, so both return the same fields."""
+        :func:`shipid.methods.ebm.kernels.ebm_cd_ekf`, so both return the same fields."""
         nd = max(N - 1, 0)
         return cls(t=t, x_pred=np.empty((N, n)), P_pred=np.empty((N, n, n)), x_filt=np.empty((N, n)),
                    P_filt=np.empty((N, n, n)), Phi=np.empty((nd, n, n)), Qd=np.empty((nd, n, n)),
@@ -182,7 +182,7 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     check_pd : bool
         Check that P stays positive definite (raises ``NotPositiveDefiniteError`` naming the
         sample; checked every 50th sample and at the last, for cost — the compiled EBM path
-        :func:`shipid.estimate.cd_ekf_fast.ebm_cd_ekf` checks every sample). An innovation
+        :func:`shipid.methods.ebm.kernels.ebm_cd_ekf` checks every sample). An innovation
         covariance that is not positive definite raises it too.
 
     Returns

@@ -5,7 +5,7 @@ matrices ``Z^T Z`` and ``Z^T [Phi, y]`` of prefiltered lag instruments (45) with
 ``L = A(q)`` of the AR noise model (43), and refits that AR model (42). The straightforward computations
 (``np.convolve`` per signal, an explicit instrument matrix, ``Z^T Z`` by matrix product, the explicit AR
 regressor matrix) remain in :mod:`shipid.estimate.iv`, :mod:`shipid.estimate.arma` and
-:mod:`shipid.methods.masscm` as the reference paths; the tests compare these kernels with them.
+:mod:`shipid.methods.masscm.estimator` as the reference paths; the tests compare these kernels with them.
 
 * :func:`fir_filter` — ``y = A(q) x`` from rest (what ``np.convolve(a, x)[:n]`` and ``lfilter(a, 1, x)``
   compute), row by row.

@@ -20,7 +20,7 @@ Two structures share the rigid-body equations and the state/input layout:
     ``data_root()/params/kvlcc2_L7_mmg_shipmmg.yml``.
 
 Every force is written linear in its coefficients, ``F = H(x, u) θ + F_fixed(x, u)``
-(:func:`basis`): the simulator and the regression of :mod:`shipid.methods.realdata`
+(:func:`basis`): the simulator and the regression of :mod:`shipid.methods.mmg.estimator`
 use the same expression, so an identified coefficient means in simulation exactly
 what it meant in the regression.
 

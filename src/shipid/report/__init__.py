@@ -75,9 +75,9 @@ before building, so a `register_section` call in those modules is always picked 
 a report warning, never a crash).
 
 ## What the three methods store (series modules, issue 8)
-`shipid.methods.masscm_series` (roll-rate overlays, equation errors, Fig. 4 map; Table 3 via
-`shipid study mass-cm-sensitivity --out`), `shipid.methods.dp_series` (innovations with σ),
-`shipid.methods.ebm_series` (signals, Tables 1–2 and 4, force fits; opt-in validation and Fig. 7 map,
+`shipid.methods.masscm.series` (roll-rate overlays, equation errors, Fig. 4 map; Table 3 via
+`shipid study mass-cm-sensitivity --out`), `shipid.methods.dp.series` (innovations with σ),
+`shipid.methods.ebm.series` (signals, Tables 1–2 and 4, force fits; opt-in validation and Fig. 7 map,
 `shipid identify ebm --figures`). Each is hooked where the method builds its Result and never raises.
 
 ## Try it

@@ -32,7 +32,7 @@ METHODS = ("mass-cm", "dp", "ebm")
 #: Noise-free data make the standard errors ~10⁻⁵ kg, so that a 10⁻⁴ kg difference between noise models
 #: raises the noise-model warning and the residuals (numerical, not noise) fail every whiteness check;
 #: narrow-band wave roll with low-noise sensors is a documented limitation of the default AR(40)
-#: prefilter (shipid.methods.masscm, "Known limitations"). With this noise the method works as designed.
+#: prefilter (shipid.methods.masscm.estimator, "Known limitations"). With this noise the method works as designed.
 DEMO_MASSCM_NOISE = {"gyro_std": 0.002, "acc_std": 0.02}
 
 
@@ -42,7 +42,7 @@ def _fallback_mass_cm(seed: int):
     The datasets carry white sensor noise (:data:`DEMO_MASSCM_NOISE`): the setting in which the
     method's assumptions hold, so that its warnings and residual checks mean what they say.
     """
-    from shipid.methods.masscm import estimate_mass_cm
+    from shipid.methods.masscm.estimator import estimate_mass_cm
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
     from shipid.vessels import load_vessel
@@ -57,13 +57,13 @@ def _fallback_mass_cm(seed: int):
         "demo_setting", "white sensor noise: gyro 0.002 rad/s, accelerometer 0.02 m/s², no waves and no biases "
         "(the method's own assumptions). Without noise the standard errors shrink to ~10⁻⁵ kg and the "
         "residuals are numerical, so every check turns red without meaning anything; narrow-band wave roll "
-        "with low-noise sensors is a documented limitation (shipid.methods.masscm, 'Known limitations').")
+        "with low-noise sensors is a documented limitation (shipid.methods.masscm.estimator, 'Known limitations').")
     try:  # Fig. 4: the cost over (m, zm_bar) on the same data, with the true value marked
         _add_masscm_contour(res, seed)
     except Exception as err:  # noqa: BLE001 - the figure is an extra; say why it is missing
         res.diagnostics.setdefault("warnings", []).append(
             f"demo report: Fig. 4 cost contour not computed ({type(err).__name__}: {err})")
-    try:  # Table 3: a small sensitivity study (shipid.methods.masscm_study)
+    try:  # Table 3: a small sensitivity study (shipid.methods.masscm.study)
         _add_masscm_spread(res, seed)
     except Exception as err:  # noqa: BLE001
         res.diagnostics.setdefault("warnings", []).append(
@@ -73,7 +73,7 @@ def _fallback_mass_cm(seed: int):
 
 def _add_masscm_contour(res, seed: int) -> None:
     """Fig. 4: the method stores a coarse cost map (``contours["cost"]``); mark the true (m, zm_bar) on it."""
-    from shipid.methods.masscm_study import table3
+    from shipid.methods.masscm.study import table3
 
     c = (res.series.get("contours") or {}).get("cost")
     if c is None:
@@ -88,8 +88,8 @@ DEMO_SPREAD_RUNS = 30
 
 def _add_masscm_spread(res, seed: int, runs: int = DEMO_SPREAD_RUNS) -> None:
     """Table 3 (small): ``runs`` runs of the sensitivity study from random initial values."""
-    from shipid.methods.masscm_series import spread_series
-    from shipid.methods.masscm_study import run_one, summarise
+    from shipid.methods.masscm.series import spread_series
+    from shipid.methods.masscm.study import run_one, summarise
 
     outs = [run_one(i, seed, data_seed=seed) for i in range(runs)]
     sp = spread_series(summarise(outs), outs)
@@ -101,8 +101,8 @@ def _add_masscm_spread(res, seed: int, runs: int = DEMO_SPREAD_RUNS) -> None:
 
 def _fallback_dp(seed: int):
     """Fossen et al. (1996): the six simulated supply-vessel trials, shortened to 400 s."""
-    from shipid.methods.dp import identify_dp
-    from shipid.methods.dp_trials import TrialNoise, simulate_dp_trials
+    from shipid.methods.dp.estimator import identify_dp
+    from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
 
@@ -114,14 +114,16 @@ def _fallback_dp(seed: int):
 
 def _fallback_ebm(seed: int):
     """Yoon & Rhee (2003): a simulated 20/20 zig-zag and a 35 deg turn of ESSO OSAKA."""
-    from shipid.methods import ebm, ebm_trials
+    from shipid.methods.ebm import estimator as ebm
+
+    from shipid.methods.ebm import trials as ebm_trials
 
     trials = [ebm_trials.simulate_trial("zigzag-20", 600.0, seed=seed + 1),
               ebm_trials.simulate_trial("turning-35", 600.0, seed=seed + 2)]
     res = ebm.identify(trials)
     res.provenance.setdefault("seed", seed)
     res.provenance.setdefault("command", "shipid demo (report step: simulated ESSO OSAKA trials)")
-    from shipid.methods import ebm_series
+    from shipid.methods.ebm import series as ebm_series
 
     # opt-in extras, each a few seconds: held-out validation (Figs 6, 10), coarse D-optimal map (Fig. 7)
     for what, kind, fn in (("validation overlays", "overlays",
@@ -154,11 +156,11 @@ def _realdata_mmg_ebm(seed: int):
     root = data_root()
     if root is None or not (root / "kvlcc2_hsva").is_dir():
         return None
-    from shipid.methods import realdata as R
-    from shipid.methods import validate as V
+    from shipid.methods.mmg import estimator as R
+    from shipid.methods.mmg import validate as V
     from shipid.models import mmg
     from shipid.report.convention import overlay, table, trial_summary
-    from shipid.studies.realdata_study import read_kvlcc2
+    from shipid.methods.mmg.study import read_kvlcc2
 
     train = [read_kvlcc2(n) for n in KVLCC2_TRAIN]
     res = R.identify(train, mmg.load_published("kvlcc2_hsva"), structure=None, select=True,

@@ -21,6 +21,7 @@ import numpy as np
 
 import shipid
 from shipid.outputs import atomic_write_text
+from shipid import registry as method_registry
 from shipid.report.formatting import format_estimate, fmt_num
 from shipid.report.registry import load_method_sections, sections_for
 from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
@@ -458,15 +459,27 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
     return "".join(html_parts), {xkey, *(k for k, _ in cols)}
 
 
+def _enriched(result):
+    """``result`` completed by its method's ``report.enrich`` hook when it has one.
+
+    A method's report module may define ``enrich(result) -> Result`` to add what the report needs
+    and the result file does not carry (the MMG method re-reads its training runs for the data
+    summary and the fit overlays).
+    """
+    info = method_registry.for_result(result.method)
+    if info is None or not info.has_module("report"):
+        return result
+    hook = getattr(info.submodule("report"), "enrich", None)
+    return hook(result) if callable(hook) else result
+
+
 def build_report(result) -> str:
     """The complete HTML document for ``result`` (a :class:`~shipid.result.Result`).
 
     Never raises for odd ``series`` content: a figure that cannot be drawn is
     replaced by a visible note and listed among the warnings.
     """
-    from shipid.report.sections.mmg import enrich
-
-    result = enrich(result)  # mmg-ebm runs of `shipid identify mmg`: data summary and fit overlays
+    result = _enriched(result)
     ctx = RenderContext(result)
     load_problems = load_method_sections(result.method)
     ctx.problems.extend(load_problems)

@@ -17,14 +17,18 @@ fragments, each one of
 - ``"residual-checks"``: the table of residual statistics of the overlays and
   residuals drawn so far in this section.
 
-Sections registered for a method run in registration order; the defaults in
-:mod:`shipid.report.sections` are registered first.
+Sections registered for a method run in registration order; the defaults of
+each method's ``report`` module are registered first.
 """
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 from dataclasses import dataclass
 from typing import Any, Callable
+
+from shipid import registry as method_registry
 
 SectionFn = Callable[[Any], list]
 
@@ -90,23 +94,16 @@ def register_section(method: str, fn: SectionFn, *, title: str | None = None,
 
 
 def _method_modules(method: str) -> list[str]:
-    names = []
-    for stem in dict.fromkeys([method.replace("-", ""), method.replace("-", "_")]):
-        if stem.isidentifier():
-            names += [f"shipid.methods.{stem}", f"shipid.methods.{stem}.report"]
-    return names
+    info = method_registry.for_result(method)
+    return [] if info is None else [info.package, f"{info.package}.report"]
 
 
 def load_method_sections(method: str) -> list[str]:
     """Import the method's own modules so that their ``register_section`` calls run.
 
-    Tries ``shipid.methods.<m>`` and ``shipid.methods.<m>.report`` where ``<m>`` is
-    the method name without ``-`` or with ``_`` (``mass-cm`` -> ``masscm``/``mass_cm``).
-    Returns messages for modules that exist but failed to import (shown in the report).
+    Imports the package that :mod:`shipid.registry` names for ``method`` (a
+    ``Result.method`` value) and its ``report`` module. Returns messages for modules that exist but failed to import (shown in the report).
     """
-    import importlib
-    import importlib.util
-
     problems = []
     for mod in _method_modules(method):
         try:
@@ -124,7 +121,7 @@ def load_method_sections(method: str) -> list[str]:
 
 def sections_for(method: str) -> list[tuple[str, SectionFn]]:
     """The ``(title, fn)`` pairs for ``method``: defaults, then the method's own, then ``"*"``."""
-    import shipid.report.sections  # noqa: F401  (registers the defaults)
+    load_method_sections(method)
     own = _REGISTRY.get(method, [])
     ordered = [e for e in own if e[2]] + [e for e in own if not e[2]] + list(_REGISTRY.get("*", []))
     return [(title, fn) for title, fn, _d in ordered]

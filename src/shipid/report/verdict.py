@@ -20,6 +20,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from shipid import registry as method_registry
 from shipid.report.formatting import fmt_num
 
 esc = html.escape
@@ -102,27 +103,19 @@ def _coverage_text(result) -> tuple[str, str]:
 
 
 def known_coverage(method: str) -> Mapping | None:
-    """A coverage study the method publishes as ``COVERAGE`` in its module (``shipid.methods.<m>``).
+    """A coverage study the method publishes as ``COVERAGE`` (through :mod:`shipid.registry`).
 
     The mapping holds ``coverage`` (fraction of runs whose ±2 SE interval held the true value),
     ``n`` (runs), optionally ``nominal``, ``note`` and ``source`` (the study that produced it).
     """
-    import importlib
-
-    for stem in dict.fromkeys([method.replace("-", ""), method.replace("-", "_")]):
-        if not stem.isidentifier():
-            continue
-        try:
-            mod = importlib.import_module(f"shipid.methods.{stem}")
-        except Exception:  # noqa: BLE001 - no module, no published study
-            continue
-        cov = getattr(mod, "COVERAGE", None)
-        if isinstance(cov, Mapping) and cov:
-            out = dict(cov)
-            if out.get("source"):
-                out["note"] = "; ".join(x for x in (str(out.get("note") or ""), f"source: {out['source']}") if x)
-            return out
-    return None
+    info = method_registry.for_result(method)
+    cov = None if info is None else info.coverage
+    if not cov:
+        return None
+    out = dict(cov)
+    if out.get("source"):
+        out["note"] = "; ".join(x for x in (str(out.get("note") or ""), f"source: {out['source']}") if x)
+    return out
 
 
 def _validation_text(result) -> list[str]:

@@ -8,7 +8,7 @@ with this module in its preload list and, in the environment variable
 imports, numba kernels loaded from the disk cache, datasets a task caches per process.
 Every worker forked afterwards starts with all of it in memory, instead of each
 worker paying it again (about 1.6 s per worker for the Table-3 study of
-:mod:`shipid.methods.masscm_study`, i.e. 4 % of a 2-worker 10 000-run campaign).
+:mod:`shipid.methods.masscm.study`, i.e. 4 % of a 2-worker 10 000-run campaign).
 
 A warm-up must not change any run's numbers (tasks are functions of their
 arguments only, see :mod:`shipid.studies.engine`); it only moves work earlier.

@@ -1,11 +1,8 @@
-"""Default report sections of the three methods.
+"""Helpers of the methods' report sections (:mod:`shipid.report.sections._util`).
 
-Each module registers, for its method, a section that presents the entries the
-method is expected to carry under the report convention (see :mod:`shipid.report`)
-with the caption of the paper figure or table they reproduce. They only draw
-what is present; a method's own sections (``register_section``) come after.
+Each method's ``shipid.methods.<m>.report`` module registers, for its method, a default section that
+presents the entries the method is expected to carry under the report convention (see
+:mod:`shipid.report`) with the caption of the paper figure or table they reproduce; they are loaded
+through :mod:`shipid.registry` when a report of that method is built. They only draw what is present;
+a method's own further sections (``register_section``) come after.
 """
-
-from __future__ import annotations
-
-from shipid.report.sections import dp, ebm, masscm  # noqa: F401  (registration side effects)

@@ -1,0 +1,256 @@
+"""DP identification commands (seed 001, Fossen, Sagatun & Sørensen 1996).
+
+``shipid identify dp --surge S1.csv S2.csv --sway-yaw Y1.csv Y2.csv --azimuth A1.csv A2.csv``
+``shipid study dp-supply [--seed S]`` and
+``shipid study dp-coverage --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR] [--json]``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import click
+import numpy as np
+
+from shipid.cli import CONTEXT, identify, study
+from shipid.cli._common import loud, strict_option
+from shipid.cli.campaign_cmds import campaign_options
+from shipid.errors import ShipidError
+
+#: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
+REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
+
+
+class _ManyValues(click.Option):
+    """An option that takes every following argument up to the next option: ``--surge a.csv b.csv``.
+
+    It may also be repeated (``--surge a.csv --surge b.csv``); all files are collected.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("multiple", True)
+        super().__init__(*args, **kwargs)
+        self._prev = None
+        self._parser_opt = None
+
+    def add_to_parser(self, parser, ctx):
+        ret = super().add_to_parser(parser, ctx)
+        for name in self.opts:
+            opt = parser._long_opt.get(name) or parser._short_opt.get(name)
+            if opt is not None:
+                self._parser_opt = opt
+                self._prev = opt.process
+                prefixes = tuple(parser._opt_prefixes) if hasattr(parser, "_opt_prefixes") else ("-",)
+
+                def process(value, state, _prev=self._prev, _prefixes=prefixes):
+                    vals = [value]
+                    while state.rargs and not state.rargs[0].startswith(_prefixes):
+                        vals.append(state.rargs.pop(0))
+                    for v in vals:
+                        _prev(v, state)
+
+                opt.process = process
+                break
+        return ret
+
+
+def _read(paths, kind):
+    from shipid.data.io import read_trial
+
+    if not paths:
+        raise ShipidError(f"no {kind} trials given (--{kind} FILE [FILE ...])")
+    return [read_trial(p, required=REQUIRED, manoeuvre=f"dp-{kind}") for p in paths]
+
+
+def _print_table(result, theta_true=None) -> None:
+    from shipid.models.dp import THETA_MEANING, THETA_NAMES
+
+    head = f"{'param':8s} {'meaning':32s} {'estimate':>11s} {'std':>10s}"
+    if theta_true is not None:
+        head += f" {'true':>11s} {'error %':>8s} {'err/std':>8s}"
+    click.echo(head)
+    for i, nm in enumerate(THETA_NAMES):
+        e = result.estimates[nm]
+        line = f"{nm:8s} {THETA_MEANING[nm]:32s} {e.value:11.4e} {e.std:10.2e}"
+        if theta_true is not None:
+            tt = theta_true[i]
+            line += f" {tt:11.4e} {100 * (e.value - tt) / abs(tt):8.2f} {(e.value - tt) / e.std:8.2f}"
+        click.echo(line)
+    m = result.model
+    np.set_printoptions(precision=4, suppress=False, linewidth=110)
+    click.echo("A_h'' (eq. 48 form) =\n" + str(np.asarray(m["A_h"])))
+    click.echo("K'' diag (eq. 49 form) = " + str(np.asarray(m["K"])))
+    click.echo("A'' = M''^-1 A_h M'' (eq. 51 form) =\n" + str(np.asarray(m["A"])))
+    click.echo("B'' = M''^-1 T'' K'' (eq. 52 form) =\n" + str(np.asarray(m["B"])))
+    d = result.diagnostics
+    for name, st in d["stages"].items():
+        nis = ", ".join(f"{v:.2f}" for v in st["nis_mean"])
+        click.echo(f"{name}: converged={st['converged']} settled={st['settled']} trials={len(st['samples'])} "
+                   f"samples={st['samples']} NIS mean=[{nis}] (dof {st['nis_dof'][0]}) {st['seconds']:.1f} s")
+        if not st["settled"]:
+            click.echo(f"{name}: NOT SETTLED -- the std of its parameters are unreliable")
+        if "noise" in st:
+            click.echo(f"{name} noise (estimated): " + "; ".join(
+                f"{k} = {v['value']:.3g} +- {v['std']:.2g} {v['unit'].split(' ')[0]} ({v['scale_vs_nominal']:.2f} x nominal)"
+                for k, v in st["noise"].items()))
+    if d.get("covariance"):
+        click.echo(f"std: {d['covariance']}")
+    # the warnings follow on stderr, one line each (shipid.cli._common.loud)
+
+
+@identify.command("dp", context_settings=CONTEXT)
+@click.option("--surge", cls=_ManyValues, type=click.Path(), help="Uncoupled surge trial files (SI1).")
+@click.option("--sway-yaw", "sway_yaw", cls=_ManyValues, type=click.Path(),
+              help="Coupled sway-yaw trial files (SI2).")
+@click.option("--azimuth", cls=_ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
+@click.option("--vessel", default="supply", show_default=True,
+              help="Packaged vessel giving M'', the thruster arms, L and m.")
+@click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")
+@click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg: the starting value (estimated from the data) [default 0.25].")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
+@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+              help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
+@click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
+@strict_option
+def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
+    """Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).
+
+    \b
+    Trial files: CSV/Parquet with t [s], x [m], y [m], psi [rad or deg],
+    p1..p6 [-] (pitch ratios P/D), alpha6 [rad or deg] (azimuth angle).
+    SI1 uses the surge trials, SI2 the sway-yaw trials, SI3 the azimuth trials;
+    each processes its trials in parallel (N >= 1) and freezes what the previous found.
+    Example: shipid identify dp --surge s1.csv s2.csv --sway-yaw y1.csv y2.csv --azimuth a1.csv a2.csv
+    """
+    from dataclasses import replace
+
+    from shipid.methods.dp.estimator import DPOptions, identify_dp
+    from shipid.models.dp import dp_vessel
+    from shipid.vessels import load_vessel
+
+    v = dp_vessel(load_vessel(vessel))
+    trials = {k: _read(p, k) for k, p in (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}
+    opt = DPOptions()
+    if sigma_pos is not None:
+        opt = replace(opt, sigma_pos=sigma_pos)
+    if sigma_psi is not None:
+        opt = replace(opt, sigma_psi=float(np.deg2rad(sigma_psi)))
+    _check_outputs(out, plot, force)
+    res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, opt,
+                      provenance={"inputs": [str(p) for p in (*surge, *sway_yaw, *azimuth)],
+                                  "command": "shipid identify dp"})
+    _emit(res, as_json, out, plot, force, trials=[tr for k in trials for tr in trials[k]])
+
+
+def _check_outputs(out, plot, force):
+    from pathlib import Path
+
+    from shipid.errors import OutputExistsError
+
+    for p in (out, plot):
+        if p is not None and Path(p).exists() and not force:
+            raise OutputExistsError(p)
+
+
+def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
+    loud(res, trials=trials)
+    if out is not None:
+        res.write_json(out, force=force)
+    if plot is not None:
+        from shipid.methods.dp.plot import plot_parameter_histories
+        plot_parameter_histories(res, plot, force=force)
+    if as_json:
+        click.echo(res.to_json())
+    else:
+        _print_table(res, theta_true)
+
+
+@study.command("dp-supply", context_settings=CONTEXT)
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")
+@click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
+@click.option("--trials", "n_trials", type=int, default=2, show_default=True,
+              help="Trials per manoeuvre (N of the parallel EKF).")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
+@click.option("--plot", type=click.Path(dir_okay=False), default=None,
+              help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
+@click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
+@strict_option
+def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
+    """Simulate the six trials of §4.2 for the supply vessel and identify it.
+
+    Truth: the paper's identified values (eqs. 48-49) with M'' (eq. 30) and T'' (eq. 29);
+    disturbances: earth-fixed current 0.3 m/s, a drifting bias, white force noise;
+    sensors: position 0.5 m, heading 0.25 deg (1 sigma), 1 Hz. Prints true vs estimated.
+    """
+    from shipid.methods.dp.estimator import identify_dp
+    from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
+    from shipid.models.dp import dp_vessel
+    from shipid.vessels import load_vessel
+
+    if seed < 0:
+        raise ShipidError(f"--seed must be >= 0, got {seed}")
+    if duration < 60 or n_trials < 1:
+        raise ShipidError("--duration must be >= 60 s and --trials >= 1")
+    _check_outputs(out, plot, force)
+    v = dp_vessel(load_vessel("supply"))
+    t0 = time.perf_counter()
+    noise = TrialNoise()
+    trials = simulate_dp_trials(v, seed, duration=duration, n_per_kind=n_trials, noise=noise)
+    t_sim = time.perf_counter() - t0
+    res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta,
+                      provenance={"seed": seed, "command": f"shipid study dp-supply --seed {seed}",
+                                  "noise": noise.as_dict(), "duration_s": duration, "trials_per_kind": n_trials})
+    res.diagnostics["simulation_seconds"] = t_sim
+    _emit(res, as_json, out, plot, force, theta_true=v.theta)
+
+
+@study.command("dp-coverage", context_settings=CONTEXT)
+@click.option("--runs", type=click.IntRange(min=1), default=24, show_default=True, help="Realisations.")
+@click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
+@click.option("--covariance", type=click.Choice(["observed", "ekf"]), default="observed", show_default=True,
+              help="observed: noise levels and std from the likelihood (default); ekf: the paper's P_theta.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary (and every run) as JSON.")
+@campaign_options
+def study_dp_coverage(runs, duration, covariance, as_json, campaign):
+    """Coverage of the DP std over realisations with unknown noise levels (issue 15).
+
+    Each run: the six trials of `study dp-supply` (1 Hz) with its own noise seed, measurement
+    noise (0.5 m, 0.2 deg) and process noise (white force, wandering bias) each scaled by a
+    factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
+    of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
+    """
+    import json
+    from dataclasses import replace
+
+    from shipid.cli.campaign_cmds import echo_campaign_summary
+    from shipid.methods.dp.coverage import summarise
+
+    if duration < 60:
+        raise ShipidError("--duration must be >= 60 s")
+    res = replace(campaign, progress=not as_json).run(
+        "shipid.methods.dp.coverage:run_one", runs, kwargs={"duration": duration, "covariance": covariance},
+        name=f"dp-coverage-{covariance}", warm_up="shipid.methods.dp.coverage:warm_up",
+        chunk_size=1)  # runs of ~30 s: each is stored as soon as it is done
+    outs = [r.outputs if r.status == "ok" else None for r in res.records]
+    s = summarise(outs)
+    s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
+    if as_json:
+        click.echo(json.dumps({"summary": s, "runs": outs}, indent=1, allow_nan=True))
+        return
+    echo_campaign_summary(res)
+    click.echo(f"dp-coverage: {s['ok']} realisations (seed {campaign.seed}), covariance {covariance}, "
+               f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
+               f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
+    click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "
+               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'no std':>6s} {'unreliable':>10s}")
+    for nm, p in s["parameters"].items():
+        click.echo(f"  {nm:8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
+                   f"{p['rms_error_over_std']:9.2f} {p['mean_rel_error_pct']:9.2f} {p['rms_rel_error_pct']:9.2f} "
+                   f"{p['max_abs_rel_error_pct']:9.2f} {p['no_std']:6d} {p['std_unreliable']:10d}")
+    if "pooled" in s:
+        p = s["pooled"]
+        click.echo(f"  {'pooled':8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
+                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {p['no_std']:6d}")
+    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses)")

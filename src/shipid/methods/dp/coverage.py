@@ -1,0 +1,131 @@
+"""Coverage study of the DP identification's standard deviations (seed 001, issue 15).
+
+Each realisation simulates the six trials of Fossen, Sagatun & Sørensen (1996) §4.2 that
+``shipid study dp-supply`` uses (surge ×2, sway–yaw ×2, azimuth ×2, 1 Hz; truth: the paper's
+θ of eqs. 48–49) with its own noise seed and its own noise levels, unknown to the estimator:
+
+* measurement noise: 0.5 m position and 0.2° heading (1σ) times a scale s_m,
+* process noise: white force noise q_h = 1e-8 and a *wandering* bias -- a first-order
+  Gauss–Markov process with correlation time 1800 s and stationary std 3e-4 m g
+  (:class:`~shipid.methods.dp.trials.TrialNoise` ``bias_tau``; the estimator models the bias as a
+  random walk, eq. 37, and assumes 0.25° heading noise), all times a scale s_p (intensities s_p²),
+
+with s_m and s_p drawn independently from {0.5, 1, 2}. :func:`identify_dp` is called with its
+defaults (it is told neither scale). :func:`summarise` reports, per θ, the coverage of ±1 and
+±2 std, the RMS of error/std, the bias and RMS of the relative error.
+
+Seeds: run ``i`` of a campaign with seed S draws from ``SeedSequence([S, i])``. The settings of
+the method (Hessian steps, settling threshold, the Newton iteration) were chosen on campaign
+seed 1, runs 0–5 (``--seed 1 --runs 6``); seed 2 was the first report (below), seed 3 is the
+suite's coverage tests; the current figures are from campaign seed 4, used for nothing else.
+
+Measured on the fresh seed 4 (``shipid study dp-coverage --runs 24 --seed 4 --workers 2``, 24
+realisations, 1200-s trials): pooled ±2-std coverage 0.949 over θ1…θ9 (±1 std 0.67), every
+estimate with a std (no unsettled scheme; in one realisation q_h of SI2 was held as not
+determined), per θ 0.875 (θ5)–1.00; RMS of error/std 1.01 (0.76–1.28 per θ, θ3 the largest);
+RMS relative error 0.6–3.7 % except θ3 (23 %), largest |error| θ2 12.9 %, θ3 49 %. θ1, θ2,
+θ4…θ9 all within 10 % in 23 of 24 realisations (θ2 12.9 % at scales 2/2), θ3 within 25 % in
+17 of 24. On seed 2 (before undetermined noise levels were held, :func:`shipid.methods.dp.pem._undetermined`)
+the figure was 0.917 over the estimates with a std and 0.866 counting the 12 without one
+(two realisations with measurement scale 2 whose SI2 Hessian was indefinite along q_h); both
+now settle with a finite std. Same seed-2 realisations with ``--covariance ekf`` (the EKF's
+P_θθ with assumed noise): pooled ±2-std coverage 0.72, RMS of error/std 2.24, 10 of 24 with
+an unsettled scheme.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+#: Noise scales drawn per realisation (separately for measurement and process noise).
+SCALES = (0.5, 1.0, 2.0)
+#: Nominal levels of the study's simulated trials (see the module docstring).
+SIGMA_POS = 0.5
+SIGMA_PSI_DEG = 0.2
+Q_H = 1e-8
+B0 = 3e-4
+BIAS_TAU = 1800.0
+
+
+def study_noise(s_m: float, s_p: float):
+    """The :class:`TrialNoise` of one realisation with measurement scale ``s_m``, process scale ``s_p``."""
+    from shipid.methods.dp.trials import TrialNoise
+
+    return TrialNoise(sigma_pos=SIGMA_POS * s_m, sigma_psi=float(np.deg2rad(SIGMA_PSI_DEG)) * s_m,
+                      q_h=Q_H * s_p ** 2, q_b=0.0, b0=B0 * s_p, bias_tau=BIAS_TAU)
+
+
+def run_one(i: int, seedseq, duration: float = 1200.0, trials: int = 2, covariance: str = "observed") -> dict:
+    """One realisation (campaign-engine task): simulate, identify, compare with the truth."""
+    from shipid.methods.dp.estimator import DPOptions, identify_dp
+    from shipid.methods.dp.trials import simulate_dp_trials
+    from shipid.models.dp import dp_vessel
+    from shipid.vessels import load_vessel
+
+    rng = np.random.default_rng(seedseq)
+    s_m = float(rng.choice(SCALES))
+    s_p = float(rng.choice(SCALES))
+    data_seed = int(rng.integers(0, 2 ** 31 - 1))
+    v = dp_vessel(load_vessel("supply"))
+    tr = simulate_dp_trials(v, data_seed, duration=duration, n_per_kind=trials, noise=study_noise(s_m, s_p))
+    t0 = time.perf_counter()
+    res = identify_dp(tr["surge"], tr["sway-yaw"], tr["azimuth"], v, DPOptions(covariance=covariance),
+                      theta_true=v.theta)
+    secs = time.perf_counter() - t0
+    d = res.diagnostics
+    noise = {st: {k: x["scale_vs_nominal"] for k, x in nz.items()} for st, nz in d.get("noise", {}).items()}
+    return {"s_m": s_m, "s_p": s_p, "data_seed": data_seed, "seconds": secs,
+            "theta": [res.estimates[f"theta{j}"].value for j in range(1, 10)],
+            "std": [res.estimates[f"theta{j}"].std for j in range(1, 10)],
+            "status": [res.estimates[f"theta{j}"].status for j in range(1, 10)],
+            "theta_true": v.theta.tolist(), "error_sigma": np.asarray(d["error_sigma"]).tolist(),
+            "relative_error": np.asarray(d["relative_error"]).tolist(),
+            "settled": {k: bool(s["settled"]) for k, s in d["stages"].items()},
+            "noise_scale_estimates": noise, "warnings": list(d["warnings"])}
+
+
+def summarise(outputs: list[dict | None]) -> dict:
+    """Per-θ coverage of ±1/±2 std, RMS of error/std, relative error; pooled over θ1…θ9.
+
+    Coverage and RMS are over the estimates that have a std (an unsettled scheme whose Hessian
+    is not positive definite reports none: counted in ``no_std``); ``cover_2sd_all`` counts
+    those as not covered.
+    """
+    ok = [o for o in outputs if o is not None]
+    n = len(ok)
+    out = {"runs": len(outputs), "ok": n, "failed": len(outputs) - n, "parameters": {}}
+    if not n:
+        return out
+    es = np.array([o["error_sigma"] for o in ok], dtype=float)
+    rel = np.array([o["relative_error"] for o in ok], dtype=float)
+    unrel = np.array([[s != "estimated" for s in o["status"]] for o in ok])
+    fin = np.isfinite(es)
+    for j in range(9):
+        e = es[fin[:, j], j]
+        out["parameters"][f"theta{j + 1}"] = {
+            "cover_1sd": float(np.mean(np.abs(e) <= 1.0)) if e.size else float("nan"),
+            "cover_2sd": float(np.mean(np.abs(e) <= 2.0)) if e.size else float("nan"),
+            "cover_2sd_all": float(np.sum(np.abs(e) <= 2.0) / n),
+            "rms_error_over_std": float(np.sqrt(np.mean(e ** 2))) if e.size else float("nan"),
+            "no_std": int(n - e.size),
+            "mean_rel_error_pct": float(100 * np.mean(rel[:, j])),
+            "rms_rel_error_pct": float(100 * np.sqrt(np.mean(rel[:, j] ** 2))),
+            "max_abs_rel_error_pct": float(100 * np.max(np.abs(rel[:, j]))),
+            "std_unreliable": int(unrel[:, j].sum())}
+    e = es[fin]
+    out["pooled"] = {"cover_1sd": float(np.mean(np.abs(e) <= 1.0)), "cover_2sd": float(np.mean(np.abs(e) <= 2.0)),
+                     "cover_2sd_all": float(np.sum(np.abs(e) <= 2.0) / es.size),
+                     "rms_error_over_std": float(np.sqrt(np.mean(e ** 2))), "no_std": int(es.size - e.size)}
+    out["unsettled_runs"] = int(sum(not all(o["settled"].values()) for o in ok))
+    out["seconds_per_identify"] = float(np.mean([o["seconds"] for o in ok]))
+    return out
+
+
+def warm_up(**_) -> None:
+    """Compile (or load) the likelihood kernels once before the runs."""
+    import shipid.methods.dp.loglik  # noqa: F401
+
+
+__all__ = ["SCALES", "study_noise", "run_one", "summarise", "warm_up"]

@@ -1,0 +1,607 @@
+"""DP ship identification of Fossen, Sagatun & Sørensen (1996), §4.2–4.4, end to end.
+
+Decoupled identification (Fig. 4), each scheme a parallel state-augmented EKF (eqs. 20–25,
+41–45) over its trials, each freezing what the previous one found:
+
+* **SI1** (surge trials): θ1 = A_h[1,1] and θ6 = K1 = K2 from the decoupled surge model
+  eqs. 31–32 in momentum form, ``ḣ_u = θ1 h_u + θ6 (u1 + u2) + b_u``, ``ṡ = h_u / m11``;
+* **SI2** (sway–yaw trials): θ2 … θ5 (sway–yaw block of A_h) and θ7 = K3 = K4, θ8 = K5
+  from the full momentum model eqs. 35–38 with θ1, θ6 frozen;
+* **SI3** (azimuth trials): θ9 = K6 with θ1 … θ8 frozen.
+
+Trial data are converted to the bis system (eqs. 26–28): ``t'' = t / sqrt(L/g)``,
+``x'' = x / L``, ``y'' = y / L``; the pitch ratios become the control vector of eq. 5.
+Measured are position and heading (eqs. 44–45).
+
+Surge measurement (a reading of eq. 32 for real trials): eq. 32 needs the distance run
+along the ship's x axis. It is computed from the position fixes as
+``s_k = Σ_j (Δx_j cos ψ̄_j + Δy_j sin ψ̄_j)`` (ψ̄_j the mean measured heading over the step),
+which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ + ẏ sin ψ = u``).
+
+Noise levels and standard deviations (default ``DPOptions.covariance = "observed"``): the
+EKF passes of a scheme only find a starting point. Then θ of the scheme and the noise levels
+-- the momentum process noise q_h (eq. 35), the bias random walk q_b (eq. 37), the position and
+heading noise (eqs. 44–45) -- are estimated together by maximising the innovation
+log-likelihood of the filter (prediction-error method, :mod:`shipid.methods.dp.pem`), and the
+reported covariance is the *observed information*: the inverse Hessian of the negative
+log-likelihood at its optimum (θ block, the noise levels' uncertainty included). The filter's
+own P_θθ assumes the noise known and ignores that the gain depends on θ; on data whose noise
+levels differed from the assumed ones by factors 0.5–2 it covered the error within ±2σ in
+44 % of cases (issue 15). The estimated noise levels are in ``diagnostics["noise"]`` (SI
+units). A noise level the data do not determine (at or next to the bound of its scale, or with
+a likelihood flat or concave along it, e.g. q_h under large measurement noise) is held at its
+optimum when the Hessian is formed, marked ``"determined": False`` and warned about; θ's std
+then comes from the rest of the Hessian. A scheme whose likelihood maximisation has not settled gets a line in
+``diagnostics["warnings"]`` and its parameters (and those of later schemes) the status
+``"std unreliable"``. ``covariance="ekf"`` is the paper's procedure (EKF estimate and P_θθ).
+
+Parameters frozen from an earlier scheme keep their values (as in the paper) but their
+uncertainty is carried into the later standard deviations: to first order through the
+sensitivity of the likelihood optimum to them (``"observed"``), or as Schmidt–Kalman consider
+states (``"ekf"``: in the augmented state with their covariance, zero gain); the reported
+9 × 9 covariance holds the cross-scheme correlations.
+
+Measured with ``covariance="ekf"`` (the EKF's σ) on simulated supply-vessel trials
+(``shipid study dp-supply --seed S``, default noise of :class:`shipid.methods.dp.trials.TrialNoise`, 10 seeds, commit of 2026-11-21):
+
+* 1200-s trials: every |error|/σ < 3 (RMS of error/σ 0.5–1.3 per parameter); θ1, θ2,
+  θ5 … θ9 within 5 % in 10/10 seeds (RMS error 0.4–2.5 %), θ4 in 9/10 (RMS 2.5 %), the weak
+  sway-yaw coupling θ3 in 3/10 (RMS 14 %, with a σ of about 12 %); 9/10 runs flagged converged.
+* 600-s trials: RMS errors 0.5–3.7 % except θ3 (14 %) and θ4 (6 %); one seed in ten had
+  |error|/σ of 5–6 for θ4 and θ7 although flagged converged: the state-augmented EKF can
+  settle at a point that fits worse than the truth (it ignores the dependence of the gain on
+  θ), and on short trials its σ is then too small.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import ConvergenceError, InputError
+from shipid.estimate.ekf_augmented import AugmentedModel, ParallelEKFResult, parallel_augmented_ekf, rk4_map
+from shipid.models import dp
+from shipid.models.thrusters import control_vector
+from shipid.report.convention import history, table
+from shipid.result import Estimate, Result
+
+#: Free parameters (0-based indices into θ1..θ9) of each scheme, Fig. 4 / eqs. 46–47.
+STAGES = {"SI1": (0, 5), "SI2": (1, 2, 3, 4, 6, 7), "SI3": (8,)}
+#: Trial kind used by each scheme.
+STAGE_KIND = {"SI1": "surge", "SI2": "sway-yaw", "SI3": "azimuth"}
+#: Generic starting values of θ1..θ9 (bis), not the paper's results: stable diagonal
+#: damping, no coupling, equal thrust coefficients.
+THETA_START = np.array([-0.05, -0.1, 0.0, 0.0, -0.1, 5e-3, 5e-3, 5e-3, 5e-3])
+#: Prior standard deviations of θ1..θ9 around the starting values.
+THETA_START_STD = np.array([0.05, 0.1, 0.1, 0.1, 0.2, 5e-3, 5e-3, 5e-3, 5e-3])
+
+
+@dataclass(frozen=True)
+class DPOptions:
+    """Noise model and priors of the DP identification (bis system unless stated).
+
+    Attributes
+    ----------
+    sigma_pos : float
+        Position measurement noise, m.
+    sigma_psi : float
+        Heading measurement noise, rad.
+    q_h : float
+        Intensity of the momentum process noise w_h (eq. 35), bis force² × bis time.
+    q_b : float
+        Intensity of the bias random walk w_b (eq. 37), bis force² per bis time.
+        For ``q_h``, ``q_b`` and ``b0_std`` the yaw component is scaled by ``yaw_arm``
+        (a moment arm in units of L: environmental moments are forces times a lever
+        much shorter than L).
+    yaw_arm : float
+        That lever, in L.
+    q_theta : float
+        Intensity of the parameter random walk w_θ (eq. 38) relative to the prior
+        variance, per bis time (0: constant parameters).
+    theta0, theta0_std : tuple of 9 floats
+        Starting values and prior standard deviations of θ1..θ9.
+    h0_std : float
+        Prior std of the initial momentum (bis).
+    b0_std : float
+        Prior std of the initial bias (bis force); 1e-3 m g ≈ 60 kN for the supply vessel,
+        a generous bound on the mean environmental force in DP-trial weather. A much wider
+        prior (3e-3 was tried) lets the early EKF steps trade thrust for bias and biases
+        the sway-yaw estimates (measured: error/σ up to 7 on single seeds).
+    current_states : bool
+        SI2/SI3: keep the current of eq. 8 as two earth-fixed states (see
+        :func:`shipid.models.dp.momentum_current_rhs`) besides the body bias b_h of eq. 35.
+        Off by default (the paper's model). Measured on simulated trials with a 0.3 m/s
+        current: without them b_h cannot follow the current force as the heading turns and
+        SI2 is biased; with them the product A_h·ν_c makes the EKF fragile (biased in about
+        half of the seeds tried). Neither is reliable with a strong current; prefer trials
+        in slack water.
+    current0_std : float
+        Prior std of each current component, m/s.
+    q_c : float
+        Intensity of the current random walk, (m/s)² per s.
+    passes : int
+        Filter passes per scheme. Pass j + 1 restarts from the final estimate of pass j
+        with the *same* prior covariance (so no information is counted twice); only the
+        point the EKF linearises about improves. With generic starting values one pass
+        leaves a transient bias from the early, badly linearised steps; two remove it.
+    covariance : {"observed", "ekf"}
+        ``"observed"`` (default): after the EKF passes, θ of the scheme and the noise
+        intensities (q_h, q_b, sigma_pos, sigma_psi, as scales on the values above, which are
+        then only starting points) are estimated by maximising the innovation likelihood
+        of the filter, and the reported covariance is the observed information
+        (:mod:`shipid.methods.dp.pem`). ``"ekf"``: the paper's procedure, the EKF's final
+        estimate and P_θθ with the noise levels above taken as known. ``current_states``
+        always uses ``"ekf"``.
+    """
+
+    sigma_pos: float = 0.5
+    sigma_psi: float = float(np.deg2rad(0.25))
+    q_h: float = 1e-8
+    q_b: float = 1e-10
+    yaw_arm: float = 0.1
+    q_theta: float = 0.0
+    theta0: tuple = tuple(THETA_START)
+    theta0_std: tuple = tuple(THETA_START_STD)
+    h0_std: float = 0.05
+    b0_std: float = 1e-3
+    current_states: bool = False
+    current0_std: float = 0.5
+    q_c: float = 1e-7
+    passes: int = 2
+    covariance: str = "observed"
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class StageResult:
+    """One identification scheme: its free parameters and its parallel-EKF result."""
+
+    name: str
+    free: tuple[int, ...]
+    ekf: ParallelEKFResult
+    t: np.ndarray
+    theta_full: np.ndarray
+    seconds: float
+    diagnostics: dict = field(default_factory=dict)
+    est: tuple[int, ...] = ()
+    theta_cov: np.ndarray | None = None
+
+    @property
+    def free_theta(self) -> np.ndarray:
+        """History of the free parameters, ``(n, len(free))``."""
+        return self.ekf.theta[:, [self.est.index(i) for i in self.free]]
+
+    @property
+    def free_std(self) -> np.ndarray:
+        return self.ekf.theta_std[:, [self.est.index(i) for i in self.free]]
+
+
+# ---------------------------------------------------------------------------------------------
+# Data preparation
+# ---------------------------------------------------------------------------------------------
+def _prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
+    """Bis time, measurements and inputs of one trial."""
+    need = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6"]
+    trial.require(need, method="identify dp")
+    b = vessel.bis
+    t = trial.t
+    if t.size < 10:
+        raise InputError(f"too short for identification ({t.size} samples)", file=trial.meta.get("source"))
+    tb = b.t_to_bis(t - t[0])
+    src = trial.meta.get("source")
+    P = trial.stack([f"p{i}" for i in range(1, 7)])
+    alpha = trial["alpha6"] if "alpha6" in trial else np.full(t.size, np.pi / 2)
+    for j, col in enumerate(list(P.T) + [alpha]):
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:  # inputs drive the model: no gaps allowed (measurements may have gaps)
+            name = f"p{j + 1}" if j < 6 else "alpha6"
+            raise InputError("missing input value (fill or trim the gap first)", file=src, channel=name,
+                             row=int(bad[0]) + 1)
+    U = np.column_stack([control_vector(P, vessel.p0), alpha])
+    x, y, psi = trial["x"], trial["y"], trial["psi"]
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+    if ok.sum() < 10:
+        raise InputError(f"too few position/heading fixes ({int(ok.sum())})", file=src)
+    idx = np.flatnonzero(ok)
+    if kind == "surge":
+        # distance run along the heading between consecutive fixes (gaps are bridged):
+        # mean of two headings taken across the ±π cut
+        pk = psi[idx]
+        c = pk[:-1] + 0.5 * np.arctan2(np.sin(pk[1:] - pk[:-1]), np.cos(pk[1:] - pk[:-1]))
+        sk = np.concatenate([[0.0], np.cumsum(np.diff(x[idx]) * np.cos(c) + np.diff(y[idx]) * np.sin(c))])
+        Z = np.full((t.size, 1), np.nan)
+        Z[idx, 0] = sk / b.L
+    else:
+        Z = np.full((t.size, 3), np.nan)
+        Z[idx] = np.column_stack([x[idx] / b.L, y[idx] / b.L, np.unwrap(psi[idx])])
+    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0])}
+
+
+class _RK4Discrete:
+    """Discrete f and Φ of one trial by :func:`rk4_map` over its own (bis) sample intervals, cached."""
+
+    def __init__(self, fc, jc, t: np.ndarray):
+        self.fc, self.jc = fc, jc
+        self.dt = np.diff(t)
+        self._key = None
+        self._val = None
+
+    def _eval(self, k, x, u, th):
+        key = (k, x.tobytes(), th.tobytes())
+        if key != self._key:
+            self._val = rk4_map(self.fc, self.jc, x, u, th, self.dt[k])
+            self._key = key
+        return self._val
+
+    def f(self, k, x, u, th):
+        return self._eval(k, x, u, th)[0]
+
+    def jac(self, k, x, u, th):
+        v = self._eval(k, x, u, th)
+        return v[1], v[2]
+
+
+def _wrap_last(z: np.ndarray, zp: np.ndarray) -> np.ndarray:
+    d = z - zp
+    d[-1] = np.arctan2(np.sin(d[-1]), np.cos(d[-1]))
+    return d
+
+
+def _surge_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray):
+    """Eqs. 31–32 in momentum form; state [h_u, s, b_u]."""
+    m11 = vessel.M[0, 0]
+    free = list(free)
+
+    def full(th):
+        out = theta_full.copy()
+        out[free] = th
+        return out
+
+    def fc(x, u, th):
+        f = full(th)
+        return np.array([f[0] * x[0] + f[5] * (u[0] + u[1]) + f[8] * np.cos(u[6]) * u[5] + x[2], x[0] / m11, 0.0])
+
+    def jc(x, u, th):
+        f = full(th)
+        A = np.array([[f[0], 0.0, 1.0], [1.0 / m11, 0.0, 0.0], [0.0, 0.0, 0.0]])
+        Bfull = np.zeros((3, 9))
+        Bfull[0, 0] = x[0]
+        Bfull[0, 5] = u[0] + u[1]
+        Bfull[0, 8] = np.cos(u[6]) * u[5]
+        return A, Bfull[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.array([[0.0, 1.0, 0.0]])
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[1:2], nx=3, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((1, len(free)))))
+
+
+def _momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray,
+                    current: bool = True):
+    """Eqs. 35–38 (ERRATA readings); state [h, η, b_h] (+ [V_x, V_y] bis with ``current``)."""
+    M, Minv, arms = vessel.M, vessel.Minv, vessel.arms
+    free = list(free)
+    rhs = dp.momentum_current_rhs if current else dp.momentum_rhs
+    rjac = dp.momentum_current_jacobian if current else dp.momentum_jacobian
+    nx = 11 if current else 9
+
+    cache: dict = {}
+
+    def mats(th):
+        key = th.tobytes()
+        if key not in cache:
+            cache.clear()
+            out = theta_full.copy()
+            out[free] = th
+            cache[key] = dp.matrices_from_theta(out)
+        return cache[key]
+
+    def fc(x, u, th):
+        A_h, K = mats(th)
+        return rhs(x, u[:6], u[6], M, Minv, A_h, K, arms)
+
+    def jc(x, u, th):
+        A_h, K = mats(th)
+        Fx, Ft = rjac(x, u[:6], u[6], M, Minv, A_h, K, arms)
+        return Fx, Ft[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.zeros((3, nx))
+    H[:, 3:6] = np.eye(3)
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[3:6], nx=nx, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((3, len(free)))), residual=_wrap_last)
+
+
+# ---------------------------------------------------------------------------------------------
+# One scheme
+# ---------------------------------------------------------------------------------------------
+def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_full: np.ndarray,
+              options: DPOptions = DPOptions(), *, free: Sequence[int] | None = None,
+              theta_cov: np.ndarray | None = None, noise_start: dict | None = None) -> StageResult:
+    """Run one identification scheme (SI1, SI2 or SI3) as a parallel augmented EKF over ``trials``.
+
+    Parameters
+    ----------
+    name : {"SI1", "SI2", "SI3"}
+    trials : sequence of Trial
+        N ≥ 1 trials of the scheme's kind (processed in parallel, eqs. 20–25).
+    vessel : DPVessel
+        Supplies M'', T'' arms, p0 and the bis scales (its A_h and K are not used).
+    theta_full : ndarray (9,)
+        Current values of θ1..θ9: the frozen ones are used as they are, the free ones are
+        the starting values.
+    options : DPOptions
+    free : sequence of int, optional
+        Free parameter indices (default :data:`STAGES`\\[name]).
+    theta_cov : ndarray (9, 9), optional
+        Covariance of the parameters found by earlier schemes (zero rows for the others).
+        Those parameters are frozen at their values as the paper does, but *considered*
+        (Schmidt–Kalman, see :func:`shipid.estimate.ekf_augmented.augmented_ekf`): their
+        uncertainty is carried into the standard deviations of this scheme's parameters.
+    noise_start : dict, optional
+        Noise log-scales found by an earlier scheme (``diagnostics["noise_log_scales"]``):
+        the EKF passes run with them and the likelihood maximisation starts from them.
+    """
+    if not trials:
+        raise InputError(f"{name} needs at least one {STAGE_KIND[name]} trial")
+    free = tuple(STAGES[name] if free is None else free)
+    kind = STAGE_KIND[name]
+    base_options = options
+    pem_on = options.covariance == "observed" and not options.current_states
+    if options.covariance not in ("observed", "ekf"):
+        raise InputError(f"unknown covariance {options.covariance!r} (observed, ekf)")
+    data = [_prepare(tr, vessel, kind) for tr in trials]
+    ns = dict(noise_start or {})
+    if pem_on:
+        from shipid.methods.dp.pem import measurement_log_scales
+
+        ns.update(measurement_log_scales(kind, data, vessel, options))
+    if pem_on and ns:
+        options = replace(options, q_h=options.q_h * np.exp(2 * ns.get("q_h", 0.0)),
+                          q_b=options.q_b * np.exp(2 * ns.get("q_b", 0.0)),
+                          sigma_pos=options.sigma_pos * np.exp(ns.get("sigma_pos", 0.0)),
+                          sigma_psi=options.sigma_psi * np.exp(ns.get("sigma_psi", 0.0)))
+    b = vessel.bis
+    relevant = (0, 5, 8) if kind == "surge" else tuple(range(9))
+    cov_prev = np.zeros((9, 9)) if theta_cov is None else np.asarray(theta_cov, dtype=float)
+    consider = [i for i in relevant if i not in free and cov_prev[i, i] > 0]
+    est = sorted(set(free) | set(consider))
+    fpos = [est.index(i) for i in free]
+    cpos = [est.index(i) for i in consider]
+    th0 = np.asarray(theta_full, dtype=float)[est]
+    std0 = np.asarray(options.theta0_std, dtype=float)[list(free)]
+    P0t = cov_prev[np.ix_(est, est)].copy()
+    P0t[fpos, :] = 0.0
+    P0t[:, fpos] = 0.0
+    P0t[fpos, fpos] = std0 ** 2
+    if kind == "surge":
+        models = [_surge_model(vessel, np.asarray(theta_full, float), est, d["t"]) for d in data]
+        x0 = [np.array([0.0, d["Z"][d["first"], 0], 0.0]) for d in data]
+        sp = options.sigma_pos / b.L
+        P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
+        R = np.array([[sp ** 2]])
+
+        def make_Q(dt):
+            return lambda k: np.diag([options.q_h * dt[k], 0.0, options.q_b * dt[k]])
+    else:
+        cur = options.current_states
+        models = [_momentum_model(vessel, np.asarray(theta_full, float), est, d["t"], cur) for d in data]
+        nc = 2 if cur else 0
+        x0 = [np.concatenate([np.zeros(3), d["Z"][d["first"]], np.zeros(3 + nc)]) for d in data]
+        sp = options.sigma_pos / b.L
+        c0 = options.current0_std / b.speed
+        qc = options.q_c / b.speed ** 2 * b.time  # (m/s)²/s → bis speed² per bis time
+        a2 = np.array([1.0, 1.0, options.yaw_arm ** 2])
+        P0x = np.diag(np.concatenate([[options.h0_std ** 2] * 3, [sp ** 2, sp ** 2, options.sigma_psi ** 2],
+                                      options.b0_std ** 2 * a2, [c0 ** 2] * nc]))
+        R = np.diag([sp ** 2, sp ** 2, options.sigma_psi ** 2])
+
+        def make_Q(dt):
+            return lambda k: np.diag(np.concatenate([options.q_h * dt[k] * a2, np.zeros(3),
+                                                     options.q_b * dt[k] * a2, [qc * dt[k]] * nc]))
+    Qx = [make_Q(np.diff(d["t"])) for d in data]
+    # parameter random walk, eq. 38 (per step, with the mean bis step of the first trial)
+    dtm = float(np.mean(np.diff(data[0]["t"])))
+    Qt = np.zeros((len(est), len(est)))
+    Qt[fpos, fpos] = options.q_theta * std0 ** 2 * dtm
+    t0 = time.perf_counter()
+    history = []
+    for j in range(max(1, options.passes)):
+        try:
+            ekf = parallel_augmented_ekf(models[0], x0, th0, P0x, P0t, Qx, Qt, R, [d["Z"] for d in data],
+                                         [d["U"] for d in data], models=models, consider_theta=cpos)
+        except ConvergenceError as err:
+            raise ConvergenceError(f"{name} (pass {j + 1}): {err}") from None
+        history.append(ekf.theta_final[fpos].tolist())
+        th0 = ekf.theta_final.copy()
+    pem = None
+    if pem_on:
+        from shipid.methods.dp.pem import StageLikelihood, noise_report, pem_stage
+
+        lik = StageLikelihood(kind, data, vessel, base_options)
+        a0 = np.array([ns.get(k, 0.0) for k in lik.noise_names])
+        th_start = np.asarray(theta_full, dtype=float).copy()
+        th_start[list(free)] = ekf.theta_final[fpos]
+        scale = np.maximum(ekf.theta_std[-1, fpos], 1e-6 * np.abs(th_start[list(free)]) + 1e-12)
+        pem = pem_stage(lik, th_start, list(free), scale, consider, cov_prev, a0)
+    secs = time.perf_counter() - t0
+    longest = int(np.argmax([d["t"].size for d in data]))
+    t_si = b.t_from_bis(data[longest]["t"])
+    full = np.asarray(theta_full, dtype=float).copy()
+    full[list(free)] = ekf.theta_final[fpos]
+    cov = cov_prev.copy()
+    cov[np.ix_(est, est)] = ekf.theta_cov[-1]
+    diag = _stage_diagnostics(ekf.theta[:, fpos], ekf.theta_std[:, fpos], ekf, std0,
+                              [d["Z"].shape[1] for d in data])
+    if pem is not None:
+        full[list(free)] = pem.theta
+        cov = cov_prev.copy()
+        fl = list(free)
+        cov[np.ix_(fl, fl)] = pem.cov_free
+        if consider:
+            cov[np.ix_(fl, consider)] = pem.cross
+            cov[np.ix_(consider, fl)] = pem.cross.T
+        informative = bool(np.all(np.sqrt(np.diag(pem.cov_free)) < 0.5 * std0))
+        diag.update({"ekf_settled": diag["settled"], "settled": pem.settled, "informative": informative,
+                     "converged": pem.settled and informative, "loglik": pem.loglik, "pem": pem.diagnostics,
+                     "covariance": "observed information: inverse Hessian of the innovation log-likelihood "
+                                   "over (theta, noise log-scales), plus the considered parameters' share",
+                     "noise_log_scales": dict(zip(lik.noise_names, pem.log_scales.tolist())),
+                     "noise": noise_report(lik, pem, vessel)})
+    else:
+        diag["covariance"] = "EKF P_theta_theta after the last pass (noise levels assumed known)"
+    diag["considered"] = [dp.THETA_NAMES[i] for i in consider]
+    diag["trials"] = [d["source"] for d in data]
+    diag["samples"] = [int(d["t"].size) for d in data]
+    diag["seconds"] = secs
+    diag["passes"] = history
+    return StageResult(name=name, free=free, ekf=ekf, t=t_si, theta_full=full, seconds=secs, diagnostics=diag,
+                       est=tuple(est), theta_cov=cov)
+
+
+def _stage_diagnostics(th: np.ndarray, sd: np.ndarray, ekf: ParallelEKFResult, std0: np.ndarray,
+                       nz: list[int]) -> dict:
+    """Convergence and consistency checks of one scheme.
+
+    *settled*: over the last quarter of the run no estimate strayed more than 2 σ (its σ
+    at the time) from its final value; *informative*: every final σ is below half its
+    prior σ. ``converged`` requires both. NIS means should be near the number of
+    measured channels (χ² consistency); reported, not gated.
+    """
+    n = th.shape[0]
+    q = int(0.75 * n)
+    dev = np.max(np.abs(th[q:] - th[-1]) / sd[q:], axis=0)
+    settled = bool(np.all(dev < 2.0))
+    informative = bool(np.all(sd[-1] < 0.5 * std0))
+    nis_mean = [float(np.nanmean(v)) for v in ekf.nis]
+    return {"converged": settled and informative, "settled": settled, "informative": informative,
+            "max_late_deviation_sigma": dev.tolist(), "nis_mean": nis_mean, "nis_dof": nz,
+            "loglik": ekf.loglik, "iterations": int(n)}
+
+
+# ---------------------------------------------------------------------------------------------
+# The pipeline
+# ---------------------------------------------------------------------------------------------
+def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequence[Trial],
+                vessel: dp.DPVessel, options: DPOptions = DPOptions(), *,
+                theta_true: np.ndarray | None = None, provenance: dict | None = None) -> Result:
+    """Identify θ1..θ9 of a DP vessel by SI1 → SI2 → SI3 (Fossen et al. 1996 §4.3, Fig. 4).
+
+    Parameters
+    ----------
+    surge, sway_yaw, azimuth : sequence of Trial
+        The trials of the three manoeuvres (N ≥ 1 each; the paper uses N = 2). Channels
+        ``x, y, psi, p1..p6`` and ``alpha6`` (SI).
+    vessel : DPVessel
+        Known quantities: M'' (eq. 30), the thruster arms (eq. 29), p0 and L, m, g.
+    options : DPOptions
+    theta_true : ndarray, optional
+        Known truth (simulation studies): stored in the result next to the estimates.
+
+    Returns
+    -------
+    Result
+        ``estimates``: θ1..θ9 (bis) with std; ``model``: A_h, K, A'', B'' (eqs. 48–52 form),
+        M'', T''; ``series``: parameter histories of every scheme (Fig. 8);
+        ``diagnostics``: per-scheme convergence, NIS, log-likelihood, run times.
+    """
+    theta = np.asarray(options.theta0, dtype=float).copy()
+    cov = np.zeros((9, 9))
+    stages: list[StageResult] = []
+    noise: dict = {}
+    for name, trials in (("SI1", surge), ("SI2", sway_yaw), ("SI3", azimuth)):
+        st = run_stage(name, trials, vessel, theta, options, theta_cov=cov, noise_start=noise)
+        theta, cov = st.theta_full, st.theta_cov
+        noise = {**noise, **st.diagnostics.get("noise_log_scales", {})}
+        stages.append(st)
+    res = _result(stages, vessel, options, theta_true, provenance or {})
+    from shipid.methods.dp.series import attach  # report series: innovations with σ, inputs (issue 8)
+    attach(res, stages, vessel, surge, sway_yaw, azimuth)
+    return res
+
+
+def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, theta_true, provenance) -> Result:
+    theta = stages[-1].theta_full
+    cov = stages[-1].theta_cov
+    std = np.sqrt(np.diag(cov))
+    std[std == 0] = np.nan
+    where = {i: st.name for st in stages for i in st.free}
+    unsettled = {st.name for st in stages if not st.diagnostics["settled"]}
+    estimates = {}
+    for i, nm in enumerate(dp.THETA_NAMES):
+        sname = where.get(i, "?")
+        # a scheme that has not settled (or that a scheme built on inherits from) gives no reliable std
+        bad = sname in unsettled or any(s.name in unsettled for s in stages if s.name < sname)
+        note = f"{dp.THETA_MEANING[nm]}; {sname}"
+        if bad:
+            note += "; std unreliable: " + ", ".join(sorted(n for n in unsettled if n <= sname)) + " has not settled"
+        estimates[nm] = Estimate(value=float(theta[i]), std=float(std[i]), unit="- (bis)",
+                                 status="std unreliable" if bad else "estimated", note=note)
+    A_h, K = dp.matrices_from_theta(theta)
+    T = vessel.T(np.pi / 2)
+    model = {
+        "family": "dp-momentum (Fossen, Sagatun & Sorensen 1996 eqs. 35-38)",
+        "vessel": vessel.name, "units": "bis system (L, m, sqrt(L/g))",
+        "L": vessel.bis.L, "m": vessel.bis.m, "g": vessel.bis.g,
+        "theta_names": list(dp.THETA_NAMES),
+        "A_h": A_h, "K": K, "A": dp.derived_A(vessel.M, A_h), "B": dp.derived_B(vessel.M, T, K),
+        "M": vessel.M, "T": T, "D": -A_h @ vessel.M,
+        "theta": theta, "theta_std": std,
+    }
+    diagnostics = {"converged": all(st.diagnostics["converged"] for st in stages),
+                   "iterations": int(sum(st.diagnostics["iterations"] for st in stages)),
+                   "stages": {st.name: st.diagnostics for st in stages},
+                   "seconds": float(sum(st.seconds for st in stages)), "warnings": []}
+    for st in stages:
+        if not st.diagnostics["settled"]:
+            names = ", ".join(f"theta{i + 1}" for i in st.free)
+            diagnostics["warnings"].append(f"{st.name}: parameter estimate has not settled; std of {names} "
+                                           f"unreliable (see diagnostics.stages.{st.name})")
+        elif not st.diagnostics["converged"]:
+            diagnostics["warnings"].append(f"{st.name}: parameter estimate gained little information "
+                                           f"(see diagnostics.stages.{st.name})")
+        for k, v in st.diagnostics.get("noise", {}).items():
+            if v["at_bound"]:
+                diagnostics["warnings"].append(f"{st.name}: noise level {k} not determined by the data "
+                                               f"(held at {v['scale_vs_nominal']:.3g} x nominal)")
+    diagnostics["noise"] = {st.name: st.diagnostics["noise"] for st in stages if "noise" in st.diagnostics}
+    diagnostics["covariance"] = stages[-1].diagnostics.get("covariance", "")
+    if theta_true is not None:
+        tt = np.asarray(theta_true, dtype=float)
+        diagnostics["theta_true"] = tt
+        diagnostics["error"] = theta - tt
+        diagnostics["error_sigma"] = (theta - tt) / std
+        diagnostics["relative_error"] = (theta - tt) / np.abs(tt)
+    hist = {}
+    for st in stages:
+        for j, i in enumerate(st.free):
+            nm = dp.THETA_NAMES[i]
+            hist[nm] = history(st.t, st.free_theta[:, j], st.free_std[:, j], "- (bis)",
+                               true=None if theta_true is None else float(theta_true[i]),
+                               label=f"θ{i + 1}'' = {dp.THETA_MEANING[nm]} ({st.name})", paper="Fig. 8")
+    series = {"histories": hist}
+    if theta_true is not None:
+        rows = [[nm, float(theta_true[i]), float(theta[i]), float(std[i]),
+                 float(100 * (theta[i] - theta_true[i]) / abs(theta_true[i])),
+                 float((theta[i] - theta_true[i]) / std[i])] for i, nm in enumerate(dp.THETA_NAMES)]
+        series["tables"] = {"true_vs_estimated": table(
+            ["parameter", "true", "estimate", "std", "error %", "error / std"], rows,
+            caption="simulated trials: true θ (eqs. 48-49) vs estimated")}
+    prov = {"options": options.as_dict()}
+    prov.update(provenance)
+    return Result(method="dp", estimates=estimates, model=model, covariance=cov,
+                  covariance_names=list(dp.THETA_NAMES), diagnostics=diagnostics, series=series,
+                  provenance=prov)
+
+
+#: The last coverage study of the stated std (read by the report's verdict panel): fresh seed, 24 realisations
+#: with unknown noise scales; every estimate had a std. RMS of error/std 1.01 pooled.
+COVERAGE = {"coverage": 0.949, "n": 24, "nominal": 0.954, "note": "pooled over theta1..theta9; lowest theta5 at "
+            "0.875", "source": "shipid study dp-coverage --runs 24 --seed 4 --workers 2"}
+__all__ = ["COVERAGE", "STAGES", "STAGE_KIND", "DPOptions", "StageResult", "run_stage", "identify_dp"]

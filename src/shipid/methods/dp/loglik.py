@@ -1,0 +1,284 @@
+"""Compiled (numba) innovation log-likelihood of the DP models at fixed parameters (seed 001).
+
+Fossen, Sagatun & Sørensen (1996): with θ fixed, the state-augmented filter of Table 1 on the
+momentum model (eqs. 35–38, ERRATA 001 readings) or on the surge model (eqs. 31–32 in momentum
+form) reduces to a plain EKF on the trial state, and the trials of a parallel scheme
+(eqs. 20–25) become independent. The Gaussian log-likelihood of its innovations,
+
+    ℓ(θ, q) = Σ_trials Σ_k −½ (ν_kᵀ S_k⁻¹ ν_k + log det 2π S_k),
+
+is the criterion of the prediction-error method around the filter; :mod:`shipid.methods.dp.pem`
+maximises it over θ and the noise intensities and differentiates it for the observed
+information. The filter here is the one :func:`shipid.estimate.ekf_augmented.augmented_ekf`
+runs with a zero parameter covariance: the same RK4 map and its exact chain-rule Jacobian
+(:func:`~shipid.estimate.ekf_augmented.rk4_map`), the Joseph-form update, the symmetrised
+covariance, the heading innovation wrapped to (−π, π]; ``tests/methods/dp/test_loglik.py``
+checks the two agree.
+
+Positive definiteness of the filtered covariance is checked by a Cholesky factorisation at
+every sample; on failure the kernels return the failing step (the caller raises).
+
+Everything compiled lives in this one file (numba's ``cache=True`` is invalidated by
+changes to the file that holds a function).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+LOG2PI = float(np.log(2.0 * np.pi))
+
+
+@njit(**_JIT)
+def _mom_f(x, tau, M, Minv, A, out):
+    """Eqs. 35–37: ``ẋ`` of ``x = [h, η, b_h]`` with thrust force ``tau`` (bis)."""
+    nu0 = Minv[0, 0] * x[0] + Minv[0, 1] * x[1] + Minv[0, 2] * x[2]
+    nu1 = Minv[1, 0] * x[0] + Minv[1, 1] * x[1] + Minv[1, 2] * x[2]
+    nu2 = Minv[2, 0] * x[0] + Minv[2, 1] * x[1] + Minv[2, 2] * x[2]
+    m11, m22, m23 = M[0, 0], M[1, 1], M[1, 2]
+    a = m22 * nu1 + m23 * nu2
+    cn0 = -a * nu2
+    cn1 = m11 * nu0 * nu2
+    cn2 = a * nu0 - m11 * nu0 * nu1
+    for i in range(3):
+        out[i] = (A[i, 0] * x[0] + A[i, 1] * x[1] + A[i, 2] * x[2] + tau[i] + x[6 + i])
+    out[0] -= cn0
+    out[1] -= cn1
+    out[2] -= cn2
+    c, s = np.cos(x[5]), np.sin(x[5])
+    out[3] = c * nu0 - s * nu1
+    out[4] = s * nu0 + c * nu1
+    out[5] = nu2
+    out[6] = 0.0
+    out[7] = 0.0
+    out[8] = 0.0
+
+
+@njit(**_JIT)
+def _mom_jac(x, M, Minv, A, F):
+    """∂ẋ/∂x of :func:`_mom_f` (the ``Fx`` of :func:`shipid.models.dp.momentum_jacobian`)."""
+    F[:, :] = 0.0
+    nu = Minv @ x[0:3]
+    m11, m22, m23 = M[0, 0], M[1, 1], M[1, 2]
+    u, v, r = nu[0], nu[1], nu[2]
+    a = m22 * v + m23 * r
+    J = np.zeros((3, 3))
+    J[0, 1] = -m22 * r
+    J[0, 2] = -a - m23 * r
+    J[1, 0] = m11 * r
+    J[1, 2] = m11 * u
+    J[2, 0] = a - m11 * v
+    J[2, 1] = (m22 - m11) * u
+    J[2, 2] = m23 * u
+    JM = J @ Minv
+    for i in range(3):
+        for j in range(3):
+            F[i, j] = A[i, j] - JM[i, j]
+        F[i, 6 + i] = 1.0
+    c, s = np.cos(x[5]), np.sin(x[5])
+    for j in range(3):
+        F[3, j] = c * Minv[0, j] - s * Minv[1, j]
+        F[4, j] = s * Minv[0, j] + c * Minv[1, j]
+        F[5, j] = Minv[2, j]
+    F[3, 5] = -s * u - c * v
+    F[4, 5] = c * u - s * v
+
+
+@njit(**_JIT)
+def _mom_rk4(x, tau, M, Minv, A, dt, Phi):
+    """One RK4 step of eqs. 35–37 and its exact Jacobian into ``Phi`` (as ``rk4_map``)."""
+    n = 9
+    I = np.eye(n)
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    A1 = np.empty((n, n))
+    A2 = np.empty((n, n))
+    A3 = np.empty((n, n))
+    A4 = np.empty((n, n))
+    _mom_f(x, tau, M, Minv, A, k1)
+    _mom_jac(x, M, Minv, A, A1)
+    x2 = x + 0.5 * dt * k1
+    _mom_f(x2, tau, M, Minv, A, k2)
+    _mom_jac(x2, M, Minv, A, A2)
+    K2 = A2 @ (I + 0.5 * dt * A1)
+    x3 = x + 0.5 * dt * k2
+    _mom_f(x3, tau, M, Minv, A, k3)
+    _mom_jac(x3, M, Minv, A, A3)
+    K3 = A3 @ (I + 0.5 * dt * K2)
+    x4 = x + dt * k3
+    _mom_f(x4, tau, M, Minv, A, k4)
+    _mom_jac(x4, M, Minv, A, A4)
+    K4 = A4 @ (I + dt * K3)
+    Phi[:, :] = I + dt / 6.0 * (A1 + 2.0 * K2 + 2.0 * K3 + K4)
+    return x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@njit(**_JIT)
+def _update(x, P, nu, Hidx, R, nis_ll):
+    """Joseph-form update with measurements ``x[Hidx] + v``; adds (NIS, log det 2πS) to nis_ll.
+
+    Returns False when S or the updated P is not positive definite.
+    """
+    n = x.size
+    m = Hidx.size
+    S = np.empty((m, m))
+    PHt = np.empty((n, m))
+    for i in range(n):
+        for j in range(m):
+            PHt[i, j] = P[i, Hidx[j]]
+    for i in range(m):
+        for j in range(m):
+            S[i, j] = PHt[Hidx[i], j] + (R[i] if i == j else 0.0)
+    for i in range(m):
+        for j in range(i + 1, m):
+            v = 0.5 * (S[i, j] + S[j, i])
+            S[i, j] = v
+            S[j, i] = v
+    for i in range(m):
+        if not S[i, i] > 0.0:
+            return False
+    L = np.linalg.cholesky(S)
+    # K = P Hᵀ S⁻¹  (solve S Kᵀ = H P)
+    Sinv = np.linalg.inv(L).T @ np.linalg.inv(L)
+    K = PHt @ Sinv
+    w = np.linalg.solve(L, nu)
+    nis_ll[0] += w @ w
+    ld = 0.0
+    for i in range(m):
+        ld += 2.0 * np.log(L[i, i])
+    nis_ll[1] += ld + m * LOG2PI
+    nis_ll[2] += m
+    x += K @ nu
+    IKH = np.eye(n)
+    for i in range(n):
+        for j in range(m):
+            IKH[i, Hidx[j]] -= K[i, j]
+    KRKt = np.zeros((n, n))
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for l in range(m):
+                acc += K[i, l] * R[l] * K[j, l]
+            KRKt[i, j] = acc
+    Pn = IKH @ P @ IKH.T + KRKt
+    P[:, :] = 0.5 * (Pn + Pn.T)
+    for i in range(n):
+        if not P[i, i] > 0.0:
+            return False
+    # Cholesky check of positive definiteness
+    for j in range(n):
+        d = P[j, j]
+        for k in range(j):
+            d -= Pn[j, k] * Pn[j, k]
+        if not d > 0.0:
+            return False
+        d = np.sqrt(d)
+        Pn[j, j] = d
+        for i in range(j + 1, n):
+            s = P[i, j]
+            for k in range(j):
+                s -= Pn[i, k] * Pn[j, k]
+            Pn[i, j] = s / d
+    return True
+
+
+@njit(**_JIT)
+def momentum_loglik(Z, dt, tau, M, Minv, A, qh, qb, R, x0, P0):
+    """Innovation log-likelihood of one trial of the momentum model at fixed θ.
+
+    Parameters
+    ----------
+    Z : (n, 3) measured x'', y'', ψ (NaN rows: no fix)
+    dt : (n−1,) bis sample intervals
+    tau : (n, 3) thrust force T(α) K u of each sample (bis), held over the step
+    M, Minv, A : (3, 3) M'', its inverse and A_h
+    qh, qb : (3,) intensities of w_h and w_b per component (bis)
+    R : (3,) measurement variances
+    x0, P0 : prior of ``[h, η, b_h]``
+
+    Returns
+    -------
+    (loglik, nis_sum, n_channels_used, failed_step) ; failed_step = −1 when all went well.
+    """
+    n = Z.shape[0]
+    x = x0.copy()
+    P = P0.copy()
+    Phi = np.empty((9, 9))
+    Hidx = np.array([3, 4, 5])
+    acc = np.zeros(3)
+    Q = np.zeros(9)
+    for k in range(n):
+        if np.isfinite(Z[k, 0]) and np.isfinite(Z[k, 1]) and np.isfinite(Z[k, 2]):
+            nu = np.empty(3)
+            nu[0] = Z[k, 0] - x[3]
+            nu[1] = Z[k, 1] - x[4]
+            d = Z[k, 2] - x[5]
+            nu[2] = np.arctan2(np.sin(d), np.cos(d))
+            if not _update(x, P, nu, Hidx, R, acc):
+                return -np.inf, acc[0], acc[2], k
+        if k == n - 1:
+            break
+        xn = _mom_rk4(x, tau[k], M, Minv, A, dt[k], Phi)
+        for i in range(3):
+            Q[i] = qh[i] * dt[k]
+            Q[6 + i] = qb[i] * dt[k]
+        Pn = Phi @ P @ Phi.T
+        for i in range(9):
+            Pn[i, i] += Q[i]
+        P = 0.5 * (Pn + Pn.T)
+        x = xn
+        if not np.all(np.isfinite(x)):
+            return -np.inf, acc[0], acc[2], k
+    return -0.5 * (acc[0] + acc[1]), acc[0], acc[2], -1
+
+
+@njit(**_JIT)
+def surge_loglik(Z, dt, tau, m11, a11, qh, qb, R, x0, P0):
+    """Innovation log-likelihood of one surge trial (eqs. 31–32, momentum form) at fixed θ.
+
+    State ``[h_u, s, b_u]``, ``ḣ_u = θ1 h_u + τ_u + b_u``, ``ṡ = h_u / m11``; ``Z`` (n,) the
+    distance run s'' (NaN: no fix), ``tau`` (n,) the thrust force, ``a11`` = θ1, ``qh, qb``
+    scalars, ``R`` the variance of s''. Returns as :func:`momentum_loglik`.
+    """
+    n = Z.shape[0]
+    x = x0.copy()
+    P = P0.copy()
+    Hidx = np.array([1])
+    Rv = np.array([R])
+    acc = np.zeros(3)
+    Ac = np.zeros((3, 3))
+    Ac[0, 0] = a11
+    Ac[0, 2] = 1.0
+    Ac[1, 0] = 1.0 / m11
+    I = np.eye(3)
+    for k in range(n):
+        if np.isfinite(Z[k]):
+            nu = np.array([Z[k] - x[1]])
+            if not _update(x, P, nu, Hidx, Rv, acc):
+                return -np.inf, acc[0], acc[2], k
+        if k == n - 1:
+            break
+        h = dt[k]
+        # RK4 of the linear system ẋ = Ac x + c (c = [τ, 0, 0]) and its Jacobian
+        c = np.array([tau[k], 0.0, 0.0])
+        k1 = Ac @ x + c
+        k2 = Ac @ (x + 0.5 * h * k1) + c
+        k3 = Ac @ (x + 0.5 * h * k2) + c
+        k4 = Ac @ (x + h * k3) + c
+        K2 = Ac @ (I + 0.5 * h * Ac)
+        K3 = Ac @ (I + 0.5 * h * K2)
+        K4 = Ac @ (I + h * K3)
+        Phi = I + h / 6.0 * (Ac + 2.0 * K2 + 2.0 * K3 + K4)
+        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        Pn = Phi @ P @ Phi.T
+        Pn[0, 0] += qh * h
+        Pn[2, 2] += qb * h
+        P = 0.5 * (Pn + Pn.T)
+    return -0.5 * (acc[0] + acc[1]), acc[0], acc[2], -1
+
+
+__all__ = ["momentum_loglik", "surge_loglik", "LOG2PI"]

@@ -1,0 +1,296 @@
+"""Commands of seed 000 (Linder et al. 2015): mass and centre of mass from IMU and rudder.
+
+* ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json]``
+* ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR]
+  [--store FILE [--resume]] [--json]`` (Table 3)
+* ``shipid study mass-cm-contour --out fig.png`` (Fig. 4)
+* ``shipid analyse crlb mass-cm [--duration S] [--wave-roll DEG] ...`` (Cramér–Rao bounds)
+
+``known.toml`` holds ``U, M, zg_bar, m_c, zc_bar, zs_bar, g`` (bare numbers in SI, or tables
+``{ value = ..., unit = "..." }``) and optionally ``z_f`` (known centre of rotation) or
+``z_f_prior = [mean, std]``, and ``theta0`` (9 initial values in the order of
+:data:`shipid.models.roll_reduced.THETA_NAMES`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+import tomllib
+from pathlib import Path
+
+import click
+import numpy as np
+
+from shipid.cli import analyse, identify, study
+from shipid.cli._common import loud, loud_lines, strict_option
+from shipid.cli.campaign_cmds import campaign_options
+from shipid.errors import InputError, ShipidError
+
+KNOWN_KEYS = ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")
+_UNITS = {"U": "m/s", "M": "kg", "zg_bar": "m", "m_c": "kg", "zc_bar": "m", "zs_bar": "m", "g": "m/s^2",
+          "z_f": "m"}
+
+
+def _si(name: str, entry, path: str) -> float:
+    """A known value: a bare number (SI) or ``{value, unit}`` converted with pint."""
+    if isinstance(entry, (int, float)) and not isinstance(entry, bool):
+        return float(entry)
+    if isinstance(entry, dict) and "value" in entry:
+        from shipid.data.units import parse_unit, to_si
+
+        unit = entry.get("unit", _UNITS.get(name, ""))
+        try:
+            value, si = to_si(float(entry["value"]), unit)
+            if si != parse_unit(_UNITS[name]):
+                raise ValueError(f"{unit} is {si}, not {parse_unit(_UNITS[name])}")
+        except (ValueError, TypeError, InputError) as err:  # one line for any unit problem
+            raise InputError(f"{name}: cannot convert {entry['value']} {unit} to {_UNITS[name]} ({err})",
+                             file=path) from None
+        return float(value)
+    raise InputError(f"{name} must be a number or {{ value = ..., unit = \"...\" }}", file=path)
+
+
+def read_known(path: str) -> dict:
+    """Parse ``known.toml`` into KnownParams plus the optional z_f / prior / theta0."""
+    from shipid.models.roll_reduced import THETA_NAMES, KnownParams
+    try:
+        raw = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(f"not valid TOML ({err})", file=path) from None
+    raw = raw.get("known", raw)
+    missing = [k for k in KNOWN_KEYS if k not in raw]
+    if missing:
+        raise InputError(f"missing known parameter(s): {', '.join(missing)} (need {', '.join(KNOWN_KEYS)})",
+                         file=path)
+    vals = {k: _si(k, raw[k], path) for k in KNOWN_KEYS}
+    if vals["M"] <= 0 or vals["m_c"] <= 0:
+        raise InputError("M and m_c must be positive", file=path)
+    out = {"known": KnownParams(**vals), "z_f": None, "z_f_prior": None, "theta0": None}
+    if "z_f" in raw:
+        out["z_f"] = _si("z_f", raw["z_f"], path)
+    if "z_f_prior" in raw:
+        pr = raw["z_f_prior"]
+        if not (isinstance(pr, list) and len(pr) == 2 and float(pr[1]) > 0):
+            raise InputError("z_f_prior must be [mean, std] in m with std > 0", file=path)
+        out["z_f_prior"] = (float(pr[0]), float(pr[1]))
+    if "theta0" in raw:
+        th = raw["theta0"]
+        if not (isinstance(th, list) and len(th) == len(THETA_NAMES)):
+            raise InputError(f"theta0 must list {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})", file=path)
+        out["theta0"] = [float(x) for x in th]
+    return out
+
+
+def _fmt(v: float) -> str:
+    return "inf" if math.isinf(v) else ("nan" if math.isnan(v) else f"{v:.5g}")
+
+
+@identify.command("mass-cm")
+@click.option("--nominal", "nominal", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="Nominal-condition trial(s) (known M at zg_bar). Repeat for extra datasets.")
+@click.option("--calibration", "calibration", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="Calibration trial(s) (known extra m_c at zc_bar).")
+@click.option("--loaded", "loaded", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="Loaded trial(s): the unknown load m at zm_bar.")
+@click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False),
+              help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
+@click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
+@click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
+@click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma"]), default="auto",
+              show_default=True,
+              help="Noise model of the prefilter (43): auto: AR(40) of eps/(1 - c q^-2) with c chosen by the data "
+                   "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
+@click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
+@strict_option
+def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
+                     as_json):
+    """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
+
+    Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
+    yaw rate (SNAME sign), delta [rad] rudder. Without z_f in known.toml m is NOT identifiable
+    (only zm_bar and rho = m z_m/(m_c z_c) are); the tool says so.
+    """
+    from shipid.data.io import read_trial
+    from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, estimate_mass_cm
+
+    kn = read_known(known_path)
+    datasets = []
+    for cond, paths in (("nominal", nominal), ("calibration", calibration), ("loaded", loaded)):
+        for p in paths:
+            datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
+    opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
+    res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
+                           z_f_prior=kn["z_f_prior"], options=opts,
+                           init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
+    res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm.series)
+    loud(res, trials=[tr for _, tr in datasets])
+    if as_json:
+        d = res.to_dict()
+        flat = {k: e.value for k, e in res.estimates.items()}
+        flat.update({f"{k}_std": e.std for k, e in res.estimates.items()})
+        d.update(flat)
+        d["converged"] = res.diagnostics["converged"]
+        d["iterations"] = res.diagnostics["iterations"]
+        click.echo(json.dumps(d, indent=2, allow_nan=True))
+        return
+    click.echo(f"mass-cm (Linder et al. 2015): converged={res.diagnostics['converged']} "
+               f"after {res.diagnostics['iterations']} iterations, z_f {res.diagnostics['z_f_mode']}")
+    for k, e in res.estimates.items():
+        click.echo(f"  {k:8s} = {_fmt(e.value):>11s} ± {_fmt(e.std):<10s} {e.unit:10s} {e.note}")
+
+
+@study.command("mass-cm-sensitivity")
+@click.option("--runs", type=click.IntRange(min=1), default=10_000, show_default=True)
+@click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True,
+              help="known: z_f given (identifiable m); free: estimated as in the paper (m then not identifiable).")
+@click.option("--init", type=click.Choice(["given", "linear"]), default="given", show_default=True,
+              help="given: start from the random Table-3 draw (paper); linear: the equation-error start.")
+@click.option("--data-seed", type=int, default=0, show_default=True, help="Seed of the three synthetic datasets.")
+@click.option("--json", "as_json", is_flag=True)
+@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
+              help="Also write the study as a result JSON (Table 3 spread) for `shipid report`.")
+@click.option("--force", is_flag=True, help="Overwrite --out.")
+@strict_option
+@campaign_options
+def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
+    """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
+
+    Runs through the campaign engine: a local process pool by default, ``--dask-local N``
+    or ``--scheduler ADDR`` for Dask, ``--store FILE [--resume]`` to keep and continue it.
+    """
+    from dataclasses import replace
+
+    from shipid.methods.masscm.study import summarise
+
+    seed = campaign.seed
+    if out and Path(out).exists() and not force:  # fail before the study, not after it
+        from shipid.errors import OutputExistsError
+        raise OutputExistsError(out)
+    t0 = time.perf_counter()
+    # warm_up compiles the numba kernels once here, then warms the forkserver every worker is forked from
+    res = replace(campaign, progress=not as_json).run(
+        "shipid.methods.masscm.study:run_one", runs,
+        kwargs={"zf_mode": zf_mode, "data_seed": data_seed, "init": init}, name="mass-cm-sensitivity",
+        warm_up="shipid.methods.masscm.study:warm_up")
+    outs = [r.outputs if r.status == "ok" else None for r in res.records]
+    s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
+    s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
+    s["warnings"] = loud_lines([f"{s['flagged']} of {s['runs']} runs flagged implausible or not converged "
+                                "(left out of the means)"] if s["flagged"] else [])
+    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report` (issue 8)
+        from shipid.methods.masscm.series import spread_result
+        spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
+                      f"--init {init} --data-seed {data_seed} --seed {seed}").write_json(out, force=force)
+    if as_json:
+        click.echo(json.dumps(s, indent=2, allow_nan=True))
+        return
+    click.echo(f"Table 3 reproduction: {s['runs']} runs, {s['flagged']} flagged implausible, "
+               f"z_f {zf_mode}, init {init}, {s['wall_s']:.1f} s")
+    click.echo(f"  {'param':8s} {'true':>9s} {'mean':>10s} {'std':>10s} {'paper mean':>11s} {'paper std':>10s}")
+    for n, p in s["parameters"].items():
+        click.echo(f"  {n:8s} {p['true']:9.4g} {p['mean']:10.5g} {p['std']:10.3g} {p['paper_mean']:11.5g} "
+                   f"{p['paper_std']:10.3g}")
+
+
+@study.command("mass-cm-coverage")
+@click.option("--regime", type=click.Choice(["waves", "sensors", "both"]), required=True,
+              help="waves: 0.5 deg wave roll, noise-free sensors; sensors: gyro/accelerometer noise and biases, "
+                   "no waves; both: the two (issue-3 noise).")
+@click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
+@click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
+              help="Length of each of the three datasets (s).")
+@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto"]), default=None,
+              help="Noise model of Algorithm 1 (default: the estimator's default).")
+@click.option("--json", "as_json", is_flag=True)
+@campaign_options
+def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
+    """Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.
+
+    Fresh rudder and noise realisations per run (SeedSequence([seed, i])), z_f known; the bound is
+    `shipid analyse crlb mass-cm` for the same regime and record length.
+    """
+    from dataclasses import replace
+
+    from shipid.methods.masscm.estimator import MassCMOptions
+    from shipid.methods.masscm.coverage import bound_for, summarise
+
+    t0 = time.perf_counter()
+    kw = {"regime": regime, "duration": duration,
+          "noise_model": noise_model or MassCMOptions().noise_model}
+    res = replace(campaign, progress=not as_json).run("shipid.methods.masscm.coverage:run_one", runs, kwargs=kw,
+                                                     name="mass-cm-coverage",
+                                                     warm_up="shipid.methods.masscm.coverage:warm_up")
+    outs = [r.outputs if r.status == "ok" else None for r in res.records]
+    s = summarise(outs, regime=regime, duration=duration, bound=bound_for(regime, duration))
+    s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"],
+              "wall_s": time.perf_counter() - t0})
+    if as_json:
+        click.echo(json.dumps(s, indent=2, allow_nan=True))
+        return
+    click.echo(f"mass-cm coverage, regime {regime}: {s['used']} of {s['runs']} runs ({s['failed']} failed, "
+               f"{s['flagged_implausible']} flagged implausible, {s['not_converged']} not converged), "
+               f"3 x {duration:g} s, seed {campaign.seed}, {s['wall_s']:.1f} s")
+    click.echo(f"  {'':7s} {'true':>9s} {'mean':>9s} {'bias/se':>8s} {'spread':>9s} {'mean std':>9s} "
+               f"{'bound':>9s} {'spr/bnd':>8s} {'cov 2std':>8s}")
+    rows = [(k, q) for k, q in s["quantities"].items()]
+    rows += [(f"{k}*", q) for k, q in s["quantities_unflagged"].items()]
+    for k, q in rows:
+        ratio = q["spread_over_bound"]
+        click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
+                   f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
+                   f"{ratio if ratio is not None else float('nan'):8.2f} {q['coverage_2std']:8.2f}")
+    click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
+
+
+@study.command("mass-cm-contour")
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Figure file (.png/.pdf/.svg).")
+@click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True)
+@click.option("--data-seed", type=int, default=0, show_default=True)
+@click.option("--force", is_flag=True, help="Overwrite an existing figure.")
+@strict_option
+def mass_cm_contour(out, zf_mode, data_seed, force):
+    """Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate."""
+    from shipid.methods.masscm.contour import contour_figure
+    path = contour_figure(out, data_seed=data_seed, zf_mode=zf_mode, force=force)
+    click.echo(f"wrote {path}")
+
+
+@analyse.group("crlb")
+def crlb_group():
+    """Cramér–Rao lower bounds for planned experiments."""
+
+
+@crlb_group.command("mass-cm")
+@click.option("--vessel", default="fishing-vessel", show_default=True)
+@click.option("--duration", type=float, default=300.0, show_default=True, help="Length of each dataset (s).")
+@click.option("--fs", type=float, default=50.0, show_default=True, help="Sampling rate (Hz).")
+@click.option("--rudder-deg", type=float, default=5.0, show_default=True, help="PRBS rudder amplitude (deg).")
+@click.option("--gyro-std", type=float, default=0.002, show_default=True, help="Gyro white noise (rad/s).")
+@click.option("--acc-std", type=float, default=0.02, show_default=True, help="Accelerometer white noise (m/s^2).")
+@click.option("--wave-roll", type=float, default=0.5, show_default=True, help="Roll std from waves alone (deg).")
+@click.option("--wave-period", type=float, default=1.0, show_default=True, help="Wave peak period (s).")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--method", type=click.Choice(["spectrum", "ar"]), default="spectrum", show_default=True,
+              help="spectrum: the exact equation-error spectrum of the simulated noise (Whittle form); ar: an AR(40) "
+                   "noise model fitted to a simulated noise record (cannot represent the wave-roll zeros).")
+@click.option("--json", "as_json", is_flag=True)
+def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, method, as_json):
+    """Bounds on zm_bar, rho and m (z_f known) for a ship, excitation, noise and record length."""
+    from shipid.methods.masscm.crlb import crlb
+    from shipid.models.roll_sim import NoiseSpec
+    if duration <= 0 or fs <= 0:
+        raise ShipidError("--duration and --fs must be positive")
+    noise = NoiseSpec(gyro_std=gyro_std, acc_std=acc_std, wave_roll_deg=wave_roll, wave_period=wave_period)
+    b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
+             method=method)
+    if as_json:
+        click.echo(json.dumps(b, indent=2, allow_nan=True))
+        return
+    click.echo(f"Cramér–Rao bounds, {vessel}, {duration:g} s per dataset at {fs:g} Hz, rudder ±{rudder_deg:g} deg, "
+               f"waves {wave_roll:g} deg roll (z_f known):")
+    for k in ("zm_bar", "rho", "m"):
+        e = b["bounds"][k]
+        click.echo(f"  {k:7s} true {e['true']:.5g}  std >= {e['std']:.3g}  ({100 * e['rel']:.2f} %)")

@@ -1,0 +1,199 @@
+"""One compiled (numba) pass of steps B(b)–(c) of Algorithm 1 (Linder et al. 2015) for one dataset.
+
+For the default configuration (AR noise model ``L = A(q)``, lag instruments (45)) an iteration of
+:func:`shipid.methods.masscm.estimator.iterate` does, per dataset, at the relaxed iterate ``theta_mid``:
+
+1. the equation error (42) ``eps = y - Phi g_i(theta_mid)``;
+2. its AR(p) noise model (least squares, :func:`shipid.estimate.arma.fit_ar`) — the prefilter (43);
+3. the closed-loop instrument simulation (46)–(47) (:func:`shipid.methods.masscm.estimator._closed_loop_sim`);
+4. the IV moments ``Z^T Z``, ``Z^T [Phi, y]`` of the prefiltered instruments
+   (:func:`shipid.methods.masscm.estimator._fir_moments_compiled`).
+
+:func:`dataset_step` does all four in one compiled call (the Python and numpy overhead of the separate
+calls was a third of a run). The arithmetic is that of the functions named above (tests compare them);
+the compression of the moments (eigen-decomposition with the rank rule) stays in
+:func:`shipid.estimate.iv.iv_compress_products`. Compiled with ``cache=True``; a cache older than
+:mod:`shipid.estimate.fir_kernels` (whose functions are compiled into these) is dropped at import.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from shipid.estimate import fir_kernels
+from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
+
+
+def _drop_stale_cache() -> None:
+    """Remove this module's numba cache index when :mod:`shipid.estimate.fir_kernels` is newer.
+
+    numba invalidates a cached function only when its own source file changes, but the kernels here
+    compile the ``fir_kernels`` functions into themselves: after an edit there, the cached
+    :func:`dataset_step` would silently keep the old code. Deleting the stale index files makes numba
+    compile afresh (once) and write a new cache.
+    """
+    import glob
+    import os
+    try:
+        dep = os.path.getmtime(fir_kernels.__file__)
+        for f in glob.glob(os.path.join(os.path.dirname(__file__), "__pycache__", "masscm_step.*.nbi")):
+            if os.path.getmtime(f) < dep:
+                os.remove(f)
+    except OSError:                     # read-only tree, a concurrent worker removed it first: harmless
+        pass
+
+
+_drop_stale_cache()
+
+
+@njit(cache=True)
+def _iir2(b, a, x):
+    """``lfilter(b, a, x)`` for second-order ``b``, ``a`` with ``a[0] = 1`` (direct form II transposed)."""
+    n = x.size
+    y = np.empty(n)
+    z0 = 0.0
+    z1 = 0.0
+    for t in range(n):
+        xt = x[t]
+        yt = b[0] * xt + z0
+        z0 = b[1] * xt - a[1] * yt + z1
+        z1 = b[2] * xt - a[2] * yt
+        y[t] = yt
+    return y
+
+
+@njit(cache=True)
+def _bilinear(p2, p1, p0, q2, q1, q0, T):
+    """:func:`shipid.models.roll_reduced.bilinear_tf` of ``(p2 s^2 + p1 s + p0)/(q2 s^2 + q1 s + q0)``."""
+    c = 2.0 / T
+    b = np.array([p2 * c * c + p1 * c + p0, -2 * p2 * c * c + 2 * p0, p2 * c * c - p1 * c + p0])
+    a = np.array([q2 * c * c + q1 * c + q0, -2 * q2 * c * c + 2 * q0, q2 * c * c - q1 * c + q0])
+    return b / a[0], a / a[0]
+
+
+@njit(cache=True)
+def _mean(x):
+    s = 0.0
+    for t in range(x.size):
+        s += x[t]
+    return s / x.size
+
+
+@njit(cache=True, fastmath={"reassoc", "contract"})
+def _delayed_y_columns(F, nls, yf, Sy, s, ZtP):
+    """Columns 0, 1 of ``Z^T Phi`` (37): ``-sum_t F[k, t-i] yf[t-d]``, ``d = 1, 2``, ``t = s .. n-1``.
+
+    Moving the window back by ``d`` samples turns them into the y column ``Sy[(k, i-d)]`` plus edge terms:
+    ``sum_t f[t-i] y[t-1] = Sy[i-1] + f[s-i] y[s-1] - f[n-i] y[n-1]`` (i >= 1) and
+    ``sum_t f[t-i] y[t-2] = Sy[i-2] + f[s-i+1] y[s-1] + f[s-i] y[s-2] - f[n-i+1] y[n-1] - f[n-i] y[n-2]``
+    (i >= 2); the lags that would need a negative shift (i < d) are direct dot products.
+    """
+    n = yf.size
+    m = n - s
+    r = 0
+    for k in range(nls.size):
+        fk = F[k]
+        d10 = 0.0
+        for i in range(nls[k]):
+            if i == 0:
+                acc1 = 0.0
+                acc2 = 0.0
+                f0 = fk[s:]
+                y1 = yf[s - 1:n - 1]
+                y2 = yf[s - 2:n - 2]
+                for t in range(m):
+                    acc1 += f0[t] * y1[t]
+                    acc2 += f0[t] * y2[t]
+                d10 = acc1
+                D1, D2 = acc1, acc2
+            else:
+                D1 = Sy[r - 1] + fk[s - i] * yf[s - 1] - fk[n - i] * yf[n - 1]
+                if i == 1:                                   # sum_t f[t-1] y[t-2] from the i = 0 sum
+                    D2 = d10 + fk[s - 1] * yf[s - 2] - fk[n - 1] * yf[n - 2]
+                else:
+                    D2 = (Sy[r - 2] + fk[s - i + 1] * yf[s - 1] + fk[s - i] * yf[s - 2]
+                          - fk[n - i + 1] * yf[n - 1] - fk[n - i] * yf[n - 2])
+            ZtP[r, 0] = -D1
+            ZtP[r, 1] = -D2
+            r += 1
+
+
+@njit(cache=True)
+def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
+    """Steps B(b)–(c) for one dataset; see the module docstring.
+
+    Parameters
+    ----------
+    y : (n,) output (roll rate); PhiT : (5, n) regressors (37) transposed; g_mid : (5,) ``g_i(theta_mid)``.
+    s : first instrument row (:func:`shipid.methods.masscm.estimator._start`); p : AR order.
+    X : (8, n) work array whose rows 2..7 hold the iterate-independent signals of
+        :func:`shipid.methods.masscm.estimator._fir_moments_compiled` (rows 0, 1 are overwritten).
+    nls : (4,) lags (n_y, n_as, n_r, n_delta).
+    r_hat0, delta : black-box yaw rate (44) and the (mean-removed) rudder.
+    sim : ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]`` of dataset i (``roll_terms`` at theta_mid).
+    y_hat, a_hat : the previous instrument signals (kept when the model is unstable).
+
+    Returns
+    -------
+    status : 0 ok; 1 the AR normal equations are not positive definite or the residual is constant
+        (the caller redoes this dataset on the reference path).
+    stable : whether the closed-loop simulation was done (else ``y_hat``, ``a_hat`` are the inputs).
+    a, lam : AR polynomial and innovation variance; y_hat, a_hat; ZtZ, ZtP : the IV moments.
+    """
+    n = y.size
+    # (42) equation error at theta_mid, and its AR(p) model (fit_ar: mean removed, scaled by the std)
+    e = np.empty(n - s)
+    for t in range(s, n):
+        v = y[t]
+        for j in range(5):
+            v -= PhiT[j, t] * g_mid[j]
+        e[t - s] = v
+    mu = _mean(e)
+    var = 0.0
+    for t in range(e.size):
+        e[t] -= mu
+        var += e[t] * e[t]
+    scale = np.sqrt(var / e.size)
+    empty = np.zeros((0, 0))
+    if not (np.isfinite(scale) and scale > 0.0) or e.size <= 2 * p:
+        return 1, False, np.zeros(p + 1), 0.0, y_hat, a_hat, empty, empty
+    for t in range(e.size):
+        e[t] /= scale
+    ok, a, s2 = ar_fit(e, p)
+    if not ok:
+        return 1, False, a, 0.0, y_hat, a_hat, empty, empty
+    lam = s2 * scale * scale
+    # (46)-(47) closed-loop instruments
+    A1, d, k1, Kyaw, Kd, zs, g, U, T = sim[0], sim[1], sim[2], sim[3], sim[4], sim[5], sim[6], sim[7], sim[8]
+    stable = A1 > 0 and d > 0 and k1 > 0
+    if stable:
+        u = Kyaw * r_hat0 + Kd * delta
+        b1, a1 = _bilinear(0.0, 1.0, 0.0, A1, d, k1, T)
+        y_hat = _iir2(b1, a1, u)
+        b2, a2 = _bilinear(zs, 0.0, g, A1, d, k1, T)
+        a_hat = _iir2(b2, a2, u) - U * r_hat0
+    # iterate-dependent instrument signals: y_hat and the difference of a_hat, mean removed
+    my = _mean(y_hat)
+    for t in range(n):
+        X[0, t] = y_hat[t] - my
+    X[1, 0] = 0.0
+    X[1, 1] = 0.0
+    for t in range(2, n):
+        X[1, t] = a_hat[t] - a_hat[t - 2]
+    md = _mean(X[1])
+    for t in range(n):
+        X[1, t] -= md
+    Fl = fir_filter(a, X)
+    # products with the measured columns of (37) and y (rows 4..7 of Fl); the two delayed-y columns
+    # follow from the y column by the window shift (see _delayed_y_columns)
+    ZtZ, ZtT = lag_moments(Fl[:4], nls, Fl[4:8], s)
+    ZtP = np.empty((ZtT.shape[0], 6))
+    _delayed_y_columns(Fl, nls, Fl[7], ZtT[:, 3], s, ZtP)
+    for c in range(4):
+        for r in range(ZtT.shape[0]):
+            ZtP[r, 2 + c] = ZtT[r, c]
+    return 0, stable, a, lam, y_hat, a_hat, ZtZ, ZtP
+
+
+__all__ = ["dataset_step"]

@@ -1,0 +1,356 @@
+"""Real-data commands (issue 6): validate a model on a run, identify MMG models, held-out studies.
+
+* ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
+  (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
+* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso]``
+  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
+* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json]``
+* ``shipid study kvlcc2-zigzag [--train-only] [--json]``
+
+The studies print the cross-validation table over the candidate structures (training
+runs only) and the chosen one before any test run is read (``--train-only`` stops
+there); see :mod:`shipid.methods.mmg.study` for the frozen protocol.
+"""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from shipid.cli import CONTEXT, cli, identify, study
+from shipid.cli._common import loud, loud_lines, strict_option
+from shipid.data.io import FORMATS
+from shipid.errors import ShipidError
+
+
+#: Per data profile: the published prior and the sign of the file's rudder relative to MMG's
+#: (MMG: rudder positive turns the ship to starboard; HSVA logs the rudder positive to port).
+PROFILE_DEFAULTS = {"kvlcc2": ("kvlcc2_hsva", -1), "esso": ("esso_osaka_3m", 1)}
+#: How ``identify`` and ``validate`` read runs (recorded in MODEL.json's ``model.validate``).
+READ_SETTINGS = {"trim_empty_rows": True, "interpolate_gaps": 1.0}
+
+
+def _read_run(path, fmt=None, channels=None):
+    from shipid.data.io import read_trial
+
+    return read_trial(path, fmt=fmt, channel_map=channels, method="shipid validate/identify", **READ_SETTINGS)
+
+
+def _flip(tr, sign):
+    if sign == -1 and "delta" in tr:
+        out = tr.with_channels(delta=-tr["delta"])
+        out.meta["rudder_sign_flipped"] = True
+        return out
+    return tr
+
+
+def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
+    """The first-rudder-step yaw sign of a run (rudder already multiplied by ``sign``) and a warning if it
+    contradicts MMG's convention (``against`` names what it contradicts)."""
+    from shipid.methods.mmg.validate import first_step_yaw_sign
+
+    st = first_step_yaw_sign(tr)
+    if st["sign"] >= 0:
+        return st, None
+    return st, (f"{tr.meta.get('source', 'run')}: the yaw response to the first rudder step (t = {st['t_step']:.1f} s, "
+                f"rudder {st['delta_step_deg']:+.1f} deg with rudder sign {sign:+d}, yaw rate change "
+                f"{st['dr_deg_s']:+.2f} deg/s) contradicts {against}; the run's rudder sign is probably the "
+                f"opposite (--rudder-sign {-sign:+d})")
+
+
+@cli.command("validate", context_settings=CONTEXT)
+@click.argument("model")
+@click.option("--trial", "trial_path", required=True, type=click.Path(dir_okay=False),
+              help="Measured run (CSV/Parquet/Esso CSV/KVLCC2 .dat).")
+@click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
+              help="Trial format [default: from the file, else MODEL.json's].")
+@click.option("--channels", default=None,
+              help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
+@click.option("--horizon", default=None, type=float,
+              help="Length of restarted horizons, s [default: MODEL.json's, else 60].")
+@click.option("--rudder-sign", default=None, type=int,
+              help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
+                   "[default: MODEL.json's training convention, else from the data profile: -1 for HSVA KVLCC2].")
+@click.option("--json", "as_json", is_flag=True, help="Print the error table as JSON.")
+@click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
+              help="Write a figure of measured vs predicted motion (PNG/PDF/SVG).")
+@click.option("--out", "out_path", default=None, type=click.Path(dir_okay=False),
+              help="Write the whole-run open-loop prediction beside the measured channels (CSV/Parquet).")
+@click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
+@strict_option
+def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
+    """Simulate MODEL open loop on a measured run and report RMS/max errors.
+
+    MODEL is a JSON file written by 'shipid identify mmg --json' (or 'identify
+    realdata'), or 'published:esso_osaka_3m' / 'published:kvlcc2_L7' for the published
+    MMG sets read from the shared data folder. The model starts from the measured
+    initial state and is driven by the measured rudder, propeller revolutions and
+    true wind; errors of heading (deg), yaw rate (deg/s), u, v (m/s) and position (m)
+    over the first 30 s, 60 s, the whole run and 60-s horizons restarted from the
+    measured state. The reading settings and the rudder sign convention of the
+    model's training runs come from MODEL.json; it warns when the model did not
+    converge and when the run's yaw response to its first rudder step contradicts
+    the convention.
+    """
+    from shipid.methods.mmg import validate as V
+
+    if horizon is not None and horizon <= 0:
+        raise ShipidError("--horizon must be positive")
+    if rudder_sign not in (None, 1, -1):
+        raise ShipidError("--rudder-sign must be 1 or -1")
+    if out_path and not force:
+        from pathlib import Path
+
+        from shipid.errors import OutputExistsError
+        if Path(out_path).exists():          # before the simulation, not after
+            raise OutputExistsError(out_path)
+    m, doc = V.load_model_document(model)
+    mv = dict((doc or {}).get("model", {}).get("validate", {}) or {})
+    notes = []
+    if doc is not None and (doc.get("diagnostics") or {}).get("converged") is False:
+        notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
+                     "its predictions must not be trusted")
+    tr = _read_run(trial_path, fmt or mv.get("format"), channels if channels is not None else mv.get("channels"))
+    profile = tr.meta.get("profile")
+    if rudder_sign is None:
+        rudder_sign = int(mv.get("rudder_sign") or PROFILE_DEFAULTS.get(profile, (None, 1))[1])
+    elif "rudder_sign" in mv and int(mv["rudder_sign"]) != rudder_sign:
+        notes.append(f"--rudder-sign {rudder_sign:+d} differs from the rudder sign of the model's training runs "
+                     f"({int(mv['rudder_sign']):+d})")
+    if horizon is None:
+        horizon = float(mv.get("horizon_s", 60.0))
+    tr = _flip(tr, rudder_sign)
+    st, w = _convention_warning(tr, rudder_sign, "the model's convention (rudder positive turns to starboard"
+                                + (f", as in its training runs with rudder sign {int(mv['rudder_sign']):+d})"
+                                   if "rudder_sign" in mv else ")"))
+    if w:
+        notes.append(w)
+    v = V.validate(m, tr, horizon=horizon)
+    warns = loud_lines(notes, trials=[tr])
+    if out_path:
+        from shipid.methods.mmg.export import write_prediction
+        _, pt = write_prediction(v, tr, out_path, rudder_sign=rudder_sign, force=force)
+        if pt.meta["diverged_from_s"] is not None:
+            warns += loud_lines([f"the prediction diverged at t = {pt.meta['diverged_from_s']:g} s; "
+                                 f"{out_path} has empty predicted cells from there"])
+    if plot_path:
+        V.plot(v, plot_path, force=force)
+    if as_json:
+        d = v.to_dict()
+        d["settings"] = {"rudder_sign": rudder_sign, "horizon_s": horizon, "profile": profile,
+                         "first_step_yaw_sign": st}
+        d["warnings"] = warns
+        click.echo(json.dumps(d, indent=2))
+    else:
+        click.echo(V.format_table(v))
+        if plot_path:
+            click.echo(f"plot written to {plot_path}")
+        if out_path:
+            click.echo(f"prediction written to {out_path}")
+
+
+# ----------------------------------------------------------------------------- identify
+def _prior(spec: str | None, profiles: set, notes: list):
+    """The prior model and how it was chosen: ``--prior``, else the data profile, else Esso with a warning."""
+    from shipid.methods.mmg import validate as V
+    from shipid.models import mmg
+
+    if spec is None:
+        known = {p for p in profiles if p in PROFILE_DEFAULTS}
+        if len(known) > 1:
+            raise ShipidError(f"training runs of different ships ({', '.join(sorted(known))}): give --prior")
+        if known:
+            prof = known.pop()
+            spec, how = PROFILE_DEFAULTS[prof][0], f"data profile {prof}"
+        else:
+            spec, how = "esso_osaka_3m", "default (no --prior, and the files' format names no ship)"
+            notes.append("no --prior given and the training files' format names no ship: the Esso Osaka 3 m "
+                         "prior (structure, masses, fixed constants) is used; give --prior for another ship")
+    else:
+        how = "--prior"
+    if spec.endswith(".json"):
+        return V.load_model(spec), {"spec": spec, "chosen_by": how}
+    pm = mmg.load_published(spec.replace("published:", ""))
+    return pm, {"spec": spec, "name": pm.name, "chosen_by": how}
+
+
+def _print_result(res) -> None:
+    conv = res.diagnostics.get("converged")
+    if conv is not None:
+        click.echo("converged: " + ("yes" if conv else "NO (do not trust this model)"))
+    click.echo(f"structure {res.model['structure']} / candidate '{res.model.get('structure_candidate')}'"
+               f" (fixed constants from {res.model.get('fixed_from')})")
+    sel = res.diagnostics.get("structure_selection")
+    if sel:
+        click.echo(f"chosen by {sel['method']}:")
+        for c, row in sel["table"].items():
+            click.echo(f"  {c:<40} score {row['score']:.3f}")
+    click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10} {'unit':>5}  status")
+    for k, e in res.estimates.items():
+        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g} {e.unit:>5}  {e.status}")
+    for m, d in res.diagnostics.get("ridge", {}).items():
+        click.echo(f"mode {m}: R2 {d['R2']:.3f}, k {d['k']:.3g}, kappa {d['kappa']:.3g}, n {d['n']}")
+
+
+def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    from pathlib import Path
+
+    from shipid.errors import OutputExistsError
+    from shipid.methods.mmg import estimator as R
+
+    if not paths:
+        raise ShipidError("no training runs given")
+    if rudder_sign not in (None, 1, -1):
+        raise ShipidError("--rudder-sign must be 1 or -1")
+    if output and Path(output).exists() and not force:
+        raise OutputExistsError(output)       # before the fit, not after it
+    raw = [_read_run(p, fmt, channels) for p in paths]
+    profiles = {tr.meta.get("profile") for tr in raw}
+    notes: list[str] = []
+    if rudder_sign is None:
+        signs = {PROFILE_DEFAULTS.get(p, (None, 1))[1] for p in profiles}
+        if len(signs) > 1:
+            raise ShipidError("training runs with different rudder conventions: give --rudder-sign")
+        rudder_sign, sign_from = signs.pop(), "data profile"
+    else:
+        sign_from = "--rudder-sign"
+    trials, steps = [], []
+    for tr in raw:
+        tr = _flip(tr, rudder_sign)
+        st, w = _convention_warning(tr, rudder_sign, "MMG's convention (rudder positive turns to starboard)")
+        steps.append({"file": tr.meta.get("source", ""), **st})
+        if w:
+            notes.append(w)
+        trials.append(tr)
+    pm, prior_info = _prior(prior, profiles, notes)
+    st = None if structure in (None, "auto") else structure
+    res = R.identify(trials, pm, structure=st, select=st is None, folds=folds,
+                     extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
+    res.model["prior"] = prior_info
+    res.model["conventions"] = {
+        "rudder_sign": rudder_sign, "rudder_sign_from": sign_from,
+        "rudder": "delta = rudder_sign x the file's rudder; positive turns the ship to starboard (MMG)",
+        "yaw_rate": "positive to starboard", "heading": "clockwise from x0", "first_rudder_step": steps}
+    res.model["validate"] = {"rudder_sign": rudder_sign, "format": fmt, "channels": channels,
+                             "profiles": sorted(p for p in profiles if p), "horizon_s": 60.0, "read": READ_SETTINGS}
+    loud(res, trials=trials, extra=notes)
+    if output:
+        res.write_json(output, force=force)
+    if as_json:
+        click.echo(res.to_json())
+    else:
+        _print_result(res)
+        if output:
+            click.echo(f"model written to {output}"
+                       + ("" if res.diagnostics.get("converged", True) else " (NOT converged: see the warnings)"))
+
+
+_ID_OPTS = [
+    click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
+                 help="Trial format [default: from the file]."),
+    click.option("--channels", default=None,
+                 help="Column map for own column names, e.g. 'x=x_position_mid,u=u_velo,psi=hdg[deg]'."),
+    click.option("--prior", default=None,
+                 help="Structure and fixed constants: esso_osaka_3m, kvlcc2_hsva, kvlcc2_L7 or MODEL.json "
+                      "[default: from the data profile (Esso CSV: esso_osaka_3m, HSVA .dat: kvlcc2_hsva); "
+                      "other files: esso_osaka_3m with a warning]."),
+    click.option("--structure", default="auto", show_default=True,
+                 help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
+    click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
+    click.option("--rudder-sign", default=None, type=int,
+                 help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
+                      "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
+    click.option("--json", "as_json", is_flag=True, help="Print the Result (MODEL.json) to stdout."),
+    click.option("--output", "-o", default=None, type=click.Path(dir_okay=False), help="Write MODEL.json here."),
+    click.option("--force", is_flag=True, help="Overwrite --output."),
+]
+
+
+def _with_id_opts(f):
+    f = strict_option(f)
+    for opt in reversed(_ID_OPTS):
+        f = opt(f)
+    return f
+
+
+@identify.command("mmg", context_settings=CONTEXT)
+@click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
+              help="A training run (repeat for several).")
+@_with_id_opts
+def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode).
+
+    The structure (which coefficients are free) is chosen by cross-validation over the
+    given runs unless --structure names one. The result is a self-describing MODEL.json
+    for 'shipid validate'.
+    """
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+
+
+from shipid.methods.dp.cli import _ManyValues  # noqa: E402  (an option taking several files)
+
+
+@identify.command("realdata", context_settings=CONTEXT)
+@click.option("--train", "train", cls=_ManyValues, required=True, type=click.Path(dir_okay=False),
+              help="Training runs: --train A.csv B.csv ...")
+@_with_id_opts
+def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+    """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+
+
+# ----------------------------------------------------------------------------- studies
+@study.command("esso-osaka-heldout", context_settings=CONTEXT)
+@click.option("--split", type=click.Choice(["miyauchi2022", "wakita2022", "both"]), default="both",
+              show_default=True, help="Training/test split of the data set's README.")
+@click.option("--folds", default=0, show_default=True, type=int,
+              help="CV folds within the training runs (0: leave one run out, the frozen scheme).")
+@click.option("--train-only", is_flag=True,
+              help="Stop after the CV table and the chosen structure: no test run is read.")
+@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+@strict_option
+def esso_heldout_cmd(split, folds, train_only, as_json):
+    """Esso Osaka 3 m: CV table over the candidate structures (training runs only), the chosen one,
+    then the held-out error table of the identified model vs the published MMG set."""
+    from shipid.methods.mmg import study as S
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    splits = ["miyauchi2022", "wakita2022"] if split == "both" else [split]
+    out = {}
+    for sp in splits:                      # every selection is made (and printed) before any test run is read
+        out[sp] = S.esso_train(sp, folds=folds or None, progress=say)
+        if not as_json:
+            click.echo(S.format_esso_training(out[sp]))
+    if not train_only:
+        for sp in splits:
+            out[sp]["heldout"] = S.esso_evaluate(out[sp], progress=say)
+            if not as_json:
+                click.echo(S.format_esso_heldout(out[sp]))
+    warns = loud_lines([])
+    if as_json:
+        click.echo(json.dumps({**out, "warnings": warns} if warns else out, indent=1, allow_nan=True))
+
+
+@study.command("kvlcc2-zigzag", context_settings=CONTEXT)
+@click.option("--folds", default=0, show_default=True, type=int,
+              help="CV folds within the training zig-zags (0: leave one out, the frozen scheme).")
+@click.option("--train-only", is_flag=True,
+              help="Stop after the CV table and the chosen structure: no held-out zig-zag is read.")
+@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+@strict_option
+def kvlcc2_cmd(folds, train_only, as_json):
+    """KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
+    from shipid.methods.mmg import study as S
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    st = S.kvlcc2_train(folds=folds or None, progress=say)
+    if not as_json:
+        click.echo(S.format_kvlcc2_training(st))
+    if not train_only:
+        st.update(S.kvlcc2_evaluate(st, progress=say))
+        if not as_json:
+            click.echo(S.format_kvlcc2_heldout(st))
+    st["warnings"] = loud_lines(st.get("warnings", []))
+    if as_json:
+        click.echo(json.dumps(st, indent=1, allow_nan=True))

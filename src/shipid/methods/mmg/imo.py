@@ -1,0 +1,308 @@
+"""IMO MSC.137(76) Standards for ship manoeuvrability, assessed on an identified MMG model with bands.
+
+Criteria (Resolution MSC.137(76), 4 December 2002, §5.3–5.4; definitions §4.2 and
+ITTC 7.5-04-02-01, :mod:`shipid.simulate.metrics`):
+
+* **Turning ability** (§5.3.1): 35° turning circle to either side, advance ≤ 4.5 L
+  and tactical diameter ≤ 5 L.
+* **Initial turning ability** (§5.3.2): 10° rudder to either side; the ship should
+  not have travelled more than 2.5 L (along its track) by the time the heading has
+  changed 10° from the original heading (measured in the 10°/10° zig-zag).
+* **Yaw-checking and course-keeping** (§5.3.3): first overshoot of the 10°/10°
+  zig-zag ≤ 10° if L/V < 10 s, ≤ 20° if L/V ≥ 30 s, ≤ (5 + ½ L/V)° in between;
+  second overshoot of the 10°/10° zig-zag ≤ 25°, 40°, (17.5 + 0.75 L/V)° (the first
+  limit + 15° at the ends); first overshoot of the 20°/20° zig-zag ≤ 25°.
+* **Stopping ability** (§5.4): track reach of the full-astern stopping test ≤ 15 L
+  (an Administration may accept up to 20 L for large, low-powered ships); only where
+  the model has an astern propeller model (the ``esso-*`` structures, Hachii's
+  thrust for n < 0); otherwise "not available".
+
+Scale: the criteria in ship lengths hold at any Froude-similar scale; the overshoot
+limits depend on the *full-scale* L/V in seconds, ``(L/V)_ship = (L/U)_model √λ``
+with ``λ = L_ship / L_model``. Without ``ship_length`` the scale is unknown and an
+overshoot criterion is decided only when it passes the strictest limit (pass) or
+fails the most lenient one (fail); otherwise it reads "depends on L/V". With
+``ship_length`` the steering gear is the slowest SOLAS allows (2.32°/s: 35° to 30°
+the other side in 28 s, II-1 reg. 29.3.2) at model scale, ``2.32 √λ`` °/s, unless a
+rate is given; without it, the training runs' rudder rate (often far faster: the
+3 m Esso Osaka's servo swings 30° within one 0.1-s sample). The stopping test uses
+the training runs' propeller reversal, so its track reach is the model's.
+
+Uncertainty: ``samples`` coefficient vectors are drawn (seeded) from N(θ̂, Σ) of the
+identified model's free coefficients (``covariance``, ``covariance_names`` of
+MODEL.json; fixed coefficients stay fixed) and every manoeuvre is simulated for each
+(one batch, :mod:`shipid.methods.mmg.manoeuvres`). Each criterion reports the
+nominal value (the point estimate), the Monte Carlo standard deviation and the
+2.275 %–97.725 % quantile band (the ±2-std band of a normal; quantiles rather than
+nominal ± 2 std so that a skewed response shows), and P(pass) over the draws (against
+the strictest limit where the limit is a range). The
+ridge standard errors of ``identify mmg`` assume independent residuals, so the
+bands are optimistic in the same measure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from shipid.errors import InputError
+from shipid.methods.mmg import manoeuvres as MM
+from shipid.simulate.metrics import turning_metrics, zigzag_metrics
+
+#: Quantiles of the band (the ±2-std probabilities of a normal).
+BAND = (2.275, 97.725)
+#: Maximum stopping track reach (ship lengths).
+STOPPING_LIMIT = 15.0
+#: Slowest steering gear SOLAS II-1 reg. 29.3.2 allows (deg/s): 35° one side to 30° the other in 28 s.
+SOLAS_RUDDER_RATE = 65.0 / 28.0
+
+
+def overshoot_limits(l_over_v: float | None) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(min, max) limits (deg) of the 10°/10° first and second overshoots for full-scale L/V (s);
+    ``None``: the range over all L/V."""
+    if l_over_v is None:
+        return (10.0, 20.0), (25.0, 40.0)
+    if l_over_v < 10.0:
+        a, b = 10.0, 25.0
+    elif l_over_v >= 30.0:
+        a, b = 20.0, 40.0
+    else:
+        a, b = 5.0 + 0.5 * l_over_v, 17.5 + 0.75 * l_over_v
+    return (a, a), (b, b)
+
+
+def sample_coefficients(result: Mapping[str, Any], samples: int, seed: int) -> tuple[list[str], np.ndarray]:
+    """Names and ``(samples + 1, p)`` values: row 0 the estimate, then draws from N(θ̂, Σ) (seeded)."""
+    names = list(result.get("covariance_names") or [])
+    cov = result.get("covariance")
+    coef = result["model"]["coefficients"]
+    theta = np.array([float(coef[n]) for n in names])
+    if not names or cov is None:
+        if samples:
+            raise InputError("the model has no parameter covariance: use --samples 0")
+        return names, theta[None]
+    S = np.asarray(cov, float)
+    if S.shape != (len(names), len(names)) or not np.all(np.isfinite(S)):
+        raise InputError("the model's covariance is malformed or not finite")
+    S = 0.5 * (S + S.T)
+    w, V = np.linalg.eigh(S)
+    if w.min() < -1e-9 * max(w.max(), 1e-300):
+        raise InputError(f"the model's covariance is not positive semi-definite (eigenvalue {w.min():.3g})")
+    A = V * np.sqrt(np.clip(w, 0.0, None))
+    z = np.random.default_rng(seed).standard_normal((samples, len(names)))
+    return names, np.vstack([theta, theta + z @ A.T])
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """One criterion: nominal value, MC std and band, limit(s) and verdict."""
+
+    name: str
+    unit: str
+    value: float
+    std: float
+    band: tuple[float, float]
+    limit: tuple[float, float] | None
+    verdict: str
+    p_pass: float
+    n_valid: int
+    note: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "unit": self.unit, "value": self.value, "std": self.std,
+                "band": list(self.band), "limit": None if self.limit is None else list(self.limit),
+                "verdict": self.verdict, "p_pass": self.p_pass, "samples_valid": self.n_valid, "note": self.note}
+
+
+def _criterion(name, unit, vals, limit, note="") -> Criterion:
+    vals = np.asarray(vals, float)
+    nominal = float(vals[0])
+    mc = vals[1:][np.isfinite(vals[1:])]
+    std = float(np.std(mc, ddof=1)) if mc.size > 1 else float("nan")
+    band = tuple(float(q) for q in np.percentile(mc, BAND)) if mc.size > 1 else (float("nan"), float("nan"))
+    if limit is None:
+        verdict, p = "not available", float("nan")
+    elif not np.isfinite(nominal):
+        verdict, p = "fail (not reached)", float(np.mean(vals[1:] <= limit[0])) if vals.size > 1 else float("nan")
+    else:
+        lo, hi = limit
+        verdict = "pass" if nominal <= lo else "fail" if nominal > hi else "depends on L/V (give --ship-length)"
+        p = float(np.mean(vals[1:] <= lo)) if vals.size > 1 else float("nan")   # strictest limit if a range
+    return Criterion(name, unit, nominal, std, band, None if limit is None else tuple(limit), verdict, p,
+                     int(mc.size), note)
+
+
+def _arc(x, y):
+    return np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+
+
+def initial_turning(rec: MM.BatchRecord, i: int, angle: float = np.deg2rad(10.0)) -> float:
+    """Track distance (m) from execute until the heading has changed ``angle``; NaN if never."""
+    ev = np.flatnonzero(np.diff(rec.delta_cmd[i]) != 0) + 1
+    if ev.size == 0:
+        return float("nan")
+    k0 = int(ev[0])
+    psi = np.abs(rec.x[i, k0:, 2] - rec.x[i, k0, 2])
+    s = _arc(rec.x[i, k0:, 0], rec.x[i, k0:, 1])
+    j = np.flatnonzero(psi >= angle)
+    if j.size == 0 or j[0] == 0:
+        return float("nan")
+    j = int(j[0])
+    return float(s[j - 1] + (angle - psi[j - 1]) / (psi[j] - psi[j - 1]) * (s[j] - s[j - 1]))
+
+
+def stopping_reach(rec: MM.BatchRecord, i: int) -> float:
+    """Track reach (m) from the astern order until the ahead speed is lost (u = 0); NaN if never."""
+    k0 = int(np.flatnonzero(rec.delta_cmd[i] > 0)[0])
+    u = rec.x[i, k0:, 3]
+    s = _arc(rec.x[i, k0:, 0], rec.x[i, k0:, 1])
+    j = np.flatnonzero(u <= 0)
+    if j.size == 0 or j[0] == 0:
+        return float("nan")
+    j = int(j[0])
+    return float(s[j - 1] + u[j - 1] / (u[j - 1] - u[j]) * (s[j] - s[j - 1]))
+
+
+def _safe(f, *a):
+    try:
+        return f(*a)
+    except InputError:
+        return None
+
+
+def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship_length: float | None = None,
+           speed: float | None = None, rps: float | None = None, rudder_rate_deg_s: float | None = None,
+           dt: float = 0.1) -> dict[str, Any]:
+    """All criteria of the module docstring for the MODEL.json dict ``result``."""
+    from shipid.methods.mmg.validate import model_from_result
+
+    if samples < 0:
+        raise InputError(f"--samples must be >= 0, got {samples}")
+    model = model_from_result(result)
+    L = float(model.particulars["L"])
+    if ship_length is not None and not ship_length > 0:
+        raise InputError(f"--ship-length must be positive, got {ship_length:g}")
+    gear_note = None
+    if ship_length is not None and rudder_rate_deg_s is None:
+        rudder_rate_deg_s = SOLAS_RUDDER_RATE * np.sqrt(ship_length / L)
+        gear_note = (f"rudder rate {rudder_rate_deg_s:.3g} deg/s: the SOLAS minimum {SOLAS_RUDDER_RATE:.3g} deg/s "
+                     f"(35 deg to 30 deg the other side in 28 s) at scale {ship_length / L:.4g} (Froude)")
+    cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s)
+    if gear_note:
+        from dataclasses import replace
+        cond = replace(cond, notes=cond.notes + (gear_note,))
+    lu = L / cond.speed
+    lv = None if ship_length is None else lu * np.sqrt(ship_length / L)
+    names, vals = sample_coefficients(result, samples, seed)
+    Th = MM.theta_rows(model, names, vals)
+    R = vals.shape[0]
+    kinds = [("turning-35", np.deg2rad(35.0), np.inf, 1), ("turning-35-port", np.deg2rad(35.0), np.inf, -1),
+             ("zigzag-10", np.deg2rad(10.0), np.deg2rad(10.0), 1), ("zigzag-10-port", np.deg2rad(10.0),
+                                                                  np.deg2rad(10.0), -1),
+             ("zigzag-20", np.deg2rad(20.0), np.deg2rad(20.0), 1), ("zigzag-20-port", np.deg2rad(20.0),
+                                                                  np.deg2rad(20.0), -1)]
+    K = len(kinds)
+    ThB = {m: np.repeat(T, K, axis=0) for m, T in Th.items()}            # row = sample * K + kind
+    order = np.tile([k[1] for k in kinds], R)
+    psw = np.tile([k[2] for k in kinds], R)
+    side = np.tile([k[3] for k in kinds], R)
+    rec = MM.simulate_rudder_batch(model, ThB, order, psw, side, cond, dt=dt, exact_reversal=True)
+    diverged = ~np.isfinite(rec.x).all(axis=(1, 2))
+    vals_of: dict[str, np.ndarray] = {}
+
+    def put(key, i, v):
+        vals_of.setdefault(key, np.full(R, np.nan))[i] = v
+
+    for r in range(R):
+        for j, (kname, _, ps, sd) in enumerate(kinds):
+            row = r * K + j
+            if diverged[row]:
+                continue
+            tr = rec.trial(row)
+            if kname.startswith("turning"):
+                tm = _safe(turning_metrics, tr)
+                if tm is not None:
+                    put(f"{kname} advance", r, tm.advance / L)
+                    put(f"{kname} tactical diameter", r, tm.tactical_diameter / L)
+            else:
+                zm = _safe(zigzag_metrics, tr, ps)
+                ov = list(zm.overshoots) if zm is not None else []
+                put(f"{kname} first overshoot", r, np.degrees(ov[0]) if len(ov) > 0 else np.nan)
+                if kname.startswith("zigzag-10"):
+                    put(f"{kname} second overshoot", r, np.degrees(ov[1]) if len(ov) > 1 else np.nan)
+                    put(f"initial turning{' port' if sd < 0 else ''}", r, initial_turning(rec, row) / L)
+    (f1lo, f1hi), (f2lo, f2hi) = overshoot_limits(lv)
+    crit = []
+    for side_name in ("turning-35", "turning-35-port"):
+        crit.append(_criterion(f"{side_name} advance", "L", vals_of.get(f"{side_name} advance", np.full(R, np.nan)),
+                               (4.5, 4.5)))
+        crit.append(_criterion(f"{side_name} tactical diameter", "L",
+                               vals_of.get(f"{side_name} tactical diameter", np.full(R, np.nan)), (5.0, 5.0)))
+    for nm in ("initial turning", "initial turning port"):
+        crit.append(_criterion(nm + " (track to 10 deg heading)", "L",
+                               vals_of.get(nm, np.full(R, np.nan)), (2.5, 2.5)))
+    for z in ("zigzag-10", "zigzag-10-port"):
+        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (f1lo, f1hi)))
+        crit.append(_criterion(f"{z} second overshoot", "deg", vals_of[f"{z} second overshoot"], (f2lo, f2hi)))
+    for z in ("zigzag-20", "zigzag-20-port"):
+        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (25.0, 25.0)))
+    stop_note = ""
+    if model.structure.startswith("esso") and cond.rps_astern is not None:
+        srec = MM.simulate_stopping_batch(model, Th, cond, dt=dt)
+        reach = np.array([stopping_reach(srec, r) / L if np.isfinite(srec.x[r]).all() else np.nan
+                          for r in range(R)])
+        note = (f"full astern {cond.rps_astern:g} rev/s (the training runs' most negative rate), reversed at "
+                + (f"{cond.rps_rate:.3g} rev/s^2" if cond.rps_rate else "once") + " as in the training runs; a "
+                "full-scale engine reverses far more slowly, so this is the model's, not the ship's, track reach")
+        crit.append(_criterion("stopping track reach", "L", reach, (STOPPING_LIMIT, STOPPING_LIMIT), note))
+    else:
+        stop_note = ("not available: model has no astern propeller" if not model.structure.startswith("esso")
+                     else "not available: the training runs never reversed the propeller")
+        crit.append(Criterion("stopping track reach", "L", float("nan"), float("nan"), (float("nan"),) * 2,
+                              None, stop_note, float("nan"), 0, stop_note))
+    warnings = []
+    for c in crit:
+        if c.limit is None:
+            continue
+        if not np.isfinite(c.value):
+            warnings.append(f"{c.name}: not reached by the nominal model within the simulated time")
+        elif samples and c.n_valid < samples:
+            warnings.append(f"{c.name}: {samples - c.n_valid} of {samples} draws gave no value (left out of the band)")
+    if diverged.any():
+        warnings.append(f"{int(diverged.sum())} of {diverged.size} simulated manoeuvres diverged "
+                        "(left out of the bands)")
+    return {"model": model.name, "structure": model.structure, "L": L, "L_over_U_model_s": lu,
+            "ship_length": ship_length, "L_over_V_full_scale_s": lv, "conditions": cond.to_dict(),
+            "samples": int(samples), "seed": int(seed), "dt": dt,
+            "covariance_names": names, "criteria": [c.to_dict() for c in crit], "warnings": warnings,
+            "notes": ["criteria of IMO MSC.137(76) 5.3-5.4 in ship lengths (model scale); overshoot limits "
+                      "from the full-scale L/V", "band: 2.275-97.725 % quantiles of the Monte Carlo over the "
+                      "parameter covariance (ridge SEs: optimistic)"]}
+
+
+def format_report(rep: Mapping[str, Any]) -> str:
+    """Plain-text table of :func:`assess`."""
+    c = rep["conditions"]
+    lv = rep["L_over_V_full_scale_s"]
+    lines = [f"IMO MSC.137(76) manoeuvres of {rep['model']} ({rep['structure']}), L = {rep['L']:g} m",
+             f"approach {c['speed']:.4g} m/s, {c['rps']:.4g} rev/s, rudder {c['rudder_rate_deg_s']:.3g} deg/s; "
+             f"L/U = {rep['L_over_U_model_s']:.3g} s (model); full-scale L/V = "
+             + (f"{lv:.3g} s" if lv is not None else "unknown (give --ship-length)"),
+             f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']} "
+             "(ridge standard errors assume independent residuals: the bands are optimistic)",
+             f"{'criterion':<52} {'value':>8} {'std':>7} {'band (+-2 std)':>19} {'limit':>11} {'P(pass)':>8}  verdict"]
+    for k in rep["criteria"]:
+        lim = k["limit"]
+        ls = "-" if lim is None else (f"{lim[0]:g}" if lim[0] == lim[1] else f"{lim[0]:g}-{lim[1]:g}")
+        b = k["band"]
+        lines.append(f"{k['name'] + ' [' + k['unit'] + ']':<52} {k['value']:8.3g} {k['std']:7.2g} "
+                     f"[{b[0]:7.3g}, {b[1]:7.3g}] {ls:>11} {k['p_pass']:8.2f}  {k['verdict']}")
+    for n in c["notes"]:
+        lines.append(f"note: {n}")
+    return "\n".join(lines)
+
+
+__all__ = ["assess", "format_report", "overshoot_limits", "sample_coefficients", "initial_turning",
+           "stopping_reach", "Criterion", "BAND", "STOPPING_LIMIT"]

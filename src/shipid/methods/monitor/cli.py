@@ -1,0 +1,213 @@
+"""``shipid monitor mass-cm``: online mass / centre-of-mass monitoring of a loaded-condition stream (seed 000).
+
+A thin loop over :class:`shipid.methods.monitor.estimator.MassCMMonitor`: read the stream in chunks, feed them,
+print each update (one JSON line, or a live panel on a terminal).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import click
+
+from shipid.cli import CONTEXT, cli
+from shipid.errors import InputError
+
+_CHANNELS = ["t", "p", "a_s", "r", "delta"]
+
+
+@cli.group("monitor", context_settings=CONTEXT)
+def monitor() -> None:
+    """Monitor a ship online from a stream of measurements."""
+
+
+def _csv_chunks(fh, header: list[str], label: str, lines_per_chunk: int, follow: bool, poll: float,
+                idle_timeout: float | None):
+    """Trials of consecutive complete CSV lines of ``fh`` (after ``header``), parsed by ``read_trial``.
+
+    With ``follow`` the end of the file is not the end of the stream: wait for more lines (as ``tail -f``)
+    until ``idle_timeout`` seconds pass without a new line (never, when None).
+    """
+    from shipid.data.io import read_trial
+
+    buf: list[str] = []
+    partial = ""
+    last = time.monotonic()
+    row0 = len(header)
+    with tempfile.TemporaryDirectory(prefix="shipid-monitor-") as tmp:
+        tmpf = Path(tmp) / "chunk.csv"
+
+        def parse(lines):
+            nonlocal row0
+            tmpf.write_text("".join(header + lines), encoding="utf-8")
+            try:
+                tr = read_trial(tmpf, fmt="csv", required=_CHANNELS, method="mass-cm")
+            except InputError as err:
+                raise InputError(f"{label}: rows {row0 + 1}-{row0 + len(lines)}: {err}") from None
+            row0 += len(lines)
+            return tr
+
+        while True:
+            line = fh.readline()
+            if line:
+                last = time.monotonic()
+                line = partial + line
+                partial = ""
+                if not line.endswith("\n"):
+                    if follow:           # a line still being written
+                        partial = line
+                        continue
+                    line += "\n"
+                if line.strip():
+                    buf.append(line)
+                if len(buf) >= lines_per_chunk:
+                    yield parse(buf)
+                    buf = []
+                continue
+            if buf:
+                yield parse(buf)
+                buf = []
+            if not follow or (idle_timeout is not None and time.monotonic() - last > idle_timeout):
+                if partial.strip():
+                    yield parse([partial + "\n"])
+                return
+            time.sleep(poll)
+
+
+def _header(fh, label: str) -> list[str]:
+    """Comment lines and the column header of a CSV stream (waits for it to appear when following)."""
+    out = []
+    while True:
+        line = fh.readline()
+        if not line:
+            raise InputError(f"{label}: empty stream (no CSV header)")
+        out.append(line)
+        if line.strip() and not line.lstrip().startswith("#"):
+            return out
+
+
+def _panel(u, nominal_label: str):
+    from rich.markup import escape
+    from rich.table import Table
+
+    tb = Table(title=f"shipid monitor mass-cm  ({nominal_label})", show_header=True)
+    tb.add_column("quantity")
+    tb.add_column("estimate", justify="right")
+    tb.add_column("± std", justify="right")
+    j = u.to_json()
+
+    def fmt(v, p=4):
+        return "—" if v is None else f"{v:.{p}g}"
+    tb.add_row(escape("t [s]"), fmt(j["t"], 6), f"window {j['window_s']:.0f} s")
+    tb.add_row(escape("m [kg]"), fmt(j["m"]), fmt(j["m_std"], 2))
+    tb.add_row(escape("zm_bar [m]"), fmt(j["zm_bar"]), fmt(j["zm_bar_std"], 2))
+    tb.add_row(escape("rho [-]"), fmt(j["rho"]), fmt(j["rho_std"], 2))
+    tb.add_row("converged", "yes" if j["converged"] else "no", "")
+    tb.add_row("detector T", fmt(j["statistic"], 3), "ALARM" if j["alarm"] else "")
+    tb.add_row(escape("last change at [s]"), fmt(j["change_at"], 6), "")
+    return tb
+
+
+@monitor.command("mass-cm")
+@click.option("--nominal", required=True, type=click.Path(dir_okay=False, exists=True),
+              help="Nominal-condition trial (recorded once).")
+@click.option("--calibration", required=True, type=click.Path(dir_okay=False, exists=True),
+              help="Calibration trial (known extra m_c at zc_bar, recorded once).")
+@click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False, exists=True),
+              help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g and z_f (required here).")
+@click.option("--stream", required=True, type=str,
+              help="Loaded-condition stream: a trial file, '-' for standard input (CSV), or with --follow a "
+                   "CSV file still being written.")
+@click.option("--window", type=click.FloatRange(min=30), default=300.0, show_default=True,
+              help="Sliding window of the loaded-stream moments (s).")
+@click.option("--every", type=click.FloatRange(min=1), default=10.0, show_default=True,
+              help="Update period in stream time (s); also the block length.")
+@click.option("--init", "init_s", type=click.FloatRange(min=30), default=120.0, show_default=True,
+              help="Stream seconds used by the start-up run of Algorithm 1 before the first estimate.")
+@click.option("--threshold", type=click.FloatRange(min=0), default=None,
+              help="Alarm threshold of the detector's Wald statistic [default: MonitorOptions.threshold].")
+@click.option("--jsonl", is_flag=True, help="One JSON line per update (the default when stdout is not a terminal).")
+@click.option("--follow", is_flag=True, help="Keep reading a CSV file that is still being written (as tail -f).")
+@click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
+              help="With --follow: stop after this many seconds without new data [default: never].")
+@click.option("--strict", is_flag=True, help="Exit with status 3 if any warning was raised.")
+def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, jsonl, follow,
+                    idle_timeout, strict):
+    """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
+
+    Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
+    "rho_std", "converged", "alarm", "change_at", ...} (shipid.methods.monitor.estimator). Channels as for
+    `shipid identify mass-cm`: t, p, a_s, r, delta.
+    Example: shipid simulate fishing-vessel mass-cm-stream --change-at 900 --to 0.7,-0.14 --out s.csv;
+    shipid monitor mass-cm --nominal s.nominal.csv --calibration s.calibration.csv --known s.known.toml
+    --stream s.csv --jsonl > run.jsonl
+    """
+    from dataclasses import replace
+
+    from shipid.methods.masscm.cli import read_known
+    from shipid.data.io import read_trial
+    from shipid.methods.masscm.estimator import REQUIRED
+    from shipid.methods.monitor.estimator import MassCMMonitor, MonitorOptions
+
+    kn = read_known(known_path)
+    if kn["z_f"] is None:
+        raise InputError("z_f is required for monitoring (m is not identifiable without it)", file=known_path)
+    opts = MonitorOptions(window=window, every=every, init=init_s)
+    if threshold is not None:
+        opts = replace(opts, threshold=threshold)
+    nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm")
+    cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm")
+    mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)
+    mon.keep_updates = False
+    live = None
+    as_json = jsonl or not sys.stdout.isatty()
+    if not as_json:
+        from rich.live import Live
+        live = Live(refresh_per_second=4)
+        live.start()
+    n_warn = 0
+
+    def emit(updates):
+        nonlocal n_warn
+        for u in updates:
+            for w in u.warnings:
+                n_warn += 1
+                click.echo(f"shipid: warning: {w}", err=True)
+            if u.alarm:
+                click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
+                           f"detector T = {u.statistic:.3g} > {opts.threshold:g})", err=True)
+            if live is not None:
+                live.update(_panel(u, Path(nominal).name))
+            else:
+                click.echo(json.dumps(u.to_json()))
+                sys.stdout.flush()
+
+    try:
+        chunk_lines = max(1, int(round(every / mon.T)))
+        if stream == "-" or follow:
+            fh = sys.stdin if stream == "-" else open(stream, encoding="utf-8", newline="")
+            try:
+                label = "stdin" if stream == "-" else stream
+                hdr = _header(fh, label)
+                for tr in _csv_chunks(fh, hdr, label, chunk_lines, follow, 0.2, idle_timeout):
+                    emit(mon.feed(tr.t, tr["p"], tr["a_s"], tr["r"], tr["delta"]))
+            finally:
+                if fh is not sys.stdin:
+                    fh.close()
+        else:
+            if not os.path.exists(stream):
+                raise InputError("no such file", file=stream)
+            tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm")
+            for a in range(0, len(tr.t), chunk_lines):
+                s = slice(a, a + chunk_lines)
+                emit(mon.feed(tr.t[s], tr["p"][s], tr["a_s"][s], tr["r"][s], tr["delta"][s]))
+    finally:
+        if live is not None:
+            live.stop()
+    if strict and n_warn:
+        sys.exit(3)

@@ -1,0 +1,187 @@
+"""HTML report of a monitoring run: the JSON lines of ``shipid monitor mass-cm`` (issue 18).
+
+One self-contained page: m(t), zm_bar(t) and rho(t) with their ±2 std bands, the detector statistic with
+its threshold, the alarms and the located change times, and the truth when the stream was simulated
+(the ``*.truth.json`` sidecar of ``shipid simulate fishing-vessel mass-cm-stream``), with the detection
+delay and the coverage of the ±2 std intervals from 300 s after the change computed from them.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from shipid.errors import InputError
+
+_KEYS = ("t", "m", "m_std", "zm_bar", "zm_bar_std", "rho", "rho_std", "converged", "alarm", "change_at")
+
+
+def is_monitor_jsonl(path: str | Path) -> bool:
+    """Whether the first non-empty line of ``path`` is a monitor update (a JSON object with ``t`` and ``alarm``)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                if line.strip():
+                    obj = json.loads(line)
+                    return isinstance(obj, dict) and "t" in obj and "alarm" in obj and "method" not in obj
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return False
+    return False
+
+
+def read_updates(path: str | Path) -> list[dict]:
+    """The updates of a JSONL file; a bad line is an :class:`InputError` naming the file and the line."""
+    out = []
+    with open(path, encoding="utf-8") as fh:
+        for k, line in enumerate(fh, start=1):
+            if not line.strip():
+                continue
+            try:
+                obj = json.loads(line)
+            except json.JSONDecodeError as err:
+                raise InputError(f"line {k}: not valid JSON ({err.msg})", file=str(path)) from None
+            missing = [key for key in _KEYS if key not in obj]
+            if missing:
+                raise InputError(f"line {k}: not a monitor update (missing {', '.join(missing)})", file=str(path))
+            out.append(obj)
+    if not out:
+        raise InputError("no updates in the file", file=str(path))
+    return out
+
+
+def _col(ups, key) -> np.ndarray:
+    return np.array([np.nan if u.get(key) is None else float(u[key]) for u in ups])
+
+
+def summary(ups: list[dict], truth: dict | None, settle: float = 300.0) -> dict:
+    """Alarms, located changes and, with the truth, detection delay and coverage of ±2 std from change + settle."""
+    t = _col(ups, "t")
+    alarms = [float(u["t"]) for u in ups if u["alarm"]]
+    located = [u["change_at"] for u in ups if u["alarm"]]
+    out = {"updates": len(ups), "t_end": float(t[-1]), "alarms": alarms, "located": located}
+    if truth is not None:
+        from shipid.simulate.masscm_stream import truth_at
+        ca = truth.get("change_at")
+        out["true_change_at"] = ca
+        out["false_alarms"] = [a for a in alarms if ca is None or a <= ca]
+        after = [a for a in alarms if ca is not None and a > ca]
+        out["detection_delay"] = after[0] - ca if after else None
+        t0 = (ca or 0.0) + settle
+        sel = [u for u in ups if u["m"] is not None and u["t"] >= t0]
+        if sel:
+            mt, zt = truth_at(truth, [u["t"] for u in sel])
+            out["coverage_from"] = t0
+            out["coverage_m"] = float(np.mean([abs(u["m"] - a) <= 2 * u["m_std"] for u, a in zip(sel, mt)]))
+            out["coverage_zm_bar"] = float(np.mean([abs(u["zm_bar"] - a) <= 2 * u["zm_bar_std"]
+                                                    for u, a in zip(sel, zt)]))
+    return out
+
+
+def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
+    """m, zm_bar, rho with ±2 std bands and the detector statistic against stream time."""
+    from shipid.report.figures import new_figure
+
+    fig = new_figure(height=8.0)
+    axs = fig.subplots(4, 1, sharex=True)
+    t = _col(ups, "t")
+    alarms = [u["t"] for u in ups if u["alarm"]]
+    located = sorted({u["change_at"] for u in ups if u["alarm"]})
+    tt = None
+    if truth is not None:
+        from shipid.simulate.masscm_stream import truth_at
+        tt = np.linspace(0.0, float(np.nanmax(t)), 2000)
+        mt, zt = truth_at(truth, tt)
+        kn_rho = None
+        try:
+            from shipid.models.roll_reduced import KnownParams
+            kn = KnownParams.from_vessel(truth.get("vessel", "fishing-vessel"))
+            zf = float(truth["z_f"])
+            kn_rho = mt * (zt + zf) / (kn.m_c * (kn.zc_bar + zf))
+        except Exception:  # no rho truth for an unknown vessel: only m and zm_bar are drawn
+            kn_rho = None
+    for ax, key, label, tr in ((axs[0], "m", "m [kg]", None if tt is None else mt),
+                               (axs[1], "zm_bar", "zm_bar [m]", None if tt is None else zt),
+                               (axs[2], "rho", "rho [-]", None if tt is None else kn_rho)):
+        v, s = _col(ups, key), _col(ups, key + "_std")
+        ax.fill_between(t, v - 2 * s, v + 2 * s, color="C0", alpha=0.25, lw=0, label="±2 std")
+        ax.plot(t, v, color="C0", lw=1.2, label="estimate")
+        if tr is not None:
+            ax.plot(tt, tr, color="k", lw=1.0, ls="--", label="truth (simulated)")
+        fin = v[np.isfinite(v)]
+        if fin.size:
+            lo, hi = np.percentile(fin, [2, 98])
+            pad = 0.5 * (hi - lo) + 1e-12
+            ax.set_ylim(lo - pad, hi + pad)
+        ax.set_ylabel(label)
+    T = _col(ups, "statistic") if any("statistic" in u for u in ups) else None
+    if T is not None:
+        axs[3].semilogy(t, np.maximum(T, 1e-3), color="C2", lw=1.0, label="detector T")
+        if threshold is not None:
+            axs[3].axhline(threshold, color="C3", lw=0.8, ls=":", label=f"threshold {threshold:g}")
+    axs[3].set_ylabel("Wald T")
+    axs[3].set_xlabel("stream time t [s]")
+    for ax in axs:
+        for a in alarms:
+            ax.axvline(a, color="C3", lw=1.0)
+        for c in located:
+            ax.axvline(c, color="C3", lw=0.8, ls="--")
+    axs[0].legend(loc="best", fontsize=7)
+    axs[3].legend(loc="best", fontsize=7)
+    axs[0].set_title("red: alarm (solid) and located change (dashed)", fontsize=8)
+    return fig
+
+
+def write_monitor_report(jsonl: str | Path, out: str | Path, *, truth_path: str | Path | None = None,
+                         force: bool = False) -> Path:
+    """Write the HTML page of a monitoring run (atomically; an existing ``out`` needs ``force``)."""
+    from shipid.errors import OutputExistsError
+    from shipid.methods.monitor.estimator import MonitorOptions
+    from shipid.report.figures import to_data_uri
+
+    out = Path(out)
+    if out.exists() and not force:
+        raise OutputExistsError(str(out))
+    ups = read_updates(jsonl)
+    truth = None
+    if truth_path is not None:
+        try:
+            truth = json.loads(Path(truth_path).read_text(encoding="utf-8"))
+        except (OSError, json.JSONDecodeError) as err:
+            raise InputError(f"cannot read the truth sidecar ({err})", file=str(truth_path)) from None
+        if not isinstance(truth, dict) or "before" not in truth:
+            raise InputError("not a truth sidecar of shipid simulate ... mass-cm-stream", file=str(truth_path))
+    summ = summary(ups, truth)
+    fig = figure(ups, truth, MonitorOptions().threshold)
+    uri = to_data_uri(fig)
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    warn = sorted({w for u in ups for w in u.get("warnings", [])})
+    rows = "".join(f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(json.dumps(v))}</td></tr>"
+                   for k, v in summ.items())
+    last = ups[-1]
+    page = f"""<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>shipid monitor mass-cm: {html.escape(Path(jsonl).name)}</title>
+<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{padding:2px 8px;text-align:left}}
+table{{border-collapse:collapse}} tr:nth-child(even){{background:#f4f4f4}}</style></head><body>
+<h1>Online mass and centre-of-mass monitoring</h1>
+<p>Monitoring run {html.escape(str(jsonl))}: {len(ups)} updates to t = {last['t']:g} s
+(Linder et al. 2015, Algorithm 1 on a sliding window; shipid.methods.monitor.estimator).
+{"Truth from " + html.escape(str(truth_path)) + " (simulated stream)." if truth else "No truth given."}</p>
+<h2>Summary</h2><table>{rows}</table>
+<h2>Estimates against time</h2>
+<figure><img src="{uri}" alt="m, zm_bar, rho and the detector statistic against time" style="width:100%">
+<figcaption>Estimates with ±2 std bands; alarms (red, solid) and located change times (red, dashed);
+the detector's Wald statistic T with the default threshold.</figcaption></figure>
+<h2>Warnings</h2>{"<ul>" + "".join(f"<li>{html.escape(w)}</li>" for w in warn) + "</ul>" if warn else "<p>none</p>"}
+</body></html>
+"""
+    tmp = out.with_name(out.name + ".tmp")
+    tmp.write_text(page, encoding="utf-8")
+    tmp.replace(out)
+    return out
+
+
+__all__ = ["is_monitor_jsonl", "read_updates", "summary", "figure", "write_monitor_report"]

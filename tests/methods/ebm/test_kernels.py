@@ -1,0 +1,169 @@
+"""The compiled EBM filter and smoothers (:mod:`shipid.methods.ebm.kernels`) equal the reference path.
+
+The reference is the pure-Python :func:`shipid.estimate.cd_ekf.cd_ekf` with the
+:class:`~shipid.models.ebm_state.EbmModel` callables and
+:mod:`shipid.estimate.smoothers` (seed 002 eqs. 9–10). Both run on the same short
+seeded simulated trial; agreement is required to 1e-9 relative (the two differ only in
+the order of floating-point operations, measured ~1e-11).
+
+The numba compilation is cached on disk (``cache=True``): only the first run on a
+machine compiles (~30 s); later runs load it in well under a second.
+"""
+
+import numpy as np
+import pytest
+
+from shipid.methods.ebm import kernels as fast
+from shipid.estimate.cd_ekf import cd_ekf
+from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.estimate.smoothers import mbf_smoother, rts_smoother
+from shipid.methods.ebm import estimator as ebm
+from shipid.methods.ebm.trials import simulate_trial
+from shipid.models import abkowitz as ab
+from shipid.models.ebm_state import EbmModel, initial_state, measurement_noise
+
+RTOL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def problem():
+    tr = simulate_trial("zigzag-20", 150.0, seed=4)
+    p = ab.params_from_vessel()
+    tc = ab.trial_conditions()
+    cfg = ebm.EbmConfig()  # rudder_q_gain > 0: Q per sample interval
+    model = EbmModel.from_abkowitz(p, tc["x_D"], tc["y_D"], tc["y_S"], q_force=cfg.q_force,
+                                   q_current=cfg.q_current)
+    Q = ebm.process_noise(model, np.asarray(tr["delta"], dtype=float), cfg)
+    R = measurement_noise(tc["sigma_xy"], tc["sigma_xy_dot"], tc["sigma_psi"], tc["sigma_u_log"])
+    z = ebm.measurements(tr)
+    t = tr.t - tr.t[0]
+    return dict(tr=tr, p=p, model=model, Q=Q, R=R, z=z, t=t, x0=initial_state(z[0], model),
+                P0=ebm._prior_cov(False))
+
+
+def _reference(pb, **kw):
+    m = kw.get("model", pb["model"])
+    return cd_ekf(m.f, m.F, m.h, m.H, kw.get("Q", pb["Q"]), pb["R"], pb["t"], kw.get("z", pb["z"]), pb["x0"],
+                  kw.get("P0", pb["P0"]), substeps=kw.get("substeps", 1))
+
+
+def _compiled(pb, **kw):
+    return fast.ebm_cd_ekf(kw.get("model", pb["model"]), kw.get("Q", pb["Q"]), pb["R"], pb["t"],
+                           kw.get("z", pb["z"]), pb["x0"], kw.get("P0", pb["P0"]),
+                           **{k: v for k, v in kw.items() if k in ("tol", "max_terms", "substeps")})
+
+
+def _close(a, b, rtol=RTOL):
+    """|a − b| ≤ rtol × (largest |b| of that component over the samples); NaNs must coincide."""
+    a, b = np.asarray(a), np.asarray(b)
+    np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+    scale = np.nanmax(np.abs(b), axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    err = np.nan_to_num(np.abs(a - b)) / scale
+    assert err.max() <= rtol, f"max relative difference {err.max():.3g}"
+
+
+def _assert_filters_equal(fa, fb):
+    for name in ("x_pred", "P_pred", "x_filt", "P_filt", "Phi", "Qd", "innov", "S", "K", "H", "nis",
+                 "HtSinv_nu", "HtSinv_H"):
+        _close(getattr(fa, name), getattr(fb, name))
+    assert fa.loglik == pytest.approx(fb.loglik, rel=RTOL)
+
+
+def _assert_smoothers_equal(sa, sb, fr):
+    _close(sa.x, sb.x)
+    # P(k|N) = P(k|k) − … cancels strongly for the well-determined states (the current's
+    # variance falls by ~1e6 from the prior), so rounding in either path is ~eps·|P(k|k)|,
+    # not ~eps·|P(k|N)|: compare relative to the *filtered* standard deviations.
+    sd = np.sqrt(np.einsum("kii->ki", fr.P_filt))
+    err = np.abs(sa.P - sb.P) / (sd[:, :, None] * sd[:, None, :])
+    assert err.max() <= RTOL, f"max difference of smoothed P / (σ_i σ_j filtered) {err.max():.3g}"
+
+
+@pytest.mark.parametrize("absolute", [False, True])
+def test_kernels_equal_model_methods(problem, absolute):
+    m = problem["model"]
+    if absolute:
+        from dataclasses import replace
+        m = replace(m, absolute=True)
+    p = m.kernel_params()
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        x = problem["x0"] + rng.normal(size=17) * np.array([1, 1, 1e-2, 10, 10, 1, 1e6, 1e4, 1e2, 1e6, 1e4, 1e2,
+                                                                1e8, 1e6, 1e4, 0.5, 0.5])
+        tk = float(rng.uniform(0, 100))
+        for kern, meth in ((fast.ebm_f, m.f), (fast.ebm_F, m.F), (fast.ebm_h, m.h), (fast.ebm_H, m.H)):
+            np.testing.assert_allclose(kern(p, tk, x), meth(tk, x), rtol=1e-14, atol=1e-300)
+
+
+@pytest.mark.parametrize("absolute, substeps", [(False, 1), (True, 2)])
+def test_compiled_filter_and_smoothers_equal_reference(problem, absolute, substeps):
+    from dataclasses import replace
+    kw = dict(model=replace(problem["model"], absolute=absolute), substeps=substeps)
+    fb = _reference(problem, **kw)
+    fa = _compiled(problem, **kw)
+    _assert_filters_equal(fa, fb)
+    _assert_smoothers_equal(fast.mbf_smoother_fast(fa), mbf_smoother(fb), fb)
+    _assert_smoothers_equal(fast.rts_smoother_fast(fa), rts_smoother(fb), fb)
+
+
+def test_constant_q_and_missing_measurements(problem):
+    z = problem["z"].copy()
+    z[7] = np.nan          # a whole sample missing
+    z[12, [0, 1]] = np.nan  # DGPS position dropped
+    z[20, 4] = np.nan      # gyro dropped
+    Q = problem["model"].Q()
+    fb = _reference(problem, z=z, Q=Q)
+    fa = _compiled(problem, z=z, Q=Q)
+    _assert_filters_equal(fa, fb)
+    np.testing.assert_array_equal(fa.x_filt[7], fa.x_pred[7])
+    assert np.isnan(fa.nis[7]) and np.all(fa.H[12, :2] == 0) and np.isnan(fa.innov[20, 4])
+    _assert_smoothers_equal(fast.mbf_smoother_fast(fa), mbf_smoother(fb), fb)
+
+
+def test_unconverged_taylor_series_falls_back_to_reference(problem):
+    """With max_terms too small the compiled loop stops; the reference path (Van Loan) runs instead."""
+    fa = _compiled(problem, max_terms=3)
+    fb = _reference(problem)
+    for name in ("x_filt", "P_filt", "Phi"):
+        np.testing.assert_array_equal(getattr(fa, name), getattr(fb, name))
+
+
+def test_not_positive_definite_is_reported_with_sample_index(problem):
+    # an indefinite prior on a state no sensor sees directly (Ẍ): the filtered P at sample 0
+    P0 = problem["P0"].copy()
+    P0[8, 8] = -1.0
+    with pytest.raises(NotPositiveDefiniteError, match=r"filter covariance at sample 0 \(t = 0 s\)"):
+        _compiled(problem, P0=P0)
+    with pytest.raises(NotPositiveDefiniteError, match=r"filter covariance at sample 0 \(t = 0 s\)"):
+        _reference(problem, P0=P0)
+    # an innovation covariance that is not positive definite
+    R = problem["R"].copy()
+    R[4, 4] = -1.0  # a negative gyro variance
+    pb = dict(problem, R=R)
+    for run in (_compiled, _reference):
+        with pytest.raises(NotPositiveDefiniteError, match=r"innovation covariance at sample 0"):
+            run(pb)
+
+
+def test_generic_smoothers_equal_reference_on_linear_model():
+    """The compiled smoothers read any FilterResult (here the reference filter on a linear model)."""
+    F = np.array([[0.0, 1.0, 0.0], [-0.2, -0.1, 1.0], [0.0, 0.0, -0.05]])
+    H = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    rng = np.random.default_rng(2)
+    t = np.arange(200) * 0.5
+    Z = rng.normal(size=(200, 2))
+    Z[50] = np.nan
+    fr = cd_ekf(lambda t, x: F @ x, lambda t, x: F, lambda t, x: H @ x, lambda t, x: H,
+                np.diag([0.0, 0.02, 0.01]), np.diag([0.04, 0.25]), t, Z, np.zeros(3), np.eye(3))
+    _assert_smoothers_equal(fast.mbf_smoother_fast(fr), mbf_smoother(fr), fr)
+    _assert_smoothers_equal(fast.rts_smoother_fast(fr), rts_smoother(fr), fr)
+
+
+def test_ebm_step1_routes_to_compiled_path_with_same_result(problem):
+    tr, p = problem["tr"], problem["p"]
+    a = ebm.estimate_states(tr, p)
+    b = ebm.estimate_states(tr, p, config=ebm.EbmConfig(compiled=False))
+    _close(a.smooth.x, b.smooth.x)
+    _close(a.filt.x_filt, b.filt.x_filt)
+    np.testing.assert_allclose(a.current, b.current, rtol=RTOL, atol=1e-12)

@@ -1,0 +1,171 @@
+"""IMO MSC.137(76) assessment of identified MMG models: limits, draws, bands, stopping, CLI."""
+
+import json
+
+import numpy as np
+import pytest
+
+from shipid.cli import main
+from shipid.data import data_root
+from shipid.errors import InputError
+from shipid.methods.mmg import imo as I
+from shipid.models import mmg
+
+ROOT = data_root()
+KV = ROOT / "kvlcc2_hsva" if ROOT is not None else None
+
+
+def need(path="params"):
+    if ROOT is None or not (ROOT / path).exists():
+        pytest.skip("shared data not found (set SHIPID_DATA)")
+
+
+def test_overshoot_limits_follow_msc137():
+    assert I.overshoot_limits(5.0) == ((10.0, 10.0), (25.0, 25.0))
+    assert I.overshoot_limits(20.0) == ((15.0, 15.0), (32.5, 32.5))
+    assert I.overshoot_limits(10.0) == ((10.0, 10.0), (25.0, 25.0))        # continuous at 10 s
+    assert I.overshoot_limits(29.999)[1][0] == pytest.approx(40.0, abs=1e-3)  # and at 30 s
+    assert I.overshoot_limits(30.0) == ((20.0, 20.0), (40.0, 40.0))
+    assert I.overshoot_limits(None) == ((10.0, 20.0), (25.0, 40.0))
+
+
+def test_draws_are_seeded_and_have_the_covariance():
+    res = {"model": {"coefficients": {"a": 1.0, "b": -2.0, "c": 5.0}}, "covariance_names": ["a", "b"],
+           "covariance": [[4.0, 1.0], [1.0, 1.0]]}
+    names, v = I.sample_coefficients(res, 4000, seed=3)
+    assert names == ["a", "b"] and v.shape == (4001, 2)
+    np.testing.assert_array_equal(v[0], [1.0, -2.0])
+    np.testing.assert_array_equal(v, I.sample_coefficients(res, 4000, seed=3)[1])
+    assert not np.array_equal(v, I.sample_coefficients(res, 4000, seed=4)[1])
+    C = np.cov(v[1:].T)
+    # sampling error of a variance estimate from 4000 draws is about sqrt(2/4000) = 2.2 % relative
+    np.testing.assert_allclose(C, [[4.0, 1.0], [1.0, 1.0]], rtol=0.1, atol=0.1)
+    bad = dict(res, covariance=[[1.0, 2.0], [2.0, 1.0]])
+    with pytest.raises(InputError, match="positive semi-definite"):
+        I.sample_coefficients(bad, 10, 0)
+    with pytest.raises(InputError, match="no parameter covariance"):
+        I.sample_coefficients(dict(res, covariance=None), 10, 0)
+
+
+def _published_esso_result():
+    m = mmg.load_published("esso_osaka_3m")
+    return {"model": dict(m.to_dict(), training_conditions={"rps_ahead": 10.0, "rps_astern": -10.0,
+                                                            "rps_rate": 20.0, "rudder_rate": float(np.deg2rad(40)),
+                                                            "runs": 1}),
+            "covariance_names": [], "covariance": None}
+
+
+def test_stopping_only_where_the_model_has_an_astern_propeller():
+    need()
+    rep = I.assess(_published_esso_result(), samples=0, ship_length=325.0)
+    stop = rep["criteria"][-1]
+    assert stop["name"] == "stopping track reach"
+    assert 0.5 < stop["value"] < 20.0 and stop["verdict"] in ("pass", "fail")
+    assert rep["L_over_V_full_scale_s"] == pytest.approx(3.0 / rep["conditions"]["speed"] * np.sqrt(325 / 3.0))
+    # with the ship's length the steering gear is SOLAS's slowest, Froude-scaled
+    assert rep["conditions"]["rudder_rate_deg_s"] == pytest.approx(65 / 28 * np.sqrt(325 / 3.0))
+    kv = mmg.load_published("kvlcc2_hsva")
+    rep = I.assess({"model": kv.to_dict()}, samples=0, rps=10.23, rudder_rate_deg_s=15.0)
+    stop = rep["criteria"][-1]
+    assert stop["verdict"] == "not available: model has no astern propeller"
+    # without the full-scale length an overshoot verdict is given only where every L/V agrees
+    z = next(c for c in rep["criteria"] if c["name"] == "zigzag-10 first overshoot")
+    assert z["limit"] == [10.0, 20.0]
+    assert z["verdict"] == ("pass" if z["value"] <= 10 else "fail" if z["value"] > 20 else
+                            "depends on L/V (give --ship-length)")
+
+
+def _identify(files, tmp_path, name):
+    out = tmp_path / name
+    args = ["identify", "mmg", "--prior", "kvlcc2_hsva", "--rudder-sign", "-1", "--structure",
+            "linear-hull+rudder", "-o", str(out)]
+    for f in files:
+        args += ["--trial", str(KV / f)]
+    assert main(args) == 0
+    return json.loads(out.read_text())
+
+
+def _widths(rep):
+    return {c["name"]: c["band"][1] - c["band"][0] for c in rep["criteria"] if np.isfinite(c["value"])}
+
+
+def _check_contains_nominal(rep):
+    for c in rep["criteria"]:
+        if np.isfinite(c["value"]):
+            assert c["band"][0] <= c["value"] <= c["band"][1], c["name"]
+            assert c["samples_valid"] == rep["samples"]
+
+
+@pytest.mark.realdata
+def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_path, capsys):
+    """A model identified from one HSVA zig-zag: the quantile bands contain the point estimate, and
+    with the covariance divided by 4 (what 4x the data would give) every band is about half as wide."""
+    need("kvlcc2_hsva")
+    res = _identify(["HSVA_CPMC_KVLCC2_Z_20_05.dat"], tmp_path, "m1.json")
+    capsys.readouterr()
+    rep = I.assess(res, samples=60, seed=1)
+    _check_contains_nominal(rep)
+    q = dict(res, covariance=(np.asarray(res["covariance"]) / 4.0).tolist())
+    rep4 = I.assess(q, samples=60, seed=1)
+    _check_contains_nominal(rep4)
+    w, w4 = _widths(rep), _widths(rep4)
+    assert len(w) == 12
+    for k in w:
+        assert 0.3 < w4[k] / w[k] < 0.7, (k, w[k], w4[k])
+    # same seed, same answer; the CLI prints the same numbers as JSON
+    mj = tmp_path / "m1.json"
+    assert main(["imo", str(mj), "--json", "--samples", "60", "--seed", "1"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    np.testing.assert_array_equal([c["band"] for c in cli["criteria"]], [c["band"] for c in rep["criteria"]])
+
+
+@pytest.mark.realdata
+@pytest.mark.slow
+def test_bands_shrink_with_more_runs(tmp_path):
+    """Identified from 3 vs all 13 HSVA zig-zags: bands contain the nominal and every one is narrower with 13."""
+    need("kvlcc2_hsva")
+    few = _identify(["HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat",
+                     "HSVA_CPMC_KVLCC2_Z_35_05.dat"], tmp_path, "m3.json")
+    many = _identify(sorted(p.name for p in KV.glob("*.dat")), tmp_path, "m13.json")
+    r3, r13 = I.assess(few, samples=60, seed=2), I.assess(many, samples=60, seed=2)
+    _check_contains_nominal(r3)
+    _check_contains_nominal(r13)
+    w3, w13 = _widths(r3), _widths(r13)
+    for k in w3:
+        assert w13[k] < w3[k], (k, w3[k], w13[k])
+
+
+def test_stopping_batch_equals_the_generic_simulator_and_reach_is_interpolated():
+    """The stopping rows are mmg.simulate_batch with the same propeller schedule; the reach is the
+    track length up to u = 0 (linear interpolation between the samples around it)."""
+    need()
+    from shipid.methods.mmg import manoeuvres as MM
+
+    m = mmg.load_published("esso_osaka_3m")
+    cond = MM.Conditions(speed=MM.equilibrium_speed(m, 10.0), rps=10.0, rudder_rate=1.0, rps_astern=-10.0,
+                         rps_rate=20.0)
+    rec = MM.simulate_stopping_batch(m, MM.theta_rows(m), cond)
+    t = rec.t
+    U = np.zeros((t.size, 4))
+    U[:, 1] = rec.n[0]
+    ref = mmg.simulate_batch(m, t, np.array([[0, 0, 0, cond.speed, 0, 0]]), U)[0]
+    np.testing.assert_allclose(rec.x[0], ref, rtol=1e-10, atol=1e-12)
+    k0 = int(np.flatnonzero(rec.delta_cmd[0] > 0)[0])
+    assert rec.n[0, k0] == pytest.approx(10.0 - 20.0 * 0.1)              # the ramp starts at execute
+    assert rec.x[0, -1, 3] <= 0 < rec.x[0, -2, 3]                          # stopped at the first u <= 0
+    reach = I.stopping_reach(rec, 0)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(ref[k0:, 0]), np.diff(ref[k0:, 1])))])
+    assert s[-2] <= reach <= s[-1]
+
+
+def test_initial_turning_on_a_constructed_track():
+    from shipid.methods.mmg.manoeuvres import BatchRecord
+
+    t = np.arange(0.0, 30.0, 0.1)
+    x = np.zeros((1, t.size, 6))
+    x[0, :, 0] = 2.0 * t                                   # 2 m/s straight (track = 2 t)
+    x[0, :, 2] = np.where(t > 5.0, np.deg2rad(1.0) * (t - 5.0), 0.0)   # 1 deg/s after execute at 5 s
+    cmd = np.where(t >= 5.0, 0.1, 0.0)[None]
+    rec = BatchRecord(t, x, cmd, cmd, np.zeros((1, t.size)))
+    # heading change 10 deg at t = 15 s, 10 s after execute: 20 m of track
+    assert I.initial_turning(rec, 0) == pytest.approx(20.0, rel=1e-9)

@@ -1,0 +1,86 @@
+"""``shipid simulate fishing-vessel mass-cm-stream``, ``shipid monitor mass-cm`` and the report of a run."""
+
+import io
+import json
+import sys
+
+import pytest
+
+from shipid.cli import main
+
+
+@pytest.fixture(scope="module")
+def stream(tmp_path_factory):
+    d = tmp_path_factory.mktemp("monitor")
+    out = d / "s.csv"
+    rc = main(["simulate", "fishing-vessel", "mass-cm-stream", "--duration", "400", "--change-at", "250",
+               "--to", "0.7,-0.14", "--seed", "3", "--out", str(out)])
+    assert rc == 0
+    return d
+
+
+def _args(d, *extra):
+    return ["monitor", "mass-cm", "--nominal", str(d / "s.nominal.csv"), "--calibration",
+            str(d / "s.calibration.csv"), "--known", str(d / "s.known.toml"), *extra]
+
+
+def test_simulate_writes_the_files(stream):
+    for name in ("s.csv", "s.nominal.csv", "s.calibration.csv", "s.known.toml", "s.truth.json"):
+        assert (stream / name).exists(), name
+    truth = json.loads((stream / "s.truth.json").read_text())
+    assert truth["change_at"] == 250.0 and truth["after"] == {"m": 0.7, "zm_bar": -0.14}
+    assert "phi" not in (stream / "s.csv").read_text().splitlines()[0]      # the stream holds what an IMU measures
+    # no clobbering
+    assert main(["simulate", "fishing-vessel", "mass-cm-stream", "--out", str(stream / "s.csv")]) == 2
+
+
+def test_monitor_file_and_stdin_agree(stream, capsys, monkeypatch):
+    rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl"))
+    cap = capsys.readouterr()
+    assert rc == 0
+    lines = [json.loads(x) for x in cap.out.splitlines()]
+    assert len(lines) == 40 and lines[-1]["t"] == 400.0
+    alarms = [x for x in lines if x["alarm"]]
+    assert len(alarms) == 1 and 250 < alarms[0]["t"] <= 370
+    assert "alarm at t =" in cap.err
+    (stream / "run.jsonl").write_text(cap.out)
+    monkeypatch.setattr(sys, "stdin", io.StringIO((stream / "s.csv").read_text()))
+    rc = main(_args(stream, "--stream", "-", "--jsonl"))
+    assert rc == 0
+    assert [json.loads(x) for x in capsys.readouterr().out.splitlines()] == lines
+
+
+def test_report_of_a_run(stream, capsys):
+    if not (stream / "run.jsonl").exists():
+        pytest.skip("needs test_monitor_file_and_stdin_agree")
+    out = stream / "r.html"
+    rc = main(["report", str(stream / "run.jsonl"), "--out", str(out), "--truth", str(stream / "s.truth.json")])
+    assert rc == 0
+    page = out.read_text()
+    assert "data:image/png;base64," in page and "detection_delay" in page and "<td>[]</td>" in page   # no false alarm
+
+
+def test_bad_stream_is_one_line(stream, capsys, tmp_path):
+    lines = (stream / "s.csv").read_text().splitlines(True)
+    bad = tmp_path / "bad.csv"
+    row = lines[1000].split(",")
+    row[1] = "nan"
+    bad.write_text("".join(lines[:1000]) + ",".join(row) + "".join(lines[1001:3000]))
+    rc = main(_args(stream, "--stream", str(bad), "--jsonl"))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "bad.csv" in err[0]
+    rc = main(_args(stream, "--stream", str(tmp_path / "none.csv")))
+    assert rc == 2
+
+
+def test_live_panel_renders():
+    from rich.console import Console
+
+    from shipid.methods.monitor.cli import _panel
+    from shipid.methods.monitor.estimator import MonitorUpdate
+
+    u = MonitorUpdate(930.0, 0.71, 0.09, -0.141, 0.018, 3.0, 0.12, False, True, 900.0, window_s=30.0, statistic=63.0)
+    con = Console(file=io.StringIO(), width=100)
+    con.print(_panel(u, "s.nominal.csv"))
+    text = con.file.getvalue()
+    assert "0.71" in text and "ALARM" in text and "900" in text and "m [kg]" in text and "zm_bar [m]" in text
