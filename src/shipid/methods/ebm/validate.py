@@ -19,7 +19,8 @@ line fitted within ±``fit_half`` s to each channel, evaluated at the start):
 The prediction is compared in the measured quantities of eq. 8 (what the run records, at the
 sensors' positions): heading ψ (deg, wrapped), antenna position (m, distance), antenna velocity
 over ground (m/s, magnitude of the difference of ``(ẋ, ẏ)``) and the speed log ``u_r − y_S r``
-(m/s). The lever arms ``x_D, y_D, y_S`` are the run's metadata, else zero (body origin).
+(m/s). The lever arms ``x_D, y_D, y_S`` are the run's metadata, else those of the model's training
+runs, else zero (body origin, with a warning).
 """
 
 from __future__ import annotations
@@ -64,8 +65,21 @@ def params_from_result(result: Result) -> ab.AbkowitzParams:
     return p.with_theta(thX, thY, thN).with_current(cs, cd)
 
 
-def _levers(trial: Trial) -> tuple[float, float, float]:
-    return tuple(float(trial.meta.get(k, 0.0)) for k in ("x_D", "y_D", "y_S"))
+def levers(trial: Trial, result: Result | None = None) -> tuple[tuple[float, float, float], str]:
+    """Sensor lever arms ``(x_D, y_D, y_S)`` (m) and where they came from.
+
+    The run's metadata, else those of the result's training runs (the same installation, when
+    they all agree), else the body origin.
+    """
+    keys = ("x_D", "y_D", "y_S")
+    if all(k in trial.meta for k in keys):
+        return tuple(float(trial.meta[k]) for k in keys), "run metadata"
+    if result is not None:
+        seen = {tuple(float(s.get(k, 0.0)) for k in keys)
+                for s in (d.get("sensors") or {} for d in (result.diagnostics or {}).get("trials", []))}
+        if len(seen) == 1:
+            return seen.pop(), "the model's training runs"
+    return (0.0, 0.0, 0.0), "not stated: body origin assumed"
 
 
 def measured_columns(trial: Trial) -> np.ndarray:
@@ -73,9 +87,9 @@ def measured_columns(trial: Trial) -> np.ndarray:
     return np.column_stack([np.asarray(trial[c], dtype=float) for c in COLUMNS])
 
 
-def sensor_outputs(X: np.ndarray, p: ab.AbkowitzParams, levers) -> np.ndarray:
+def sensor_outputs(X: np.ndarray, p: ab.AbkowitzParams, lever) -> np.ndarray:
     """Eq. 8 (absolute positions) from states ``[u_r, v_r, r, x, y, ψ]`` (..., 6): ``[x_D, y_D, ẋ_D, ẏ_D, ψ, U]``."""
-    xD, yD, yS = levers
+    xD, yD, yS = lever
     ur, vr, r, x, y, psi = (X[..., i] for i in range(6))
     c, s = np.cos(psi), np.sin(psi)
     cx, cy = p.current_xy
@@ -84,10 +98,11 @@ def sensor_outputs(X: np.ndarray, p: ab.AbkowitzParams, levers) -> np.ndarray:
                      psi, ur - yS * r], axis=-1)
 
 
-def initial_states(trial: Trial, starts: np.ndarray, p: ab.AbkowitzParams, fit_half: float) -> np.ndarray:
+def initial_states(trial: Trial, starts: np.ndarray, p: ab.AbkowitzParams, fit_half: float,
+                   lever: tuple[float, float, float]) -> np.ndarray:
     """States ``[u_r, v_r, r, x, y, ψ]`` at ``starts`` from the measurements around them (module docstring)."""
     t = np.asarray(trial.t, dtype=float)
-    xD, yD, _ = _levers(trial)
+    xD, yD, _ = lever
     psi, r = local_fit(t, np.unwrap(np.asarray(trial["psi"], dtype=float)), starts, fit_half)
     xa, _ = local_fit(t, trial["x"], starts, fit_half)
     ya, _ = local_fit(t, trial["y"], starts, fit_half)
@@ -109,22 +124,27 @@ def _errors(pred: np.ndarray, meas: np.ndarray) -> dict[str, np.ndarray]:
 
 def validate(p: ab.AbkowitzParams, trial: Trial, *, horizon: float = DEFAULT_HORIZON, stride: float | None = None,
              windows: tuple[float, ...] = (30.0, 60.0), whole: bool = True, fit_half: float = 5.0,
-             model_name: str = "abkowitz") -> Validation:
-    """Simulate the Abkowitz ship ``p`` open loop on ``trial`` and compare (module docstring)."""
+             model_name: str = "abkowitz", lever: tuple[float, float, float] | None = None,
+             lever_source: str = "") -> Validation:
+    """Simulate the Abkowitz ship ``p`` open loop on ``trial`` and compare (module docstring).
+
+    ``lever``: the sensor lever arms ``(x_D, y_D, y_S)``, m (default :func:`levers` of the run).
+    """
     trial.require(list(REQUIRED), method="validate ebm")
     src = trial.meta.get("source")
     check_finite(src, {c: trial[c] for c in REQUIRED})
     t = np.asarray(trial.t, dtype=float)
     U = np.column_stack([trial["delta"], trial["n"]]).astype(float)
     Z = measured_columns(trial)
-    levers = _levers(trial)
+    if lever is None:
+        lever, lever_source = levers(trial)
     dt = float(np.median(np.diff(t)))
     sub = max(1, int(np.ceil(dt / 0.2 - 1e-9)))
     h = dt / sub
     f = ab.make_dynamics(p)
 
     def simulate(starts: np.ndarray, L: int) -> np.ndarray:
-        X0 = initial_states(trial, starts, p, fit_half)
+        X0 = initial_states(trial, starts, p, fit_half, lever)
         out = np.full((starts.size, L, 6), np.nan)
         with np.errstate(all="ignore"):
             for i, (k0, x) in enumerate(zip(starts, X0)):
@@ -136,14 +156,17 @@ def validate(p: ab.AbkowitzParams, trial: Trial, *, horizon: float = DEFAULT_HOR
                     if not np.all(np.isfinite(x)):
                         break
                     out[i, j] = x
-        return sensor_outputs(out, p, levers)
+        return sensor_outputs(out, p, lever)
 
     win, hz, pred = error_table(t, Z, simulate, _errors, QUANTITIES, UNITS, horizon=horizon, stride=stride,
                                 windows=windows, whole=whole)
-    settings = {"levers_m": dict(zip(("x_D", "y_D", "y_S"), levers)),
+    settings = {"levers_m": dict(zip(("x_D", "y_D", "y_S"), lever)), "levers_from": lever_source,
                 "current": {"speed_m_s": p.current_speed, "direction_rad": p.current_dir},
                 "initial_state": f"straight-line fit within +-{fit_half:g} s of each start",
                 "substeps": sub}
+    if lever_source.startswith("not stated"):
+        settings["warnings"] = [f"{src or 'the run'} states no sensor positions: DGPS antenna and speed log "
+                                "taken at the body origin"]
     return Validation(windows=win, horizons=hz, t=t[:pred.shape[0]], measured=Z[:pred.shape[0]], predicted=pred,
                       model_name=model_name, source=str(src or ""), quantities=QUANTITIES, units=UNITS,
                       method="ebm", columns=COLUMNS, settings=settings)
@@ -154,6 +177,9 @@ def validate_result(result: Result, trial: Trial, *, horizon: float | None = Non
     ``identify("ebm", ...)`` result (every coefficient of eq. 13 as estimated, also those the
     training data did not determine)."""
     name = f"ebm ({result.model.get('vessel', '?')})"
+    lever, source = levers(trial, result)
+    kw.setdefault("lever", lever)
+    kw.setdefault("lever_source", source)
     return validate(params_from_result(result), trial, horizon=DEFAULT_HORIZON if horizon is None else horizon,
                     model_name=kw.pop("model_name", name), **kw)
 
@@ -166,4 +192,4 @@ def plot(v: Validation, path, *, force: bool = False):
 
 
 __all__ = ["validate", "validate_result", "params_from_result", "initial_states", "sensor_outputs",
-           "measured_columns", "plot", "REQUIRED", "COLUMNS", "QUANTITIES", "UNITS", "DEFAULT_HORIZON"]
+           "measured_columns", "levers", "plot", "REQUIRED", "COLUMNS", "QUANTITIES", "UNITS", "DEFAULT_HORIZON"]
