@@ -68,7 +68,7 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--channels", default=None,
               help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
 @click.option("--horizon", default=None, type=float,
-              help="Length of restarted horizons, s [default: MODEL.json's, else 60].")
+              help="Length of restarted horizons, s [default: MODEL.json's, else the method's: 60, mass-cm 10].")
 @click.option("--rudder-sign", default=None, type=int,
               help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                    "[default: MODEL.json's training convention, else from the data profile: -1 for HSVA KVLCC2].")

@@ -25,7 +25,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from shipid.analysis.openloop import Validation, format_table, horizon_starts
+from shipid.analysis.openloop import Validation, format_table, horizon_starts, summarise
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
@@ -163,20 +163,7 @@ def _errors(pred: np.ndarray, meas: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _summary(err: Mapping[str, np.ndarray], mask: np.ndarray | None = None) -> dict[str, dict[str, float]]:
-    out = {}
-    for q in QUANTITIES:
-        e = np.asarray(err[q])
-        if mask is not None:
-            e = e[mask]
-        e = e.ravel()
-        if e.size == 0:
-            out[q] = {"rms": float("nan"), "max": float("nan"), "unit": UNITS[q]}
-            continue
-        if not np.all(np.isfinite(e)):     # a diverged prediction is an infinite error, not a skipped one
-            out[q] = {"rms": float("inf"), "max": float("inf"), "unit": UNITS[q]}
-            continue
-        out[q] = {"rms": float(np.sqrt(np.mean(e * e))), "max": float(np.max(np.abs(e))), "unit": UNITS[q]}
-    return out
+    return summarise(err, QUANTITIES, UNITS, mask)
 
 
 def validate(model: mmg.MmgModel, trial: Trial, *, horizon: float = 60.0, stride: float | None = None,
