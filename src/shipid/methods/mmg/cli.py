@@ -68,7 +68,7 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--channels", default=None,
               help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
 @click.option("--horizon", default=None, type=float,
-              help="Length of restarted horizons, s [default: MODEL.json's, else 60].")
+              help="Length of restarted horizons, s [default: MODEL.json's, else the method's: 60, mass-cm 10].")
 @click.option("--rudder-sign", default=None, type=int,
               help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                    "[default: MODEL.json's training convention, else from the data profile: -1 for HSVA KVLCC2].")
@@ -80,11 +80,17 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
 @strict_option
 def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
-    """Simulate MODEL open loop on a measured run and report RMS/max errors.
+    """Simulate MODEL open loop on a held-out run and report RMS/max errors.
 
-    MODEL is a JSON file written by 'shipid identify mmg --json' (or 'identify
-    realdata'), or 'published:esso_osaka_3m' / 'published:kvlcc2_L7' for the published
-    MMG sets read from the shared data folder. The model starts from the measured
+    MODEL is a result JSON of 'shipid identify mmg | ebm | dp | mass-cm --json' (the
+    method is read from its 'method' field), or 'published:esso_osaka_3m' /
+    'published:kvlcc2_L7' for the published MMG sets read from the shared data folder.
+    EBM: the Abkowitz ship driven by the measured rudder and propeller rate, compared
+    in heading, antenna position and velocity and speed log; DP: the LF model driven
+    by the measured pitch ratios and azimuth angle, compared in x, y and heading;
+    mass-cm: the roll model (33) of the run's loading condition driven by the measured
+    a_s, r and rudder, compared in roll rate (and roll angle where recorded), with
+    10-s horizons by default. An MMG model starts from the measured
     initial state and is driven by the measured rudder, propeller revolutions and
     true wind; errors of heading (deg), yaw rate (deg/s), u, v (m/s) and position (m)
     over the first 30 s, 60 s, the whole run and 60-s horizons restarted from the
@@ -105,6 +111,11 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         from shipid.errors import OutputExistsError
         if Path(out_path).exists():          # before the simulation, not after
             raise OutputExistsError(out_path)
+    other = _result_of_other_method(model)
+    if other is not None:
+        _validate_other(model, other, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path,
+                        out_path, force)
+        return
     m, doc = V.load_model_document(model)
     mv = dict((doc or {}).get("model", {}).get("validate", {}) or {})
     notes = []
@@ -144,6 +155,72 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         click.echo(json.dumps(d, indent=2))
     else:
         click.echo(V.format_table(v))
+        if plot_path:
+            click.echo(f"plot written to {plot_path}")
+        if out_path:
+            click.echo(f"prediction written to {out_path}")
+
+
+def _result_of_other_method(model: str) -> dict | None:
+    """The JSON document of ``model`` when it is a result of a method other than MMG, else None
+    (``published:`` sets, MMG results and unreadable files take the MMG path, which reports them)."""
+    from pathlib import Path
+
+    from shipid import registry
+
+    if str(model).startswith("published:") or not Path(model).is_file():
+        return None
+    try:
+        doc = json.loads(Path(model).read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    if not isinstance(doc, dict) or "method" not in doc:
+        return None
+    if (doc.get("model") or {}).get("family") == "mmg":
+        return None
+    info = registry.for_result(str(doc["method"]))
+    return None if info is not None and info.name == "mmg" else doc
+
+
+def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path,
+                    force):
+    """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
+    from shipid import registry
+    from shipid.analysis.openloop import format_table, write_csv
+    from shipid.data.io import read_trial
+    from shipid.errors import InputError
+    from shipid.result import Result
+
+    method = str(doc["method"])
+    info = registry.for_result(method)
+    if info is None or not info.has_module("validate"):
+        can = ", ".join(k for k, v in registry.methods().items() if v.has_module("validate"))
+        raise InputError(f"a {method!r} result cannot be validated (methods with an open-loop model: {can})",
+                         file=model)
+    mod = info.submodule("validate")
+    try:
+        res = Result.from_dict(doc)
+    except (KeyError, TypeError, ValueError) as err:
+        raise InputError(f"malformed result ({type(err).__name__}: {err})", file=model) from None
+    tr = read_trial(trial_path, fmt=fmt, channel_map=channels, required=list(getattr(mod, "REQUIRED", ())) or None,
+                    method="shipid validate", **READ_SETTINGS)
+    tr = _flip(tr, rudder_sign)
+    notes = []
+    if (res.diagnostics or {}).get("converged") is False:
+        notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
+                     "its predictions must not be trusted")
+    v = mod.validate_result(res, tr, horizon=horizon)
+    warns = loud_lines(notes + list(v.settings.get("warnings", [])), trials=[tr])
+    if out_path:
+        write_csv(v, out_path, force=force)
+    if plot_path:
+        mod.plot(v, plot_path, force=force)
+    if as_json:
+        d = v.to_dict()
+        d["warnings"] = warns
+        click.echo(json.dumps(d, indent=2))
+    else:
+        click.echo(format_table(v))
         if plot_path:
             click.echo(f"plot written to {plot_path}")
         if out_path:
