@@ -234,14 +234,16 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
                f"{s['flagged_implausible']} flagged implausible, {s['not_converged']} not converged), "
                f"3 x {duration:g} s, seed {campaign.seed}, {s['wall_s']:.1f} s")
     click.echo(f"  {'':7s} {'true':>9s} {'mean':>9s} {'bias/se':>8s} {'spread':>9s} {'mean std':>9s} "
-               f"{'bound':>9s} {'spr/bnd':>8s} {'cov 2std':>8s}")
+               f"{'bound':>9s} {'spr/bnd':>8s} {'95% CI':>13s} {'cov 2std':>8s}")
     rows = [(k, q) for k, q in s["quantities"].items()]
     rows += [(f"{k}*", q) for k, q in s["quantities_unflagged"].items()]
     for k, q in rows:
         ratio = q["spread_over_bound"]
+        ci = q.get("spread_over_bound_ci95")
+        ci_s = f"[{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "-"
         click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
                    f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
-                   f"{ratio if ratio is not None else float('nan'):8.2f} {q['coverage_2std']:8.2f}")
+                   f"{ratio if ratio is not None else float('nan'):8.2f} {ci_s:>13s} {q['coverage_2std']:8.2f}")
     click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
 
 

@@ -136,6 +136,7 @@ def _stats(fin: list, vessel: str, bound: dict | None) -> dict:
         v = np.array([o[k] for o in fin], dtype=float)
         s = np.array([o[f"{k}_std"] for o in fin], dtype=float)
         spread = float(v.std(ddof=1)) if n > 1 else float("nan")
+        mad = float(1.4826 * np.median(np.abs(v - np.median(v)))) if n > 1 else float("nan")
         cov = float(np.mean(np.abs(v - truth[k]) <= 2 * s)) if n else float("nan")
         b = None if bound is None else float(bound[k]["std"])
         q[k] = {"true": truth[k], "mean": float(v.mean()) if n else float("nan"),
@@ -146,8 +147,19 @@ def _stats(fin: list, vessel: str, bound: dict | None) -> dict:
                 "coverage_se": math.sqrt(max(cov * (1 - cov), 0.25 / max(n, 1)) / n) if n else float("nan"),
                 "bound": b, "spread_over_bound": spread / b if b else None,
                 "spread_over_bound_rel_se": 1 / math.sqrt(2 * (n - 1)) if n > 1 else None,
+                "spread_over_bound_ci95": _ratio_ci(spread / b, n) if b and n > 1 else None,
+                # outlier-resistant: 1.4826 x the median absolute deviation (= the std for Gaussian estimates;
+                # its sampling error is ~1.65x that of the std, so the chi-square interval above is too narrow for it)
+                "spread_mad": mad, "spread_mad_over_bound": mad / b if b and n > 1 else None,
                 "mean_within_one_spread": bool(abs(v.mean() - truth[k]) <= spread) if n > 1 else None}
     return q
+
+
+def _ratio_ci(ratio: float, n: int) -> list:
+    """95 % interval of sigma/bound from a sample spread over ``n`` runs: ``(n-1) s^2 / sigma^2 ~ chi2(n-1)``."""
+    from scipy.stats import chi2
+    lo, hi = chi2.ppf([0.975, 0.025], n - 1)
+    return [float(ratio * math.sqrt((n - 1) / lo)), float(ratio * math.sqrt((n - 1) / hi))]
 
 
 def bound_for(regime: str, duration: float, vessel: str = "fishing-vessel", seed: int = 0) -> dict:
