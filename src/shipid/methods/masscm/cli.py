@@ -240,10 +240,10 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
     for k, q in rows:
         ratio = q["spread_over_bound"]
         ci = q.get("spread_over_bound_ci95")
-        ci_s = f"[{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "-"
+        ci_s = f"[{ci[0]:.3g}, {ci[1]:.3g}]" if ci else "-"
         click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
                    f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
-                   f"{ratio if ratio is not None else float('nan'):8.2f} {ci_s:>13s} {q['coverage_2std']:8.2f}")
+                   f"{ratio if ratio is not None else float('nan'):8.3g} {ci_s:>13s} {q['coverage_2std']:8.2f}")
     click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
 
 
