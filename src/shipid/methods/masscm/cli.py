@@ -234,14 +234,16 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
                f"{s['flagged_implausible']} flagged implausible, {s['not_converged']} not converged), "
                f"3 x {duration:g} s, seed {campaign.seed}, {s['wall_s']:.1f} s")
     click.echo(f"  {'':7s} {'true':>9s} {'mean':>9s} {'bias/se':>8s} {'spread':>9s} {'mean std':>9s} "
-               f"{'bound':>9s} {'spr/bnd':>8s} {'cov 2std':>8s}")
+               f"{'bound':>9s} {'spr/bnd':>8s} {'95% CI':>13s} {'cov 2std':>8s}")
     rows = [(k, q) for k, q in s["quantities"].items()]
     rows += [(f"{k}*", q) for k, q in s["quantities_unflagged"].items()]
     for k, q in rows:
         ratio = q["spread_over_bound"]
+        ci = q.get("spread_over_bound_ci95")
+        ci_s = f"[{ci[0]:.3g}, {ci[1]:.3g}]" if ci else "-"
         click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
                    f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
-                   f"{ratio if ratio is not None else float('nan'):8.2f} {q['coverage_2std']:8.2f}")
+                   f"{ratio if ratio is not None else float('nan'):8.3g} {ci_s:>13s} {q['coverage_2std']:8.2f}")
     click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
 
 
@@ -273,9 +275,11 @@ def crlb_group():
 @click.option("--wave-roll", type=float, default=0.5, show_default=True, help="Roll std from waves alone (deg).")
 @click.option("--wave-period", type=float, default=1.0, show_default=True, help="Wave peak period (s).")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--method", type=click.Choice(["spectrum", "ar"]), default="spectrum", show_default=True,
-              help="spectrum: the exact equation-error spectrum of the simulated noise (Whittle form); ar: an AR(40) "
-                   "noise model fitted to a simulated noise record (cannot represent the wave-roll zeros).")
+@click.option("--method", type=click.Choice(["kf", "spectrum", "ar"]), default="kf", show_default=True,
+              help="kf: Cramér–Rao bound of the data-generating model (ship (11), wave filter, sensor noise, biases; "
+                   "exact Kalman-filter likelihood, sway/yaw rows and noise levels as nuisance); spectrum: optimal-IV "
+                   "bound of the rudder-driven regressors with the exact equation-error spectrum (Whittle form); ar: "
+                   "the same with an AR(40) noise model (cannot represent the wave-roll zeros).")
 @click.option("--json", "as_json", is_flag=True)
 def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, method, as_json):
     """Bounds on zm_bar, rho and m (z_f known) for a ship, excitation, noise and record length."""
@@ -283,14 +287,20 @@ def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll,
     from shipid.models.roll_sim import NoiseSpec
     if duration <= 0 or fs <= 0:
         raise ShipidError("--duration and --fs must be positive")
+    if gyro_std < 0 or acc_std < 0 or wave_roll < 0 or (gyro_std == acc_std == wave_roll == 0):
+        raise ShipidError("--gyro-std, --acc-std and --wave-roll must be >= 0 and not all 0 (noise-free data: no bound)")
     noise = NoiseSpec(gyro_std=gyro_std, acc_std=acc_std, wave_roll_deg=wave_roll, wave_period=wave_period)
-    b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
-             method=method)
+    try:
+        b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
+                 method=method)
+    except ValueError as exc:
+        raise ShipidError(f"crlb mass-cm: {exc}") from None
     if as_json:
         click.echo(json.dumps(b, indent=2, allow_nan=True))
         return
-    click.echo(f"Cramér–Rao bounds, {vessel}, {duration:g} s per dataset at {fs:g} Hz, rudder ±{rudder_deg:g} deg, "
-               f"waves {wave_roll:g} deg roll (z_f known):")
+    click.echo(f"Cramér–Rao bounds ({method}), {vessel}, {duration:g} s per dataset at {fs:g} Hz, rudder "
+               f"±{rudder_deg:g} deg, waves {wave_roll:g} deg roll, gyro {gyro_std:g} rad/s, acc {acc_std:g} m/s^2 "
+               f"(z_f known):")
     for k in ("zm_bar", "rho", "m"):
         e = b["bounds"][k]
         click.echo(f"  {k:7s} true {e['true']:.5g}  std >= {e['std']:.3g}  ({100 * e['rel']:.2f} %)")
