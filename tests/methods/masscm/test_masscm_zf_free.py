@@ -12,6 +12,7 @@ settled); since the four-iterate relaxation (``MassCMOptions.cycle_after``) 0. S
 
 import numpy as np
 import pytest
+from known.linder2015 import TABLE3_TRUE
 
 from shipid.methods.masscm.identifiability import m_of_zf
 from shipid.methods.masscm.estimator import I_ZF, MassCMOptions, iterate, rho_of
@@ -39,7 +40,7 @@ def test_zf_free_runs_are_rarely_flagged(free_runs):
 
 def test_zf_free_identifiable_quantities_as_with_zf_known(free_runs, kn):
     ok = [o for o in free_runs if not o["implausible"]]
-    rho_true = rho_of(np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182]), kn)   # Table 2
+    rho_true = rho_of(TABLE3_TRUE, kn)
     for o in ok:
         th = np.array([o[n] for n in THETA_NAMES])
         assert abs(o["zm_bar"] - ZM_KNOWN_STUDY) < 1e-4
