@@ -176,3 +176,19 @@ def test_out_options_is_one_decorator():
 
     names = {p.name for p in cmd.params}
     assert names == {"as_json", "out", "force"}
+
+
+def test_a_method_command_writes_the_json_it_prints(tmp_path, capsys):
+    """`analyse crlb mass-cm` (a short record): -o writes what --json prints; the text table otherwise."""
+    out = tmp_path / "crlb.json"
+    args = ["analyse", "crlb", "mass-cm", "--duration", "30", "--fs", "20"]
+    assert main([*args, "--json", "-o", str(out)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    written = json.loads(out.read_text(encoding="utf-8"))
+    assert written == printed
+    assert set(written["bounds"]) >= {"m", "zm_bar", "rho"} and written["bounds"]["m"]["std"] > 0
+    assert main([*args, "-o", str(out)]) == 2                  # refused, unchanged
+    assert json.loads(out.read_text(encoding="utf-8")) == written
+    capsys.readouterr()
+    assert main([*args, "-o", str(out), "--force"]) == 0
+    assert "Cramér–Rao bounds" in capsys.readouterr().out
