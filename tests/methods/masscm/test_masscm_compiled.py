@@ -6,6 +6,7 @@ straightforward numpy/scipy computations they replace, piece by piece and run by
 
 import numpy as np
 import pytest
+from known.linder2015 import TABLE3_TRUE
 
 from shipid.methods.masscm.estimator import (MassCMOptions, _fir_moments_compiled, _fir_moments_numpy, _g_and_jac,
                                    _gauss_newton, _instruments, _residual_fun, _start, initial_state, prepare)
@@ -15,7 +16,7 @@ from shipid.methods.masscm.study import run_one
 from shipid.models.roll_reduced import KnownParams, to_moment
 from shipid.models.roll_sim import simulate_datasets
 
-TRUE = np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182])
+TRUE = TABLE3_TRUE
 
 
 @pytest.fixture(scope="module")
