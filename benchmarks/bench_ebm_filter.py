@@ -35,7 +35,7 @@ import numpy as np
 
 
 def _problem(duration: float):
-    from shipid.methods.ebm.estimator import EbmConfig, _prior_cov, measurements, process_noise
+    from shipid.methods.ebm.estimator import EbmConfig, measurements, prior_cov, process_noise
     from shipid.methods.ebm.trials import simulate_trial
     from shipid.models import abkowitz as ab
     from shipid.models.ebm_state import EbmModel, initial_state, measurement_noise
@@ -50,7 +50,7 @@ def _problem(duration: float):
     z = measurements(tr)
     t = tr.t - tr.t[0]
     x0 = initial_state(z[0], model)
-    P0 = _prior_cov(False)
+    P0 = prior_cov(False)
     return tr, model, Q, R, t, z, x0, P0
 
 
