@@ -25,6 +25,8 @@ E2 = WGS84_F * (2.0 - WGS84_F)
 
 
 def ecef(lat_deg, lon_deg):
+    """Earth-centred earth-fixed ``(x, y, z)`` in m of points on the WGS-84 ellipsoid (height 0;
+    Fossen 2011, eq. 2.71)."""
     phi, lam = np.radians(lat_deg), np.radians(lon_deg)
     n = WGS84_A / np.sqrt(1.0 - E2 * np.sin(phi) ** 2)
     return n * np.cos(phi) * np.cos(lam), n * np.cos(phi) * np.sin(lam), n * (1.0 - E2) * np.sin(phi)

@@ -31,6 +31,8 @@ _WIND_UNITS = {"K": 1000.0 / 3600.0, "M": 1.0, "N": _KNOT, "S": 1609.344 / 3600.
 
 @dataclass
 class Samples:
+    """One channel's samples as read: times (s), values (SI) and the log line of each."""
+
     t: list = field(default_factory=list)
     v: list = field(default_factory=list)
     line: list = field(default_factory=list)
@@ -46,6 +48,9 @@ class Samples:
 
 
 class BadLine(Exception):
+    """A line that cannot be used: ``kind`` (sentence type, ``"tag"``, ``"time"`` or ``"line"``), the
+    message and the channel it concerns (None: the whole line)."""
+
     def __init__(self, kind: str, message: str, channel: str | None = None):
         super().__init__(message)
         self.kind = kind
