@@ -28,8 +28,6 @@ import ast
 import sys
 from pathlib import Path
 
-import pytest
-
 SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "shipid"
 MAX_LINES = 600
