@@ -24,6 +24,8 @@ from typing import Callable
 
 from shipid import registry
 from shipid.demo import DemoContext, demo_step
+from shipid.report.html import write_report
+from shipid.result import Result
 
 #: Method name -> ``fallback(seed) -> Result`` on simulated data: each registered method's
 #: ``demo.fallback`` (filled on first use; an entry set beforehand is kept).
@@ -54,8 +56,6 @@ def real_data_runs() -> dict[str, Callable]:
 
 def collect_results(ctx: DemoContext) -> dict[str, object]:
     """Results produced by earlier steps: ``ctx.results`` and result JSON files in ``ctx.files``."""
-    from shipid.result import Result
-
     found: dict[str, object] = {}
     for name, res in (getattr(ctx, "results", None) or {}).items():
         if isinstance(res, Result):
@@ -76,8 +76,6 @@ def collect_results(ctx: DemoContext) -> dict[str, object]:
 @demo_step("report", order=900, description="an HTML report for each method's result")
 def report_step(ctx: DemoContext) -> list[dict]:
     """Write ``report-<name>.html`` for every result of this demo run (and the three methods)."""
-    from shipid.report.html import write_report
-
     results = collect_results(ctx)
     rows: list[dict] = []
     have = {getattr(r, "method", None) for r in results.values()}
