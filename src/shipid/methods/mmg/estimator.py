@@ -147,8 +147,13 @@ _H = np.zeros((6, 9))
 _H[np.arange(6), np.arange(6)] = 1.0
 
 
-def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig()) -> SmoothedRun:
-    """Step 1 on one run: kinematic CD-EKF and RTS smoother (module docstring)."""
+def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled: bool = True) -> SmoothedRun:
+    """Step 1 on one run: kinematic CD-EKF and RTS smoother (module docstring).
+
+    ``compiled``: the fused compiled pass :func:`shipid.methods.mmg.kernels.kinematic_filter_smoother`
+    (same algorithm, equal to rounding); False runs the reference
+    :func:`~shipid.estimate.cd_ekf.cd_ekf` and :func:`~shipid.estimate.smoothers.rts_smoother`.
+    """
     trial.require(list(MEAS) + ["delta", "n"], method="identify mmg")
     from shipid.methods.mmg.validate import trial_inputs
 
@@ -164,14 +169,21 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig()) -> SmoothedR
     Q[6, 6], Q[7, 7], Q[8, 8] = c.q_u, c.q_v, c.q_r
     x0 = np.concatenate([np.nan_to_num(z[0]), np.zeros(3)])
     P0 = np.diag(np.concatenate([sig, [0.05, 0.05, 0.01]])) ** 2
+    out = None
     try:
-        fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
+        if compiled:
+            from shipid.methods.mmg.kernels import kinematic_filter_smoother
+            out = kinematic_filter_smoother(t, z, Q, R, x0, P0)
+        if out is None:
+            fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
+            sm = rts_smoother(fr)
+            out = (sm.x, sm.std, fr.nis, float(fr.loglik))
     except Exception as err:   # a filter breakdown is reported in one line, never a traceback
         raise ShipidError(f"motion estimation failed on {trial.meta.get('source', 'run')}: {err}") from None
-    sm = rts_smoother(fr)
-    return SmoothedRun(t=np.asarray(trial.t, float), s=sm.x, s_std=sm.std, inputs=trial_inputs(trial),
-                       source=str(trial.meta.get("source", "")), nis_mean=float(np.nanmean(fr.nis)),
-                       loglik=float(fr.loglik), sigma=sig)
+    xs, std, nis, loglik = out
+    return SmoothedRun(t=np.asarray(trial.t, float), s=xs, s_std=std, inputs=trial_inputs(trial),
+                       source=str(trial.meta.get("source", "")), nis_mean=float(np.nanmean(nis)),
+                       loglik=float(loglik), sigma=sig)
 
 
 # ----------------------------------------------------------------------------- step 2
