@@ -29,8 +29,9 @@ from shipid.models import mmg
 
 @dataclass(frozen=True)
 class Moments:
-    """Moments of one mode's regression rows: ``HᵀH`` (p, p), ``Hᵀy`` (p,), ``yᵀy``, rows ``n``
-    and the ascending ``|H|`` of every column (list of p arrays)."""
+    """Moments of one mode's regression rows: ``HᵀH`` (p, p), ``Hᵀy`` (p,), ``yᵀy``, rows ``n``,
+    the ascending ``|H|`` of every column (list of p arrays), and per column the number of
+    non-zero entries ``nnz`` and the smallest non-zero ``|H|`` ``min_nz`` (inf if none)."""
 
     G: np.ndarray
     c: np.ndarray
@@ -38,15 +39,27 @@ class Moments:
     n: int
     absH: tuple[np.ndarray, ...]
     names: tuple[str, ...]
+    nnz: np.ndarray
+    min_nz: np.ndarray
 
     @classmethod
     def of(cls, H: np.ndarray, y: np.ndarray, names: Sequence[str]) -> "Moments":
+        a = np.abs(H)
+        nz = a > 0
         return cls(G=H.T @ H, c=H.T @ y, yy=float(y @ y), n=int(H.shape[0]),
-                   absH=tuple(np.sort(np.abs(H[:, j])) for j in range(H.shape[1])), names=tuple(names))
+                   absH=tuple(np.sort(a[:, j]) for j in range(H.shape[1])), names=tuple(names),
+                   nnz=np.count_nonzero(nz, axis=0), min_nz=np.where(nz, a, np.inf).min(axis=0, initial=np.inf))
 
 
-def _count_above(blocks: Sequence[Moments], j: int, thr: float) -> int:
-    return int(sum(b.n - np.searchsorted(b.absH[j], thr, side="right") for b in blocks))
+def _count_above(blocks: Sequence[Moments], thr: float) -> np.ndarray:
+    """Per column, the number of rows with ``|H| > thr`` over all blocks (exact)."""
+    total = np.zeros(blocks[0].nnz.size, np.int64)
+    for b in blocks:
+        cnt = b.nnz.astype(np.int64)
+        for j in np.flatnonzero(b.min_nz <= thr):      # rare: the threshold cuts into the column
+            cnt[j] = b.n - np.searchsorted(b.absH[j], thr, side="right")
+        total += cnt
+    return total
 
 
 def ridge_theta(G: np.ndarray, c: np.ndarray, yy: float, n: int, k: float | None = None, *,
@@ -103,7 +116,7 @@ def fit_from_moments(blocks: Sequence[Mapping[str, Moments]], prior: mmg.MmgMode
         colnorm = np.sqrt(np.diag(G))
         thr = 1e-12 * max(colnorm.max(), 1e-300) if colnorm.size else 0.0
         ok = colnorm > thr
-        ok &= np.array([_count_above(bm, j, thr) >= 20 for j in range(len(names))], bool)
+        ok &= _count_above(bm, thr) >= 20
         if not ok.any():
             continue
         cf, cd = c[ok], None
