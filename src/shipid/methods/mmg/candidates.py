@@ -104,6 +104,8 @@ def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, d
         if k == "gamma_R" and v == "symmetric":
             g = 0.5 * (p["gamma_R_minus"] + p["gamma_R_plus"])
             p["gamma_R_minus"] = p["gamma_R_plus"] = g
+        elif k == "gamma_R" and v == "swapped":      # the prior's asymmetry applied to the other side
+            p["gamma_R_minus"], p["gamma_R_plus"] = p["gamma_R_plus"], p["gamma_R_minus"]
         else:
             p[k] = float(v)
     return _replace(prior, particulars=p), free

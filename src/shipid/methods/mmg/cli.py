@@ -5,6 +5,7 @@
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso]``
   and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json]``
+* ``shipid study kvlcc2-large-angle [--json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json]``
 
 The studies print the cross-validation table over the candidate structures (training
@@ -354,3 +355,24 @@ def kvlcc2_cmd(folds, train_only, as_json):
     st["warnings"] = loud_lines(st.get("warnings", []))
     if as_json:
         click.echo(json.dumps(st, indent=1, allow_nan=True))
+
+
+@study.command("kvlcc2-large-angle", context_settings=CONTEXT)
+@click.option("--json", "as_json", is_flag=True, help="Print the table as JSON.")
+@strict_option
+def kvlcc2_large_angle_cmd(as_json):
+    """KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones
+    (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the
+    kvlcc2-zigzag study's held-out runs."""
+    from shipid.methods.mmg import extrapolation as E
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(f"  fitted and scored: {s}", err=True))
+    table = E.cross_validate(progress=say)
+    warns = loud_lines([])
+    if as_json:
+        out = {"train": list(E.TRAIN), "validate": list(E.VALIDATE), "table": table}
+        click.echo(json.dumps({**out, "warnings": warns} if warns else out, indent=1, allow_nan=True))
+    else:
+        click.echo(f"KVLCC2 large-angle CV: trained on {len(E.TRAIN)} zig-zags (10, 15 deg), "
+                   f"scored on {', '.join(E.VALIDATE)}")
+        click.echo(E.format_table(table))
