@@ -104,6 +104,9 @@ def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, d
         if k == "gamma_R" and v == "symmetric":
             g = 0.5 * (p["gamma_R_minus"] + p["gamma_R_plus"])
             p["gamma_R_minus"] = p["gamma_R_plus"] = g
+        elif k == "gamma_R_asymmetry":              # fraction of the prior's asymmetry kept about the mean
+            g, h = 0.5 * (p["gamma_R_minus"] + p["gamma_R_plus"]), 0.5 * (p["gamma_R_plus"] - p["gamma_R_minus"])
+            p["gamma_R_minus"], p["gamma_R_plus"] = g - float(v) * h, g + float(v) * h
         elif k == "gamma_R" and v == "swapped":      # the prior's asymmetry applied to the other side
             p["gamma_R_minus"], p["gamma_R_plus"] = p["gamma_R_plus"], p["gamma_R_minus"]
         else:

@@ -21,7 +21,11 @@ The score (lower is better) is the RMS over runs and sides of the peak-yaw-rate 
 record. Candidates: the frozen study's six (:data:`shipid.methods.mmg.candidates.CANDIDATES`)
 the same three free sets with the L7 asymmetry of γ_R applied to the other side
 (``swapped``: the HSVA rudder sign was inferred and the model propeller's sense of
-rotation is not among the particulars), and each of these with the port/starboard asymmetry terms of the ``yasukawa2015-asym``
+rotation is not among the particulars), two with a quarter, half and three quarters
+of the L7 asymmetry of γ_R kept about its mean (between the symmetric and the L7 values), the three symmetric-γ_R ones with the
+non-dimensional regression weighting (:func:`shipid.methods.mmg.estimator.row_weights`:
+each sample counts by its non-dimensional force, so the slower, larger-drift parts of
+the bigger zig-zags weigh as much as the fast straight runs), and each of these with the port/starboard asymmetry terms of the ``yasukawa2015-asym``
 structure (:data:`shipid.models.mmg.COEFS`: propeller side force and moment ∝ thrust,
 rudder force per side).
 """
@@ -51,6 +55,12 @@ def candidates() -> dict[str, dict]:
     base = dict(CANDIDATES["yasukawa2015"])
     for name in ("full", "linear-hull+rudder", "hull-only"):     # the L7 asymmetry of γ_R on the other side
         base[name + "/swapped-gamma_R"] = dict(base[name], particulars={"gamma_R": "swapped"})
+    for name in ("full", "linear-hull+rudder"):                  # part of the L7 asymmetry of γ_R
+        for a in (0.25, 0.5, 0.75):
+            base[f"{name}/gamma_R-asymmetry-{a:g}"] = dict(base[name], particulars={"gamma_R_asymmetry": a})
+    for name in ("full", "linear-hull+rudder", "hull-only"):     # non-dimensional regression weighting
+        base[name + "/symmetric-gamma_R/nondimensional"] = dict(base[name + "/symmetric-gamma_R"],
+                                                                weighting="nondimensional")
     out = dict(base)
     for name, c in base.items():
         a = dict(c, structure="yasukawa2015-asym")
@@ -119,14 +129,14 @@ def cross_validate(cands: Mapping[str, Mapping] | None = None, *, root: Path | N
 
 def format_table(table: Mapping[str, dict]) -> str:
     """One line per candidate: score, peak-yaw-rate errors per side, heading RMS, overshoot RMS."""
-    lines = [f"  {'candidate':<44} {'score':>7} {'r_pk rms%':>9} {'stbd%':>7} {'port%':>7} {'psi deg':>8} "
+    lines = [f"  {'candidate':<56} {'score':>7} {'r_pk rms%':>9} {'stbd%':>7} {'port%':>7} {'psi deg':>8} "
              f"{'ovs deg':>8}"]
     best = min(table, key=lambda c: table[c]["score"])
     for c, r in table.items():
         if "error" in r:
-            lines.append(f"  {c:<44} failed: {r['error']}")
+            lines.append(f"  {c:<56} failed: {r['error']}")
             continue
-        lines.append(f"  {c:<44} {r['score']:7.2f} {r['r_peak_rms_pct']:9.2f} {r['r_peak_stbd_mean_pct']:7.2f} "
+        lines.append(f"  {c:<56} {r['score']:7.2f} {r['r_peak_rms_pct']:9.2f} {r['r_peak_stbd_mean_pct']:7.2f} "
                      f"{r['r_peak_port_mean_pct']:7.2f} {r['psi_rms_deg']:8.2f} {r['overshoot_rms_deg']:8.2f}"
                      + ("  <-" if c == best else ""))
     return "\n".join(lines)
