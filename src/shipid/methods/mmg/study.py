@@ -161,9 +161,10 @@ the HSVA particulars (error), same autopilot for both::
 Largest error 1.70° (2nd overshoot of 20/10 starboard): within the 2° target; the
 second overshoots are predicted too small on all three runs, as in CV. 60-s horizons
 on the held-out zig-zags: heading RMS 3.11 vs 11.98°, position 0.91 vs 3.87 m.
-Run time on the shared 2-core machine: 6–12 min for the Esso study depending on the
-load (the Wakita leave-one-run-out CV over 35 runs × 12 candidates is 5–8.5 min of it),
-1–3.5 min for KVLCC2; the slow tests that rerun both take about 7 min.
+Run time on the shared 2-core machine: the Esso study (both splits) 110 s wall, 33 s CPU
+(``benchmarks/bench_mmg_cv.py --study``: step 1 compiled, :mod:`shipid.methods.mmg.kernels`;
+fold fits from per-run moments, :mod:`shipid.methods.mmg.moments`), with the same
+choices and held-out numbers as above.
 """
 
 from __future__ import annotations
