@@ -284,3 +284,36 @@ def emit(payload: Any, *, as_json: bool, out: str | None, force: bool, text: Cal
     elif text is not None:
         text()
     return path
+
+
+class ManyValues(click.Option):
+    """An option that takes every following argument up to the next option: ``--surge a.csv b.csv``.
+
+    It may also be repeated (``--surge a.csv --surge b.csv``); all files are collected.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("multiple", True)
+        super().__init__(*args, **kwargs)
+        self._prev = None
+        self._parser_opt = None
+
+    def add_to_parser(self, parser, ctx):
+        ret = super().add_to_parser(parser, ctx)
+        for name in self.opts:
+            opt = parser._long_opt.get(name) or parser._short_opt.get(name)
+            if opt is not None:
+                self._parser_opt = opt
+                self._prev = opt.process
+                prefixes = tuple(parser._opt_prefixes) if hasattr(parser, "_opt_prefixes") else ("-",)
+
+                def process(value, state, _prev=self._prev, _prefixes=prefixes):
+                    vals = [value]
+                    while state.rargs and not state.rargs[0].startswith(_prefixes):
+                        vals.append(state.rargs.pop(0))
+                    for v in vals:
+                        _prev(v, state)
+
+                opt.process = process
+                break
+        return ret

@@ -237,7 +237,7 @@ def basis_yasukawa(p, u, v, r, delta, n):
     HY = np.stack([qX * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
     HN = np.stack([qN * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
     zero = np.zeros_like(u)
-    aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta}
+    aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta, "T": T, "FN_cos": -FN * np.cos(delta)}
     return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
 
 

@@ -13,7 +13,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
-from shipid.cli._common import emit, loud, out_options, refuse_existing, strict_option
+from shipid.cli._common import ManyValues, emit, loud, out_options, refuse_existing, strict_option
 from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import ShipidError
 
@@ -21,37 +21,6 @@ from shipid.errors import ShipidError
 REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
 
 
-class _ManyValues(click.Option):
-    """An option that takes every following argument up to the next option: ``--surge a.csv b.csv``.
-
-    It may also be repeated (``--surge a.csv --surge b.csv``); all files are collected.
-    """
-
-    def __init__(self, *args, **kwargs):
-        kwargs.setdefault("multiple", True)
-        super().__init__(*args, **kwargs)
-        self._prev = None
-        self._parser_opt = None
-
-    def add_to_parser(self, parser, ctx):
-        ret = super().add_to_parser(parser, ctx)
-        for name in self.opts:
-            opt = parser._long_opt.get(name) or parser._short_opt.get(name)
-            if opt is not None:
-                self._parser_opt = opt
-                self._prev = opt.process
-                prefixes = tuple(parser._opt_prefixes) if hasattr(parser, "_opt_prefixes") else ("-",)
-
-                def process(value, state, _prev=self._prev, _prefixes=prefixes):
-                    vals = [value]
-                    while state.rargs and not state.rargs[0].startswith(_prefixes):
-                        vals.append(state.rargs.pop(0))
-                    for v in vals:
-                        _prev(v, state)
-
-                opt.process = process
-                break
-        return ret
 
 
 def _read(paths, kind):
@@ -99,10 +68,10 @@ def _print_table(result, theta_true=None) -> None:
 
 
 @identify.command("dp", context_settings=CONTEXT)
-@click.option("--surge", cls=_ManyValues, type=click.Path(), help="Uncoupled surge trial files (SI1).")
-@click.option("--sway-yaw", "sway_yaw", cls=_ManyValues, type=click.Path(),
+@click.option("--surge", cls=ManyValues, type=click.Path(), help="Uncoupled surge trial files (SI1).")
+@click.option("--sway-yaw", "sway_yaw", cls=ManyValues, type=click.Path(),
               help="Coupled sway-yaw trial files (SI2).")
-@click.option("--azimuth", cls=_ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
+@click.option("--azimuth", cls=ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
 @click.option("--vessel", default="supply", show_default=True,
               help="Packaged vessel giving M'', the thruster arms, L and m.")
 @click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")

@@ -5,6 +5,7 @@
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
   and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
+* ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
 
 The studies print the cross-validation table over the candidate structures (training
@@ -19,7 +20,7 @@ import json
 import click
 
 from shipid.cli import CONTEXT, cli, identify, study
-from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, strict_option
 from shipid.data.io import FORMATS
 from shipid.errors import ShipidError
 
@@ -359,11 +360,10 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as
     _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force)
 
 
-from shipid.methods.dp.cli import _ManyValues  # noqa: E402  (an option taking several files)
 
 
 @identify.command("realdata", context_settings=CONTEXT)
-@click.option("--train", "train", cls=_ManyValues, required=True, type=click.Path(dir_okay=False),
+@click.option("--train", "train", cls=ManyValues, required=True, type=click.Path(dir_okay=False),
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
 def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force):
@@ -423,3 +423,27 @@ def kvlcc2_cmd(folds, train_only, as_json, out, force):
             click.echo(S.format_kvlcc2_heldout(st))
     st["warnings"] = loud_lines(st.get("warnings", []))
     emit(st, as_json=as_json, out=out, force=force, indent=1)
+
+
+@study.command("kvlcc2-large-angle", context_settings=CONTEXT)
+@out_options(json_help="Print the table as JSON.")
+@strict_option
+def kvlcc2_large_angle_cmd(as_json, out, force):
+    """KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones
+    (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the
+    kvlcc2-zigzag study's held-out runs."""
+    from shipid.methods.mmg import extrapolation as E
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(f"  fitted and scored: {s}", err=True))
+    table = E.cross_validate(progress=say)
+    warns = loud_lines([])
+    payload = {"train": list(E.TRAIN), "validate": list(E.VALIDATE), "table": table}
+    if warns:
+        payload["warnings"] = warns
+
+    def text():
+        click.echo(f"KVLCC2 large-angle CV: trained on {len(E.TRAIN)} zig-zags (10, 15 deg), "
+                   f"scored on {', '.join(E.VALIDATE)}")
+        click.echo(E.format_table(table))
+
+    emit(payload, as_json=as_json, out=out, force=force, indent=1, text=text)

@@ -4,9 +4,10 @@ The same numbers as :func:`shipid.methods.mmg.estimator.cross_validate` with
 :func:`shipid.methods.mmg.estimator.horizon_sse` as fold errors (the reference path,
 kept and tested against this one), computed in far fewer numpy calls:
 
-1. every candidate is fitted on every fold's training runs, stacking per-run regression
-   blocks computed once per candidate (the same arrays :func:`shipid.methods.mmg.estimator.regression_data`
-   builds for the fold);
+1. every candidate is fitted on every fold's training runs from the sums of per-run
+   regression moments computed once per candidate (:mod:`shipid.methods.mmg.moments`:
+   the fit of :func:`shipid.methods.mmg.estimator.fit` on the fold's stacked
+   :func:`shipid.methods.mmg.estimator.regression_data`, to rounding);
 2. every restarted horizon of every test run, of every fold, of every candidate that
    shares a structure and particulars, becomes one row of a single batch with the
    coefficients of its fold's model; all rows are integrated together by RK4 with
@@ -35,6 +36,7 @@ from shipid.errors import ShipidError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
+from shipid.methods.mmg.moments import fit_from_moments, run_moments
 from shipid.models import mmg
 
 
@@ -80,8 +82,13 @@ def _group_key(model: mmg.MmgModel) -> str:
 def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel,
                             candidates: Mapping[str, Mapping], *, config: R.FitConfig = R.FitConfig(),
                             folds: int | None = None, horizon: float = 60.0, decimate: int = 2,
-                            progress: Callable[[], None] | None = None) -> dict[str, dict]:
-    """The table of :func:`shipid.methods.mmg.estimator.cross_validate` with horizon errors, batched (module docstring)."""
+                            progress: Callable[[], None] | None = None, moments: bool = True) -> dict[str, dict]:
+    """The table of :func:`shipid.methods.mmg.estimator.cross_validate` with horizon errors, batched (module docstring).
+
+    ``moments``: fit the folds from per-run moments (:mod:`shipid.methods.mmg.moments`); False
+    stacks each fold's regression rows and calls :func:`shipid.methods.mmg.estimator.fit`
+    (the same fits; kept for the benchmark and the tests).
+    """
     groups = R.fold_groups(len(runs), folds)
     hz: list[dict | None] = []
     bad: set[int] = set()              # runs the reference's fold errors would fail on
@@ -97,8 +104,10 @@ def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRu
         cprior, free = R.apply_candidate(prior, cand)
         cfg = R.candidate_config(config, cand)
         fitted[cname], failed[cname] = [], False
-        try:       # each run's regression block once; a fold stacks its training runs' blocks
+        try:       # each run's regression data once; a fold sums (or stacks) its training runs' blocks
             blocks = [R.regression_data([run], cprior, free, cfg) for run in runs]
+            if moments:
+                blocks = [run_moments(b) for b in blocks]
         except (ShipidError, np.linalg.LinAlgError, ValueError):
             blocks = None
         for g in groups:
@@ -108,10 +117,13 @@ def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRu
             try:
                 if blocks is None:
                     raise ValueError("regression data failed")
-                data = {md: R.ModeData(H=np.concatenate([blocks[i][md].H for i in tr_idx]),
-                                       y=np.concatenate([blocks[i][md].y for i in tr_idx]),
-                                       names=blocks[0][md].names) for md in mmg.MODES}
-                m = R.fit([runs[i] for i in tr_idx], cprior, free, cfg, data=data).model
+                if moments:
+                    m = fit_from_moments([blocks[i] for i in tr_idx], cprior, cfg.ridge_k)
+                else:
+                    data = {md: R.ModeData(H=np.concatenate([blocks[i][md].H for i in tr_idx]),
+                                           y=np.concatenate([blocks[i][md].y for i in tr_idx]),
+                                           names=blocks[0][md].names) for md in mmg.MODES}
+                    m = R.fit([runs[i] for i in tr_idx], cprior, free, cfg, data=data).model
             except (ShipidError, np.linalg.LinAlgError, ValueError):
                 failed[cname], m = True, None
             if bad.intersection(g):

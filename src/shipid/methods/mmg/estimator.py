@@ -68,6 +68,7 @@ from shipid.errors import InputError, ShipidError
 from shipid.estimate.cd_ekf import cd_ekf
 from shipid.estimate.ridge import RidgeFit, ridge
 from shipid.estimate.smoothers import rts_smoother
+from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config  # noqa: F401
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -147,8 +148,13 @@ _H = np.zeros((6, 9))
 _H[np.arange(6), np.arange(6)] = 1.0
 
 
-def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig()) -> SmoothedRun:
-    """Step 1 on one run: kinematic CD-EKF and RTS smoother (module docstring)."""
+def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled: bool = True) -> SmoothedRun:
+    """Step 1 on one run: kinematic CD-EKF and RTS smoother (module docstring).
+
+    ``compiled``: the fused compiled pass :func:`shipid.methods.mmg.kernels.kinematic_filter_smoother`
+    (same algorithm, equal to rounding); False runs the reference
+    :func:`~shipid.estimate.cd_ekf.cd_ekf` and :func:`~shipid.estimate.smoothers.rts_smoother`.
+    """
     trial.require(list(MEAS) + ["delta", "n"], method="identify mmg")
     from shipid.methods.mmg.validate import trial_inputs
 
@@ -164,110 +170,24 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig()) -> SmoothedR
     Q[6, 6], Q[7, 7], Q[8, 8] = c.q_u, c.q_v, c.q_r
     x0 = np.concatenate([np.nan_to_num(z[0]), np.zeros(3)])
     P0 = np.diag(np.concatenate([sig, [0.05, 0.05, 0.01]])) ** 2
+    out = None
     try:
-        fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
+        if compiled:
+            from shipid.methods.mmg.kernels import kinematic_filter_smoother
+            out = kinematic_filter_smoother(t, z, Q, R, x0, P0)
+        if out is None:
+            fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
+            sm = rts_smoother(fr)
+            out = (sm.x, sm.std, fr.nis, float(fr.loglik))
     except Exception as err:   # a filter breakdown is reported in one line, never a traceback
         raise ShipidError(f"motion estimation failed on {trial.meta.get('source', 'run')}: {err}") from None
-    sm = rts_smoother(fr)
-    return SmoothedRun(t=np.asarray(trial.t, float), s=sm.x, s_std=sm.std, inputs=trial_inputs(trial),
-                       source=str(trial.meta.get("source", "")), nis_mean=float(np.nanmean(fr.nis)),
-                       loglik=float(fr.loglik), sigma=sig)
+    xs, std, nis, loglik = out
+    return SmoothedRun(t=np.asarray(trial.t, float), s=xs, s_std=std, inputs=trial_inputs(trial),
+                       source=str(trial.meta.get("source", "")), nis_mean=float(np.nanmean(nis)),
+                       loglik=float(loglik), sigma=sig)
 
 
 # ----------------------------------------------------------------------------- step 2
-# The candidate lists below were FROZEN a priori (session 2 of issue 6) from physics and
-# training-run evidence only; see the module docstring of shipid.methods.mmg.study
-# for the reasons of each axis. They are full factorial designs over their axes, so that
-# no combination is in or out because of how it scored on a test run.
-_ESSO_FREE = {
-    # hull only: propeller and rudder stay at the published values (identified by their
-    # authors from runs of this data set)
-    "hull-only": {"X": ("X_0F", "X_0A", "X_vr"), "Y": ("Y_v", "Y_r", "CD_Y"), "N": ("N_v", "N_r", "CD_N")},
-    # hull + ahead thrust (K_T polynomial) + rudder force gain and lever arm; the astern
-    # (Hachii) thrust and Ueno side-force polynomials stay fixed: rarely excited
-    "hull+rudder+thrust": {"X": ("X_0F", "X_0A", "X_vr", "XP_k0", "XP_k1", "XP_k2", "XR_gain"),
-                           "Y": ("Y_v", "Y_r", "CD_Y", "YR_gain"), "N": ("N_v", "N_r", "CD_N", "NR_arm")},
-    # every coefficient of the structure free (4-quadrant propeller included)
-    "hull+rudder+4-quadrant-propeller": dict(mmg.COEFS["esso-lowspeed"]),
-}
-_CUBIC_HULL = {"X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv"),
-               "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr"),
-               "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr")}
-
-
-def _esso_candidates() -> dict[str, dict]:
-    """Hull structure (low-speed | cubic) x free set (3) x regression weighting (2): 12 candidates."""
-    out: dict[str, dict] = {}
-    for weighting in ("none", "nondimensional"):
-        for hull in ("lowspeed", "cubic"):
-            for free_name, free in _ESSO_FREE.items():
-                if hull == "lowspeed":
-                    cand: dict = dict(free)
-                    name = free_name
-                else:
-                    # same propeller/rudder coefficients free, the hull replaced by the cubic expansion
-                    nh = {"X": 3, "Y": 3, "N": 3}
-                    cand = {m: _CUBIC_HULL[m] + tuple(free[m][nh[m]:]) for m in mmg.MODES}
-                    cand["structure"] = "esso-cubic-hull"
-                    name = "cubic-" + free_name
-                if weighting != "none":
-                    cand["weighting"] = weighting
-                    name += "/" + weighting
-                out[name] = cand
-    # the default (first) candidate: the structure of the published set with its own free set
-    first = "hull+rudder+thrust"
-    return {first: out.pop(first), **out}
-
-
-def _yasukawa_candidates() -> dict[str, dict]:
-    """Free set (3) x flow-straightening gamma_R (prior's asymmetric | symmetric mean): 6 candidates."""
-    base = {
-        "full": {m: mmg.COEFS["yasukawa2015"][m] for m in mmg.MODES},
-        "linear-hull+rudder": {"X": ("R_0", "X_vv", "X_vr", "X_rr", "XP_gain", "XR_gain"),
-                               "Y": ("Y_v", "Y_r", "YR_gain"), "N": ("N_v", "N_r", "NR_arm")},
-        "hull-only": dict(_CUBIC_HULL),
-    }
-    out = dict(base)
-    for name, cand in base.items():
-        out[name + "/symmetric-gamma_R"] = dict(cand, particulars={"gamma_R": "symmetric"})
-    return out
-
-
-#: Candidate structures (sets of free coefficients, hull structure, regression weighting,
-#: particular overrides) per prior structure; the first is the default.
-CANDIDATES: dict[str, dict[str, dict]] = {"esso-lowspeed": _esso_candidates(),
-                                          "yasukawa2015": _yasukawa_candidates()}
-
-
-def candidate_config(config: "FitConfig", cand: Mapping) -> "FitConfig":
-    """The fit settings of a candidate (its ``weighting`` replaces the default's)."""
-    from dataclasses import replace as _replace
-    return _replace(config, weighting=cand["weighting"]) if "weighting" in cand else config
-
-
-def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, dict[str, tuple[str, ...]]]:
-    """The prior with a candidate's particular overrides applied, and its free coefficients per mode."""
-    free = {m: tuple(cand[m]) for m in mmg.MODES}
-    from dataclasses import replace as _replace
-    st = cand.get("structure")
-    if st and st != prior.structure:
-        # change of hull structure: every hull coefficient of the new one is free; the values
-        # needed to build the model are zeros until the regression sets them
-        coef = {c: prior.coef.get(c, 0.0) for m in mmg.MODES for c in mmg.COEFS[st][m]}
-        prior = _replace(prior, structure=st, coef=coef, name=f"{prior.name} ({st})")
-    over = cand.get("particulars") or {}
-    if not over:
-        return prior, free
-    p = dict(prior.particulars)
-    for k, v in over.items():
-        if k == "gamma_R" and v == "symmetric":
-            g = 0.5 * (p["gamma_R_minus"] + p["gamma_R_plus"])
-            p["gamma_R_minus"] = p["gamma_R_plus"] = g
-        else:
-            p[k] = float(v)
-    return _replace(prior, particulars=p), free
-
-
 @dataclass(frozen=True)
 class FitConfig:
     """Step-2 settings.

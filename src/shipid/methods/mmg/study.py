@@ -161,9 +161,10 @@ the HSVA particulars (error), same autopilot for both::
 Largest error 1.70° (2nd overshoot of 20/10 starboard): within the 2° target; the
 second overshoots are predicted too small on all three runs, as in CV. 60-s horizons
 on the held-out zig-zags: heading RMS 3.11 vs 11.98°, position 0.91 vs 3.87 m.
-Run time on the shared 2-core machine: 6–12 min for the Esso study depending on the
-load (the Wakita leave-one-run-out CV over 35 runs × 12 candidates is 5–8.5 min of it),
-1–3.5 min for KVLCC2; the slow tests that rerun both take about 7 min.
+Run time on the shared 2-core machine: the Esso study (both splits) 110 s wall, 33 s CPU
+(``benchmarks/bench_mmg_cv.py --study``: step 1 compiled, :mod:`shipid.methods.mmg.kernels`;
+fold fits from per-run moments, :mod:`shipid.methods.mmg.moments`), with the same
+choices and held-out numbers as above.
 """
 
 from __future__ import annotations
@@ -171,68 +172,21 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import re
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from shipid.data import data_root, read_trial
+from shipid.data.basins import SPLITS, read_esso, read_kvlcc2
+from shipid.data.basins import esso_dir as _esso_dir  # noqa: F401  (kept for callers of the old name)
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
+from shipid.methods.mmg.zigzag import (execute_index, first_side, kvlcc2_autopilot, overshoots,  # noqa: F401
+                                       reversal_delays, reversal_times, rudder_rate, simulate_zigzag,
+                                       steering_gear, zigzag_angles)
 from shipid.models import mmg
-
-# --------------------------------------------------------------------------- Esso Osaka splits
-# shared/data/esso_osaka_3m/README_upstream.md, "Correspondence table with the paper".
-_RND = "random/random_{}.csv"
-SPLITS: dict[str, dict[str, list[str]]] = {
-    "miyauchi2022": {
-        "train": [_RND.format("06-Aug-2020_16_24_25_4"), _RND.format("06-Aug-2020_16_24_25_5"),
-                  _RND.format("06-Aug-2020_16_24_25_6"), "turning/turn_cut_14-Sep-2020_16_09_02.csv",
-                  "zigzag/zigzag_31-Jul-2020_13_22_52.csv", "zigzag/zigzag_31-Jul-2020_13_50_28.csv"],
-        "test": [_RND.format("06-Aug-2020_16_24_25_3"), "turning/turn_14-Sep-2020_14_50_41.csv",
-                 "zigzag/zigzag_31-Jul-2020_14_10_05.csv", "berthing/berthing_12-Nov-2020_11_49_21.csv",
-                 "berthing/berthing_12-Nov-2020_13_21_03.csv"],
-        "train_label": ["Train-TRZ"],
-    },
-    "wakita2022": {
-        "train": [_RND.format(s) for s in ("03-Aug-2020_11_04_37", "06-Aug-2020_16_24_25_1",
-                                           "06-Aug-2020_16_24_25_4", "06-Aug-2020_16_24_25_5",
-                                           "06-Aug-2020_16_24_25_6", "31-Jul-2020_12_29_58",
-                                           "31-Jul-2020_12_48_39", "31-Jul-2020_14_52_18")]
-        + [f"turning/turn_{s}.csv" for s in ("14-Oct-2020_14_08_51", "14-Oct-2020_14_17_39",
-                                            "14-Oct-2020_14_29_49", "14-Oct-2020_14_39_54",
-                                            "14-Oct-2020_14_56_07", "14-Oct-2020_15_21_57",
-                                            "14-Sep-2020_13_39_32", "14-Sep-2020_13_51_45",
-                                            "14-Sep-2020_14_16_04", "14-Sep-2020_14_50_41",
-                                            "14-Sep-2020_15_47_33", "14-Sep-2020_15_58_08",
-                                            "cut_14-Sep-2020_15_58_08", "cut_14-Sep-2020_16_09_02")]
-        + [f"zigzag/zigzag_31-Jul-2020_{s}.csv" for s in ("13_04_24", "13_14_21", "13_22_52", "13_29_19",
-                                                          "13_50_28", "13_57_45", "14_03_39", "14_10_05")]
-        + [f"berthing/berthing_12-Nov-2020_{s}.csv" for s in ("11_07_23", "11_14_47", "11_21_46",
-                                                             "13_09_11", "13_37_05")],
-        "test": [_RND.format("06-Aug-2020_16_24_25_3"), "turning/turn_14-Oct-2020_15_06_53.csv",
-                 "zigzag/zigzag_31-Jul-2020_13_42_53.csv", "berthing/berthing_12-Nov-2020_11_38_50.csv",
-                 "berthing/berthing_12-Nov-2020_11_49_21.csv", "berthing/berthing_12-Nov-2020_13_21_03.csv"],
-        "train_label": ["Train-TZRB+"],
-    },
-}
-
-
-def _esso_dir(root: Path | None) -> Path:
-    root = data_root() if root is None else Path(root)
-    d = None if root is None else root / "esso_osaka_3m" / "data"
-    if d is None or not d.is_dir():
-        raise InputError("the Esso Osaka data (esso_osaka_3m/data) was not found; set SHIPID_DATA")
-    return d
-
-
-def read_esso(rel: str, root: Path | None = None) -> Trial:
-    """One Esso Osaka run (empty trailing rows trimmed, as the data set's README allows)."""
-    return read_trial(_esso_dir(root) / rel, trim_empty_rows=True, method="realdata study")
-
 
 def _pooled(rows: Sequence[dict]) -> dict[str, dict[str, float]]:
     """Pool horizon metrics over runs (RMS weighted by horizon count, max of maxima)."""
@@ -421,216 +375,6 @@ KVLCC2_TRAIN = ("HSVA_CPMC_KVLCC2_Z_05_01.dat", "HSVA_CPMC_KVLCC2_Z_10_01.dat", 
                 "HSVA_CPMC_KVLCC2_Z_25_05.dat", "HSVA_CPMC_KVLCC2_Z_30_05.dat")
 
 
-def read_kvlcc2(name: str, root: Path | None = None) -> Trial:
-    """One HSVA zig-zag with the rudder in the MMG convention.
-
-    HSVA records the rudder positive to port: in every run the yaw rate has the sign
-    of −δ (checked on all 13 files). The MMG convention (positive δ turns the ship to
-    starboard) needs ``δ = −δ_HSVA``; the flip is recorded in ``meta``.
-    """
-    root = data_root() if root is None else Path(root)
-    d = None if root is None else root / "kvlcc2_hsva"
-    if d is None or not d.is_dir():
-        raise InputError("the KVLCC2 HSVA data (kvlcc2_hsva) was not found; set SHIPID_DATA")
-    tr = read_trial(d / name, fmt="kvlcc2", method="realdata study")
-    out = tr.with_channels(delta=-tr["delta"])
-    out.meta["rudder_sign_flipped"] = "delta = -delta_HSVA (HSVA: positive to port)"
-    return out
-
-
-def zigzag_angles(name: str) -> tuple[float, float]:
-    """(rudder, switch heading) in rad from an HSVA file name ``..._Z_20_10_P.dat``."""
-    m = re.search(r"_Z_(\d+)_(\d+)", name)
-    if not m:
-        raise InputError(f"cannot read the zig-zag angles from '{name}'")
-    return np.deg2rad(float(m.group(1))), np.deg2rad(float(m.group(2)))
-
-
-def execute_index(delta: np.ndarray, threshold: float = np.deg2rad(1.0)) -> int:
-    """First sample where the rudder has moved more than ``threshold`` from its initial value."""
-    k = np.flatnonzero(np.abs(delta - delta[0]) > threshold)
-    if k.size == 0:
-        raise InputError("no rudder execute found")
-    return max(int(k[0]) - 1, 0)
-
-
-def overshoots(t: np.ndarray, psi: np.ndarray, k_exec: int, psi_switch: float, side: int,
-               count: int = 2) -> list[float]:
-    """Overshoot angles (rad) from the heading alone.
-
-    ``ψ₀ = ψ(k_exec)``; the i-th reversal is where ``d_i (ψ − ψ₀)`` first reaches the
-    switch angle (``d_1 = side``, alternating); the i-th overshoot is the largest
-    ``d_i (ψ − ψ₀) − ψ_switch`` between that reversal and the next. The same rule is
-    applied to measured and predicted headings, so their overshoots are comparable
-    whatever the rudder signal's noise.
-    """
-    p = np.unwrap(psi) - np.unwrap(psi)[k_exec]
-    out, k, d = [], k_exec, side
-    for _ in range(count):
-        hit = np.flatnonzero(d * p[k:] >= psi_switch)
-        if hit.size == 0:
-            break
-        k1 = k + int(hit[0])
-        nxt = np.flatnonzero(-d * p[k1:] >= psi_switch)
-        end = k1 + int(nxt[0]) if nxt.size else p.size
-        seg = d * p[k1:end]
-        j = int(np.argmax(seg))
-        if end == p.size and j == seg.size - 1:
-            break                                   # still turning when the record ends
-        out.append(float(seg[j] - psi_switch))
-        k, d = k1, -d
-    return out
-
-
-def reversal_delays(tr: Trial, psi_switch: float, threshold: float = np.deg2rad(0.5)) -> list[float]:
-    """Delays (s) between each measured heading crossing of ±ψ_switch and the rudder starting to reverse.
-
-    The tank's autopilot does not reverse the rudder at the very sample the heading
-    passes the switch angle: on the HSVA runs it starts 0.3–0.7 s later. The start is
-    the first sample after the crossing where the rudder has left its value at the
-    crossing by ``threshold`` towards the other side.
-    """
-    k0 = execute_index(tr["delta"])
-    p = np.unwrap(tr["psi"]) - np.unwrap(tr["psi"])[k0]
-    d = tr["delta"]
-    side = 1 if np.mean(d[k0:k0 + int(round(5 / tr.dt))]) > 0 else -1
-    out, k, s = [], k0, side
-    while True:
-        hit = np.flatnonzero(s * p[k:] >= psi_switch)
-        if hit.size == 0:
-            break
-        k1 = k + int(hit[0])
-        mv = np.flatnonzero(s * (d[k1:] - d[k1]) < -threshold)
-        if mv.size == 0:
-            break
-        out.append(float(tr.t[k1 + int(mv[0])] - tr.t[k1]))
-        k, s = k1, -s
-    return out
-
-
-def simulate_zigzag(model: mmg.MmgModel, tr: Trial, delta_z: float, psi_switch: float, *,
-                    rate: float, delay: float = 0.0, accel: float = np.inf,
-                    duration: float | None = None) -> np.ndarray:
-    """Closed-loop zig-zag of ``model`` from the measured state at execute; heading history (n,).
-
-    The rudder moves towards ``±delta_z`` with the rate limited to ``rate`` (rad/s) and
-    the rate's change to ``accel`` (rad/s², :func:`steering_gear`; ``inf``: rate limit
-    only), and reverses ``delay``
-    seconds after the *predicted* heading passes ``±psi_switch`` from ψ at execute
-    (Kempf's rule with the tank autopilot's reaction time); propeller revolutions are
-    the measured ones.
-    """
-    Z = V.measured_states(tr)
-    Uin = V.trial_inputs(tr)
-    k0 = execute_index(tr["delta"])
-    t = tr.t[k0:] if duration is None else tr.t[k0:k0 + int(round(duration / tr.dt))]
-    dt = float(np.median(np.diff(t)))
-    x = Z[k0][None].copy()
-    psi0 = x[0, 2]
-    side = 1 if np.mean(tr["delta"][k0:k0 + int(5 / dt)]) > 0 else -1   # MMG: δ > 0 turns to starboard
-    d = side
-    delta = float(tr["delta"][k0])
-    out = np.full(t.size, np.nan)
-    out[0] = x[0, 2]
-    switches = 0
-    w = 0.0                            # rudder rate
-    pending: float | None = None       # time at which an ordered reversal takes effect
-    cmd = d
-    for k in range(t.size - 1):
-        tk = t[k] - t[0]
-        if pending is None and d * (x[0, 2] - psi0) >= psi_switch:
-            d = -d
-            switches += 1
-            pending = tk + delay
-            if switches > 3:          # the second overshoot ends at the third reversal
-                return out[:k + 1]
-        if pending is not None and tk >= pending - 1e-9:
-            cmd, pending = d, None
-        target = cmd * delta_z
-        if np.isfinite(accel):
-            err = target - delta
-            w_des = np.sign(err) * min(rate, np.sqrt(2.0 * accel * abs(err)))   # brake to stop at the target
-            w += np.clip(w_des - w, -accel * dt, accel * dt)
-            if abs(err) <= abs(w) * dt and abs(w_des) <= accel * dt:
-                delta, w = target, 0.0
-            else:
-                delta += w * dt
-        else:
-            delta += np.clip(target - delta, -rate * dt, rate * dt)
-        u = np.array([[delta, Uin[k0 + k, 1], 0.0, 0.0]])
-        x = mmg.simulate_batch(model, np.array([0.0, dt]), x, u[:, None, :].repeat(2, axis=1))[:, -1]
-        out[k + 1] = x[0, 2]
-    return out
-
-
-def rudder_rate(tr: Trial) -> float:
-    """Rudder rate of the run (rad/s): 95th percentile of |dδ/dt| over samples where the rudder moves."""
-    dd = np.abs(np.diff(tr["delta"])) / np.diff(tr.t)
-    moving = dd[dd > np.deg2rad(1.0)]
-    return float(np.percentile(moving, 95)) if moving.size else float(np.deg2rad(15.0))
-
-
-def reversal_times(tr: Trial, delta_z: float, tol: float = np.deg2rad(0.5)) -> list[tuple[float, float]]:
-    """``(delta_z, duration)`` of each measured rudder reversal: from the last sample within ``tol``
-    of one side (±``delta_z``) to the first within ``tol`` of the other (rad, s)."""
-    d = tr["delta"]
-    side = np.where(d > delta_z - tol, 1, np.where(d < -delta_z + tol, -1, 0))
-    k = np.flatnonzero(side != 0)
-    return [(float(delta_z), float(tr.t[b] - tr.t[a])) for a, b in zip(k[:-1], k[1:]) if side[a] != side[b]]
-
-
-def steering_gear(trials: Sequence[Trial], names: Sequence[str],
-                  tol: float = np.deg2rad(0.5)) -> tuple[float, float]:
-    """Rudder rate limit (rad/s) and rate-change limit (rad/s²) from the measured reversals.
-
-    A trapezoidal rudder motion (accelerate at ``a``, run at ``r``, brake at ``a``)
-    swings ``2 δ_z`` in ``2 δ_z / r + r / a``; between the ``tol`` thresholds of
-    :func:`reversal_times` that is ``2 δ_z / r + r / a − 2 √(2 tol / a)``. ``(r, a)``
-    are the least-squares fit of that time to every reversal of the given runs. On
-    the HSVA runs the effective rate grows with the swing (about 10.6°/s for ±5°,
-    14.7°/s for ±30°), which a pure rate limit cannot reproduce. Falls back to the
-    95th-percentile rate and no acceleration limit with fewer than two rudder angles.
-    """
-    from scipy.optimize import least_squares
-
-    st = [x for f, tr in zip(names, trials) for x in reversal_times(tr, zigzag_angles(f)[0], tol)]
-    fallback = (float(np.median([rudder_rate(tr) for tr in trials])), float("inf"))
-    if len({round(dz, 6) for dz, _ in st}) < 2:
-        return fallback
-    dz = np.array([x[0] for x in st])
-    T = np.array([x[1] for x in st])
-
-    def res(p):
-        r, a = np.exp(p)
-        return 2 * dz / r + r / a - 2 * np.sqrt(2 * tol / a) - T
-
-    sol = least_squares(res, np.log([np.deg2rad(15.0), np.deg2rad(50.0)]))
-    if not sol.success:
-        return fallback
-    r, a = np.exp(sol.x)
-    return float(r), float(a)
-
-
-def kvlcc2_autopilot(trials: Sequence[Trial], names: Sequence[str]) -> dict[str, float]:
-    """Tank autopilot from the given (training) runs.
-
-    ``rate`` (rad/s) and ``accel`` (rad/s²) of the steering gear (:func:`steering_gear`);
-    ``delay`` (s): the command delay after the heading crosses ±ψ_switch — the median
-    measured delay until the rudder has moved 0.5° (:func:`reversal_delays`) less the
-    time the modelled gear takes to move those 0.5° from rest (``√(2·0.5°/a)``).
-    """
-    thr = np.deg2rad(0.5)
-    delays = [dl for f, tr in zip(names, trials) for dl in reversal_delays(tr, zigzag_angles(f)[1], thr)]
-    rate, accel = steering_gear(trials, names)
-    start = np.sqrt(2 * thr / accel) if np.isfinite(accel) else thr / rate
-    measured = float(np.median(delays)) if delays else 0.0
-    return {"delay": max(0.0, measured - float(start)), "measured_delay": measured, "rate": rate, "accel": accel}
-
-
-def _first_side(tr: Trial, k0: int) -> int:
-    return 1 if np.mean(tr["delta"][k0:k0 + int(round(5.0 / tr.dt))]) > 0 else -1
-
-
 def zigzag_overshoots(model: mmg.MmgModel, tr: Trial, name: str, autopilot: dict[str, float]) -> dict[str, Any]:
     """Measured and predicted first/second overshoots (deg) of one zig-zag.
 
@@ -639,7 +383,7 @@ def zigzag_overshoots(model: mmg.MmgModel, tr: Trial, name: str, autopilot: dict
     """
     dz, ps = zigzag_angles(name)
     k0 = execute_index(tr["delta"])
-    side = _first_side(tr, k0)
+    side = first_side(tr, k0)
     meas = [float(np.degrees(o)) for o in overshoots(tr.t, tr["psi"], k0, ps, side)]
     psi = simulate_zigzag(model, tr, dz, ps, rate=autopilot["rate"], delay=autopilot["delay"],
                           accel=autopilot.get("accel", np.inf))
