@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+from shipid.data.basins import read_kvlcc2
 from shipid.data.paths import data_root
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
-from shipid.methods.mmg.study import read_kvlcc2
 from shipid.models import mmg
 from shipid.report.convention import overlay, table, trial_summary
 
