@@ -15,7 +15,7 @@ import pytest
 
 from shipid.methods.masscm.identifiability import m_of_zf
 from shipid.methods.masscm.estimator import I_ZF, MassCMOptions, iterate, rho_of
-from shipid.methods.masscm.study import _prepared, _state0, draw_initial, run_one
+from shipid.methods.masscm.study import prepared, initial_moments, draw_initial, run_one
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 
 ZM_KNOWN_STUDY = -0.1820948     # zm_bar of the 10 000-run z_f-known study (masscm_study docstring)
@@ -54,9 +54,9 @@ def test_warm_iterations_hold_zf_and_paths_agree(kn):
     outs = {}
     for compute in ("fast", "reference"):
         opts = MassCMOptions(compute=compute, noise_model="ar")
-        prep, known = _prepared(0, "fishing-vessel", opts)
+        prep, known = prepared(0, "fishing-vessel", opts)
         th0 = draw_initial(np.random.default_rng(np.random.SeedSequence([1, 3])))
-        core = iterate(prep, known, th0, options=opts, state0=_state0(0, "fishing-vessel", opts), jacobian=False)
+        core = iterate(prep, known, th0, options=opts, state0=initial_moments(0, "fishing-vessel", opts), jacobian=False)
         h = core["history"]
         assert core["converged"] and h.shape[0] >= 2
         assert np.all(h[1:, I_ZF] == h[0, I_ZF])
@@ -75,8 +75,8 @@ def test_period_4_cycle_is_damped(compute):
     out = {}
     for cyc in (0, 10):
         opts = MassCMOptions(compute=compute, cycle_after=cyc, noise_model="ar")
-        prep, known = _prepared(0, "fishing-vessel", opts)
-        out[cyc] = iterate(prep, known, th0, z_f=-0.029, options=opts, state0=_state0(0, "fishing-vessel", opts),
+        prep, known = prepared(0, "fishing-vessel", opts)
+        out[cyc] = iterate(prep, known, th0, z_f=-0.029, options=opts, state0=initial_moments(0, "fishing-vessel", opts),
                            jacobian=False)
     assert not out[0]["converged"] and out[0]["iterations"] == 50
     h = out[0]["history"][-8:, THETA_NAMES.index("K_vdot")]

@@ -114,7 +114,8 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     (only zm_bar and rho = m z_m/(m_c z_c) are); the tool says so.
     """
     from shipid.data.io import read_trial
-    from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, estimate_mass_cm
+    from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
+    from shipid.methods.masscm.series import with_series
 
     kn = read_known(known_path)
     datasets = []
@@ -122,10 +123,10 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
         for p in paths:
             datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
     opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
-    res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
-                           z_f_prior=kn["z_f_prior"], options=opts,
-                           init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
-    res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm.series)
+    fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
+                      options=opts, init="given" if kn["theta0"] is not None else "linear")
+    res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
+    res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
     if as_json:
         d = res.to_dict()

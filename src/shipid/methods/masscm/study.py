@@ -105,15 +105,17 @@ from __future__ import annotations
 
 import copy
 import functools
+import time
 import warnings
 from dataclasses import replace
 
 import numpy as np
 
 from shipid.estimate.linalg import one_blas_thread
-from shipid.methods.masscm.estimator import MassCMOptions, implausible_reasons, initial_state, iterate, prepare
+from shipid.methods.masscm.estimator import (MassCMOptions, estimate_mass_cm, implausible_reasons, initial_state,
+                                             iterate, prepare, rho_of)
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
-from shipid.models.roll_sim import simulate_datasets
+from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
 
 #: Order of parameters in Table 3.
@@ -143,7 +145,7 @@ def _key(data_seed: int, vessel: str, options: MassCMOptions):
     return (data_seed, vessel, replace(options, compute="fast"))
 
 
-def _prepared(data_seed: int, vessel: str, options: MassCMOptions):
+def prepared(data_seed: int, vessel: str, options: MassCMOptions):
     key = _key(data_seed, vessel, options)
     if key not in _CACHE:
         d = simulate_datasets(vessel, seed=data_seed)
@@ -153,9 +155,9 @@ def _prepared(data_seed: int, vessel: str, options: MassCMOptions):
     return _CACHE[key][:2]
 
 
-def _state0(data_seed: int, vessel: str, options: MassCMOptions):
+def initial_moments(data_seed: int, vessel: str, options: MassCMOptions):
     """First-iteration IV moments of the cached datasets (independent of the initial values)."""
-    _prepared(data_seed, vessel, options)
+    prepared(data_seed, vessel, options)
     return _CACHE[_key(data_seed, vessel, options)][2]
 
 
@@ -181,8 +183,8 @@ def run_one(i: int, seed=0, *, zf_mode: str = "known", data_seed: int = 0, init:
     # the paper's noise-free protocol with the AR(40) noise model (the fused compiled path; Table 3 as measured)
     options = MassCMOptions(max_iter=max_iter, compute=compute, noise_model="ar")
     with one_blas_thread():      # the cached datasets too: their AR fits must not depend on the BLAS threads
-        prep, known = _prepared(data_seed, vessel, options)
-        state0 = _state0(data_seed, vessel, options)
+        prep, known = prepared(data_seed, vessel, options)
+        state0 = initial_moments(data_seed, vessel, options)
     theta0 = draw_initial(rng, vessel)
     z_f = _zf_true(vessel) if zf_mode == "known" else None
     with warnings.catch_warnings(), one_blas_thread():
@@ -213,7 +215,6 @@ def _identifiable_drift(history: np.ndarray, known, last: int = 10) -> float:
     A diagnostic only (it changes no count): a run that stops at ``max_iter`` with a small value has its
     identifiable results settled while the iteration cycles in nuisance coefficients.
     """
-    from shipid.methods.masscm.estimator import rho_of
     h = np.asarray(history, dtype=float)[-last:]
     if h.size == 0 or not np.all(np.isfinite(h)):
         return float("nan")
@@ -232,7 +233,6 @@ def warm_up(data_seed: int = 0, vessel: str = "fishing-vessel", **_run_kwargs) -
     the workers are forked from, so that no worker pays the ~1.6 s of imports, cache loading and dataset
     synthesis itself. The run it makes changes no later run (the caches are keyed by their inputs).
     """
-    import time
     t0 = time.perf_counter()
     run_one(0, 0, data_seed=data_seed, vessel=vessel)
     return time.perf_counter() - t0
@@ -278,9 +278,6 @@ def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool =
     noise, constant biases, 0.5 deg wave roll), z_f known, linear initialisation; returns the
     estimates of m, zm_bar, rho with their standard errors.
     """
-    from shipid.methods.masscm.estimator import estimate_mass_cm
-    from shipid.models.roll_sim import NoiseSpec
-
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     d = simulate_datasets(vessel, seed=ss, duration=duration, noise=NoiseSpec.issue3())
     known = KnownParams.from_vessel(vessel)
