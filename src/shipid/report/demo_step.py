@@ -42,7 +42,8 @@ def _fallback_mass_cm(seed: int):
     The datasets carry white sensor noise (:data:`DEMO_MASSCM_NOISE`): the setting in which the
     method's assumptions hold, so that its warnings and residual checks mean what they say.
     """
-    from shipid.methods.masscm.estimator import estimate_mass_cm
+    from shipid.methods.masscm.estimator import fit_mass_cm
+    from shipid.methods.masscm.series import with_series
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
     from shipid.vessels import load_vessel
@@ -50,7 +51,7 @@ def _fallback_mass_cm(seed: int):
     d = simulate_datasets("fishing-vessel", seed=seed, noise=NoiseSpec(**DEMO_MASSCM_NOISE))
     known = KnownParams.from_vessel("fishing-vessel")
     z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
-    res = estimate_mass_cm(list(d.items()), known, z_f=z_f, cost_map=True)
+    res = with_series(fit_mass_cm(list(d.items()), known, z_f=z_f), cost_map=True)
     res.provenance.setdefault("seed", seed)
     res.provenance.setdefault("command", "shipid demo (report step: simulated fishing-vessel datasets)")
     res.provenance.setdefault(

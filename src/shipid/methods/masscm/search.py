@@ -189,7 +189,7 @@ def _norm(x):
 
 
 @njit(cache=True)
-def _spd_solve(H, b):
+def spd_solve(H, b):
     """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``."""
     n = b.size
     L = np.zeros((n, n))
@@ -348,7 +348,7 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
                     H[k, j] = 0.0
                 H[j, j] = 1.0
                 rhs[j] = 0.0
-        ok, dx = _spd_solve(H, rhs)
+        ok, dx = spd_solve(H, rhs)
         if not ok:                        # not positive definite (rounding): more damping
             mu *= nu
             nu *= 2.0
@@ -398,4 +398,4 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["sim_terms", "lstsq_qr", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+__all__ = ["sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
