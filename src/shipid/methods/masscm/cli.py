@@ -181,7 +181,7 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
     s["warnings"] = loud_lines([f"{s['flagged']} of {s['runs']} runs flagged implausible or not converged "
                                 "(left out of the means)"] if s["flagged"] else [])
-    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report` (issue 8)
+    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report`
         from shipid.methods.masscm.series import spread_result
         spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
                       f"--init {init} --data-seed {data_seed} --seed {seed}").write_json(out, force=force)
@@ -199,7 +199,7 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
 @study.command("mass-cm-coverage")
 @click.option("--regime", type=click.Choice(["waves", "sensors", "both"]), required=True,
               help="waves: 0.5 deg wave roll, noise-free sensors; sensors: gyro/accelerometer noise and biases, "
-                   "no waves; both: the two (issue-3 noise).")
+                   "no waves; both: the two together.")
 @click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
 @click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
               help="Length of each of the three datasets (s).")

@@ -1,4 +1,4 @@
-"""HTML report of a monitoring run: the JSON lines of ``shipid monitor mass-cm`` (issue 18).
+"""HTML report of a monitoring run: the JSON lines of ``shipid monitor mass-cm``.
 
 One self-contained page: m(t), zm_bar(t) and rho(t) with their ±2 std bands, the detector statistic with
 its threshold, the alarms and the located change times, and the truth when the stream was simulated
