@@ -10,6 +10,7 @@ series need (:func:`shipid.methods.masscm.series.with_series`); no report work i
 
 from __future__ import annotations
 
+import os
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -143,7 +144,18 @@ def fit_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
             and (z_f is not None or z_f_prior is not None)):
         noise_model_check(res, prep, known, th0, z_f, z_f_prior, options, init)
         res.diagnostics["wall_s"] = time.perf_counter() - t0
+    # what shipid report needs to make the report series again from the files (report.enrich)
+    res.provenance["mass_cm_call"] = {
+        "files": [[cond, _file_of(tr)] for cond, tr in datasets],
+        "z_f": z_f, "z_f_prior": None if z_f_prior is None else [float(v) for v in z_f_prior],
+        "theta0": None if theta0 is None else [float(v) for v in th0], "init": init}
     return MassCMFit(res, core, prep, known, options, list(datasets))
+
+
+def _file_of(trial) -> str | None:
+    """The absolute path of the file a trial was read from, or its ``source`` label when that is not a file."""
+    src = (getattr(trial, "meta", None) or {}).get("source")
+    return os.path.abspath(src) if isinstance(src, str) and os.path.isfile(src) else src
 
 
 #: Warn when AR(40) and the structured AR give m this many combined standard errors apart. Chosen on 10
