@@ -124,7 +124,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
     if free[I_ZF] and prior is None:
         # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
-        # negative) on both sides (see identifiability_masscm); keep the search inside it
+        # negative) on both sides (see shipid.methods.masscm.identifiability); keep the search inside it
         lo[:3] = 0.0
         lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
     lo_in, hi_in = lo.copy(), hi.copy()
