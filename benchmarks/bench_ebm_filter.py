@@ -7,8 +7,8 @@ conventions (linear prediction ``F x`` in the backward pass).
 
 Ours, two paths:
 
-* compiled — :func:`shipid.methods.ebm.kernels.ebm_cd_ekf` +
-  :func:`~shipid.methods.ebm.kernels.mbf_smoother_fast` (numba, what
+* compiled — :func:`shipid.methods.ebm.compiled.ebm_cd_ekf` +
+  :func:`~shipid.methods.ebm.compiled.mbf_smoother_fast` (numba, what
   :func:`shipid.methods.ebm.estimator.estimate_states` uses);
 * reference — :func:`shipid.estimate.cd_ekf.cd_ekf` + :func:`~shipid.estimate.smoothers.mbf_smoother`
   (pure Python/numpy, the definition the compiled path is tested against).
@@ -35,7 +35,7 @@ import numpy as np
 
 
 def _problem(duration: float):
-    from shipid.methods.ebm.estimator import EbmConfig, _prior_cov, measurements, process_noise
+    from shipid.methods.ebm.estimator import EbmConfig, measurements, prior_cov, process_noise
     from shipid.methods.ebm.trials import simulate_trial
     from shipid.models import abkowitz as ab
     from shipid.models.ebm_state import EbmModel, initial_state, measurement_noise
@@ -50,7 +50,7 @@ def _problem(duration: float):
     z = measurements(tr)
     t = tr.t - tr.t[0]
     x0 = initial_state(z[0], model)
-    P0 = _prior_cov(False)
+    P0 = prior_cov(False)
     return tr, model, Q, R, t, z, x0, P0
 
 
@@ -58,7 +58,7 @@ def _contenders(model, Q, R, t, z, x0, P0):
     from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
 
     from shipid.estimate.cd_ekf import cd_ekf, rk4_propagate, taylor_discretise
-    from shipid.methods.ebm.kernels import ebm_cd_ekf, mbf_smoother_fast
+    from shipid.methods.ebm.compiled import ebm_cd_ekf, mbf_smoother_fast
     from shipid.estimate.smoothers import mbf_smoother
 
     N = t.size
@@ -129,7 +129,7 @@ def main() -> None:
 
     print(f"load average at start: {os.getloadavg()}")
     t0 = time.perf_counter()
-    import shipid.methods.ebm.kernels as fast_mod
+    import shipid.methods.ebm.compiled as fast_mod
     tr, model, Q, R, t, z, x0, P0 = _problem(args.duration)
     fast_mod.mbf_smoother_fast(fast_mod.ebm_cd_ekf(model, Q, R, t[:5], z[:5], x0, P0))
     print(f"compiled path ready in {time.perf_counter() - t0:.2f} s (import + numba cache load, "

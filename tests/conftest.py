@@ -17,6 +17,9 @@ fails a test when
 
 It is used automatically by every test module that imports ``shipid.cli.main`` and by
 every test under ``tests/cli/``.
+
+``tests/`` is put on ``sys.path`` so that test modules import the known answers of the papers
+(``from known.linder2015 import TABLE3_TRUE``, :mod:`known`) under ``--import-mode=importlib``.
 """
 
 from __future__ import annotations
@@ -24,10 +27,14 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+import sys
 import warnings
 from pathlib import Path
 
 import pytest
+
+if str(Path(__file__).parent) not in sys.path:      # `import known.<paper>` from any test module
+    sys.path.insert(0, str(Path(__file__).parent))
 
 from shipid.data.paths import data_root
 

@@ -46,5 +46,5 @@ def test_identify_refuses_what_it_cannot_do():
         shipid.identify("dp", {"surge": ["a.csv"], "sway-yaw": ["b.csv"]})
     with pytest.raises(InputError, match="known= is required"):
         shipid.identify("mass-cm", {"nominal": "a", "calibration": "b", "loaded": "c"})
-    with pytest.raises(InputError, match="MMG models only"):
-        shipid.validate(shipid.Result(method="dp", estimates={}), "x.csv")
+    with pytest.raises(InputError, match="'kalman' result cannot be validated"):
+        shipid.validate(shipid.Result(method="kalman", estimates={}), "x.csv")

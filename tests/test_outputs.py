@@ -1,13 +1,17 @@
 """Output files follow the umask, are written atomically and are never clobbered without force."""
 
+import dataclasses
+import json
 import os
 import stat
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shipid.cli import main
 from shipid.errors import OutputExistsError
-from shipid.outputs import atomic_write, atomic_write_text
+from shipid.outputs import atomic_write, atomic_write_text, json_default, jsonable
 
 
 @pytest.fixture
@@ -72,3 +76,22 @@ def test_cli_json_csv_and_png_outputs_are_0644(tmp_path, umask022, capsys):
     capsys.readouterr()
     for p in (csv, out, png, html):
         assert _mode(p) == 0o644, p
+
+
+def test_jsonable_is_the_one_json_rule():
+    @dataclasses.dataclass
+    class P:
+        a: np.ndarray
+        b: float
+
+    obj = {"x": np.float64(0.1), "n": np.int32(3), "arr": np.array([[1.0, np.nan]]), "p": P(np.arange(2), 2.5),
+           "path": Path("/tmp/a"), "s": {3, 1}, 7: (1, 2)}
+    out = jsonable(obj, strict=True)
+    assert out["x"] == 0.1 and type(out["x"]) is float and out["n"] == 3 and type(out["n"]) is int
+    assert out["arr"][0][0] == 1.0 and np.isnan(out["arr"][0][1])
+    assert out["p"] == {"a": [0, 1], "b": 2.5} and out["path"] == "/tmp/a" and out["s"] == [1, 3]
+    assert out["7"] == [1, 2]                                  # keys strings and tuples lists, as in JSON
+    assert json.dumps(obj, default=json_default) == json.dumps(out)
+    with pytest.raises(TypeError, match="object is not JSON-serialisable"):
+        jsonable({"f": object()}, strict=True)
+    assert jsonable({"f": 1j}) == {"f": "1j"}                  # not strict: anything else as text

@@ -80,35 +80,55 @@ def identify(method: str, trials, *, vessel: str | None = None, options=None, **
 
 
 @single_threaded
-def validate(model, trial: _Trialish, *, horizon: float = 60.0, **kwargs):
-    """Open-loop prediction of a measured run by an identified MMG model (``shipid validate``).
+def validate(model, trial: _Trialish, *, horizon: float | None = None, **kwargs):
+    """Open-loop prediction of a held-out run by an identified model (``shipid validate``).
 
     Parameters
     ----------
     model : Result, MmgModel or str
-        An ``identify("mmg", ...)`` result, a model JSON path, or ``"published:<name>"``.
+        A result of ``identify(...)`` of any method that has a ``validate`` module (``mmg``, ``ebm``,
+        ``dp``, ``mass-cm``), a result JSON path, ``"published:<name>"`` (a published MMG set) or an
+        :class:`~shipid.models.mmg.MmgModel`.
     trial : Trial or path
-        The measured run (not used for training).
-    horizon : float
-        Length of the restarted horizons, s.
+        The measured run (not used for training), with the channels the method needs.
+    horizon : float, optional
+        Length of the restarted horizons, s (default: the method's ``DEFAULT_HORIZON``; 60 s, and
+        10 s for mass-cm's 60-s records).
+    **kwargs
+        Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``).
 
     Returns
     -------
-    shipid.methods.mmg.validate.Validation
-        RMS and maximum errors over 30 s, 60 s, the whole run and restarted horizons.
+    shipid.analysis.openloop.Validation
+        RMS and maximum errors over 30 s, 60 s, the whole run and restarted horizons, in the
+        quantities the method predicts (``Validation.quantities``).
 
-    Only MMG models can be validated today; other results raise :class:`~shipid.errors.InputError`.
+    The method is found from ``Result.method`` through :func:`shipid.registry.for_result`; one
+    without a ``validate`` module raises :class:`~shipid.errors.InputError`.
     """
-    if isinstance(model, Result):
-        if model.method not in ("mmg-ebm", "mmg"):
-            raise InputError(f"validate: a {model.method!r} result cannot be validated yet (MMG models only)")
-        model = _V.model_from_result(model.to_dict())
-    elif isinstance(model, (str, os.PathLike)):
-        model = _V.load_model(model)
-    elif not isinstance(model, _mmg_model.MmgModel):
+    if isinstance(model, os.PathLike) or (isinstance(model, str) and not model.startswith("published:")):
+        path = os.fspath(model)
+        if not os.path.isfile(path):
+            raise InputError("no such model file", file=path)
+        try:
+            with open(path, encoding="utf-8") as fh:
+                model = Result.from_json(fh.read())
+        except (UnicodeDecodeError, ValueError, KeyError, TypeError) as err:
+            raise InputError(f"not a result JSON file ({type(err).__name__}: {err})", file=path) from None
+    if isinstance(model, str) or isinstance(model, _mmg_model.MmgModel):
+        m = _V.load_model(model) if isinstance(model, str) else model
+        tr = as_trial(trial, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.validate")
+        return _V.validate(m, tr, horizon=_V.DEFAULT_HORIZON if horizon is None else horizon, **kwargs)
+    if not isinstance(model, Result):
         raise InputError("validate: model must be a Result, an MmgModel or a model path")
-    tr = as_trial(trial, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.validate")
-    return _V.validate(model, tr, horizon=horizon, **kwargs)
+    info = registry.for_result(model.method)
+    if info is None or not info.has_module("validate"):
+        raise InputError(f"validate: a {model.method!r} result cannot be validated (methods with an open-loop "
+                         f"model: {', '.join(k for k, v in registry.methods().items() if v.has_module('validate'))})")
+    mod = info.submodule("validate")
+    tr = as_trial(trial, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.validate",
+                  required=list(getattr(mod, "REQUIRED", ())) or None)
+    return mod.validate_result(model, tr, horizon=horizon, **kwargs)
 
 
 def simulate(vessel: str, manoeuvre: str, *, duration: float | None = None, dt: float = 0.1, seed: int = 0,

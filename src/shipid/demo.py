@@ -33,7 +33,11 @@ from typing import Callable
 
 import numpy as np
 
-from shipid.errors import ShipidError
+from shipid.data.io import write_trial
+from shipid.errors import InputError, ShipidError
+from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
+from shipid.simulate.metrics import turning_metrics, zigzag_metrics
+from shipid.simulate.registry import get_ship_model, list_vessels
 
 DemoFn = Callable[["DemoContext"], list[dict]]
 
@@ -85,8 +89,8 @@ def _discover() -> None:
     (dask, say) is listed in :data:`SKIPPED` instead of failing the whole demo;
     any other import error is a bug and propagates.
     """
-    import shipid.methods
-    for mod in pkgutil.walk_packages(shipid.methods.__path__, "shipid.methods.",
+    methods = importlib.import_module("shipid.methods")       # plug-in discovery
+    for mod in pkgutil.walk_packages(methods.__path__, "shipid.methods.",
                                      onerror=lambda name: None):
         try:
             importlib.import_module(mod.name)
@@ -116,10 +120,6 @@ DEFAULT_DEMO_MANOEUVRE = ("zigzag-20", 600.0, 0.5)
 @demo_step("simulate", order=0, description="simulate every packaged vessel on a typical manoeuvre")
 def simulate_vessels(ctx: DemoContext) -> list[dict]:
     """Simulate every packaged vessel (and the generic Nomoto ship) and write the trials as CSV."""
-    from shipid.data.io import write_trial
-    from shipid.simulate.manoeuvres import run_manoeuvre
-    from shipid.simulate.registry import get_ship_model, list_vessels
-
     rows = []
     for entry in list_vessels():
         man, duration, dt = DEMO_MANOEUVRES.get(entry.name, DEFAULT_DEMO_MANOEUVRE)
@@ -159,10 +159,6 @@ def summarise(trial) -> dict[str, str]:
 
 def manoeuvre_measures(trial, manoeuvre: str) -> str:
     """Overshoot angles of a zig-zag or the diameters of a turning circle, as text ("-" if none)."""
-    from shipid.errors import InputError
-    from shipid.simulate.manoeuvres import parse_manoeuvre
-    from shipid.simulate.metrics import turning_metrics, zigzag_metrics
-
     spec = parse_manoeuvre(manoeuvre)
     try:
         if spec.kind == "zigzag":

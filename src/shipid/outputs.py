@@ -6,16 +6,66 @@ Windows: a reader sees either the old file or the complete new one, never half.
 The finished file gets the mode a plain ``open(path, "w")`` would give it
 (``0o666`` less the process umask, so 0644 under umask 022), not the 0600 of
 :func:`tempfile.mkstemp`.
+
+:func:`json_default` and :func:`jsonable` are the one rule for turning NumPy values,
+dataclasses, paths and sets into JSON types, used by every writer of JSON.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import os
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
+
+import numpy as np
 
 from shipid.errors import OutputExistsError
+
+
+def json_default(obj: Any) -> Any:
+    """The ``default`` hook of :func:`json.dumps`: one step towards JSON types for what it cannot write.
+
+    NumPy scalars become Python numbers (floats exactly, NaN kept), arrays nested lists, dataclass
+    instances dicts, paths strings, sets sorted lists, other mappings dicts.
+
+    Raises
+    ------
+    TypeError
+        For any other type.
+    """
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return dataclasses.asdict(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, (set, frozenset)):
+        return sorted(obj)
+    if isinstance(obj, Mapping):
+        return dict(obj)
+    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")
+
+
+def _text_default(obj: Any) -> Any:
+    try:
+        return json_default(obj)
+    except TypeError:
+        return str(obj)
+
+
+def jsonable(obj: Any, *, strict: bool = False) -> Any:
+    """``obj`` as plain JSON types (dict with string keys, list, str, int, float, bool, None).
+
+    Converted by :func:`json_default`; anything else becomes its ``str`` (``strict=False``) or raises
+    ``TypeError`` (``strict=True``). Tuples become lists and mapping keys strings, as in JSON.
+    """
+    return json.loads(json.dumps(obj, default=json_default if strict else _text_default))
 
 
 def _umask() -> int:

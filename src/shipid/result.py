@@ -12,11 +12,13 @@ from __future__ import annotations
 import datetime as _dt
 import json
 from dataclasses import asdict, dataclass, field
-from typing import Any, Mapping
+from collections.abc import MutableMapping
+from typing import Any, Iterator, Mapping
 
 import numpy as np
 
 import shipid
+from shipid import registry
 from shipid.outputs import atomic_write_text
 
 
@@ -48,6 +50,126 @@ class Estimate:
         return (self.value - 1.959963984540054 * self.std, self.value + 1.959963984540054 * self.std)
 
 
+_TYPED_DIAGNOSTICS = ("converged", "iterations", "warnings")
+
+
+@dataclass(eq=False)
+class Diagnostics(MutableMapping):
+    """What the estimator says about its own run: typed fields, and the method's further entries.
+
+    Reads and writes as the mapping the JSON holds (``d["converged"]``, ``d.get("ridge_k")``,
+    ``d.setdefault("warnings", []).append(...)``) and as attributes for the fields every method
+    reports.
+
+    Attributes
+    ----------
+    converged : bool or None
+        Whether the estimator met its convergence criterion (None: the method has none).
+    iterations : int or None
+        Iterations (or filter passes) it took.
+    warnings : list of str
+        One line per non-convergence, implausible or undetermined estimate, or repair of the data;
+        the CLI prints each on stderr and ``--strict`` exits 3 when there is any.
+    extra : dict
+        The method's own diagnostics (residual checks, noise levels, stage records ...), JSON-able.
+    """
+
+    converged: bool | None = None
+    iterations: int | None = None
+    warnings: list = field(default_factory=list)
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def coerce(cls, d: Mapping[str, Any] | None) -> "Diagnostics":
+        """``d`` as :class:`Diagnostics` (itself when it already is one)."""
+        if isinstance(d, Diagnostics):
+            return d
+        out = cls()
+        for k, v in dict(d or {}).items():
+            out[k] = v
+        return out
+
+    def __getitem__(self, key: str) -> Any:
+        if key in _TYPED_DIAGNOSTICS:
+            v = getattr(self, key)
+            if v is None:
+                raise KeyError(key)
+            return v
+        return self.extra[key]
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        if key == "warnings":
+            self.warnings = list(value) if value is not None else []
+        elif key in _TYPED_DIAGNOSTICS:
+            setattr(self, key, value)
+        else:
+            self.extra[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        if key == "warnings":
+            self.warnings = []
+        elif key in _TYPED_DIAGNOSTICS:
+            if getattr(self, key) is None:
+                raise KeyError(key)
+            setattr(self, key, None)
+        else:
+            del self.extra[key]
+
+    def __iter__(self) -> Iterator[str]:
+        for k in _TYPED_DIAGNOSTICS:
+            if k == "warnings" or getattr(self, k) is not None:
+                yield k
+        yield from self.extra
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def setdefault(self, key: str, default: Any = None) -> Any:
+        """As :meth:`dict.setdefault`; for ``"warnings"`` the stored list itself is returned."""
+        if key == "warnings":
+            return self.warnings
+        return super().setdefault(key, default)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Mapping) and self.to_dict() == dict(other.items())
+
+    __hash__ = None  # mutable
+
+    def to_dict(self) -> dict[str, Any]:
+        """The plain mapping written to JSON."""
+        return {k: self[k] for k in self}
+
+
+@dataclass(frozen=True)
+class Covariance:
+    """Covariance of the free estimates, with the names of its rows.
+
+    Attributes
+    ----------
+    names : tuple of str
+    matrix : ndarray, shape (n, n)
+    """
+
+    names: tuple
+    matrix: np.ndarray
+
+    def std(self) -> dict[str, float]:
+        """Standard errors by name (square roots of the diagonal)."""
+        d = np.sqrt(np.clip(np.diag(self.matrix), 0.0, None))
+        return dict(zip(self.names, map(float, d)))
+
+    def correlation(self) -> np.ndarray:
+        """The correlation matrix (NaN where a variance is zero)."""
+        d = np.sqrt(np.diag(self.matrix))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.matrix / np.outer(d, d)
+
+    def sub(self, names) -> "Covariance":
+        """The block of the named estimates, in the order given."""
+        idx = [self.names.index(n) for n in names]
+        return Covariance(tuple(names), self.matrix[np.ix_(idx, idx)])
+
+
 @dataclass
 class Result:
     """Output of an identification method.
@@ -62,8 +184,9 @@ class Result:
     covariance : ndarray or None
         Covariance of the estimates named in ``covariance_names``.
     covariance_names : list of str
-    diagnostics : dict
-        ``converged``, ``iterations``, residual statistics, warnings ...
+    diagnostics : Diagnostics
+        ``converged``, ``iterations``, ``warnings`` and the method's own entries (a dict given
+        here is converted).
     series : dict
         Time histories for plots (parameter histories, smoothed states ...), JSON-able.
     provenance : dict
@@ -75,19 +198,55 @@ class Result:
     model: dict[str, Any] = field(default_factory=dict)
     covariance: np.ndarray | None = None
     covariance_names: list[str] = field(default_factory=list)
-    diagnostics: dict[str, Any] = field(default_factory=dict)
+    diagnostics: Diagnostics = field(default_factory=Diagnostics)
     series: dict[str, Any] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "diagnostics":
+            value = Diagnostics.coerce(value)
+        object.__setattr__(self, name, value)
 
     def __post_init__(self) -> None:
         self.provenance.setdefault("shipid_version", shipid.__version__)
         self.provenance.setdefault("created", _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"))
 
     def value(self, name: str) -> float:
+        """The estimate called ``name``."""
         return self.estimates[name].value
 
     def std(self, name: str) -> float:
+        """Its standard error."""
         return self.estimates[name].std
+
+    @property
+    def cov(self) -> Covariance | None:
+        """:attr:`covariance` with its names, as a :class:`Covariance` (None when there is none)."""
+        if self.covariance is None:
+            return None
+        return Covariance(tuple(self.covariance_names), np.asarray(self.covariance, dtype=float))
+
+    @property
+    def converged(self) -> bool | None:
+        """``diagnostics.converged``."""
+        return self.diagnostics.converged
+
+    @property
+    def warnings(self) -> list:
+        """``diagnostics.warnings``: the lines the CLI prints on stderr."""
+        return self.diagnostics.warnings
+
+    def with_series(self, **kwargs) -> "Result":
+        """This result with the report series its method computes on request.
+
+        Calls ``with_series(result, **kwargs)`` of the method's ``series`` module (found through
+        :mod:`shipid.registry`); a method without one returns the result unchanged.
+        """
+        info = registry.for_result(self.method)
+        if info is None or not info.has_module("series"):
+            return self
+        fn = getattr(info.submodule("series"), "with_series", None)
+        return fn(self, **kwargs) if callable(fn) else self
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -96,7 +255,7 @@ class Result:
             "estimates": {k: asdict(v) for k, v in self.estimates.items()},
             "covariance": None if self.covariance is None else _jsonable(self.covariance),
             "covariance_names": list(self.covariance_names),
-            "diagnostics": _jsonable(self.diagnostics),
+            "diagnostics": _jsonable(self.diagnostics.to_dict()),
             "series": _jsonable(self.series),
             "provenance": _jsonable(self.provenance),
         }

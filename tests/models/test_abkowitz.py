@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from known.yoon_rhee2003 import EQ21_ALPHA, EQ21_TRUE, TABLE3_TRUE
 
 from shipid.models import abkowitz as ab
 from shipid.simulate.integrate import simulate
@@ -16,10 +17,8 @@ def model():
 def test_vessel_file_has_true_column_of_table_3():
     v = load_vessel("esso-osaka")
     c = v.values("abkowitz")
-    # yr2003 Table 3 "True": a few spot checks
-    assert c["Y_v"] == pytest.approx(-2.83e-2)
-    assert c["N_r"] == pytest.approx(-5.00e-3)
-    assert c["eta_3"] == pytest.approx(3.83e-7)
+    for name, true in TABLE3_TRUE.items():          # yr2003 Table 3 "True": a few spot checks
+        assert c[name] == pytest.approx(true)
     assert len(ab.THETA_X_NAMES) == 8 and len(ab.THETA_Y_NAMES) == 9 and len(ab.THETA_N_NAMES) == 9
     for sec in v.sections.values():
         for p in sec.values():
@@ -27,14 +26,14 @@ def test_vessel_file_has_true_column_of_table_3():
 
 
 def test_eq21_true_combined_coefficients():
-    # yr2003 eq. 21 text: true combined coefficients -3.7807e-2 and -5.2664e-4 with alpha = -0.4104.
+    # yr2003 eq. 21 text: the true combined coefficients with alpha = -0.4104
     p = ab.params_from_vessel()
-    a = -0.4104
+    a = EQ21_ALPHA
     Yv, Yr = p.theta_Y[1], p.theta_Y[2]
     Nv, Nr = p.theta_N[1], p.theta_N[2]
-    assert Nv * a + Nr == pytest.approx(-5.2664e-4, rel=1e-4)
+    assert Nv * a + Nr == pytest.approx(EQ21_TRUE["Nv*alpha+Nr"], rel=1e-4)
     # the paper's first value differs from the rounded table entries by 5e-4 relative
-    assert Yv + Yr / a == pytest.approx(-3.7807e-2, rel=1e-3)
+    assert Yv + Yr / a == pytest.approx(EQ21_TRUE["Yv+Yr/alpha"], rel=1e-3)
 
 
 def test_straight_run_is_an_equilibrium(model):

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from known.fossen1996 import A_EQ51, B_EQ52, T_EQ29, THETA_EQ46_49
 
 from shipid.models import dp, thrusters
 from shipid.models.bis import Bis
@@ -16,15 +17,6 @@ from shipid.vessels import load_vessel
 @pytest.fixture(scope="module")
 def supply():
     return dp.dp_vessel(load_vessel("supply"))
-
-
-# Reference values typed from the paper (Fossen, Sagatun & Sørensen 1996).
-A_EQ51 = np.array([[-0.0318, 0, 0], [0, -0.0628, -0.0030], [0, -0.0045, -0.2428]])  # eq. 51
-B_EQ52 = np.array([[0.0082, 0.0082, 0, 0, 0, 0],                                   # eq. 52
-                   [0.0001, -0.0001, 0.0008, 0.0008, 0.0020, 0.0017],
-                   [0.0035, -0.0035, -0.0059, -0.0055, 0.0113, 0.0079]])
-T_EQ29 = np.array([[1, 1, 0, 0, 0, 0], [0, 0, 1, 1, 1, 1],                         # eq. 29
-                   [0.0472, -0.0472, -0.4108, -0.3858, 0.4554, 0.3373]])
 
 
 def test_derived_A_B_match_eqs_51_52(supply):
@@ -59,7 +51,7 @@ def test_thruster_model_eqs_1_3_5():
 
 def test_theta_mapping_eqs_46_47(supply):
     th = supply.theta
-    np.testing.assert_allclose(th, [-0.0318, -0.0602, 0.0618, -0.0075, -0.2454, 9.3e-3, 2.0e-3, 2.8e-3, 2.6e-3])
+    np.testing.assert_allclose(th, THETA_EQ46_49)
     A_h, K = dp.matrices_from_theta(th)
     np.testing.assert_array_equal(A_h, supply.A_h)
     np.testing.assert_array_equal(K, supply.K)

@@ -1,13 +1,14 @@
 """Reduced roll model (18)–(26), CR shift (24) and bilinear discretisation (32)–(37), Linder et al. 2015."""
 
 import numpy as np
+from known.linder2015 import TABLE3_TRUE
 from scipy import signal
 
 from shipid.models.roll_reduced import (KnownParams, bilinear_tf, continuous_coeffs, continuous_to_discrete,
                                         discrete_coeffs, from_moment, roll_terms, to_moment)
 from shipid.models.roll_sim import simulate_datasets
 
-TRUE = np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182])   # Table 3 row T
+TRUE = TABLE3_TRUE
 CONDS = ["nominal", "calibration", "loaded"]
 
 

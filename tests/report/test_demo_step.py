@@ -4,6 +4,7 @@ import pytest
 
 from shipid.demo import DemoContext, demo_steps
 from shipid.report import demo_step
+from shipid.methods.mmg import demo as mmg_demo
 from shipid.report.examples import EXAMPLES
 
 
@@ -23,7 +24,7 @@ def test_reports_for_results_in_context(tmp_path, monkeypatch):
     def broken(seed):
         raise RuntimeError("method not ready")
     monkeypatch.setitem(demo_step.FALLBACKS, "ebm", broken)
-    monkeypatch.setattr(demo_step, "_realdata_mmg_ebm", lambda seed: None)  # as without the shared data
+    monkeypatch.setitem(demo_step.REAL_DATA, "mmg", lambda seed: None)  # as without the shared data
     rows = demo_step.report_step(ctx)
     by = {r["result"]: r for r in rows}
     assert by["ebm"]["report"].startswith("skipped: RuntimeError: method not ready")
@@ -38,7 +39,7 @@ def test_fallback_result_is_saved_and_reported(tmp_path, monkeypatch):
     ctx = DemoContext(out_dir=tmp_path, seed=3, echo=lambda s: None)
     ctx.results = {"given": EXAMPLES["mass-cm"](), "dp-given": EXAMPLES["dp"]()}
     monkeypatch.setitem(demo_step.FALLBACKS, "ebm", lambda seed: EXAMPLES["ebm"]())
-    monkeypatch.setattr(demo_step, "_realdata_mmg_ebm", lambda seed: None)
+    monkeypatch.setitem(demo_step.REAL_DATA, "mmg", lambda seed: None)
     rows = demo_step.report_step(ctx)
     assert {r["result"] for r in rows} == {"given", "dp-given", "result-ebm"}
     assert (tmp_path / "result-ebm.json").exists() and (tmp_path / "report-ebm.html").exists()
@@ -52,7 +53,7 @@ def test_real_data_report_with_held_out_validation(tmp_path):
     root = data_root()
     if root is None or not (root / "kvlcc2_hsva").is_dir():
         pytest.skip("shared real data (kvlcc2_hsva) not found: set SHIPID_DATA or provide ../shared/data")
-    res = demo_step._realdata_mmg_ebm(0)
+    res = mmg_demo.real_data(0)
     assert res.method == "mmg-ebm"
     ov = res.series["overlays"]
     assert {e["kind"] for e in ov.values()} == {"validation"}

@@ -14,6 +14,7 @@ import re
 
 import numpy as np
 import pytest
+from known.linder2015 import paper_mean, true_value
 
 FIG_RE = re.compile(r'<figure><img src="data:image/png;base64,([^"]+)" alt="[^"]*">'
                     r"<figcaption><b>Figure \d+\.</b> (.*?)</figcaption></figure>", re.S)
@@ -105,7 +106,7 @@ def test_masscm_study_report_table3(method_reports):
     rows = {r[0]: r for r in res.series["tables"]["spread"]["rows"]}
     assert list(rows) == ["A_x", "d", "k", "K_delta", "K_r", "K_vdot", "z_f", "m", "zm_bar"]
     # columns: parameter, unit, true, mean, std, lower, upper, paper mean, paper std (Table 3)
-    assert rows["m"][2] == 0.4 and rows["m"][7] == pytest.approx(0.4007)
+    assert rows["m"][2] == true_value("m") and rows["m"][7] == pytest.approx(paper_mean("m"))
     assert rows["m"][3] == pytest.approx(0.4, rel=2e-3)        # z_f known: every run reaches m (0.05 % off)
     assert len(res.series["xy"]["spread"]["x"]) == 4
     assert len(res.provenance["inputs"]) == 3

@@ -83,7 +83,7 @@ def test_demo_masscm_setting_is_one_where_the_method_works():
     from shipid.methods.masscm.series import with_series
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
-    from shipid.report.demo_step import DEMO_MASSCM_NOISE
+    from shipid.methods.masscm.demo import DEMO_MASSCM_NOISE
     from shipid.report.stats import residual_stats
     from shipid.vessels import load_vessel
 

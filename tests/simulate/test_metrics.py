@@ -6,7 +6,7 @@ import pytest
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.simulate.manoeuvres import run_manoeuvre
-from shipid.simulate.metrics import turning_metrics, zigzag_metrics
+from shipid.simulate.metrics import heading_overshoots, turning_metrics, zigzag_metrics
 from shipid.simulate.nomoto import nomoto_model
 
 
@@ -56,6 +56,23 @@ def test_zigzag_overshoot_of_a_known_heading():
     assert len(zm.overshoots) >= 4
     np.testing.assert_allclose(np.rad2deg(zm.overshoots), 10.0, atol=1e-9)
     assert zm.initial_turning_time == pytest.approx(10 / np.pi * np.arcsin(2 / 3), abs=0.05)
+
+
+def test_heading_overshoots_of_a_known_heading_and_as_the_rudder_rule():
+    # the heading of the test above: 10° exactly after each crossing of ±20°; execute at t = 1 s
+    t = np.arange(0, 60.0, 0.05)
+    psi = np.where(t >= 1.0, np.deg2rad(30.0) * np.sin(np.pi / 10 * (t - 1.0)), 0.0)
+    k0 = int(np.flatnonzero(t >= 1.0)[0])
+    np.testing.assert_allclose(np.rad2deg(heading_overshoots(t, psi, k0, np.deg2rad(20.0), 1, count=4)),
+                               10.0, atol=1e-9)
+    # on a simulated zig-zag (reversals on the sample where the heading reaches ±10°) the heading-only
+    # rule and the rudder-event rule find the same overshoots
+    tr = run_manoeuvre(nomoto_model(), "zigzag-10", duration=400.0, dt=0.1)
+    zm = zigzag_metrics(tr, np.deg2rad(10.0))
+    ev = np.flatnonzero(np.diff(tr["delta_cmd"]) != 0) + 1
+    side = int(np.sign(tr["delta_cmd"][ev[0]]))
+    ho = heading_overshoots(tr.t, tr["psi"], int(ev[0]), np.deg2rad(10.0), side, count=len(zm.overshoots))
+    np.testing.assert_allclose(ho, zm.overshoots, rtol=1e-12)
 
 
 def test_zigzag_metrics_on_simulation_and_errors():

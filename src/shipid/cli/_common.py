@@ -17,15 +17,23 @@ repair made to the input data, any Python warning raised inside a method — is
 far into the result, adds those the result itself implies and prints each one
 once. Warnings recorded but never claimed by a command are printed by ``main``
 at the end, in the same format.
+
+Outputs follow one convention (:func:`out_options`): ``--json`` prints the result as JSON
+on stdout, ``-o/--out FILE`` writes it atomically (:mod:`shipid.outputs`) and refuses
+to overwrite an existing FILE without ``--force`` (one line, exit status 2, checked
+before any work is done); :func:`emit` does both.
 """
 
 from __future__ import annotations
 
+import functools
+import json
 import math
 import warnings
+from pathlib import Path
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 import click
 
@@ -198,3 +206,81 @@ def finish(rv: int) -> int:
 def emitted() -> list[str]:
     """The warning lines printed so far in this invocation."""
     return list(_S.emitted)
+
+
+# ----------------------------------------------------------------------------- outputs
+OUT_HELP = "Write the result as JSON to FILE (atomically; an existing FILE needs --force)."
+JSON_HELP = "Print the result as JSON on stdout."
+
+
+def refuse_existing(*paths, force: bool = False) -> None:
+    """Raise :class:`~shipid.errors.OutputExistsError` (exit 2) for the first existing path unless ``force``."""
+    from shipid.errors import OutputExistsError
+
+    for p in paths:
+        if p is not None and not force and Path(p).exists():
+            raise OutputExistsError(str(p))
+
+
+def out_options(f: Callable | None = None, *, json_flag: bool = True, json_help: str = JSON_HELP,
+                out_help: str = OUT_HELP, metavar: str = "FILE", required: bool = False,
+                force_help: str = "Overwrite an existing --out file.", alias: bool = False):
+    """Click decorator: ``--json`` (``as_json``), ``-o/--out FILE`` (``out``) and ``--force`` (``force``).
+
+    Before the command runs, an existing ``--out`` without ``--force`` is refused
+    (:func:`refuse_existing`): the error comes before a long computation, never after it,
+    and never clobbers the file. ``alias=True`` also accepts the hidden spelling
+    ``--output`` (kept for commands that had it). Use it as ``@out_options`` or
+    ``@out_options(out_help=...)``; write the result with :func:`emit`.
+    """
+
+    def decorate(func):
+        @functools.wraps(func)
+        def wrapper(*args, out=None, output_alias=None, force=False, **kw):
+            if output_alias is not None:
+                if out is not None and out != output_alias:
+                    raise click.UsageError("give -o/--out once (--output is the same option)")
+                out = output_alias
+            refuse_existing(out, force=force)
+            return func(*args, out=out, force=force, **kw)
+
+        opts = []
+        if json_flag:
+            opts.append(click.option("--json", "as_json", is_flag=True, help=json_help))
+        opts.append(click.option("-o", "--out", "out", type=click.Path(dir_okay=False), default=None,
+                                 required=required, metavar=metavar, help=out_help))
+        if alias:
+            opts.append(click.option("--output", "output_alias", type=click.Path(dir_okay=False), default=None,
+                                     hidden=True))
+        opts.append(click.option("--force", is_flag=True, help=force_help))
+        for opt in reversed(opts):
+            wrapper = opt(wrapper)
+        return wrapper
+
+    return decorate(f) if f is not None else decorate
+
+
+def json_text(payload: Any, indent: int | None = 2) -> str:
+    """The JSON text of a result: a :class:`~shipid.result.Result` (its ``to_json``), a dict or a JSON string."""
+    if isinstance(payload, str):
+        return payload
+    if hasattr(payload, "to_json"):
+        return payload.to_json(indent=indent)
+    return json.dumps(payload, indent=indent, allow_nan=True)
+
+
+def emit(payload: Any, *, as_json: bool, out: str | None, force: bool, text: Callable[[], None] | None = None,
+         indent: int | None = 2):
+    """Write ``payload`` to ``out`` (atomically, see :func:`out_options`), print it with ``--json``, else ``text()``.
+
+    Returns the written path (``None`` without ``--out``).
+    """
+    from shipid.outputs import atomic_write_text
+
+    body = json_text(payload, indent)
+    path = atomic_write_text(out, body if body.endswith("\n") else body + "\n", force=force) if out else None
+    if as_json:
+        click.echo(body)
+    elif text is not None:
+        text()
+    return path

@@ -25,9 +25,9 @@ command one keyword argument ``campaign``, a
 
 Commands here:
 
-* ``shipid study toy --runs N`` — a cheap seeded toy campaign (smoke test of a cluster);
-* ``shipid study export STORE --out FILE.parquet|FILE.csv`` — one row per run;
-* ``shipid study store-info STORE`` — campaigns in a store and their progress.
+* ``shipid study toy --runs N [--json] [-o R.json]`` — a cheap seeded toy campaign (smoke test of a cluster);
+* ``shipid study export STORE -o FILE.parquet|FILE.csv [--json]`` — one row per run;
+* ``shipid study store-info STORE [--json] [-o R.json]`` — campaigns in a store and their progress.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ import math
 import click
 
 from shipid.cli import study
+from shipid.cli._common import emit, out_options
 from shipid.errors import ShipidError
 from shipid.studies.engine import CampaignOptions, CampaignResult
 
@@ -99,9 +100,9 @@ def echo_campaign_summary(res: CampaignResult) -> None:
               help="Make every K-th run fail (tests error recording).")
 @click.option("--sleep", type=click.FloatRange(min=0), default=0.0, show_default=True,
               help="Seconds each run sleeps.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+@out_options(json_help="Print one JSON object on stdout.")
 @campaign_options
-def toy(runs, points, fail_every, sleep, as_json, campaign):
+def toy(runs, points, fail_every, sleep, as_json, out, force, campaign):
     """A cheap seeded toy campaign (a least-squares line fit per run).
 
     Useful as a smoke test of an executor or a cluster: the same --seed gives the
@@ -112,32 +113,35 @@ def toy(runs, points, fail_every, sleep, as_json, campaign):
     slopes = [o["b"] for o in res.outputs if o is not None]
     mean = math.fsum(slopes) / len(slopes) if slopes else None
     summary = {**res.summary(), "mean_slope": mean}
-    if as_json:
-        click.echo(json.dumps(summary))
-    else:
+
+    def text():
         echo_campaign_summary(res)
         if mean is not None:
             click.echo(f"mean slope {mean:.6f} over {len(slopes)} runs (true 2)")
 
+    emit(summary, as_json=as_json, out=out, force=force, indent=None, text=text)
+
 
 @study.command("export")
 @click.argument("store", type=click.Path(dir_okay=False))
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False), metavar="FILE",
-              help="Output file: .parquet or .csv.")
+@out_options(required=True, json_help="Print what was written (file, campaign, runs) as JSON on stdout.",
+             out_help="Output table, one row per run: .parquet or .csv (atomically; an existing FILE needs --force).",
+             force_help="Overwrite FILE.")
 @click.option("--campaign", default=None, help="Campaign name (needed when the store holds several).")
-@click.option("--force", is_flag=True, help="Overwrite FILE.")
-def export(store, out, campaign, force):
+def export(store, as_json, out, force, campaign):
     """Export a campaign store to Parquet or CSV, one row per run."""
     from shipid.studies.store import export_store
 
     path, n = export_store(store, out, campaign=campaign, force=force)
     click.echo(f"wrote {n} runs to {path}", err=True)
+    if as_json:
+        click.echo(json.dumps({"store": store, "campaign": campaign, "out": str(path), "runs": n}))
 
 
 @study.command("store-info")
 @click.argument("store", type=click.Path(dir_okay=False))
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def store_info(store, as_json):
+@out_options(json_help="Print one JSON object on stdout.")
+def store_info(store, as_json, out, force):
     """List the campaigns in a store with their definition and progress."""
     from pathlib import Path
 
@@ -152,9 +156,11 @@ def store_info(store, as_json):
             recs = st.records(name)
             meta.update(done=len(recs), failed=sum(r.status != "ok" for r in recs))
             info.append(meta)
-    if as_json:
-        click.echo(json.dumps({"store": store, "campaigns": info}))
-        return
+    emit({"store": store, "campaigns": info}, as_json=as_json, out=out, force=force, indent=None,
+         text=lambda: _print_info(info))
+
+
+def _print_info(info: list) -> None:
     for m in info:
         click.echo(f"{m['name']}: {m['done']}/{m['n_runs']} runs done ({m['failed']} failed); task {m['task']}, "
                    f"seed {m['seed']}, kwargs {m['kwargs']}, shipid {m['shipid_version']}")

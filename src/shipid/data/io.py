@@ -51,18 +51,19 @@ import io as _io
 import json
 import os
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping
 
 import numpy as np
 
 from shipid.data.csv_dialect import detect_dialect
+from shipid.data.nmea import looks_like_nmea, read_nmea
+from shipid.data.table import RawTable, decode_text, split_lines
 from shipid.data.trial import CHANNELS, Trial
 from shipid.data.units import from_si, parse_unit, split_header, to_si
 from shipid.data.validate import validate_arrays
 from shipid.errors import InputError, ShipidError
-from shipid.outputs import atomic_write
+from shipid.outputs import atomic_write, jsonable
 
 FORMATS = ("csv", "parquet", "esso", "kvlcc2", "nmea")
 
@@ -94,17 +95,6 @@ ESSO_MANOEUVRES = ("turning", "zigzag", "random", "berthing")
 
 _EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2",
                ".nmea": "nmea", ".log": "csv"}  # .txt/.log: NMEA when the content looks like it (shipid.data.nmea)
-
-
-@dataclass
-class _Table:
-    """Raw columns as read from a file, before mapping and unit conversion."""
-
-    names: list[str]
-    units: list[str | None]
-    data: np.ndarray                     # (n_rows, n_cols) float64, NaN where empty
-    rows: np.ndarray                     # 1-based data row numbers
-    meta: dict = field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------- channel maps
@@ -209,7 +199,6 @@ def read_trial(
         elif fmt == "kvlcc2":
             table = _read_kvlcc2(p, label)
         elif fmt == "nmea":
-            from shipid.data.nmea import read_nmea
             table = read_nmea(p, label, skip_bad=skip_bad, resample=resample, interpolate_gaps=interpolate_gaps)
             resample = None  # already on its uniform grid
         else:
@@ -266,7 +255,6 @@ def _resolve_format(p: Path, fmt: str | None, label: str) -> str:
         return f
     ext = p.suffix.lower()
     if ext in (".txt", ".log"):
-        from shipid.data.nmea import looks_like_nmea
         try:
             with open(p, "rb") as fh:
                 if looks_like_nmea(fh.read(4096)):
@@ -279,7 +267,7 @@ def _resolve_format(p: Path, fmt: str | None, label: str) -> str:
                      f"(use .csv or .parquet, or --format {'|'.join(FORMATS)})", file=label)
 
 
-def _map_columns(table: _Table, profile: str | None, user_map: dict[str, str], label: str):
+def _map_columns(table: RawTable, profile: str | None, user_map: dict[str, str], label: str):
     names = table.names
     mapping: dict[str, str] = {}          # standard name -> column
     map_units: dict[str, str] = {}        # column -> unit declared in the map
@@ -349,40 +337,6 @@ def _map_columns(table: _Table, profile: str | None, user_map: dict[str, str], l
 _NUMBER_LIKE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
 
 
-def _decode(raw: bytes, label: str, what: str = "CSV") -> tuple[str, str]:
-    if raw.startswith(b"PAR1"):
-        raise InputError(f"is a Parquet file, not {what} text (use a .parquet extension or --format parquet)",
-                         file=label)
-    head = raw[:65536]
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise InputError(f"UTF-16 encoded; save the {what} file as UTF-8", file=label)
-    if b"\x00" in head:
-        raise InputError(f"binary content (NUL bytes), not {what} text", file=label)
-    try:
-        return raw.decode("utf-8-sig"), "utf-8"
-    except UnicodeDecodeError as err:
-        ctrl = sum(1 for b in head if b < 32 and b not in (9, 10, 13))
-        if ctrl:
-            raise InputError(f"binary content, not {what} text (byte 0x{raw[err.start]:02x} at offset {err.start})",
-                             file=label) from None
-        return raw.decode("cp1252", errors="replace"), "cp1252"
-
-
-_NEWLINE = re.compile(r"\r\n|\r|\n")
-
-
-def _lines(text: str, label: str) -> list[str]:
-    """The text's lines, split at CR/LF only (``str.splitlines`` would also split at, and so hide from
-    :func:`_check_text`, the control characters \\x0b, \\x0c, \\x1c-\\x1e and \\x85), trailing blank lines
-    dropped; a file with no line left is empty."""
-    lines = _NEWLINE.split(text)
-    while lines and not lines[-1].strip():
-        lines.pop()
-    if not lines:
-        raise InputError("empty file", file=label)
-    return lines
-
-
 def _check_text(lines: list[str], label: str) -> None:
     for i, line in enumerate(lines[:200]):
         if any(ord(ch) < 32 and ch != "\t" for ch in line):
@@ -390,12 +344,12 @@ def _check_text(lines: list[str], label: str) -> None:
                              row=i if i else None)
 
 
-def _read_csv(p: Path, label: str) -> _Table:
+def _read_csv(p: Path, label: str) -> RawTable:
     raw = p.read_bytes()
     if not raw.strip():
         raise InputError("empty file", file=label)
-    text, enc = _decode(raw, label)
-    lines = _lines(text, label)
+    text, enc = decode_text(raw, label)
+    lines = split_lines(text, label)
     _check_text(lines, label)
     quoted = '"' in text
     dialect = detect_dialect(lines[0], lines[1:], label)   # ',' ';' or tab, decimal comma (shipid.data.csv_dialect)
@@ -446,7 +400,7 @@ def _read_csv(p: Path, label: str) -> _Table:
             data[i] = [float(c) for c in row]
         except ValueError:
             data[i] = [_cell(c, label, names[j], i + 1) for j, c in enumerate(row)]
-    return _Table(names, units, data, np.arange(1, len(cells) + 1),
+    return RawTable(names, units, data, np.arange(1, len(cells) + 1),
                   {"encoding": enc, "csv_dialect": dialect.as_meta()})
 
 
@@ -466,14 +420,14 @@ def _cell(c: str, label: str, channel: str, row: int) -> float:
 
 
 # --- KVLCC2 HSVA .dat ----------------------------------------------------------------------
-def _read_kvlcc2(p: Path, label: str) -> _Table:
+def _read_kvlcc2(p: Path, label: str) -> RawTable:
     raw = p.read_bytes()
     if not raw.strip():
         raise InputError("empty file", file=label)
     if raw.startswith(b"PAR1") or b"\x00" in raw[:65536]:
         raise InputError("binary content, not an HSVA .dat text file", file=label)
     text = raw.decode("cp1252", errors="replace")
-    lines = _lines(text, label)
+    lines = split_lines(text, label)
     h = KVLCC2_HEADER_LINES
     if len(lines) <= h:
         raise InputError(f"header only: an HSVA .dat file has {h} header lines and then data", file=label)
@@ -493,12 +447,12 @@ def _read_kvlcc2(p: Path, label: str) -> _Table:
             "manoeuvre": title,
             "assumptions": ["column 8 read as roll angle phi [deg] (shared/data/README.md: 'probably')"],
             "dataset": "kvlcc2_hsva"}
-    return _Table([c for c, _ in KVLCC2_COLUMNS], [u for _, u in KVLCC2_COLUMNS], data,
+    return RawTable([c for c, _ in KVLCC2_COLUMNS], [u for _, u in KVLCC2_COLUMNS], data,
                   np.arange(1, data.shape[0] + 1), meta)
 
 
 # --- Parquet ---------------------------------------------------------------------------
-def _read_parquet(p: Path, label: str) -> _Table:
+def _read_parquet(p: Path, label: str) -> RawTable:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -546,7 +500,7 @@ def _read_parquet(p: Path, label: str) -> _Table:
         units.append(unit)
         cols.append(values)
     meta = {k: v for k, v in meta_md.items() if k not in ("source", "format", "profile", "units_in", "columns")}
-    return _Table(names, units, np.column_stack(cols), np.arange(1, table.num_rows + 1), meta)
+    return RawTable(names, units, np.column_stack(cols), np.arange(1, table.num_rows + 1), meta)
 
 
 # --------------------------------------------------------------------------- writing
@@ -603,27 +557,11 @@ def _write_csv(tmp: Path, cols: dict[str, np.ndarray], col_units: dict[str, str]
     tmp.write_text(buf.getvalue(), encoding="utf-8")
 
 
-def _jsonable(obj):
-    try:
-        json.dumps(obj)
-        return obj
-    except TypeError:
-        if isinstance(obj, Mapping):
-            return {str(k): _jsonable(v) for k, v in obj.items()}
-        if isinstance(obj, (list, tuple)):
-            return [_jsonable(v) for v in obj]
-        if isinstance(obj, np.ndarray):
-            return obj.tolist()
-        if isinstance(obj, np.generic):
-            return obj.item()
-        return str(obj)
-
-
 def _write_parquet(tmp: Path, cols: dict[str, np.ndarray], col_units: dict[str, str], meta) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     table = pa.table({k: pa.array(v, type=pa.float64()) for k, v in cols.items()})
     md = {b"shipid.units": json.dumps(col_units).encode("utf-8"),
-          b"shipid.meta": json.dumps(_jsonable(dict(meta))).encode("utf-8")}
+          b"shipid.meta": json.dumps(jsonable(dict(meta))).encode("utf-8")}
     pq.write_table(table.replace_schema_metadata(md), tmp)

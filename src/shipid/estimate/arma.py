@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import lfilter
+from shipid.estimate.fir_kernels import ar_fit
 
 
 @dataclass(frozen=True)
@@ -159,7 +160,6 @@ def fit_ar(x: np.ndarray, p: int) -> ARMA:
     order differs (rounding level; ``tests/estimate`` compares the two). Falls back to
     :func:`hannan_rissanen` (its least-squares fallback) when the normal equations are not positive definite.
     """
-    from shipid.estimate.fir_kernels import ar_fit
 
     x = np.asarray(x, dtype=float)
     x = x - x.mean()

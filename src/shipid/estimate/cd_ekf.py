@@ -27,6 +27,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from shipid.estimate.linalg import check_positive_definite, symmetrize
+from shipid.simulate.integrate import rk4_propagate
 
 LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -81,7 +82,7 @@ class FilterResult:
         """Output arrays for ``N`` samples, ``n`` states and ``m`` measurements, for a filter
         to fill in place (innovations and NIS start as NaN = no measurement; ``loglik`` is NaN until
         set with :func:`dataclasses.replace`). Shared by :func:`cd_ekf` and the compiled
-        :func:`shipid.methods.ebm.kernels.ebm_cd_ekf`, so both return the same fields."""
+        :func:`shipid.methods.ebm.compiled.ebm_cd_ekf`, so both return the same fields."""
         nd = max(N - 1, 0)
         return cls(t=t, x_pred=np.empty((N, n)), P_pred=np.empty((N, n, n)), x_filt=np.empty((N, n)),
                    P_filt=np.empty((N, n, n)), Phi=np.empty((nd, n, n)), Qd=np.empty((nd, n, n)),
@@ -143,19 +144,6 @@ def taylor_discretise(F: np.ndarray, Q: np.ndarray, h: float, *, tol: float = 1e
     return van_loan(F, Q, h)
 
 
-def rk4_propagate(f: Callable, t: float, x: np.ndarray, h: float, substeps: int = 1) -> np.ndarray:
-    """Integrate ``ẋ = f(t, x)`` over ``h`` with ``substeps`` RK4 steps."""
-    hs = h / substeps
-    for _ in range(substeps):
-        k1 = f(t, x)
-        k2 = f(t + 0.5 * hs, x + 0.5 * hs * k1)
-        k3 = f(t + 0.5 * hs, x + 0.5 * hs * k2)
-        k4 = f(t + hs, x + hs * k3)
-        x = x + (hs / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
-        t += hs
-    return x
-
-
 def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.ndarray], np.ndarray],
            h: Callable[[float, np.ndarray], np.ndarray], H: Callable[[float, np.ndarray], np.ndarray],
            Q: np.ndarray, R: np.ndarray, t: np.ndarray, z: np.ndarray, x0: np.ndarray,
@@ -182,7 +170,7 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     check_pd : bool
         Check that P stays positive definite (raises ``NotPositiveDefiniteError`` naming the
         sample; checked every 50th sample and at the last, for cost — the compiled EBM path
-        :func:`shipid.methods.ebm.kernels.ebm_cd_ekf` checks every sample). An innovation
+        :func:`shipid.methods.ebm.compiled.ebm_cd_ekf` checks every sample). An innovation
         covariance that is not positive definite raises it too.
 
     Returns

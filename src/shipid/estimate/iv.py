@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import lfilter
+from shipid.estimate.fir_kernels import project_qr
 
 
 def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
@@ -167,7 +168,6 @@ def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float =
 def iv_compress_products_compiled(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float = 1e-12) -> IVMoments:
     """:func:`iv_compress_products` with the projection and QR compiled
     (:func:`shipid.estimate.fir_kernels.project_qr`); the eigen-decomposition is the same LAPACK call."""
-    from shipid.estimate.fir_kernels import project_qr
 
     s, V = np.linalg.eigh(ZtZ)
     Rf, kept = project_qr(s, V, np.ascontiguousarray(ZtP), float(rtol))

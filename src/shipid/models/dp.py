@@ -29,8 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from shipid.errors import ShipidError
 from shipid.models.bis import Bis
 from shipid.models.thrusters import configuration_matrix, control_vector
+from shipid.simulate.model import ShipModel
 
 #: Names of θ1..θ9 (eqs. 46–47) and what each one is.
 THETA_NAMES = tuple(f"theta{i}" for i in range(1, 10))
@@ -106,7 +108,6 @@ def dp_vessel(vessel) -> DPVessel:
     Needs ``[particulars]`` L, m, g and ``[bis]`` M, arms, p0; ``[identified]`` A_h and K are
     optional (NaN when absent: a vessel still to be identified).
     """
-    from shipid.errors import ShipidError
 
     try:
         part = vessel.values("particulars")
@@ -236,7 +237,6 @@ def ship_model(vessel):
     Inputs ``p1..p6`` (pitch ratios) and ``alpha6`` (rad); states ``x, y, psi, u, v, r,
     u_c, v_c, r_c`` (SI). Outputs the Trial channels ``x, y, psi, u, v, r``.
     """
-    from shipid.simulate.model import ShipModel
 
     v = vessel if isinstance(vessel, DPVessel) else dp_vessel(vessel)
     par = lf_params(v)

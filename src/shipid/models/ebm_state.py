@@ -85,7 +85,7 @@ class EbmModel:
         return cls(m=p.m, x_G=p.x_G, Minv=np.linalg.inv(p.mass_matrix), x_D=x_D, y_D=y_D, y_S=y_S, **kw)
 
     def kernel_params(self) -> np.ndarray:
-        """Parameter vector of the compiled kernels of :mod:`shipid.methods.ebm.kernels`.
+        """Parameter vector of the compiled kernels of :mod:`shipid.methods.ebm.model_kernels`.
 
         ``[m, x_G, Minv (3 × 3, row-major), x_D, y_D, y_S, absolute]`` (15 floats):
         ``ebm_f/F/h/H`` there compute exactly :meth:`f`, :meth:`F`, :meth:`h`, :meth:`H`.

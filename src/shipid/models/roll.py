@@ -27,6 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import expm
 
+from shipid.simulate.model import ShipModel
 from shipid.vessels import Vessel, load_vessel
 
 STATE_NAMES = ("phi", "psi", "v", "p", "r")
@@ -232,7 +233,6 @@ def ship_model(vessel: Vessel | str = "fishing-vessel"):
     The state is ``[phi, psi, v, p, r]`` of (11); earth-fixed position is not part of the linear
     model. Outputs are the Trial channels ``phi, psi, v, p, r, a_s, u, delta``.
     """
-    from shipid.simulate.model import ShipModel
 
     v = load_vessel(vessel) if isinstance(vessel, str) else vessel
     th = params_from_vessel(v, "loaded")

@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from shipid.vessels import load_vessel
 
 #: Unknown parameters of (30), in this order.
 THETA_NAMES: tuple[str, ...] = ("k", "A_x", "d", "K_r", "K_vdot", "K_delta", "z_f", "m", "zm_bar")
@@ -53,7 +54,6 @@ class KnownParams:
 
     @classmethod
     def from_vessel(cls, vessel="fishing-vessel") -> "KnownParams":
-        from shipid.vessels import load_vessel
         v = load_vessel(vessel) if isinstance(vessel, str) else vessel
         s = v.values("general")
         return cls(U=s["U"], M=s["M"], zg_bar=s["zg_bar"], m_c=s["m_c"], zc_bar=s["zc_bar"],

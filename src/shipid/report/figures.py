@@ -22,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 from shipid.report.stats import Z95
+from shipid.report.units import pretty_unit
 
 MAX_POINTS = 4000
 WIDTH_IN = 9.6
@@ -379,7 +380,6 @@ def signals_figure(entries: Sequence[tuple[str, Mapping]]) -> Figure:
 
 
 def _pretty(u: str | None) -> str:
-    from shipid.report.units import pretty_unit
 
     return pretty_unit(u)
 

@@ -20,6 +20,8 @@ from typing import Any, Mapping
 import numpy as np
 
 import shipid
+from shipid.data.trial import CHANNELS
+from shipid.errors import OutputExistsError
 from shipid.outputs import atomic_write_text
 from shipid import registry as method_registry
 from shipid.report.formatting import format_estimate, fmt_num
@@ -28,7 +30,7 @@ from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, 
                                   residual_stats_table)
 from shipid.report import figures as F
 from shipid.report.units import pretty_unit
-from shipid.report.values import _flatten, _si_table, _with_units
+from shipid.report.values import flatten, si_table, with_units
 from shipid.report.verdict import NOT_DETERMINED, effective_status, verdict_html
 from shipid.report.render import plain_text, short_paths
 
@@ -294,7 +296,7 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
                      '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '
                      'the value; the number is the last iterate, not an estimate.</p>')
-        foot += _si_table(ctx, result)
+        foot += si_table(ctx, result)
         body = (f'<table class="est">{cap}'
                 f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
     cov_html = ""
@@ -320,7 +322,7 @@ def _diagnostics_section(ctx: RenderContext, result) -> str:
     if not d:
         return ""
     return (f'<h2 id="diagnostics">Diagnostics</h2>'
-            f'{kv_table(ctx, _with_units(result, _flatten(d)), "Estimator diagnostics.")}')
+            f'{kv_table(ctx, with_units(result, flatten(d)), "Estimator diagnostics.")}')
 
 
 def _provenance_section(ctx: RenderContext, result) -> str:
@@ -328,9 +330,9 @@ def _provenance_section(ctx: RenderContext, result) -> str:
     model = result.model or {}
     out = '<h2 id="provenance">Model and provenance</h2>'
     if model:
-        out += kv_table(ctx, _with_units(result, _flatten(model)), "Model structure and vessel particulars.")
+        out += kv_table(ctx, with_units(result, flatten(model)), "Model structure and vessel particulars.")
     if prov:
-        out += kv_table(ctx, _with_units(result, _flatten(prov)), "Provenance.")
+        out += kv_table(ctx, with_units(result, flatten(prov)), "Provenance.")
     return out
 
 
@@ -397,8 +399,6 @@ def _generic_sections(ctx: RenderContext, result) -> str:
 
 def _guess_unit(name: str) -> str | None:
     """SI unit of a standard channel name (``r``, ``u_r`` -> ``u``), else None."""
-    from shipid.data.trial import CHANNELS
-
     for cand in (name, name.split("_")[0]):
         if cand in CHANNELS and cand != "t":
             return CHANNELS[cand]
@@ -517,6 +517,5 @@ def write_report(result, path, *, force: bool = False) -> Path:
     """Build the report and write it atomically to ``path`` (never clobbers without ``force``)."""
     dest = Path(path)
     if dest.exists() and not force:  # fail before the (slow) figure drawing
-        from shipid.errors import OutputExistsError
         raise OutputExistsError(str(path))
     return atomic_write_text(dest, build_report(result), force=force)

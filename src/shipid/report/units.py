@@ -16,6 +16,9 @@ import math
 import re
 from typing import Any
 
+from shipid.models.bis import Bis
+from shipid.vessels import load_vessel
+
 #: SI unit of common model and particulars keys (last dotted component), "-" = dimensionless.
 KNOWN_UNITS: dict[str, str] = {
     "L": "m", "Lpp": "m", "B": "m", "d": "m", "draft": "m", "D_p": "m", "x_G": "m", "xG": "m",
@@ -47,8 +50,6 @@ UNITLESS_KEYS = {"iterations", "n", "p", "count", "folds", "samples", "n_samples
 def _vessel_units(vessel: str) -> dict[str, str]:
     """key → unit of every value in the vessel file ``vessel`` (empty if there is none)."""
     try:
-        from shipid.vessels import load_vessel
-
         v = load_vessel(vessel)
     except Exception:  # noqa: BLE001 - an unknown vessel just has no file units
         return {}
@@ -128,8 +129,6 @@ _D_UNITS = [["N·s/m", "N·s/m", "N·s"], ["N·s/m", "N·s/m", "N·s"], ["N·s",
 def dp_si_matrices(model) -> list[tuple[str, list, list]]:
     """(title, 3 × 3 SI matrix, units) for the bis M'' and D'' of a DP result's model (eqs. 27–28)."""
     import numpy as np
-
-    from shipid.models.bis import Bis
 
     try:
         b = Bis(L=float(model["L"]), m=float(model["m"]), g=float(model.get("g", 9.81)))

@@ -1,9 +1,9 @@
 """Values of the key–value tables of a report (diagnostics, model, provenance) and the SI table.
 
-:func:`_flatten` turns nested diagnostics into rows: numpy arrays and numpy's own text of an
+:func:`flatten` turns nested diagnostics into rows: numpy arrays and numpy's own text of an
 array become :class:`MatrixValue` / :class:`VectorValue` (drawn as small tables), lists of flat
-dicts :class:`RecordsValue`; :func:`_with_units` adds each row's unit
-(:func:`shipid.report.units.unit_of`); :func:`_si_table` shows the DP bis parameters in SI.
+dicts :class:`RecordsValue`; :func:`with_units` adds each row's unit
+(:func:`shipid.report.units.unit_of`); :func:`si_table` shows the DP bis parameters in SI.
 No Python or numpy ``repr`` reaches the page.
 """
 
@@ -86,7 +86,7 @@ def _plain(v: Any) -> Any:
     return v
 
 
-def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
+def flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
     rows = []
     for k, v in d.items():
         key = f"{prefix}{short_paths(str(k))}"
@@ -100,7 +100,7 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
         elif _records_map(v):
             rows.append((key, RecordsValue([{"": str(n), **r} for n, r in v.items()])))
         elif isinstance(v, Mapping) and depth > 0:
-            rows.extend(_flatten(v, key + ".", depth - 1))
+            rows.extend(flatten(v, key + ".", depth - 1))
         elif isinstance(v, (list, tuple)) and not v:
             rows.append((key, "none"))
         elif _small_matrix(v):
@@ -109,7 +109,7 @@ def _flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, An
             rows.append((key, RecordsValue(v)))
         elif isinstance(v, (list, tuple)) and 0 < len(v) <= 10 and all(isinstance(x, Mapping) for x in v):
             for i, item in enumerate(v):  # one block of rows per item: trials[1].manoeuvre ...
-                rows.extend(_flatten(item, f"{key}[{i + 1}].", max(depth - 1, 0)))
+                rows.extend(flatten(item, f"{key}[{i + 1}].", max(depth - 1, 0)))
         elif isinstance(v, (list, tuple)) and len(v) <= 12 and all(_is_scalar(x) for x in v):
             rows.append((key, VectorValue(v) if all(isinstance(x, (int, float)) and not isinstance(x, bool)
                                                      for x in v) else "; ".join(str(x) for x in v)))
@@ -148,7 +148,7 @@ def _vessel(result) -> str | None:
     return str(v) if v else None
 
 
-def _with_units(result, rows: list[tuple[str, Any]]) -> list[tuple[str, Any, str]]:
+def with_units(result, rows: list[tuple[str, Any]]) -> list[tuple[str, Any, str]]:
     """(key, value, unit) rows; the unit from the vessel file or :data:`~shipid.report.units.KNOWN_UNITS`."""
     vessel = _vessel(result)
     bis = "bis" in str((result.model or {}).get("units", ""))
@@ -168,7 +168,7 @@ def _with_units(result, rows: list[tuple[str, Any]]) -> list[tuple[str, Any, str
     return out
 
 
-def _si_table(ctx: RenderContext, result) -> str:
+def si_table(ctx: RenderContext, result) -> str:
     """DP θ1…θ9 (bis) in SI: A_h entries as rates with time constants, K as forces (eqs. 26–29)."""
     model = result.model or {}
     try:

@@ -37,13 +37,30 @@ class Simulation:
     u: np.ndarray
 
 
+def rk4_propagate(f: Callable[..., np.ndarray], t: float, x: np.ndarray, h: float, substeps: int = 1,
+                  args: tuple = ()) -> np.ndarray:
+    """Integrate ``ẋ = f(t, x, *args)`` over ``h`` by ``substeps`` classical Runge–Kutta steps.
+
+    The one RK4 of the package: with ``args = (u, θ)`` it steps the dynamics ``f(t, x, u, θ)`` with
+    ``u`` held (:func:`rk4_step`, the simulators); the continuous–discrete EKF
+    (:func:`shipid.estimate.cd_ekf.cd_ekf`) calls it with ``args = ()`` on its ``f(t, x)``. ``x`` may
+    carry leading batch axes when ``f`` does (e.g. :func:`shipid.models.mmg.simulate_batch`).
+    The compiled twins (:func:`shipid.methods.ebm.kernels.rk4_into`) are tested against it.
+    """
+    hs = h / substeps
+    for _ in range(substeps):
+        k1 = f(t, x, *args)
+        k2 = f(t + 0.5 * hs, x + 0.5 * hs * k1, *args)
+        k3 = f(t + 0.5 * hs, x + 0.5 * hs * k2, *args)
+        k4 = f(t + hs, x + hs * k3, *args)
+        x = x + (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        t += hs
+    return x
+
+
 def rk4_step(f: Dynamics, t: float, x: np.ndarray, u: np.ndarray, theta: Any, h: float) -> np.ndarray:
-    """One classical Runge–Kutta step of length ``h`` with ``u`` held constant."""
-    k1 = f(t, x, u, theta)
-    k2 = f(t + 0.5 * h, x + 0.5 * h * k1, u, theta)
-    k3 = f(t + 0.5 * h, x + 0.5 * h * k2, u, theta)
-    k4 = f(t + h, x + h * k3, u, theta)
-    return x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    """One classical Runge–Kutta step of length ``h`` of ``f(t, x, u, θ)`` with ``u`` held constant."""
+    return rk4_propagate(f, t, x, h, 1, (u, theta))
 
 
 def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLaw | None,
@@ -119,3 +136,6 @@ def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLa
         if progress is not None:
             progress(k + 1)
     return Simulation(t=t, x=X, u=U)
+
+
+__all__ = ["Dynamics", "InputLaw", "Simulation", "rk4_propagate", "rk4_step", "simulate"]

@@ -19,7 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from shipid.data.io import write_trial
 from shipid.data.trial import Trial
+from shipid.errors import OutputExistsError, ShipidError
 from shipid.models.roll import imu_outputs, params_from_vessel, simulate_zoh
 from shipid.models.roll_reduced import CALIBRATION, NOMINAL, KnownParams
 from shipid.models.roll_sim import NoiseSpec, rudder_prbs, simulate_condition, wave_moment
@@ -116,8 +118,6 @@ def known_toml(vessel: str = "fishing-vessel", z_f: bool = True) -> str:
 def write_stream_files(sim: dict, out: str | Path, *, force: bool = False) -> dict[str, Path]:
     """Write the stream to ``out`` and, beside it, ``<stem>.nominal.csv``, ``<stem>.calibration.csv``,
     ``<stem>.known.toml`` and the truth ``<stem>.truth.json``. Nothing is written if any exists (no force)."""
-    from shipid.data.io import write_trial
-    from shipid.errors import OutputExistsError
 
     out = Path(out)
     stem = out.with_suffix("")
@@ -139,8 +139,6 @@ def simulate_stream_cmd(vessel: str, out: str, *, duration: float | None, seed: 
                         to: str | None, force: bool) -> None:
     """``shipid simulate VESSEL mass-cm-stream``: simulate and write the files, one line on stdout."""
     import click
-
-    from shipid.errors import ShipidError
 
     if vessel not in ("fishing-vessel", "fishing_vessel", "linder2015"):
         raise ShipidError(f"mass-cm-stream is defined for the fishing-vessel (seed 000), not {vessel!r}")

@@ -107,13 +107,55 @@ class ZigZagMetrics:
     switch_angle: float
 
 
+def overshoot(psi_rel: np.ndarray, start: int, end: int, direction: float, switch_angle: float) -> float | None:
+    """The overshoot rule: ``max(d (ψ − ψ₀)) − ψ_switch`` over the samples ``start .. end − 1``.
+
+    ``psi_rel`` is the unwrapped heading minus its value at execute, ``start`` the sample of a
+    reversal, ``end`` that of the next (or ``psi_rel.size``) and ``d = direction`` (±1) the sense
+    of the heading change that triggered the reversal. None when the record ends while the heading
+    still grows (the largest value is the last sample): that overshoot is not known.
+    """
+    seg = direction * psi_rel[start:end]
+    j = int(np.argmax(seg))
+    if end == psi_rel.size and j == seg.size - 1:
+        return None                                # still turning when the record ends
+    return float(seg[j] - switch_angle)
+
+
+def heading_overshoots(t: np.ndarray, psi: np.ndarray, k_exec: int, psi_switch: float, side: int,
+                       count: int = 2) -> list[float]:
+    """Overshoot angles (rad) of a zig-zag from the heading alone (no rudder signal needed).
+
+    ``ψ₀ = ψ(k_exec)``; the i-th reversal is where ``d_i (ψ − ψ₀)`` first reaches the switch angle
+    (``d_1 = side``, alternating), and the i-th overshoot is :func:`overshoot` between that reversal
+    and the next. Applied alike to measured and predicted headings, their overshoots are comparable
+    whatever the noise of a measured rudder signal; at most ``count`` are returned.
+    """
+    p = np.unwrap(psi) - np.unwrap(psi)[k_exec]
+    out, k, d = [], k_exec, side
+    for _ in range(count):
+        hit = np.flatnonzero(d * p[k:] >= psi_switch)
+        if hit.size == 0:
+            break
+        k1 = k + int(hit[0])
+        nxt = np.flatnonzero(-d * p[k1:] >= psi_switch)
+        end = k1 + int(nxt[0]) if nxt.size else p.size
+        o = overshoot(p, k1, end, d, psi_switch)
+        if o is None:
+            break
+        out.append(o)
+        k, d = k1, -d
+    return out
+
+
 def zigzag_metrics(trial: Trial, switch_angle: float) -> ZigZagMetrics:
     """Overshoot angles of a zig-zag with switching heading ``switch_angle`` (rad).
 
     The overshoot after reversal ``i`` is ``max(d_i (ψ − ψ_0)) − switch_angle`` over
     the samples from reversal ``i`` to reversal ``i+1`` (or the end), ``d_i`` the
     direction of the heading change that triggered reversal ``i``. The last
-    overshoot is reported only if the heading turned back before the record ended.
+    overshoot is reported only if the heading turned back before the record ended
+    (:func:`overshoot`).
     """
     trial.require(["psi"], method="zig-zag metrics")
     ev = _rudder_events(trial)
@@ -126,12 +168,15 @@ def zigzag_metrics(trial: Trial, switch_angle: float) -> ZigZagMetrics:
     for i, k in enumerate(ev[1:]):
         d = 1.0 if psi[k] > 0 else -1.0
         end = int(ev[i + 2]) if i + 2 < ev.size else psi.size
-        seg = d * psi[k:end]
-        j = int(np.argmax(seg))
-        if end == psi.size and j == seg.size - 1:
-            break                                  # still turning when the record ends
-        over.append(float(seg[j] - switch_angle))
+        o = overshoot(psi, k, end, d, switch_angle)
+        if o is None:
+            break
+        over.append(o)
         times.append(float(trial.t[k]))
     return ZigZagMetrics(overshoots=tuple(over), reversal_times=tuple(times),
                          initial_turning_time=float(trial.t[ev[1]] - trial.t[ev[0]]),
                          switch_angle=float(switch_angle))
+
+
+__all__ = ["TurningMetrics", "ZigZagMetrics", "turning_metrics", "zigzag_metrics", "overshoot",
+           "heading_overshoots"]

@@ -18,6 +18,7 @@ from typing import Callable
 
 from shipid.errors import ShipidError
 from shipid.simulate.model import ShipModel
+from shipid.vessels import load_vessel, vessel_names
 
 #: Model family module of each packaged vessel (canonical name as in its TOML file).
 FAMILIES: dict[str, str] = {
@@ -77,7 +78,6 @@ def get_ship_model(name: str) -> ShipModel:
     if name in GENERIC:
         mod = importlib.import_module(GENERIC[name][1])
         return mod.ship_model(None)
-    from shipid.vessels import load_vessel, vessel_names
     try:
         vessel = load_vessel(name)
     except ShipidError:
@@ -92,7 +92,6 @@ def get_ship_model(name: str) -> ShipModel:
 
 def list_vessels() -> list[VesselEntry]:
     """Packaged vessels (with their sources) followed by the generic models."""
-    from shipid.vessels import load_vessel, vessel_names
     out = []
     for stem in vessel_names():
         v = load_vessel(stem)

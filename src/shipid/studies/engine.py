@@ -86,6 +86,7 @@ from typing import Callable, Sequence
 
 import shipid
 from shipid.errors import ShipidError
+from shipid.progress import progress_bar
 from shipid.studies.executors import (code_fingerprint, dask_local_client, dask_remote_client, iter_dask,
                                       error_text, iter_inprocess, iter_pool, resolve_task, task_reference,
                                       threads_limited, to_json, warm_up_here)
@@ -383,7 +384,6 @@ def run_campaign(task: str | Callable, n_runs: int | None = None, seed: int = 0,
             stream = iter_pool(chunks, n_workers, args, seed, warm)
 
         if progress:
-            from shipid.progress import progress_bar
             advance = stack.enter_context(progress_bar(n_runs, name, completed=len(done)))
         else:
             advance = lambda k=1: None  # noqa: E731

@@ -10,7 +10,6 @@ worker processes.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import hashlib
 import importlib
@@ -28,6 +27,7 @@ import numpy as np
 
 from shipid.errors import ShipidError
 from shipid.estimate.linalg import one_blas_thread
+from shipid.outputs import json_default
 from shipid.studies.seeding import run_entropy
 
 MAX_DASK_ATTEMPTS = 3    # Dask: tries per chunk when the cluster (not the task) fails it
@@ -35,27 +35,13 @@ DASK_CONNECT_TIMEOUT_S = 15  # seconds to reach an existing scheduler
 
 
 # --------------------------------------------------------------------------------------
-# JSON helpers
+# JSON
 # --------------------------------------------------------------------------------------
-def _jsonable(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return dataclasses.asdict(obj)
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, (set, frozenset)):
-        return sorted(obj)
-    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")
-
-
 def to_json(obj, *, canonical: bool = False) -> str:
     """JSON text of ``obj`` (floats written exactly; NumPy values converted)."""
     if canonical:
-        return json.dumps(obj, default=_jsonable, sort_keys=True, separators=(",", ":"))
-    return json.dumps(obj, default=_jsonable)
+        return json.dumps(obj, default=json_default, sort_keys=True, separators=(",", ":"))
+    return json.dumps(obj, default=json_default)
 
 
 # --------------------------------------------------------------------------------------
@@ -70,9 +56,7 @@ def code_fingerprint() -> str:
     source tree edited during the run, a cluster with another install) can be seen;
     the engine warns when it happens. A task outside the shipid package is not covered.
     """
-    import shipid
-
-    root = Path(shipid.__file__).resolve().parent
+    root = Path(__file__).resolve().parents[1]     # the shipid package
     h = hashlib.sha256()
     for path in sorted(root.rglob("*.py")):
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
@@ -118,7 +102,7 @@ def resolve_task(ref: str) -> Callable:
 # --------------------------------------------------------------------------------------
 # What runs on a worker
 # --------------------------------------------------------------------------------------
-_BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def _worker_init() -> None:
@@ -129,7 +113,7 @@ def _worker_init() -> None:
     main process killed with SIGKILL (they wait on their queue for ever), so a daemon
     thread waits on the parent's sentinel and ends the worker when it goes.
     """
-    for var in _BLAS_ENV:
+    for var in BLAS_ENV:
         os.environ[var] = "1"
     parent = multiprocessing.parent_process()
     if parent is not None:

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from shipid.errors import ShipidError
+from shipid.outputs import atomic_write
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS campaigns (
@@ -317,8 +318,6 @@ def export_store(store_path: str | os.PathLike, out: str | os.PathLike, *, campa
     (Path, int)
         The written file and the number of runs in it.
     """
-    from shipid.outputs import atomic_write
-
     if not Path(store_path).is_file():
         raise ShipidError(f"{store_path}: no such store")
     suffix = Path(out).suffix.lower()

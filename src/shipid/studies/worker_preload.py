@@ -25,7 +25,7 @@ import sys
 
 import numpy  # noqa: F401  - imported once here for every worker
 
-from shipid.studies.executors import _BLAS_ENV, WARM_UP_VAR, code_fingerprint, resolve_task
+from shipid.studies.executors import BLAS_ENV, WARM_UP_VAR, code_fingerprint, resolve_task
 
 #: What the warm-up did in this process: ``None`` (none asked), ``"ok"`` or the error text.
 STATUS: str | None = None
@@ -36,7 +36,7 @@ def _warm_up_from_environment() -> None:
     spec = os.environ.get(WARM_UP_VAR)
     if not spec:
         return
-    for var in _BLAS_ENV:                  # workers run one BLAS thread each (as _worker_init sets)
+    for var in BLAS_ENV:                  # workers run one BLAS thread each (as _worker_init sets)
         os.environ[var] = "1"
     try:
         from threadpoolctl import threadpool_limits

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from known.fossen1996 import K_EQ49
 
 from shipid.cli import main
 
@@ -48,7 +49,7 @@ def test_identify_dp_json_and_plot(trial_files, capsys):
     theta = np.asarray(res["model"]["theta"])
     assert theta.shape == (9,) and np.all(np.isfinite(theta))
     # K1 = K2 (θ6) is well determined even from 300-s trials: within 5 % of eq. 49
-    assert abs(theta[5] / 9.3e-3 - 1) < 0.05
+    assert abs(theta[5] / K_EQ49[0] - 1) < 0.05
     # inputs: one trial summary per file (issue 8, shipid.methods.dp.series)
     first = res["provenance"]["inputs"][0]
     assert first["name"].endswith("surge1.csv") and first["n_samples"] > 100 and "x" in first["channels"]

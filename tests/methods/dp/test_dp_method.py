@@ -12,6 +12,7 @@ import json
 
 import numpy as np
 import pytest
+from known.fossen1996 import THETA_EQ46_49
 
 from shipid.methods.dp.estimator import DPOptions, identify_dp, run_stage
 from shipid.methods.dp.trials import DP_CHANNELS, simulate_dp_trial, simulate_dp_trials
@@ -85,7 +86,7 @@ def test_result_contents_and_json(short_run, supply):
     assert set(d["series"]["histories"]) == set(dp.THETA_NAMES)
     h = d["series"]["histories"]["theta2"]
     assert len(h["t"]) == len(h["value"]) == len(h["std"]) == 601
-    assert h["true"] == pytest.approx(-0.0602)
+    assert h["true"] == pytest.approx(THETA_EQ46_49[1])              # eq. 48: A_h''[1, 1]
     back = Result.from_json(res.to_json())
     assert back.value("theta6") == res.value("theta6")
     # the covariance is a valid 9 x 9 covariance (considered parameters carry cross terms)

@@ -3,6 +3,7 @@ comparison with seed 002's Fig. 7 (35°, 105 s) are computed from the map, never
 
 import numpy as np
 import pytest
+from known.yoon_rhee2003 import FIG7_OPTIMUM
 
 from shipid.methods.ebm.design import PAPER_FIG7, DesignGrid, design_result, paper_comparison, prbs_grid
 from shipid.cli import main
@@ -52,7 +53,7 @@ def test_comparison_when_the_optimum_is_the_paper_point_or_the_point_is_off_grid
     g2 = _grid(_seeds((0, 0), [0.0, 0.0]), periods=(45.0, 90.0, 150.0))
     c = paper_comparison(g2)
     assert c["verdict"] == "not on the grid" and c["log10_det_paper"] is None
-    assert PAPER_FIG7 == (35.0, 105.0)
+    assert PAPER_FIG7 == FIG7_OPTIMUM
 
 
 def test_simulated_grid_optimum_is_argmax_of_the_seed_means():

@@ -1,26 +1,33 @@
-"""The compiled EBM filter and smoothers (:mod:`shipid.methods.ebm.kernels`) equal the reference path.
+"""The compiled EBM path (:mod:`shipid.methods.ebm.compiled`, :mod:`~shipid.methods.ebm.kernels`,
+:mod:`~shipid.methods.ebm.model_kernels`) equals its one reference.
 
-The reference is the pure-Python :func:`shipid.estimate.cd_ekf.cd_ekf` with the
-:class:`~shipid.models.ebm_state.EbmModel` callables and
-:mod:`shipid.estimate.smoothers` (seed 002 eqs. 9–10). Both run on the same short
-seeded simulated trial; agreement is required to 1e-9 relative (the two differ only in
-the order of floating-point operations, measured ~1e-11).
+The model equations are stated once, in :class:`~shipid.models.ebm_state.EbmModel`; the numba
+kernels of ``f, F, h, H`` must equal it on random states and random parameters, and the compiled
+RK4 must equal the one RK4 :func:`shipid.simulate.integrate.rk4_propagate`. The compiled filter and
+smoothers must equal the pure-Python :func:`shipid.estimate.cd_ekf.cd_ekf` with the ``EbmModel``
+callables and :mod:`shipid.estimate.smoothers` (seed 002 eqs. 9–10) on the same short seeded
+simulated trial, to 1e-9 relative (the two differ only in the order of floating-point operations,
+measured ~1e-11).
 
 The numba compilation is cached on disk (``cache=True``): only the first run on a
 machine compiles (~30 s); later runs load it in well under a second.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from shipid.methods.ebm import kernels as fast
 from shipid.estimate.cd_ekf import cd_ekf
 from shipid.estimate.linalg import NotPositiveDefiniteError
 from shipid.estimate.smoothers import mbf_smoother, rts_smoother
+from shipid.methods.ebm import compiled as fast
 from shipid.methods.ebm import estimator as ebm
+from shipid.methods.ebm import kernels, model_kernels
 from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
-from shipid.models.ebm_state import EbmModel, initial_state, measurement_noise
+from shipid.models.ebm_state import NX, EbmModel, initial_state, measurement_noise
+from shipid.simulate.integrate import rk4_propagate
 
 RTOL = 1e-9
 
@@ -38,7 +45,7 @@ def problem():
     z = ebm.measurements(tr)
     t = tr.t - tr.t[0]
     return dict(tr=tr, p=p, model=model, Q=Q, R=R, z=z, t=t, x0=initial_state(z[0], model),
-                P0=ebm._prior_cov(False))
+                P0=ebm.prior_cov(False))
 
 
 def _reference(pb, **kw):
@@ -84,7 +91,6 @@ def _assert_smoothers_equal(sa, sb, fr):
 def test_kernels_equal_model_methods(problem, absolute):
     m = problem["model"]
     if absolute:
-        from dataclasses import replace
         m = replace(m, absolute=True)
     p = m.kernel_params()
     rng = np.random.default_rng(5)
@@ -92,13 +98,65 @@ def test_kernels_equal_model_methods(problem, absolute):
         x = problem["x0"] + rng.normal(size=17) * np.array([1, 1, 1e-2, 10, 10, 1, 1e6, 1e4, 1e2, 1e6, 1e4, 1e2,
                                                                 1e8, 1e6, 1e4, 0.5, 0.5])
         tk = float(rng.uniform(0, 100))
-        for kern, meth in ((fast.ebm_f, m.f), (fast.ebm_F, m.F), (fast.ebm_h, m.h), (fast.ebm_H, m.H)):
+        for kern, meth in ((model_kernels.ebm_f, m.f), (model_kernels.ebm_F, m.F), (model_kernels.ebm_h, m.h),
+                           (model_kernels.ebm_H, m.H)):
             np.testing.assert_allclose(kern(p, tk, x), meth(tk, x), rtol=1e-14, atol=1e-300)
+
+
+def _random_model(rng, absolute):
+    """An EbmModel with random mass, centre of gravity, inverse mass matrix and sensor lever arms."""
+    Minv = rng.normal(size=(3, 3)) * np.array([1e-6, 1e-6, 1e-9])[:, None]
+    return EbmModel(m=float(rng.uniform(1e3, 1e7)), x_G=float(rng.normal(0, 5)), Minv=Minv,
+                    x_D=float(rng.normal(0, 20)), y_D=float(rng.normal(0, 5)), y_S=float(rng.normal(0, 5)),
+                    absolute=absolute)
+
+
+def _random_state(rng):
+    scale = np.array([5, 1, 0.05, 1e3, 1e3, np.pi, 1e6, 1e4, 1e2, 1e6, 1e4, 1e2, 1e8, 1e6, 1e4, 1, 1])
+    return rng.normal(size=NX) * scale
+
+
+@pytest.mark.parametrize("absolute", [False, True])
+def test_model_kernels_equal_the_model_on_random_parameters_and_states(absolute):
+    """The one statement of eqs. 6 and 8 is EbmModel; the numba kernels must compute the same values."""
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        m = _random_model(rng, absolute)
+        p = m.kernel_params()
+        x, tk = _random_state(rng), float(rng.uniform(0, 3600))
+        for kern, meth in ((model_kernels.ebm_f, m.f), (model_kernels.ebm_F, m.F), (model_kernels.ebm_h, m.h),
+                           (model_kernels.ebm_H, m.H)):
+            want = meth(tk, x)
+            # the kernels evaluate the same expressions; only libm's cos/sin may round differently
+            np.testing.assert_allclose(kern(p, tk, x), want, rtol=1e-13, atol=1e-13 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("substeps", [1, 3])
+def test_compiled_rk4_equals_the_one_rk4(substeps):
+    """kernels.rk4_into (inside the compiled filter) is simulate.integrate.rk4_propagate on EbmModel.f."""
+    rng = np.random.default_rng(12)
+    for _ in range(10):
+        m = _random_model(rng, bool(rng.integers(2)))
+        x, tk, h = _random_state(rng), float(rng.uniform(0, 100)), float(rng.uniform(0.05, 2.0))
+        out, work = np.empty(NX), [np.empty(NX) for _ in range(5)]
+        kernels.rk4_into(m.kernel_params(), tk, x, h, substeps, out, *work)
+        want = rk4_propagate(m.f, tk, x, h, substeps)
+        np.testing.assert_allclose(out, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_model_kernels_cache_key_is_current():
+    """kernels.py keys its numba disk cache on model_kernels.py (numba does not see that dependency).
+
+    If this fails, model_kernels.py was edited: set ``MODEL_KERNELS_KEY`` in
+    ``shipid/methods/ebm/kernels.py`` to the value printed, which also refreshes that file's cache.
+    """
+    key = kernels.source_key(model_kernels)
+    assert key == kernels.MODEL_KERNELS_KEY, f"set MODEL_KERNELS_KEY = {key!r} in shipid/methods/ebm/kernels.py"
+    assert kernels.CACHE_VALID
 
 
 @pytest.mark.parametrize("absolute, substeps", [(False, 1), (True, 2)])
 def test_compiled_filter_and_smoothers_equal_reference(problem, absolute, substeps):
-    from dataclasses import replace
     kw = dict(model=replace(problem["model"], absolute=absolute), substeps=substeps)
     fb = _reference(problem, **kw)
     fa = _compiled(problem, **kw)

@@ -2,12 +2,13 @@
 
 import numpy as np
 import pytest
+from known.linder2015 import TABLE3_TRUE
 
 from shipid.methods.masscm.identifiability import (dm_dzf, exact_fit_family, jacobian_rank, m_of_zf, report,
                                                     rho)
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams, discrete_coeffs
 
-TRUE = np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182])   # Table 3 row T
+TRUE = TABLE3_TRUE
 CONDS = ["nominal", "calibration", "loaded"]
 
 

@@ -68,13 +68,19 @@ def test_identify_known_file_missing_key(files, tmp_path, capsys):
 
 
 def test_crlb_json(capsys):
-    rc = main(["analyse", "crlb", "mass-cm", "--duration", "60", "--wave-roll", "1.0", "--json"])
+    rc = main(["analyse", "crlb", "mass-cm", "--duration", "60", "--wave-roll", "1.0", "--method", "spectrum",
+               "--json"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0
     for k in ("zm_bar", "rho", "m"):
         assert d["bounds"][k]["std"] > 0
-    # issue 3: 60 s with 1 deg wave roll is close to unidentifiable, the bound on m over 30 %
+    # issue 3: 60 s with 1 deg wave roll is close to unidentifiable, the optimal-IV bound on m over 30 %
     assert d["bounds"]["m"]["rel"] > 0.30
+    rc = main(["analyse", "crlb", "mass-cm", "--duration", "60", "--wave-roll", "1.0", "--json"])
+    kf = json.loads(capsys.readouterr().out)
+    assert rc == 0 and kf["method"] == "kf"
+    for k in ("zm_bar", "rho", "m"):                 # the Cramér–Rao bound of the model is below the IV bound
+        assert 0 < kf["bounds"][k]["std"] < d["bounds"][k]["std"]
 
 
 def test_study_sensitivity_subprocess_json():

@@ -6,6 +6,7 @@ straightforward numpy/scipy computations they replace, piece by piece and run by
 
 import numpy as np
 import pytest
+from known.linder2015 import TABLE3_TRUE
 
 from shipid.methods.masscm.criterion import gauss_newton as gauss_newton_reference
 from shipid.methods.masscm.criterion import residual_function
@@ -21,7 +22,7 @@ from shipid.methods.masscm.study import run_one
 from shipid.models.roll_reduced import KnownParams, to_moment
 from shipid.models.roll_sim import simulate_datasets
 
-TRUE = np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182])
+TRUE = TABLE3_TRUE
 
 
 @pytest.fixture(scope="module")

@@ -10,13 +10,14 @@ import warnings
 
 import numpy as np
 import pytest
+from known.linder2015 import true_value
 
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 
-ZF = -0.028                        # Table 2 (vessel file), known
-M_TRUE, KVDOT_TRUE = 0.4, 0.1      # Table 2
+ZF = true_value("z_f")             # known to the estimator
+M_TRUE, KVDOT_TRUE = true_value("m"), true_value("K_vdot")
 
 
 def _estimate(seed: int, duration: float, noise: NoiseSpec, noise_check: bool = False,

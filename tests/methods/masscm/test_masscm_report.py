@@ -38,6 +38,9 @@ def test_report_series_are_made_from_the_recorded_files(datasets):
     for kind in ("overlays", "residuals", "contours"):
         assert json.dumps(enriched.series[kind], sort_keys=True) == json.dumps(want.series[kind], sort_keys=True)
     assert "overlays" not in stored.series                           # enrich returns a copy
+    via_result = stored.with_series(cost_map=True)                   # Result.with_series -> series.with_series
+    assert json.dumps(via_result.series["overlays"], sort_keys=True) == json.dumps(want.series["overlays"],
+                                                                                   sort_keys=True)
     assert "Fig. 4" in build_report(stored)
 
 

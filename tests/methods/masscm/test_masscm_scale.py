@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from known.linder2015 import true_value
 
 from shipid.estimate.arma import ARMA
 from shipid.methods.masscm.estimator import (MassCMOptions, estimate_mass_cm, fit_mass_cm, implausible_identifiable,
@@ -15,7 +16,7 @@ from shipid.methods.masscm.series import MAX_SERIES_POINTS, with_series
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 
-ZF = -0.028
+ZF = true_value("z_f")
 KNOWN = KnownParams.from_vessel("fishing-vessel")
 
 

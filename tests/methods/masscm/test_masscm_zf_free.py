@@ -12,13 +12,22 @@ settled); since the four-iterate relaxation (``MassCMOptions.cycle_after``) 0. S
 
 import numpy as np
 import pytest
+from known.linder2015 import TABLE3_TRUE
 
 from shipid.methods.masscm.identifiability import m_of_zf
-from shipid.methods.masscm.estimator import I_ZF, MassCMOptions, iterate, rho_of
-from shipid.methods.masscm.study import prepared, initial_moments, draw_initial, run_one
+from shipid.methods.masscm.estimator import I_ZF, MassCMOptions, initial_state, iterate, prepare, rho_of
+from shipid.methods.masscm.study import draw_initial, run_one
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
+from shipid.models.roll_sim import simulate_datasets
 
 ZM_KNOWN_STUDY = -0.1820948     # zm_bar of the 10 000-run z_f-known study (masscm_study docstring)
+
+
+def _study_data(opts):
+    """The Table 3 study's datasets (data seed 0) prepared for Algorithm 1, the known particulars and the
+    first-iteration state, as :func:`shipid.methods.masscm.study.run_one` uses them."""
+    prep = prepare(list(simulate_datasets("fishing-vessel", seed=0).items()), opts)
+    return prep, KnownParams.from_vessel("fishing-vessel"), initial_state(prep, opts)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +48,7 @@ def test_zf_free_runs_are_rarely_flagged(free_runs):
 
 def test_zf_free_identifiable_quantities_as_with_zf_known(free_runs, kn):
     ok = [o for o in free_runs if not o["implausible"]]
-    rho_true = rho_of(np.array([10.38, 0.1385, 0.2067, -0.5, 0.1, -0.405, -0.028, 0.4, -0.182]), kn)   # Table 2
+    rho_true = rho_of(TABLE3_TRUE, kn)
     for o in ok:
         th = np.array([o[n] for n in THETA_NAMES])
         assert abs(o["zm_bar"] - ZM_KNOWN_STUDY) < 1e-4
@@ -54,9 +63,9 @@ def test_warm_iterations_hold_zf_and_paths_agree(kn):
     outs = {}
     for compute in ("fast", "reference"):
         opts = MassCMOptions(compute=compute, noise_model="ar")
-        prep, known = prepared(0, "fishing-vessel", opts)
+        prep, known, state0 = _study_data(opts)
         th0 = draw_initial(np.random.default_rng(np.random.SeedSequence([1, 3])))
-        core = iterate(prep, known, th0, options=opts, state0=initial_moments(0, "fishing-vessel", opts), jacobian=False)
+        core = iterate(prep, known, th0, options=opts, state0=state0, jacobian=False)
         h = core["history"]
         assert core["converged"] and h.shape[0] >= 2
         assert np.all(h[1:, I_ZF] == h[0, I_ZF])
@@ -75,9 +84,8 @@ def test_period_4_cycle_is_damped(compute):
     out = {}
     for cyc in (0, 10):
         opts = MassCMOptions(compute=compute, cycle_after=cyc, noise_model="ar")
-        prep, known = prepared(0, "fishing-vessel", opts)
-        out[cyc] = iterate(prep, known, th0, z_f=-0.029, options=opts, state0=initial_moments(0, "fishing-vessel", opts),
-                           jacobian=False)
+        prep, known, state0 = _study_data(opts)
+        out[cyc] = iterate(prep, known, th0, z_f=-0.029, options=opts, state0=state0, jacobian=False)
     assert not out[0]["converged"] and out[0]["iterations"] == 50
     h = out[0]["history"][-8:, THETA_NAMES.index("K_vdot")]
     assert np.allclose(h[:4], h[4:], rtol=1e-5) and np.ptp(h) > 5e-4   # repeats every 4 (to 2e-6) with a 1 % swing

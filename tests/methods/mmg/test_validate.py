@@ -80,10 +80,16 @@ def test_cli_validate_published_on_real_zigzag(tmp_path, capsys):
 
 def test_cli_validate_bad_model_is_one_line(tmp_path):
     bad = tmp_path / "m.json"
-    bad.write_text(json.dumps({"method": "dp", "model": {"family": "dp"}, "estimates": {}}))
+    bad.write_text(json.dumps({"method": "mmg-ebm", "model": {"family": "dp"}, "estimates": {}}))
     run = tmp_path / "r.csv"
     run.write_text("t [s],x [m]\n0,0\n")
     p = subprocess.run([sys.executable, "-m", "shipid", "validate", str(bad), "--trial", str(run)],
                        capture_output=True, text=True)
     assert p.returncode == 2
     assert p.stderr.count("\n") == 1 and "not hold an MMG model" in p.stderr
+    # a method without an open-loop model: one line naming those that have one
+    bad.write_text(json.dumps({"method": "kalman", "model": {}, "estimates": {}}))
+    p = subprocess.run([sys.executable, "-m", "shipid", "validate", str(bad), "--trial", str(run)],
+                       capture_output=True, text=True)
+    assert p.returncode == 2
+    assert p.stderr.count("\n") == 1 and "'kalman' result cannot be validated" in p.stderr

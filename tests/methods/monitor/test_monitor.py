@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from known.linder2015 import true_value
 
 from shipid.errors import InputError
 from shipid.methods.monitor.estimator import MassCMMonitor, MonitorOptions, run_monitor
@@ -9,7 +10,7 @@ from shipid.models.roll_reduced import KnownParams
 from shipid.simulate.masscm_stream import StreamSpec, simulate_stream, truth_at
 
 KN = KnownParams.from_vessel()
-Z_F = -0.028
+Z_F = true_value("z_f")
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
 """DP identification commands (seed 001, Fossen, Sagatun & Sørensen 1996).
 
-``shipid identify dp --surge S1.csv S2.csv --sway-yaw Y1.csv Y2.csv --azimuth A1.csv A2.csv``
-``shipid study dp-supply [--seed S]`` and
-``shipid study dp-coverage --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR] [--json]``.
+``shipid identify dp --surge S1.csv S2.csv --sway-yaw Y1.csv Y2.csv --azimuth A1.csv A2.csv [--json] [-o R.json]``
+``shipid study dp-supply [--seed S] [--json] [-o R.json]`` and
+``shipid study dp-coverage --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR] [--json] [-o R.json]``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
-from shipid.cli._common import loud, strict_option
+from shipid.cli._common import emit, loud, out_options, refuse_existing, strict_option
 from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import ShipidError
 
@@ -107,11 +107,9 @@ def _print_table(result, theta_true=None) -> None:
               help="Packaged vessel giving M'', the thruster arms, L and m.")
 @click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")
 @click.option("--sigma-psi", type=float, default=None, help="Heading noise, deg: the starting value (estimated from the data) [default 0.25].")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
+@out_options(force_help="Overwrite existing --out/--plot files.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
-@click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
 @strict_option
 def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
     """Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).
@@ -136,34 +134,19 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
         opt = replace(opt, sigma_pos=sigma_pos)
     if sigma_psi is not None:
         opt = replace(opt, sigma_psi=float(np.deg2rad(sigma_psi)))
-    _check_outputs(out, plot, force)
+    refuse_existing(plot, force=force)
     res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, opt,
                       provenance={"inputs": [str(p) for p in (*surge, *sway_yaw, *azimuth)],
                                   "command": "shipid identify dp"})
     _emit(res, as_json, out, plot, force, trials=[tr for k in trials for tr in trials[k]])
 
 
-def _check_outputs(out, plot, force):
-    from pathlib import Path
-
-    from shipid.errors import OutputExistsError
-
-    for p in (out, plot):
-        if p is not None and Path(p).exists() and not force:
-            raise OutputExistsError(p)
-
-
 def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
     loud(res, trials=trials)
-    if out is not None:
-        res.write_json(out, force=force)
     if plot is not None:
         from shipid.methods.dp.plot import plot_parameter_histories
         plot_parameter_histories(res, plot, force=force)
-    if as_json:
-        click.echo(res.to_json())
-    else:
-        _print_table(res, theta_true)
+    emit(res, as_json=as_json, out=out, force=force, text=lambda: _print_table(res, theta_true))
 
 
 @study.command("dp-supply", context_settings=CONTEXT)
@@ -171,11 +154,9 @@ def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
 @click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
 @click.option("--trials", "n_trials", type=int, default=2, show_default=True,
               help="Trials per manoeuvre (N of the parallel EKF).")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-@click.option("--out", type=click.Path(dir_okay=False), default=None, help="Also write the result JSON here.")
+@out_options(force_help="Overwrite existing --out/--plot files.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
-@click.option("--force", is_flag=True, help="Overwrite existing --out/--plot files.")
 @strict_option
 def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     """Simulate the six trials of §4.2 for the supply vessel and identify it.
@@ -193,7 +174,7 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
         raise ShipidError(f"--seed must be >= 0, got {seed}")
     if duration < 60 or n_trials < 1:
         raise ShipidError("--duration must be >= 60 s and --trials >= 1")
-    _check_outputs(out, plot, force)
+    refuse_existing(plot, force=force)
     v = dp_vessel(load_vessel("supply"))
     t0 = time.perf_counter()
     noise = TrialNoise()
@@ -211,9 +192,9 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
 @click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
 @click.option("--covariance", type=click.Choice(["observed", "ekf"]), default="observed", show_default=True,
               help="observed: noise levels and std from the likelihood (default); ekf: the paper's P_theta.")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary (and every run) as JSON.")
+@out_options(json_help="Print the summary (and every run) as JSON on stdout.")
 @campaign_options
-def study_dp_coverage(runs, duration, covariance, as_json, campaign):
+def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign):
     """Coverage of the DP std over realisations with unknown noise levels (issue 15).
 
     Each run: the six trials of `study dp-supply` (1 Hz) with its own noise seed, measurement
@@ -221,10 +202,8 @@ def study_dp_coverage(runs, duration, covariance, as_json, campaign):
     factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
     of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
     """
-    import json
     from dataclasses import replace
 
-    from shipid.cli.campaign_cmds import echo_campaign_summary
     from shipid.methods.dp.coverage import summarise
 
     if duration < 60:
@@ -236,11 +215,15 @@ def study_dp_coverage(runs, duration, covariance, as_json, campaign):
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
-    if as_json:
-        click.echo(json.dumps({"summary": s, "runs": outs}, indent=1, allow_nan=True))
-        return
+    emit({"summary": s, "runs": outs}, as_json=as_json, out=out, force=force, indent=1,
+         text=lambda: _coverage_table(res, s, covariance, campaign.seed))
+
+
+def _coverage_table(res, s: dict, covariance: str, seed: int) -> None:
+    from shipid.cli.campaign_cmds import echo_campaign_summary
+
     echo_campaign_summary(res)
-    click.echo(f"dp-coverage: {s['ok']} realisations (seed {campaign.seed}), covariance {covariance}, "
+    click.echo(f"dp-coverage: {s['ok']} realisations (seed {seed}), covariance {covariance}, "
                f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
                f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
     click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "

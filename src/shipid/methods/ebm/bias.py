@@ -25,15 +25,16 @@ from dataclasses import replace
 import numpy as np
 
 from shipid.data.trial import Trial
+from shipid.methods.ebm.pipeline import estimate_states, fit_coefficients, sensor_positions
+from shipid.methods.ebm.trials import add_measurements
 from shipid.models import abkowitz as ab
+from shipid.simulate.integrate import simulate
 
 OVERSAMPLE = 5
 
 
 def synthetic_trial(trial: Trial, state, p: ab.AbkowitzParams, sensors: dict) -> Trial:
     """Noise-free measured record of ship ``p`` (identified θ, current) driven by ``trial``'s δ(t), n(t)."""
-    from shipid.methods.ebm.trials import add_measurements
-    from shipid.simulate.integrate import simulate
 
     t = np.asarray(trial.t, float) - float(trial.t[0])
     cx, cy = (float(c) for c in state.current)
@@ -56,16 +57,15 @@ def synthetic_trial(trial: Trial, state, p: ab.AbkowitzParams, sensors: dict) ->
 
 def pipeline_bias(trials, states, fit, p: ab.AbkowitzParams, vessel, config):
     """``(bias_X, bias_Y, bias_N)`` of the pipeline at the identified θ (module docstring)."""
-    from shipid.methods.ebm import estimator as ebm
 
     ph = p.with_theta(fit.surge.theta, fit.sway.theta, fit.yaw.theta)
     syn = []
     for tr, st in zip(trials, states):
-        sens = ebm._sensor_positions(tr, vessel, config)
+        sens = sensor_positions(tr, vessel, config)
         syn.append(synthetic_trial(tr, st, ph, sens))
     cfg = replace(config, bias_correction=False, approach_speed=p.U0, approach_rate=p.n0)
-    s_states = [ebm.estimate_states(tr, p, vessel=vessel, config=cfg) for tr in syn]
-    f2 = ebm.fit_coefficients(s_states, p, cfg)
+    s_states = [estimate_states(tr, p, vessel=vessel, config=cfg) for tr in syn]
+    f2 = fit_coefficients(s_states, p, cfg)
     return (f2.surge.theta - fit.surge.theta, f2.sway.theta - fit.sway.theta, f2.yaw.theta - fit.yaw.theta)
 
 

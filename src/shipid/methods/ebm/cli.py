@@ -1,8 +1,9 @@
 """EBM commands (seed 002, Yoon & Rhee 2003).
 
-* ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--antenna X,Y --log-offset Y] [--json]``
-* ``shipid study ebm-esso-osaka --input standard|optimal-prbs [--seed S] [--json]``
-* ``shipid design prbs --vessel esso-osaka [--json] [--out RESULT.json [--force]]``
+* ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--antenna X,Y --log-offset Y]
+  [--json] [-o RESULT.json [--force]]``
+* ``shipid study ebm-esso-osaka --input standard|optimal-prbs [--seed S] [--json] [-o RESULT.json [--force]]``
+* ``shipid design prbs --vessel esso-osaka [--json] [-o RESULT.json [--force]]``
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
-from shipid.cli._common import loud, strict_option
+from shipid.cli._common import emit, loud, out_options, strict_option
 from shipid.errors import ShipidError
 
 
@@ -70,7 +71,7 @@ def _print_coefficients(res) -> None:
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="Trial file (CSV or Parquet) with x, y, x_dot, y_dot, psi, U, delta, n; repeatable.")
 @click.option("--vessel", default="esso-osaka", show_default=True, help="Packaged vessel.")
-@click.option("--json", "as_json", is_flag=True, help="Print the Result as JSON.")
+@out_options(json_help="Print the Result as JSON on stdout.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper (no rudder-aware noise).")
 @click.option("--yaw-variant", is_flag=True, help="Yaw rudder regressors of eq. 22.")
 @click.option("--figures", is_flag=True,
@@ -80,7 +81,7 @@ def _print_coefficients(res) -> None:
 @click.option("--log-offset", "log_offset", default=None, type=float, metavar="Y",
               help="Speed-log athwartship position [m] for trials that do not state it [default: 0].")
 @strict_option
-def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures, antenna, log_offset):
+def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figures, antenna, log_offset):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
 
@@ -103,10 +104,7 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures, antenna, 
         from shipid.methods.ebm.series import coarse_d_optimal
         res.series.setdefault("contours", {})["d_optimal"] = coarse_d_optimal(vessel)
     loud(res, trials=data)
-    if as_json:
-        click.echo(res.to_json())
-    else:
-        _print_coefficients(res)
+    emit(res, as_json=as_json, out=out, force=force, text=lambda: _print_coefficients(res))
 
 
 @study.command("ebm-esso-osaka", context_settings=CONTEXT)
@@ -115,10 +113,10 @@ def identify_ebm(trials, vessel, as_json, paper, yaw_variant, figures, antenna, 
 @click.option("--seed", default=0, show_default=True, type=int)
 @click.option("--scale", default=1.0, show_default=True, type=click.FloatRange(0.1, 10.0),
               help="Scale the trial durations (quick runs < 1).")
-@click.option("--json", "as_json", is_flag=True)
+@out_options(json_help="Print the Result as JSON on stdout.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
 @strict_option
-def study_ebm(kind, seed, scale, as_json, paper):
+def study_ebm(kind, seed, scale, as_json, out, force, paper):
     """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
     from shipid.methods.ebm.study import make_trials, study as run_study
     from shipid.progress import progress_bar
@@ -127,9 +125,10 @@ def study_ebm(kind, seed, scale, as_json, paper):
     with progress_bar(n, f"EBM study ({kind})") as advance:
         res = run_study(kind, seed, scale=scale, config=_config(paper), progress=advance)
     loud(res)
-    if as_json:
-        click.echo(res.to_json())
-        return
+    emit(res, as_json=as_json, out=out, force=force, text=lambda: _print_study(res, kind, seed))
+
+
+def _print_study(res, kind: str, seed: int) -> None:
     d = res.diagnostics
     click.echo(f"EBM study, ESSO OSAKA, input {kind}, seed {seed} ({d['paper_table']})")
     click.echo(_converged_line(res))
@@ -197,10 +196,9 @@ def _values(text: str) -> list[float]:
 @click.option("--currents", default="", help="Also sweep the current speed (knots, comma-separated) at the optimum (Fig. 8).")
 @click.option("--dt", default=1.0, show_default=True, type=click.FloatRange(0.05, 5.0),
               help="Simulation / sampling step of each PRBS run [s].")
-@click.option("--json", "as_json", is_flag=True, help="Print the map as a shipid Result (JSON) on stdout.")
-@click.option("--out", "out", default=None, type=click.Path(dir_okay=False), metavar="RESULT.json",
-              help="Also write the map as a shipid Result for `shipid report` (Fig. 7).")
-@click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
+@out_options(json_help="Print the map as a shipid Result (JSON) on stdout.", metavar="RESULT.json",
+             out_help="Write the map as a shipid Result for `shipid report` (Fig. 7), atomically; an existing "
+                      "file needs --force.")
 @strict_option
 def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
     """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7).
@@ -210,14 +208,8 @@ def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_j
     output says whether the paper's optimum (35 deg, 105 s) agrees with it within 2
     standard errors of the PRBS-realisation spread. A quick look: --periods 15,60,105,200.
     """
-    from pathlib import Path
-
     from shipid.methods.ebm.design import current_sweep, design_result, prbs_grid
-    from shipid.errors import OutputExistsError
     from shipid.progress import progress_bar
-
-    if out is not None and Path(out).exists() and not force:
-        raise OutputExistsError(out)  # before the (minutes-long) grid, not after
 
     vessel = _check_vessel(vessel)
     try:

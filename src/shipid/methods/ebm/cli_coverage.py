@@ -1,16 +1,16 @@
 """``shipid study ebm-coverage``: EBM on perturbed, unknown ships (seed 002; issue 16).
 
-* ``shipid study ebm-coverage --runs N [--seed S] [--workers W ...] [--duration T] [--json]``
+* ``shipid study ebm-coverage --runs N [--seed S] [--workers W ...] [--duration T] [--json] [-o R.json]``
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 import click
 
 from shipid.cli import study
+from shipid.cli._common import emit, out_options
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
 
 
@@ -23,9 +23,9 @@ def _fmt(x, spec):
 @click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--duration", type=click.FloatRange(300.0, 7200.0), default=1200.0, show_default=True,
               help="Length of each run's PRBS 35 deg / 105 s trial (s).")
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+@out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=100)
-def ebm_coverage(runs, duration, as_json, campaign):
+def ebm_coverage(runs, duration, as_json, out, force, campaign):
     """Coverage of the EBM std: noise seeds x ships with every Table-3 coefficient scaled by U[0.7, 1.3].
 
     Per run (shipid.methods.ebm.coverage): a straight-line-stable perturbed ship, a current,
@@ -33,18 +33,21 @@ def ebm_coverage(runs, duration, as_json, campaign):
     channels. Prints per coefficient the bias and spread of the relative error and the
     coverage of +-2 std over the runs where it is `estimated`.
     """
-    from shipid.methods.ebm.coverage import LINEAR, summarise
+    from shipid.methods.ebm.coverage import summarise
 
     res = replace(campaign, progress=not as_json).run("shipid.methods.ebm.coverage:run_one", runs,
                                                        kwargs={"duration": float(duration)}, name="ebm-coverage")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "duration": duration, "failed": res.n_failed})
-    if as_json:
-        click.echo(json.dumps(s, indent=2, allow_nan=True))
-        return
+    emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s, duration, campaign.seed))
+
+
+def _table(res, s: dict, duration: float, seed: int) -> None:
+    from shipid.methods.ebm.coverage import LINEAR
+
     echo_campaign_summary(res)
-    click.echo(f"EBM coverage study: {s['runs']} runs, seed {campaign.seed}, PRBS 35 deg / 105 s, {duration:g} s")
+    click.echo(f"EBM coverage study: {s['runs']} runs, seed {seed}, PRBS 35 deg / 105 s, {duration:g} s")
     click.echo(f"{'coefficient':<12}{'estimated':>10}{'bias %':>9}{'spread %':>10}{'mean|z|':>9}{'cover 2sd':>10}"
                f"{'wrong sign':>11}")
     for nm, t in s["table"].items():

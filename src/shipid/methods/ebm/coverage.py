@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from shipid.methods.ebm import estimator as ebm
+from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
 
 LINEAR = ("Y_v", "Y_r", "N_v", "N_r", "Y_delta", "N_delta")
@@ -79,7 +81,6 @@ def simulate_unknown(q: ab.AbkowitzParams, rng: np.random.Generator, *, duration
                      current: tuple[float, float] | None = None, noise_scale: float | None = None,
                      manoeuvre: str = "prbs-35-105"):
     """One measured trial of ship ``q`` (current and noise scale drawn from ``rng`` unless given)."""
-    from shipid.methods.ebm.trials import simulate_trial
 
     if current is None:
         current = (float(rng.uniform(0.5, 2.0)) * KNOT, float(rng.uniform(0.0, 2 * np.pi)))
@@ -92,7 +93,6 @@ def simulate_unknown(q: ab.AbkowitzParams, rng: np.random.Generator, *, duration
 
 def run_one(i: int, seed=0, *, duration: float = 1200.0) -> dict:
     """Campaign task: draw a ship, a current and noise (module docstring), identify, compare."""
-    from shipid.methods.ebm import estimator as ebm
 
     rng = np.random.default_rng(seed)
     q, fac = draw_ship(rng)

@@ -48,7 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from shipid.estimate.ridge import unit_length_scale
+from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
+from shipid.report.convention import contour, table, xy
+from shipid.result import Estimate, Result
 
 
 def log_det_criterion(H: np.ndarray) -> float:
@@ -66,7 +69,6 @@ def prbs_criterion(amplitude_deg: float, period: float, *, duration: float = 120
 
     ``ground_speed=True`` fixes the approach speed over ground (see the module docstring).
     """
-    from shipid.methods.ebm.trials import simulate_trial
 
     tc = ab.trial_conditions(vessel)
     cs = tc["current_speed"] if current_speed is None else float(current_speed)
@@ -247,7 +249,6 @@ def _axis_text(values: np.ndarray) -> str:
 
 
 def _grid_table(grid: DesignGrid, values: np.ndarray, what: str, paper: str | None) -> dict:
-    from shipid.report.convention import table
 
     cols = ["amplitude"] + [f"T = {p:g} s" for p in grid.periods]
     rows = [[float(a)] + [float(v) for v in values[i]] for i, a in enumerate(grid.amplitudes)]
@@ -280,8 +281,6 @@ def design_result(grid: DesignGrid, *, command: str | None = None, sweep: dict |
         ``log10_det_sway``; their std is NaN — the optimum is only known to the grid spacing,
         which each note states.
     """
-    from shipid.report.convention import contour, xy
-    from shipid.result import Estimate, Result
 
     a, per, val = grid.optimum("sway")
     a_s, per_s, val_s = grid.optimum("surge")

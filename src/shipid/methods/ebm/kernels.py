@@ -1,205 +1,48 @@
-"""Compiled (numba) continuous–discrete EKF and fixed-interval smoothers (seed 002, Yoon & Rhee 2003).
+"""The numba loops of the compiled EBM filter and smoothers (seed 002, Yoon & Rhee 2003, eqs. 9–10).
 
-The same algorithms as the reference pure-Python path — :func:`shipid.estimate.cd_ekf.cd_ekf`
-(eq. 9, Fig. 3), :func:`shipid.estimate.smoothers.mbf_smoother` (eq. 10, Bierman 1973) and
-:func:`~shipid.estimate.smoothers.rts_smoother` — compiled with numba, returning the same
-:class:`~shipid.estimate.cd_ekf.FilterResult` / :class:`~shipid.estimate.smoothers.SmootherResult`.
-The reference path stays the definition: tests run both on a seeded trial and require
-agreement to ~1e-9 relative (``tests/methods/ebm/test_kernels.py``).
+What they compute, and the numerics, are described in :mod:`shipid.methods.ebm.compiled`, whose
+functions call these loops and turn their status codes into results or errors.
 
-What is compiled
-----------------
-* :func:`ebm_cd_ekf`: the filter for the 17-state EBM model of
-  :mod:`shipid.models.ebm_state` (eqs. 4–8). The model's ``f, F, h, H`` are compiled
-  kernels here (:func:`ebm_f`, :func:`ebm_F`, :func:`ebm_h`, :func:`ebm_H`) on the parameter
-  vector of :meth:`shipid.models.ebm_state.EbmModel.kernel_params`; a generic model given as
-  Python callables keeps using the reference :func:`~shipid.estimate.cd_ekf.cd_ekf`.
-* :func:`mbf_smoother_fast`, :func:`rts_smoother_fast`: generic — they only read the arrays
-  of a :class:`FilterResult`, whichever filter produced it.
-
-Numerics (the standards of :mod:`shipid.estimate.linalg`, kept)
----------------------------------------------------------------
-float64 throughout, no ``fastmath``. The per-sample algebra is the reference's, evaluated
-so that the structure of the problem is not paid for in flops:
-
-* Φ and Q_d by the same Taylor series as :func:`~shipid.estimate.cd_ekf.taylor_discretise`
-  (same terms, same stopping rule). ``F`` has 24 non-zeros of 289, so products with ``F h``
-  run over its non-zeros; ``C_k = F C_{k−1} + C_{k−1} Fᵀ`` is formed as ``G + Gᵀ`` with
-  ``G = F C_{k−1}`` (``C`` is symmetric). If the series has not converged after
-  ``max_terms`` the whole trial is handed to the reference path (which falls back to Van
-  Loan's ``expm``), so no unconverged Φ is ever used.
-* ``P⁻ = Φ P Φᵀ + Q_d`` skipping the zeros of Φ; the upper triangle is computed and
-  mirrored, so P⁻ is exactly symmetric.
-* The measurement update is the batch update of eq. 9 (all six measurements at once,
-  Cholesky of S) — *no sequential scalar processing*, so the gains, ``S`` and the
-  smoother's inputs are those of the reference. The covariance update is the Joseph form
-  ``(I − K H) P (I − K H)ᵀ + K R Kᵀ``, evaluated through the low rank of ``K H``:
-  ``A = P − K (H P)``, ``P⁺ = A + (K R − A Hᵀ) Kᵀ`` (algebraically identical; the Joseph
-  form's insensitivity to errors in K is a property of the expression, not of the
-  evaluation order), then symmetrised.
-* Positive definiteness of the filtered covariance is checked by a Cholesky factorisation
-  at *every* sample (the reference checks every 50th, for cost); a failure, or an innovation
-  covariance S that is not positive definite, raises
-  :class:`~shipid.estimate.linalg.NotPositiveDefiniteError` naming the sample index and time
-  — nothing is returned from a failed run.
-* MBF backward pass: ``(I − K H)ᵀ Λ (I − K H) = Λ − (Z H + (Z H)ᵀ)`` with ``U = Λ K``,
-  ``Z = U − ½ Hᵀ (Kᵀ U)`` (again exact algebra, using Λ = Λᵀ).
-
-Compilation is cached on disk (``cache=True``, in ``__pycache__``), so only the first
-import on a machine pays the compile (~30 s on the shared 2-core machine). Everything compiled lives in this one file on
-purpose: numba's cache is invalidated by changes to the file that holds a function, not by
-changes to compiled functions it calls from other files.
+Cache. Compilation is cached on disk (``cache=True``, in ``__pycache__``). numba keys the
+cache of a function on the file that defines it only, not on the compiled functions it calls
+from other files; the filter loop here calls the model kernels of
+:mod:`shipid.methods.ebm.model_kernels`. So this file carries :data:`MODEL_KERNELS_KEY`, the
+hash of that file: an edit there must update the key here (which changes this file and so
+invalidates its cache; ``tests/methods/ebm/test_kernels.py`` checks the key). If the key does not
+match the file found at import, the loops here are compiled without the disk cache, never run
+stale.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+import hashlib
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
-from shipid.estimate.cd_ekf import LOG2PI, FilterResult, cd_ekf
-from shipid.estimate.linalg import NotPositiveDefiniteError
-from shipid.estimate.smoothers import SmootherResult
+from shipid.estimate.cd_ekf import LOG2PI
+from shipid.methods.ebm import model_kernels
+from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into, ebm_H_into
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")  # no ZeroDivisionError checks in loops
+#: First 16 hex digits of the SHA-256 of ``model_kernels.py`` (see the module docstring).
+MODEL_KERNELS_KEY = "f76451348711c0e0"
+
+
+def source_key(module) -> str | None:
+    """First 16 hex digits of the SHA-256 of ``module``'s source file; None if it cannot be read."""
+    try:
+        return hashlib.sha256(Path(module.__file__).read_bytes()).hexdigest()[:16]
+    except (OSError, TypeError):
+        return None
+
+
+#: True when the on-disk cache may be used: the model kernels are the ones the key names.
+CACHE_VALID = source_key(model_kernels) == MODEL_KERNELS_KEY
+_JIT = dict(cache=CACHE_VALID, nogil=True, error_model="numpy")  # no ZeroDivisionError checks in loops
 
 # status codes returned by the compiled loops
 OK, P_NOT_PD, S_NOT_PD, TAYLOR_NOT_CONVERGED = 0, 1, 2, 3
-
-
-# ---------------------------------------------------------------------------------------
-# EBM 17-state model kernels (mirror of shipid.models.ebm_state.EbmModel.f/F/h/H)
-# p = [m, x_G, Minv (row-major, 9), x_D, y_D, y_S, absolute (0/1)]
-# ---------------------------------------------------------------------------------------
-@njit(**_JIT)
-def ebm_f_into(t, x, p, dx):
-    """State equation (eq. 6) into ``dx`` (see :meth:`EbmModel.f`)."""
-    ur, vr, r, psi = x[0], x[1], x[2], x[5]
-    m, xg = p[0], p[1]
-    rhs0 = m * (vr * r + xg * r * r) + x[6]
-    rhs1 = -m * ur * r + x[9]
-    rhs2 = -m * xg * ur * r + x[12]
-    dx[0] = p[2] * rhs0 + p[3] * rhs1 + p[4] * rhs2
-    dx[1] = p[5] * rhs0 + p[6] * rhs1 + p[7] * rhs2
-    dx[2] = p[8] * rhs0 + p[9] * rhs1 + p[10] * rhs2
-    c, s = np.cos(psi), np.sin(psi)
-    dx[3] = ur * c - vr * s
-    dx[4] = ur * s + vr * c
-    if p[14] != 0.0:
-        dx[3] += x[15]
-        dx[4] += x[16]
-    dx[5] = r
-    dx[6] = x[7]
-    dx[7] = x[8]
-    dx[8] = 0.0
-    dx[9] = x[10]
-    dx[10] = x[11]
-    dx[11] = 0.0
-    dx[12] = x[13]
-    dx[13] = x[14]
-    dx[14] = 0.0
-    dx[15] = 0.0
-    dx[16] = 0.0
-
-
-@njit(**_JIT)
-def ebm_F_into(t, x, p, F):
-    """Jacobian ∂f/∂x into ``F`` (17 × 17, see :meth:`EbmModel.F`)."""
-    ur, vr, r, psi = x[0], x[1], x[2], x[5]
-    m, xg = p[0], p[1]
-    F[:, :] = 0.0
-    j00, j01, j02 = 0.0, m * r, m * (vr + 2 * xg * r)
-    j10, j11, j12 = -m * r, 0.0, -m * ur
-    j20, j21, j22 = -m * xg * r, 0.0, -m * xg * ur
-    for i in range(3):
-        a, b, c3 = p[2 + 3 * i], p[3 + 3 * i], p[4 + 3 * i]
-        F[i, 0] = a * j00 + b * j10 + c3 * j20
-        F[i, 1] = a * j01 + b * j11 + c3 * j21
-        F[i, 2] = a * j02 + b * j12 + c3 * j22
-        F[i, 6] = a
-        F[i, 9] = b
-        F[i, 12] = c3
-    c, s = np.cos(psi), np.sin(psi)
-    F[3, 0], F[3, 1], F[3, 5] = c, -s, -ur * s - vr * c
-    F[4, 0], F[4, 1], F[4, 5] = s, c, ur * c - vr * s
-    if p[14] != 0.0:
-        F[3, 15] = 1.0
-        F[4, 16] = 1.0
-    F[5, 2] = 1.0
-    for i in (6, 9, 12):
-        F[i, i + 1] = 1.0
-        F[i + 1, i + 2] = 1.0
-
-
-@njit(**_JIT)
-def ebm_h_into(t, x, p, out):
-    """Measurement function of eq. 8 into ``out`` (6,) (see :meth:`EbmModel.h`)."""
-    ur, vr, r, xr, yr, psi, cx, cy = x[0], x[1], x[2], x[3], x[4], x[5], x[15], x[16]
-    c, s = np.cos(psi), np.sin(psi)
-    xD, yD = p[11], p[12]
-    tt = 0.0 if p[14] != 0.0 else t
-    a = ur - yD * r
-    b = vr + xD * r
-    out[0] = xr + xD * c - yD * s + cx * tt
-    out[1] = yr + xD * s + yD * c + cy * tt
-    out[2] = a * c - b * s + cx
-    out[3] = a * s + b * c + cy
-    out[4] = psi
-    out[5] = ur - p[13] * r
-
-
-@njit(**_JIT)
-def ebm_H_into(t, x, p, H):
-    """Jacobian ∂h/∂x into ``H`` (6 × 17, see :meth:`EbmModel.H`)."""
-    ur, vr, r, psi = x[0], x[1], x[2], x[5]
-    c, s = np.cos(psi), np.sin(psi)
-    xD, yD = p[11], p[12]
-    tt = 0.0 if p[14] != 0.0 else t
-    a = ur - yD * r
-    b = vr + xD * r
-    H[:, :] = 0.0
-    H[0, 3] = 1.0
-    H[0, 5] = -xD * s - yD * c
-    H[0, 15] = tt
-    H[1, 4] = 1.0
-    H[1, 5] = xD * c - yD * s
-    H[1, 16] = tt
-    H[2, 0], H[2, 1], H[2, 2] = c, -s, -yD * c - xD * s
-    H[2, 5] = -a * s - b * c
-    H[2, 15] = 1.0
-    H[3, 0], H[3, 1], H[3, 2] = s, c, -yD * s + xD * c
-    H[3, 5] = a * c - b * s
-    H[3, 16] = 1.0
-    H[4, 5] = 1.0
-    H[5, 0], H[5, 2] = 1.0, -p[13]
-
-
-def _allocating(into, shape, p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
-    """Call a compiled ``*_into(t, x, p, out)`` kernel on a fresh output array of ``shape``."""
-    out = np.empty(shape)
-    into(float(t), np.ascontiguousarray(x, dtype=float), p, out)
-    return out
-
-
-def ebm_f(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
-    """Allocating wrapper of :func:`ebm_f_into` (for tests and scripts)."""
-    return _allocating(ebm_f_into, 17, p, t, x)
-
-
-def ebm_F(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
-    """Allocating wrapper of :func:`ebm_F_into`."""
-    return _allocating(ebm_F_into, (17, 17), p, t, x)
-
-
-def ebm_h(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
-    """Allocating wrapper of :func:`ebm_h_into`."""
-    return _allocating(ebm_h_into, 6, p, t, x)
-
-
-def ebm_H(p: np.ndarray, t: float, x: np.ndarray) -> np.ndarray:
-    """Allocating wrapper of :func:`ebm_H_into`."""
-    return _allocating(ebm_H_into, (6, 17), p, t, x)
 
 
 # ---------------------------------------------------------------------------------------
@@ -382,7 +225,7 @@ def _taylor_into(Fh, Q, h, tol, max_terms, Phi, Qd, term, tmp, C, G, rowptr, col
 
 
 @njit(**_JIT)
-def _rk4_into(p, t, x, h, substeps, out, k1, k2, k3, k4, xt):
+def rk4_into(p, t, x, h, substeps, out, k1, k2, k3, k4, xt):
     n = x.shape[0]
     hs = h / substeps
     out[:] = x
@@ -407,7 +250,7 @@ def _rk4_into(p, t, x, h, substeps, out, k1, k2, k3, k4, xt):
 # the filter loop (EBM model)
 # ---------------------------------------------------------------------------------------
 @njit(**_JIT)
-def _ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
+def ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
                      x_pred, P_pred, x_filt, P_filt, Phi_all, Qd_all, innov, S_all, K_all, H_all,
                      nis, HSn, HSH, out):
     """Fill the FilterResult arrays; return (status, sample index). ``out[0]`` = log-likelihood."""
@@ -444,7 +287,7 @@ def _ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
             Qk = Q[k - 1] if nQ > 1 else Q[0]
             if not _taylor_into(Fh, Qk, hk, tol, max_terms, Phi, Qd, term, tmp, C, G, rowptr, cols, vals):
                 return TAYLOR_NOT_CONVERGED, k
-            _rk4_into(p, t[k - 1], x, hk, substeps, xn, k1, k2, k3, k4, xt)
+            rk4_into(p, t[k - 1], x, hk, substeps, xn, k1, k2, k3, k4, xt)
             x[:] = xn
             # P⁻ = Φ P Φᵀ + Q_d:  T = Φ P,  A = Φ Tᵀ (= (Φ P Φᵀ)ᵀ), symmetrised, over Φ's non-zeros
             _csr_into(Phi, rowptr, cols, vals)
@@ -581,77 +424,11 @@ def _ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
     return OK, -1
 
 
-def _raise_not_pd(what: str, k: int, t: float, M: np.ndarray) -> None:
-    with np.errstate(all="ignore"):
-        finite = bool(np.all(np.isfinite(M)))
-        lo = float(np.linalg.eigvalsh(0.5 * (M + M.T))[0]) if finite else float("nan")
-    detail = f"smallest eigenvalue {lo:.3g}" if finite else "non-finite entries"
-    raise NotPositiveDefiniteError(f"{what} at sample {k} (t = {t:.6g} s) is not positive definite ({detail})")
-
-
-def ebm_cd_ekf(model, Q: np.ndarray, R: np.ndarray, t: np.ndarray, z: np.ndarray, x0: np.ndarray,
-               P0: np.ndarray, *, substeps: int = 1, check_pd: bool = True, tol: float = 1e-15,
-               max_terms: int = 40) -> FilterResult:
-    """The CD-EKF of :func:`shipid.estimate.cd_ekf.cd_ekf` for the 17-state EBM model, compiled.
-
-    Parameters
-    ----------
-    model : shipid.models.ebm_state.EbmModel
-        Supplies :meth:`~shipid.models.ebm_state.EbmModel.kernel_params`; ``model.f/F/h/H``
-        serve the reference fallback.
-    Q, R, t, z, x0, P0, substeps, check_pd
-        As :func:`~shipid.estimate.cd_ekf.cd_ekf` (NaN in ``z`` = missing measurement).
-    tol, max_terms
-        Stopping rule of the Taylor discretisation (as
-        :func:`~shipid.estimate.cd_ekf.taylor_discretise`); if it does not converge at some
-        sample the whole run is done by the reference path (Van Loan fallback there).
-
-    Returns
-    -------
-    FilterResult
-        Same fields as the reference; equal to it to rounding (~1e-12 relative).
-
-    Raises
-    ------
-    NotPositiveDefiniteError
-        The innovation covariance S, or (``check_pd``, checked at every sample) the filtered
-        covariance, is not positive definite; the message names the sample index and time.
-    """
-    p = np.ascontiguousarray(model.kernel_params(), dtype=float)
-    t = np.ascontiguousarray(t, dtype=float)
-    z = np.ascontiguousarray(z, dtype=float)
-    N, m = z.shape
-    x0 = np.ascontiguousarray(x0, dtype=float).ravel()
-    n = x0.size
-    if n != 17 or m != 6:
-        raise ValueError(f"ebm_cd_ekf needs 17 states and 6 measurements, got {n} and {m}")
-    Qa = np.asarray(Q, dtype=float)
-    Qa = np.ascontiguousarray(Qa[None] if Qa.ndim == 2 else Qa)
-    if Qa.shape[0] > 1 and Qa.shape[0] != max(N - 1, 1):
-        raise ValueError(f"Q per step must have N - 1 = {N - 1} matrices, got {Qa.shape[0]}")
-    R = np.ascontiguousarray(R, dtype=float)
-    P0 = np.ascontiguousarray(P0, dtype=float)
-    fr = FilterResult.allocate(t, N, n, m)
-    out = np.zeros(1)
-    status, k = _ebm_filter_loop(p, Qa, R, t, z, x0, P0, int(substeps), bool(check_pd), float(tol),
-                                 int(max_terms), *fr.buffers(), out)
-    if status == TAYLOR_NOT_CONVERGED:
-        return cd_ekf(model.f, model.F, model.h, model.H, Q, R, t, z, x0, P0, substeps=substeps,
-                      check_pd=check_pd)
-    if status == S_NOT_PD:
-        ok = np.isfinite(z[k])
-        Hm = fr.H[k][ok]
-        _raise_not_pd("innovation covariance", k, t[k], Hm @ fr.P_pred[k] @ Hm.T + R[np.ix_(ok, ok)])
-    if status == P_NOT_PD:
-        _raise_not_pd("filter covariance", k, t[k], fr.P_filt[k])
-    return replace(fr, loglik=float(out[0]))
-
-
 # ---------------------------------------------------------------------------------------
 # smoothers (generic: they read a FilterResult's arrays)
 # ---------------------------------------------------------------------------------------
 @njit(**_JIT)
-def _mbf_loop(x_filt, P_filt, K_all, H_all, HSn, HSH, Phi_all, xs, Ps):
+def mbf_loop(x_filt, P_filt, K_all, H_all, HSn, HSH, Phi_all, xs, Ps):
     N, n = x_filt.shape
     m = H_all.shape[1]
     lam = np.zeros(n); lam_m = np.zeros(n)
@@ -750,17 +527,8 @@ def _mbf_loop(x_filt, P_filt, K_all, H_all, HSn, HSH, Phi_all, xs, Ps):
                 Lam[j, i] = s
 
 
-def mbf_smoother_fast(fr: FilterResult) -> SmootherResult:
-    """Compiled :func:`shipid.estimate.smoothers.mbf_smoother` (same algorithm, eq. 10)."""
-    xs = np.empty_like(fr.x_filt)
-    Ps = np.empty_like(fr.P_filt)
-    c = np.ascontiguousarray
-    _mbf_loop(c(fr.x_filt), c(fr.P_filt), c(fr.K), c(fr.H), c(fr.HtSinv_nu), c(fr.HtSinv_H), c(fr.Phi), xs, Ps)
-    return SmootherResult(t=fr.t, x=xs, P=Ps, method="mbf")
-
-
 @njit(**_JIT)
-def _rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
+def rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
     N, n = x_filt.shape
     xs[N - 1] = x_filt[N - 1]
     Ps[N - 1] = P_filt[N - 1]
@@ -814,20 +582,5 @@ def _rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
     return -1
 
 
-def rts_smoother_fast(fr: FilterResult) -> SmootherResult:
-    """Compiled :func:`shipid.estimate.smoothers.rts_smoother` (same algorithm).
-
-    Raises :class:`NotPositiveDefiniteError` naming the sample whose predicted covariance
-    cannot be factorised (the reference raises scipy's LinAlgError there).
-    """
-    xs = np.empty_like(fr.x_filt)
-    Ps = np.empty_like(fr.P_filt)
-    c = np.ascontiguousarray
-    k = _rts_loop(c(fr.x_filt), c(fr.P_filt), c(fr.x_pred), c(fr.P_pred), c(fr.Phi), xs, Ps)
-    if k >= 0:
-        _raise_not_pd("predicted covariance", k, fr.t[k], fr.P_pred[k])
-    return SmootherResult(t=fr.t, x=xs, P=Ps, method="rts")
-
-
-__all__ = ["ebm_cd_ekf", "mbf_smoother_fast", "rts_smoother_fast", "ebm_f", "ebm_F", "ebm_h", "ebm_H",
-           "ebm_f_into", "ebm_F_into", "ebm_h_into", "ebm_H_into"]
+__all__ = ["OK", "P_NOT_PD", "S_NOT_PD", "TAYLOR_NOT_CONVERGED", "MODEL_KERNELS_KEY", "CACHE_VALID",
+           "source_key", "rk4_into", "ebm_filter_loop", "mbf_loop", "rts_loop"]

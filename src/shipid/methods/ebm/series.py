@@ -30,6 +30,10 @@ from typing import Sequence
 
 import numpy as np
 
+from shipid.methods.ebm.design import paper_comparison, prbs_grid
+from shipid.methods.ebm.pipeline import REQUIRED
+from shipid.methods.ebm.trials import simulate_trial
+from shipid.models import abkowitz as ab
 from shipid.report.convention import contour, matrix, overlay, residual, signal, table, trial_summary
 
 #: (name in the series, label, state index, unit, true channel of simulated trials)
@@ -77,7 +81,6 @@ def signals(states, *, every: int = 1) -> dict:
 
 def correlation_matrices(fit) -> dict:
     """Tables 1–2: ``WᵀW`` of each mode's scaled regressors, with the coefficient names of eq. 13."""
-    from shipid.models import abkowitz as ab
 
     out = {}
     names = {"surge": ab.THETA_X_NAMES, "sway": ab.THETA_Y_NAMES, "yaw": ab.THETA_N_NAMES}
@@ -145,7 +148,6 @@ def innovations(states) -> dict:
 
 def inputs(states) -> list[dict]:
     """``provenance["inputs"]``: a trial summary per trial (the channels EBM uses)."""
-    from shipid.methods.ebm.estimator import REQUIRED
 
     out = []
     for k, st in enumerate(states):
@@ -200,8 +202,6 @@ def validation_overlays(result, manoeuvre: str = "prbs-10-40", duration: float =
     true coefficients and measurement noise; the model run uses the coefficients in ``result`` and
     the same seed (so the same PRBS rudder sequence), no noise.
     """
-    from shipid.methods.ebm.trials import simulate_trial
-    from shipid.models import abkowitz as ab
 
     p = ab.params_from_vessel(vessel)
     th = lambda names: tuple(float(result.estimates[n].value) for n in names)  # noqa: E731
@@ -259,9 +259,6 @@ def coarse_d_optimal(vessel: str = "esso-osaka", *, amplitudes: Sequence[float] 
                      dt: float = 2.0) -> dict:
     """A coarse Fig. 7 map (default :data:`COARSE_AMPLITUDES` × :data:`COARSE_PERIODS`, one PRBS seed,
     :data:`COARSE_DURATION` s at ``dt`` = 2 s: 12 noise-free simulations, a few seconds)."""
-    from shipid.methods.ebm.design import prbs_grid
-
-    from shipid.methods.ebm.design import paper_comparison
 
     grid = prbs_grid(COARSE_AMPLITUDES if amplitudes is None else amplitudes,
                      COARSE_PERIODS if periods is None else periods,

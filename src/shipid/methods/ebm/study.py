@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.methods.ebm import estimator as ebm
+from shipid.methods.ebm.series import add_validation
 from shipid.methods.ebm.trials import STANDARD_TRIALS, VALIDATION_TRIAL, simulate_trial
 from shipid.models import abkowitz as ab
 from shipid.result import Result
@@ -122,7 +123,6 @@ def study(kind: str = "standard", seed: int = 0, *, scale: float = 1.0,
     if validation:
         th = p.with_theta(fit.surge.theta, fit.sway.theta, fit.yaw.theta)
         res.diagnostics["validation"] = validate(th, seed, scale)
-        from shipid.methods.ebm.series import add_validation  # Figs 6, 10 in the report (issue 8)
         add_validation(res, VALIDATION_TRIAL[0], min(VALIDATION_TRIAL[1] * scale, 300.0), seed=seed + 500)
     res.method = "ebm-study"
     res.provenance.update({"seed": seed, "study": f"ebm-esso-osaka --input {kind}"})

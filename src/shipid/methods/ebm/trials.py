@@ -22,6 +22,7 @@ import numpy as np
 
 from shipid.data.trial import Trial
 from shipid.models import abkowitz as ab
+from shipid.simulate.manoeuvres import run_manoeuvre
 
 #: The trials of §5.1: name → (manoeuvre spec for run_manoeuvre, default duration in s).
 #: The PRBS clock period is ours: the seed's "commanded every 400 second" reads as
@@ -114,8 +115,6 @@ def simulate_trial(manoeuvre: str, duration: float, *, seed: int = 0, dt: float 
         Multiplies every standard deviation of eq. 19 (the estimator is not told).
     """
     from dataclasses import replace
-
-    from shipid.simulate.manoeuvres import run_manoeuvre
 
     conds = ab.trial_conditions(vessel)
     dt = conds["dt"] if dt is None else float(dt)

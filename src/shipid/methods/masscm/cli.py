@@ -1,9 +1,9 @@
 """Commands of seed 000 (Linder et al. 2015): mass and centre of mass from IMU and rudder.
 
-* ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json]``
+* ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json] [-o R.json]``
 * ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR]
-  [--store FILE [--resume]] [--json]`` (Table 3)
-* ``shipid study mass-cm-contour --out fig.png`` (Fig. 4)
+  [--store FILE [--resume]] [--json] [-o R.json]`` (Table 3)
+* ``shipid study mass-cm-contour -o fig.png|grid.json [--json]`` (Fig. 4)
 * ``shipid analyse crlb mass-cm [--duration S] [--wave-roll DEG] ...`` (Cramér–Rao bounds)
 
 ``known.toml`` holds ``U, M, zg_bar, m_c, zc_bar, zs_bar, g`` (bare numbers in SI, or tables
@@ -14,7 +14,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import time
 import tomllib
@@ -24,7 +23,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
-from shipid.cli._common import loud, loud_lines, strict_option
+from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
 from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import InputError, ShipidError
 
@@ -103,10 +102,10 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto: AR(40) of eps/(1 - c q^-2) with c chosen by the data "
                    "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
-@click.option("--json", "as_json", is_flag=True, help="Print the result as one JSON object.")
+@out_options(json_help="Print the result as one JSON object.")
 @strict_option
 def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
-                     as_json):
+                     as_json, out, force):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
     Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
@@ -128,19 +127,20 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
     res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
-    if as_json:
-        d = res.to_dict()
-        flat = {k: e.value for k, e in res.estimates.items()}
-        flat.update({f"{k}_std": e.std for k, e in res.estimates.items()})
-        d.update(flat)
-        d["converged"] = res.diagnostics["converged"]
-        d["iterations"] = res.diagnostics["iterations"]
-        click.echo(json.dumps(d, indent=2, allow_nan=True))
-        return
-    click.echo(f"mass-cm (Linder et al. 2015): converged={res.diagnostics['converged']} "
-               f"after {res.diagnostics['iterations']} iterations, z_f {res.diagnostics['z_f_mode']}")
-    for k, e in res.estimates.items():
-        click.echo(f"  {k:8s} = {_fmt(e.value):>11s} ± {_fmt(e.std):<10s} {e.unit:10s} {e.note}")
+    d = res.to_dict()
+    flat = {k: e.value for k, e in res.estimates.items()}
+    flat.update({f"{k}_std": e.std for k, e in res.estimates.items()})
+    d.update(flat)
+    d["converged"] = res.diagnostics["converged"]
+    d["iterations"] = res.diagnostics["iterations"]
+
+    def text():
+        click.echo(f"mass-cm (Linder et al. 2015): converged={res.diagnostics['converged']} "
+                   f"after {res.diagnostics['iterations']} iterations, z_f {res.diagnostics['z_f_mode']}")
+        for k, e in res.estimates.items():
+            click.echo(f"  {k:8s} = {_fmt(e.value):>11s} ± {_fmt(e.std):<10s} {e.unit:10s} {e.note}")
+
+    emit(d, as_json=as_json, out=out, force=force, text=text)
 
 
 @study.command("mass-cm-sensitivity")
@@ -150,10 +150,9 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
 @click.option("--init", type=click.Choice(["given", "linear"]), default="given", show_default=True,
               help="given: start from the random Table-3 draw (paper); linear: the equation-error start.")
 @click.option("--data-seed", type=int, default=0, show_default=True, help="Seed of the three synthetic datasets.")
-@click.option("--json", "as_json", is_flag=True)
-@click.option("--out", "out", type=click.Path(dir_okay=False), default=None,
-              help="Also write the study as a result JSON (Table 3 spread) for `shipid report`.")
-@click.option("--force", is_flag=True, help="Overwrite --out.")
+@out_options(json_help="Print the Table-3 summary as JSON on stdout.",
+             out_help="Write the study as a result JSON (Table 3 spread, for `shipid report`) to FILE "
+                      "(atomically; an existing FILE needs --force).")
 @strict_option
 @campaign_options
 def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
@@ -167,9 +166,6 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
     from shipid.methods.masscm.study import summarise
 
     seed = campaign.seed
-    if out and Path(out).exists() and not force:  # fail before the study, not after it
-        from shipid.errors import OutputExistsError
-        raise OutputExistsError(out)
     t0 = time.perf_counter()
     # warm_up compiles the numba kernels once here, then warms the forkserver every worker is forked from
     res = replace(campaign, progress=not as_json).run(
@@ -185,9 +181,10 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
         from shipid.methods.masscm.series import spread_result
         spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
                       f"--init {init} --data-seed {data_seed} --seed {seed}").write_json(out, force=force)
-    if as_json:
-        click.echo(json.dumps(s, indent=2, allow_nan=True))
-        return
+    emit(s, as_json=as_json, out=None, force=force, text=lambda: _sensitivity_table(s, zf_mode, init))
+
+
+def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
     click.echo(f"Table 3 reproduction: {s['runs']} runs, {s['flagged']} flagged implausible, "
                f"z_f {zf_mode}, init {init}, {s['wall_s']:.1f} s")
     click.echo(f"  {'param':8s} {'true':>9s} {'mean':>10s} {'std':>10s} {'paper mean':>11s} {'paper std':>10s}")
@@ -205,9 +202,9 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
-@click.option("--json", "as_json", is_flag=True)
+@out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options
-def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
+def mass_cm_coverage(regime, runs, duration, noise_model, as_json, out, force, campaign):
     """Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.
 
     Fresh rudder and noise realisations per run (SeedSequence([seed, i])), z_f known; the bound is
@@ -228,35 +225,61 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, campaign):
     s = summarise(outs, regime=regime, duration=duration, bound=bound_for(regime, duration))
     s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"],
               "wall_s": time.perf_counter() - t0})
-    if as_json:
-        click.echo(json.dumps(s, indent=2, allow_nan=True))
-        return
+    emit(s, as_json=as_json, out=out, force=force, text=lambda: _coverage_table(s, regime, duration, campaign.seed))
+
+
+def _coverage_table(s: dict, regime: str, duration: float, seed: int) -> None:
     click.echo(f"mass-cm coverage, regime {regime}: {s['used']} of {s['runs']} runs ({s['failed']} failed, "
                f"{s['flagged_implausible']} flagged implausible, {s['not_converged']} not converged), "
-               f"3 x {duration:g} s, seed {campaign.seed}, {s['wall_s']:.1f} s")
+               f"3 x {duration:g} s, seed {seed}, {s['wall_s']:.1f} s")
     click.echo(f"  {'':7s} {'true':>9s} {'mean':>9s} {'bias/se':>8s} {'spread':>9s} {'mean std':>9s} "
-               f"{'bound':>9s} {'spr/bnd':>8s} {'cov 2std':>8s}")
+               f"{'bound':>9s} {'spr/bnd':>8s} {'95% CI':>13s} {'cov 2std':>8s}")
     rows = [(k, q) for k, q in s["quantities"].items()]
     rows += [(f"{k}*", q) for k, q in s["quantities_unflagged"].items()]
     for k, q in rows:
         ratio = q["spread_over_bound"]
+        ci = q.get("spread_over_bound_ci95")
+        ci_s = f"[{ci[0]:.3g}, {ci[1]:.3g}]" if ci else "-"
         click.echo(f"  {k:7s} {q['true']:9.4g} {q['mean']:9.4g} {(q['bias'] / q['bias_se'] if q['bias_se'] else float('nan')):8.2f} {q['spread']:9.3g} "
                    f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
-                   f"{ratio if ratio is not None else float('nan'):8.2f} {q['coverage_2std']:8.2f}")
+                   f"{ratio if ratio is not None else float('nan'):8.3g} {ci_s:>13s} {q['coverage_2std']:8.2f}")
     click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
 
 
+_FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
 @study.command("mass-cm-contour")
-@click.option("--out", "out", required=True, type=click.Path(dir_okay=False), help="Figure file (.png/.pdf/.svg).")
 @click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True)
 @click.option("--data-seed", type=int, default=0, show_default=True)
-@click.option("--force", is_flag=True, help="Overwrite an existing figure.")
+@out_options(json_help="Print the cost grid, its minimum and the estimate as JSON on stdout.",
+             out_help="Write the result to FILE: the figure for .png/.pdf/.svg, the cost grid as JSON for "
+                      "any other name (atomically; an existing FILE needs --force).",
+             force_help="Overwrite an existing --out file.")
 @strict_option
-def mass_cm_contour(out, zf_mode, data_seed, force):
+def mass_cm_contour(zf_mode, data_seed, as_json, out, force):
     """Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate."""
-    from shipid.methods.masscm.contour import contour_figure
-    path = contour_figure(out, data_seed=data_seed, zf_mode=zf_mode, force=force)
-    click.echo(f"wrote {path}")
+    from shipid.methods.masscm.contour import contour_figure, cost_grid
+
+    g = cost_grid(data_seed=data_seed, zf_mode=zf_mode)
+    i = np.unravel_index(np.argmin(g["cost"]), g["cost"].shape)
+    payload = {"study": "mass-cm-contour", "data_seed": data_seed, "z_f": zf_mode,
+               "converged": bool(g["converged"]), "theta": g["theta"].tolist(),
+               "minimum": {"m": float(g["m"][i[1]]), "zm_bar": float(g["zm_bar"][i[0]]),
+                           "cost": float(g["cost"][i])},
+               "m": g["m"].tolist(), "zm_bar": g["zm_bar"].tolist(), "cost": g["cost"].tolist()}
+    figure = out is not None and Path(out).suffix.lower() in _FIGURE_SUFFIXES
+    if figure:
+        path = contour_figure(out, data_seed=data_seed, zf_mode=zf_mode, force=force, grid=g)
+        click.echo(f"wrote {path}", err=as_json)
+
+    def text():
+        mn = payload["minimum"]
+        click.echo(f"Fig. 4 cost grid {len(payload['m'])} x {len(payload['zm_bar'])}, z_f {zf_mode}, data seed "
+                   f"{data_seed}: minimum at m = {mn['m']:.6g} kg, zm_bar = {mn['zm_bar']:.6g} m "
+                   f"(cost {mn['cost']:.6g})")
+
+    emit(payload, as_json=as_json, out=None if figure else out, force=force, text=text)
 
 
 @analyse.group("crlb")
@@ -274,24 +297,36 @@ def crlb_group():
 @click.option("--wave-roll", type=float, default=0.5, show_default=True, help="Roll std from waves alone (deg).")
 @click.option("--wave-period", type=float, default=1.0, show_default=True, help="Wave peak period (s).")
 @click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--method", type=click.Choice(["spectrum", "ar"]), default="spectrum", show_default=True,
-              help="spectrum: the exact equation-error spectrum of the simulated noise (Whittle form); ar: an AR(40) "
-                   "noise model fitted to a simulated noise record (cannot represent the wave-roll zeros).")
-@click.option("--json", "as_json", is_flag=True)
-def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, method, as_json):
+@click.option("--method", type=click.Choice(["kf", "spectrum", "ar"]), default="kf", show_default=True,
+              help="kf: Cramér–Rao bound of the data-generating model (ship (11), wave filter, sensor noise, biases; "
+                   "exact Kalman-filter likelihood, sway/yaw rows and noise levels as nuisance); spectrum: optimal-IV "
+                   "bound of the rudder-driven regressors with the exact equation-error spectrum (Whittle form); ar: "
+                   "the same with an AR(40) noise model (cannot represent the wave-roll zeros).")
+@out_options(json_help="Print the bounds as JSON on stdout.")
+def crlb_mass_cm(vessel, duration, fs, rudder_deg, gyro_std, acc_std, wave_roll, wave_period, seed, method, as_json,
+                 out, force):
     """Bounds on zm_bar, rho and m (z_f known) for a ship, excitation, noise and record length."""
     from shipid.methods.masscm.crlb import crlb
     from shipid.models.roll_sim import NoiseSpec
     if duration <= 0 or fs <= 0:
         raise ShipidError("--duration and --fs must be positive")
+    if gyro_std < 0 or acc_std < 0 or wave_roll < 0 or (gyro_std == acc_std == wave_roll == 0):
+        raise ShipidError("--gyro-std, --acc-std and --wave-roll must be >= 0 and not all 0 (noise-free data: no bound)")
     noise = NoiseSpec(gyro_std=gyro_std, acc_std=acc_std, wave_roll_deg=wave_roll, wave_period=wave_period)
-    b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
-             method=method)
-    if as_json:
-        click.echo(json.dumps(b, indent=2, allow_nan=True))
-        return
-    click.echo(f"Cramér–Rao bounds, {vessel}, {duration:g} s per dataset at {fs:g} Hz, rudder ±{rudder_deg:g} deg, "
-               f"waves {wave_roll:g} deg roll (z_f known):")
+    try:
+        b = crlb(vessel, duration=duration, fs=fs, delta_amp=np.deg2rad(rudder_deg), noise=noise, seed=seed,
+                 method=method)
+    except ValueError as exc:
+        raise ShipidError(f"crlb mass-cm: {exc}") from None
+    emit(b, as_json=as_json, out=out, force=force,
+         text=lambda: _crlb_table(b, vessel, duration, fs, rudder_deg, wave_roll, gyro_std, acc_std, method))
+
+
+def _crlb_table(b: dict, vessel: str, duration: float, fs: float, rudder_deg: float, wave_roll: float,
+                gyro_std: float, acc_std: float, method: str) -> None:
+    click.echo(f"Cramér–Rao bounds ({method}), {vessel}, {duration:g} s per dataset at {fs:g} Hz, rudder "
+               f"±{rudder_deg:g} deg, waves {wave_roll:g} deg roll, gyro {gyro_std:g} rad/s, acc {acc_std:g} m/s^2 "
+               f"(z_f known):")
     for k in ("zm_bar", "rho", "m"):
         e = b["bounds"][k]
         click.echo(f"  {k:7s} true {e['true']:.5g}  std >= {e['std']:.3g}  ({100 * e['rel']:.2f} %)")

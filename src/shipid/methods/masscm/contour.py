@@ -40,13 +40,17 @@ def cost_grid(data_seed: int = 0, zf_mode: str = "known", n: int = 61, span_m: f
     return {"m": ms, "zm_bar": zs, "cost": C, "theta": th, "converged": core["converged"]}
 
 
-def contour_figure(out, *, data_seed: int = 0, zf_mode: str = "known", force: bool = False):
-    """Draw Fig. 4 to ``out`` (format from the extension); returns the path."""
+def contour_figure(out, *, data_seed: int = 0, zf_mode: str = "known", force: bool = False,
+                   grid: dict | None = None):
+    """Draw Fig. 4 to ``out`` (format from the extension); returns the path.
+
+    ``grid`` is a :func:`cost_grid` result to draw (computed here when not given).
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    g = cost_grid(data_seed=data_seed, zf_mode=zf_mode)
+    g = cost_grid(data_seed=data_seed, zf_mode=zf_mode) if grid is None else grid
     th = g["theta"]
     fig, ax = plt.subplots(figsize=(6, 4.5))
     M, Z = np.meshgrid(g["m"], g["zm_bar"])

@@ -19,7 +19,10 @@ Unknowns: ``theta`` of (30) with ``z_f`` known (it is not identifiable, see
 :mod:`shipid.methods.masscm.identifiability`). Bounds on ``zm_bar``, ``rho = m z_m/(m_c z_c)`` and
 ``m`` follow by the delta method.
 
-``H_i`` (``method``): ``"spectrum"`` (default) takes the exact spectral density of the equation error at
+``method="kf"`` (default) is not this bound but the Cramér–Rao bound of the data-generating model,
+:func:`shipid.methods.masscm.crlb_kf.crlb_kf`; the two forms below stay selectable.
+
+``H_i`` (``method``): ``"spectrum"`` takes the exact spectral density of the equation error at
 the true parameters from the transfers of the simulated noise sources (:func:`equation_error_spectrum`:
 gyro and accelerometer noise analytically, the wave moment through the exact sampled ship model (11)) and
 evaluates the information in Whittle's frequency-domain form; ``"ar"`` (the former bound) fits an AR(40)
@@ -33,9 +36,9 @@ only (no unit-circle zeros) both forms agree to < 1 %; with wave roll the exact 
 regime (module :mod:`shipid.methods.masscm.coverage` has the numbers), most in sensor noise (~0.7) where
 the noise spectrum is exact and both forms agree. So the information used here — the rudder-driven
 regressors only, the optimal-IV covariance — is not the Cramér–Rao bound of the data-generating model;
-a bound from the exact likelihood of the ship model with the wave filter and sensor noise (state-space,
-Kalman filter or Whittle with the outputs p, a_s, r themselves) is left to do. Read the number as the
-asymptotic optimal-IV covariance, not a finite-sample floor.
+the bound from the exact likelihood of the ship model with the wave filter and sensor noise is
+:mod:`shipid.methods.masscm.crlb_kf` (``method="kf"``). Read the number of these two forms as the asymptotic
+optimal-IV covariance, not a floor.
 """
 
 from __future__ import annotations
@@ -133,7 +136,7 @@ def equation_error_spectrum(vessel="fishing-vessel", *, fs: float = 50.0, noise:
 
 def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
          delta_amp: float = np.deg2rad(5.0), noise: NoiseSpec = NoiseSpec.issue3(), seed=0,
-         n_datasets_per_condition: int = 1, method: str = "spectrum") -> dict:
+         n_datasets_per_condition: int = 1, method: str = "kf", nuisance: str = "free-rows") -> dict:
     """Lower bounds on the standard deviations of the estimates (z_f known).
 
     Parameters
@@ -146,8 +149,12 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
         Sensor noise and wave roll (biases do not change the bound).
     seed : int
         Seeds the rudder realisation and the noise-model simulation.
-    method : {"spectrum", "ar"}
-        ``"spectrum"`` (default): the noise of (35) by its exact spectral density
+    method : {"kf", "spectrum", "ar"}
+        ``"kf"`` (default): the Cramér–Rao bound of the data-generating model (the ship (11) with the wave filter,
+        sensor noise and biases; exact Kalman-filter likelihood, nuisance sway/yaw rows, noise levels and biases
+        eliminated), :func:`shipid.methods.masscm.crlb_kf.crlb_kf`; ``n_datasets_per_condition`` is the number
+        of rudder realisations its information is averaged over and ``nuisance`` is passed on.
+        ``"spectrum"``: the optimal-IV bound of the rudder-driven regressors, the noise of (35) by its exact spectral density
         (:func:`equation_error_spectrum`) and the information in Whittle's frequency-domain form,
         ``I = G^T [sum_k Re(Phi_k^H Phi_k) / (N phi_v(w_k))] G`` over the DFT ``Phi_k`` of the rudder-driven
         regressors (the ``k = 0`` bin, removed with the means, left out). ``"ar"``: the former bound, ``H_i``
@@ -163,8 +170,12 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
     known = KnownParams.from_vessel(vessel)
     th = true_theta(vessel)
     free = [i for i, n in enumerate(THETA_NAMES) if n != "z_f"]
-    if method not in ("spectrum", "ar"):
-        raise ValueError("method must be 'spectrum' or 'ar'")
+    if method not in ("kf", "spectrum", "ar"):
+        raise ValueError("method must be 'kf', 'spectrum' or 'ar'")
+    if method == "kf":
+        from shipid.methods.masscm.crlb_kf import crlb_kf
+        return crlb_kf(vessel, duration=duration, fs=fs, delta_amp=delta_amp, noise=noise, seed=seed,
+                       n_rudder=n_datasets_per_condition, nuisance=nuisance)
     n = int(round(duration * fs))
     models = noise_models(vessel, fs=fs, noise=noise, seed=seed) if method == "ar" else None
     spec = equation_error_spectrum(vessel, fs=fs, noise=noise, n_fft=n) if method == "spectrum" else None

@@ -27,11 +27,16 @@ And, for the Table-3 study (``shipid study mass-cm-sensitivity --out``),
 
 from __future__ import annotations
 
-from typing import Sequence
+import copy
+import os
+import warnings
+from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.methods.masscm.assemble import MassCMFit
+from shipid.data.io import read_trial
+from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
+from shipid.models.roll_reduced import KnownParams
 from shipid.methods.masscm.criterion import residual_function
 from shipid.methods.masscm.data import first_row
 from shipid.methods.masscm.moments import closed_loop_sim, transient_length
@@ -184,17 +189,66 @@ def attach(result, core: dict, prep, known, options=None, datasets=None, *, cont
         prov["inputs"] = inputs(datasets)
 
 
-def with_series(fit: MassCMFit, *, cost_map: bool = False) -> Result:
-    """The result of ``fit`` (:func:`shipid.methods.masscm.assemble.fit_mass_cm`) with its report series.
+def with_series(fit, *, cost_map: bool = False) -> Result:
+    """A result with its report series: roll-rate overlays, prefiltered equation errors, trial summaries and,
+    with ``cost_map=True``, the Fig. 4 cost map on a :data:`CONTOUR_N` × :data:`CONTOUR_N` grid.
 
-    Adds (in place, and returns ``fit.result``) the roll-rate overlays and prefiltered equation errors of every
-    dataset, the trial summaries (``provenance["inputs"]``) and, with ``cost_map=True``, the Fig. 4 cost map
-    on a :data:`CONTOUR_N` × :data:`CONTOUR_N` grid. Report work on request: ``identify`` never does it;
+    ``fit`` is a :class:`~shipid.methods.masscm.assemble.MassCMFit` (:func:`~shipid.methods.masscm.assemble.fit_mass_cm`;
+    its result is completed in place and returned) or a stored mass-cm :class:`~shipid.result.Result`
+    (``Result.with_series()``, ``shipid report``): then the datasets are read again from the files the result
+    records (``provenance["mass_cm_call"]``), Algorithm 1 is run with the recorded known parameters, options and
+    initialisation, and a copy of the result gets the series when that reproduces the stored m exactly (else,
+    or when a file is missing, a copy with one warning saying why; a result that records no files, or already
+    has overlays, comes back unchanged). Report work on request: ``identify`` never does it;
     ``shipid identify mass-cm`` does it for the result it writes (``--cost-map`` adds the map).
     """
-    attach(fit.result, fit.core, fit.prep, fit.known, fit.options, fit.datasets,
-           contour_n=CONTOUR_N if cost_map else 0)
-    return fit.result
+    if isinstance(fit, MassCMFit):
+        attach(fit.result, fit.core, fit.prep, fit.known, fit.options, fit.datasets,
+               contour_n=CONTOUR_N if cost_map else 0)
+        return fit.result
+    return _from_files(fit, cost_map)
+
+
+def _noted(result, text: str):
+    out = copy.deepcopy(result)
+    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
+    return out
+
+
+def _from_files(result, cost_map: bool):
+    """:func:`with_series` of a stored result (see there)."""
+    series = result.series if isinstance(result.series, Mapping) else {}
+    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
+    call = prov.get("mass_cm_call")
+    if result.method != "mass-cm" or series.get("overlays") or not isinstance(call, Mapping):
+        return result
+    files = call.get("files") or []
+    if not files or any(not isinstance(p, str) for _, p in files):
+        return result
+    missing = [p for _, p in files if not os.path.isfile(p)]
+    if missing:
+        return _noted(result, f"dataset file not found: {missing[0]}")
+    try:
+        datasets = [(c, read_trial(p, required=["t", *REQUIRED], method="mass-cm")) for c, p in files]
+        known = KnownParams(**(result.model or {})["known"])
+        opts = {k: v for k, v in result.diagnostics["options"].items() if k in MassCMOptions.__dataclass_fields__}
+        prior = call.get("z_f_prior")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = fit_mass_cm(datasets, known, theta0=call.get("theta0"), z_f=call.get("z_f"),
+                              z_f_prior=None if prior is None else tuple(prior), init=call.get("init"),
+                              options=MassCMOptions(**opts), noise_check=False)
+    except Exception as err:  # noqa: BLE001 - the report must still be written
+        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    if fit.result.value("m") != result.value("m"):
+        return _noted(result, f"Algorithm 1 on the recorded files gives m = {fit.result.value('m'):.6g} kg, "
+                              f"not the stored {result.value('m'):.6g} kg (files changed?)")
+    made = with_series(fit, cost_map=cost_map)
+    out = copy.deepcopy(result)
+    out.series = {**dict(series), **{k: v for k, v in made.series.items()
+                                     if k in ("overlays", "residuals", "contours")}}
+    out.provenance = {**dict(prov), "inputs": made.provenance.get("inputs", [])}
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -2,10 +2,10 @@
 
 * ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
-* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso]``
+* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
   and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
-* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json]``
-* ``shipid study kvlcc2-zigzag [--train-only] [--json]``
+* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
+* ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
 
 The studies print the cross-validation table over the candidate structures (training
 runs only) and the chosen one before any test run is read (``--train-only`` stops
@@ -19,7 +19,7 @@ import json
 import click
 
 from shipid.cli import CONTEXT, cli, identify, study
-from shipid.cli._common import loud, loud_lines, strict_option
+from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
 from shipid.data.io import FORMATS
 from shipid.errors import ShipidError
 
@@ -68,7 +68,7 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--channels", default=None,
               help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
 @click.option("--horizon", default=None, type=float,
-              help="Length of restarted horizons, s [default: MODEL.json's, else 60].")
+              help="Length of restarted horizons, s [default: MODEL.json's, else the method's: 60, mass-cm 10].")
 @click.option("--rudder-sign", default=None, type=int,
               help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                    "[default: MODEL.json's training convention, else from the data profile: -1 for HSVA KVLCC2].")
@@ -80,11 +80,17 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
 @strict_option
 def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
-    """Simulate MODEL open loop on a measured run and report RMS/max errors.
+    """Simulate MODEL open loop on a held-out run and report RMS/max errors.
 
-    MODEL is a JSON file written by 'shipid identify mmg --json' (or 'identify
-    realdata'), or 'published:esso_osaka_3m' / 'published:kvlcc2_L7' for the published
-    MMG sets read from the shared data folder. The model starts from the measured
+    MODEL is a result JSON of 'shipid identify mmg | ebm | dp | mass-cm --json' (the
+    method is read from its 'method' field), or 'published:esso_osaka_3m' /
+    'published:kvlcc2_L7' for the published MMG sets read from the shared data folder.
+    EBM: the Abkowitz ship driven by the measured rudder and propeller rate, compared
+    in heading, antenna position and velocity and speed log; DP: the LF model driven
+    by the measured pitch ratios and azimuth angle, compared in x, y and heading;
+    mass-cm: the roll model (33) of the run's loading condition driven by the measured
+    a_s, r and rudder, compared in roll rate (and roll angle where recorded), with
+    10-s horizons by default. An MMG model starts from the measured
     initial state and is driven by the measured rudder, propeller revolutions and
     true wind; errors of heading (deg), yaw rate (deg/s), u, v (m/s) and position (m)
     over the first 30 s, 60 s, the whole run and 60-s horizons restarted from the
@@ -105,6 +111,11 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         from shipid.errors import OutputExistsError
         if Path(out_path).exists():          # before the simulation, not after
             raise OutputExistsError(out_path)
+    other = _result_of_other_method(model)
+    if other is not None:
+        _validate_other(model, other, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path,
+                        out_path, force)
+        return
     m, doc = V.load_model_document(model)
     mv = dict((doc or {}).get("model", {}).get("validate", {}) or {})
     notes = []
@@ -144,6 +155,72 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         click.echo(json.dumps(d, indent=2))
     else:
         click.echo(V.format_table(v))
+        if plot_path:
+            click.echo(f"plot written to {plot_path}")
+        if out_path:
+            click.echo(f"prediction written to {out_path}")
+
+
+def _result_of_other_method(model: str) -> dict | None:
+    """The JSON document of ``model`` when it is a result of a method other than MMG, else None
+    (``published:`` sets, MMG results and unreadable files take the MMG path, which reports them)."""
+    from pathlib import Path
+
+    from shipid import registry
+
+    if str(model).startswith("published:") or not Path(model).is_file():
+        return None
+    try:
+        doc = json.loads(Path(model).read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    if not isinstance(doc, dict) or "method" not in doc:
+        return None
+    if (doc.get("model") or {}).get("family") == "mmg":
+        return None
+    info = registry.for_result(str(doc["method"]))
+    return None if info is not None and info.name == "mmg" else doc
+
+
+def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path,
+                    force):
+    """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
+    from shipid import registry
+    from shipid.analysis.openloop import format_table, write_csv
+    from shipid.data.io import read_trial
+    from shipid.errors import InputError
+    from shipid.result import Result
+
+    method = str(doc["method"])
+    info = registry.for_result(method)
+    if info is None or not info.has_module("validate"):
+        can = ", ".join(k for k, v in registry.methods().items() if v.has_module("validate"))
+        raise InputError(f"a {method!r} result cannot be validated (methods with an open-loop model: {can})",
+                         file=model)
+    mod = info.submodule("validate")
+    try:
+        res = Result.from_dict(doc)
+    except (KeyError, TypeError, ValueError) as err:
+        raise InputError(f"malformed result ({type(err).__name__}: {err})", file=model) from None
+    tr = read_trial(trial_path, fmt=fmt, channel_map=channels, required=list(getattr(mod, "REQUIRED", ())) or None,
+                    method="shipid validate", **READ_SETTINGS)
+    tr = _flip(tr, rudder_sign)
+    notes = []
+    if (res.diagnostics or {}).get("converged") is False:
+        notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
+                     "its predictions must not be trusted")
+    v = mod.validate_result(res, tr, horizon=horizon)
+    warns = loud_lines(notes + list(v.settings.get("warnings", [])), trials=[tr])
+    if out_path:
+        write_csv(v, out_path, force=force)
+    if plot_path:
+        mod.plot(v, plot_path, force=force)
+    if as_json:
+        d = v.to_dict()
+        d["warnings"] = warns
+        click.echo(json.dumps(d, indent=2))
+    else:
+        click.echo(format_table(v))
         if plot_path:
             click.echo(f"plot written to {plot_path}")
         if out_path:
@@ -194,17 +271,12 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
-    from pathlib import Path
-
-    from shipid.errors import OutputExistsError
     from shipid.methods.mmg import estimator as R
 
     if not paths:
         raise ShipidError("no training runs given")
     if rudder_sign not in (None, 1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
-    if output and Path(output).exists() and not force:
-        raise OutputExistsError(output)       # before the fit, not after it
     raw = [_read_run(p, fmt, channels) for p in paths]
     profiles = {tr.meta.get("profile") for tr in raw}
     notes: list[str] = []
@@ -235,15 +307,14 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
     res.model["validate"] = {"rudder_sign": rudder_sign, "format": fmt, "channels": channels,
                              "profiles": sorted(p for p in profiles if p), "horizon_s": 60.0, "read": READ_SETTINGS}
     loud(res, trials=trials, extra=notes)
-    if output:
-        res.write_json(output, force=force)
-    if as_json:
-        click.echo(res.to_json())
-    else:
+
+    def text():
         _print_result(res)
         if output:
             click.echo(f"model written to {output}"
                        + ("" if res.diagnostics.get("converged", True) else " (NOT converged: see the warnings)"))
+
+    emit(res, as_json=as_json, out=output, force=force, text=text)
 
 
 _ID_OPTS = [
@@ -261,9 +332,9 @@ _ID_OPTS = [
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
-    click.option("--json", "as_json", is_flag=True, help="Print the Result (MODEL.json) to stdout."),
-    click.option("--output", "-o", default=None, type=click.Path(dir_okay=False), help="Write MODEL.json here."),
-    click.option("--force", is_flag=True, help="Overwrite --output."),
+    out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
+                out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
+                         "file needs --force."),
 ]
 
 
@@ -278,14 +349,14 @@ def _with_id_opts(f):
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="A training run (repeat for several).")
 @_with_id_opts
-def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
     given runs unless --structure names one. The result is a self-describing MODEL.json
     for 'shipid validate'.
     """
-    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force)
 
 
 from shipid.methods.dp.cli import _ManyValues  # noqa: E402  (an option taking several files)
@@ -295,9 +366,9 @@ from shipid.methods.dp.cli import _ManyValues  # noqa: E402  (an option taking s
 @click.option("--train", "train", cls=_ManyValues, required=True, type=click.Path(dir_okay=False),
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
-def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force):
     """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
-    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force)
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force)
 
 
 # ----------------------------------------------------------------------------- studies
@@ -308,28 +379,27 @@ def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign
               help="CV folds within the training runs (0: leave one run out, the frozen scheme).")
 @click.option("--train-only", is_flag=True,
               help="Stop after the CV table and the chosen structure: no test run is read.")
-@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+@out_options(json_help="Print everything as JSON on stdout.")
 @strict_option
-def esso_heldout_cmd(split, folds, train_only, as_json):
+def esso_heldout_cmd(split, folds, train_only, as_json, out, force):
     """Esso Osaka 3 m: CV table over the candidate structures (training runs only), the chosen one,
     then the held-out error table of the identified model vs the published MMG set."""
     from shipid.methods.mmg import study as S
 
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     splits = ["miyauchi2022", "wakita2022"] if split == "both" else [split]
-    out = {}
+    res = {}
     for sp in splits:                      # every selection is made (and printed) before any test run is read
-        out[sp] = S.esso_train(sp, folds=folds or None, progress=say)
+        res[sp] = S.esso_train(sp, folds=folds or None, progress=say)
         if not as_json:
-            click.echo(S.format_esso_training(out[sp]))
+            click.echo(S.format_esso_training(res[sp]))
     if not train_only:
         for sp in splits:
-            out[sp]["heldout"] = S.esso_evaluate(out[sp], progress=say)
+            res[sp]["heldout"] = S.esso_evaluate(res[sp], progress=say)
             if not as_json:
-                click.echo(S.format_esso_heldout(out[sp]))
+                click.echo(S.format_esso_heldout(res[sp]))
     warns = loud_lines([])
-    if as_json:
-        click.echo(json.dumps({**out, "warnings": warns} if warns else out, indent=1, allow_nan=True))
+    emit({**res, "warnings": warns} if warns else res, as_json=as_json, out=out, force=force, indent=1)
 
 
 @study.command("kvlcc2-zigzag", context_settings=CONTEXT)
@@ -337,9 +407,9 @@ def esso_heldout_cmd(split, folds, train_only, as_json):
               help="CV folds within the training zig-zags (0: leave one out, the frozen scheme).")
 @click.option("--train-only", is_flag=True,
               help="Stop after the CV table and the chosen structure: no held-out zig-zag is read.")
-@click.option("--json", "as_json", is_flag=True, help="Print everything as JSON.")
+@out_options(json_help="Print everything as JSON on stdout.")
 @strict_option
-def kvlcc2_cmd(folds, train_only, as_json):
+def kvlcc2_cmd(folds, train_only, as_json, out, force):
     """KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
     from shipid.methods.mmg import study as S
 
@@ -352,5 +422,4 @@ def kvlcc2_cmd(folds, train_only, as_json):
         if not as_json:
             click.echo(S.format_kvlcc2_heldout(st))
     st["warnings"] = loud_lines(st.get("warnings", []))
-    if as_json:
-        click.echo(json.dumps(st, indent=1, allow_nan=True))
+    emit(st, as_json=as_json, out=out, force=force, indent=1)

@@ -1,6 +1,6 @@
 """Standard manoeuvres of identified MMG models.
 
-* ``shipid imo MODEL.json [--json] [--samples N] [--seed S] [--ship-length L]``: the IMO
+* ``shipid imo MODEL.json [--json] [-o R.json] [--samples N] [--seed S] [--ship-length L]``: the IMO
   MSC.137(76) criteria with Monte Carlo bands (:mod:`shipid.methods.mmg.imo`).
 * ``shipid simulate MODEL.json MANOEUVRE --out FILE [--speed U] [--rps N]``: handled by
   :func:`simulate_identified` (called from the generic ``simulate`` command when its
@@ -15,6 +15,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
+from shipid.cli._common import emit, out_options
 from shipid.errors import InputError, OutputExistsError, ShipidError
 
 
@@ -70,7 +71,7 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 
 @cli.command("imo", context_settings=CONTEXT)
 @click.argument("model")
-@click.option("--json", "as_json", is_flag=True, help="Print the assessment as JSON.")
+@out_options(json_help="Print the assessment as JSON on stdout.")
 @click.option("--samples", default=100, show_default=True, type=int,
               help="Monte Carlo draws from the parameter covariance (0: nominal only).")
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the draws.")
@@ -81,7 +82,7 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 @click.option("--rudder-rate", type=float, default=None, help="Steering-gear rate, deg/s [default: training data].")
 @click.option("--dt", type=float, default=0.1, show_default=True, help="Simulation step, s.")
 @click.option("--strict", is_flag=True, help="Exit 3 when there are warnings.")
-def imo_cmd(model, as_json, samples, seed, ship_length, speed, rps, rudder_rate, dt, strict):
+def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, strict):
     """IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.
 
     Turning ability (35 deg, both sides: advance <= 4.5 L, tactical diameter <= 5 L),
@@ -99,9 +100,6 @@ def imo_cmd(model, as_json, samples, seed, ship_length, speed, rps, rudder_rate,
                    rudder_rate_deg_s=rudder_rate, dt=dt)
     for w in rep["warnings"]:
         click.echo(f"warning: {w}", err=True)
-    if as_json:
-        click.echo(json.dumps(rep, indent=1, allow_nan=True))
-    else:
-        click.echo(I.format_report(rep))
+    emit(rep, as_json=as_json, out=out, force=force, indent=1, text=lambda: click.echo(I.format_report(rep)))
     if strict and rep["warnings"]:
         raise SystemExit(3)

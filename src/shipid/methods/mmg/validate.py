@@ -20,18 +20,21 @@ positions).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 
+from shipid.analysis.openloop import Validation, format_table, horizon_starts, summarise
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
+from shipid.result import Result
 
 QUANTITIES = ("psi", "r", "u", "v", "pos")
 UNITS = {"psi": "deg", "r": "deg/s", "u": "m/s", "v": "m/s", "pos": "m"}
+#: Length of the restarted horizons, s.
+DEFAULT_HORIZON = 60.0
 
 
 # ----------------------------------------------------------------------------- models
@@ -160,53 +163,7 @@ def _errors(pred: np.ndarray, meas: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _summary(err: Mapping[str, np.ndarray], mask: np.ndarray | None = None) -> dict[str, dict[str, float]]:
-    out = {}
-    for q in QUANTITIES:
-        e = np.asarray(err[q])
-        if mask is not None:
-            e = e[mask]
-        e = e.ravel()
-        if e.size == 0:
-            out[q] = {"rms": float("nan"), "max": float("nan"), "unit": UNITS[q]}
-            continue
-        if not np.all(np.isfinite(e)):     # a diverged prediction is an infinite error, not a skipped one
-            out[q] = {"rms": float("inf"), "max": float("inf"), "unit": UNITS[q]}
-            continue
-        out[q] = {"rms": float(np.sqrt(np.mean(e * e))), "max": float(np.max(np.abs(e))), "unit": UNITS[q]}
-    return out
-
-
-@dataclass(frozen=True)
-class Validation:
-    """Result of :func:`validate`.
-
-    Attributes
-    ----------
-    windows : dict
-        ``{"first_30s" | "first_60s" | "whole": {quantity: {"rms", "max", "unit"}}}``.
-    horizons : dict
-        Same layout, pooled over the restarted horizons; plus ``"count"`` and ``"length_s"``.
-    t, measured, predicted : ndarray
-        The whole-run simulation (for plots).
-    """
-
-    windows: dict
-    horizons: dict
-    t: np.ndarray
-    measured: np.ndarray
-    predicted: np.ndarray
-    model_name: str
-    source: str
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"model": self.model_name, "trial": self.source, "duration_s": float(self.t[-1] - self.t[0]),
-                "windows": self.windows, "horizons": self.horizons}
-
-
-def horizon_starts(n: int, steps: int, stride: int, min_steps: int) -> np.ndarray:
-    """Start indices of restarted horizons: every ``stride`` samples while at least ``min_steps`` remain."""
-    starts = np.arange(0, max(n - 1, 0), stride)
-    return starts[(n - starts) >= min_steps]
+    return summarise(err, QUANTITIES, UNITS, mask)
 
 
 def validate(model: mmg.MmgModel, trial: Trial, *, horizon: float = 60.0, stride: float | None = None,
@@ -257,21 +214,16 @@ def validate(model: mmg.MmgModel, trial: Trial, *, horizon: float = 60.0, stride
         E = _errors(P, Z[idx])
         hz.update(_summary(E, valid))
     return Validation(windows=win, horizons=hz, t=t[:n_whole], measured=Z[:n_whole], predicted=pred,
-                      model_name=model.name, source=str(trial.meta.get("source", "")))
+                      model_name=model.name, source=str(trial.meta.get("source", "")),
+                      quantities=QUANTITIES, units=UNITS, method="mmg-ebm", columns=mmg.STATE_NAMES)
 
 
-def format_table(v: Validation) -> str:
-    """Plain-text table of a :class:`Validation`."""
-    rows = list(v.windows.items()) + [(f"{v.horizons['length_s']:g}-s horizons (n={v.horizons['count']})",
-                                       v.horizons)]
-    head = f"{'window':<26}" + "".join(f"{q + ' [' + UNITS[q] + ']':>22}" for q in QUANTITIES)
-    lines = [f"model {v.model_name} on {v.source}", head,
-             f"{'':<26}" + "".join(f"{'rms / max':>22}" for _ in QUANTITIES)]
-    for name, s in rows:
-        if "psi" not in s:
-            continue
-        lines.append(f"{name:<26}" + "".join(f"{s[q]['rms']:>11.3g} /{s[q]['max']:>9.3g}" for q in QUANTITIES))
-    return "\n".join(lines)
+def validate_result(result: Result, trial: Trial, *, horizon: float | None = None, **kw) -> Validation:
+    """The common entry of every method's ``validate`` module: :func:`validate` on the MMG model of
+    ``result`` (an ``identify("mmg", ...)`` result). ``trial``'s rudder must follow MMG's convention
+    (positive turns the ship to starboard). ``horizon`` defaults to :data:`DEFAULT_HORIZON`."""
+    return validate(model_from_result(result.to_dict()), trial,
+                    horizon=DEFAULT_HORIZON if horizon is None else horizon, **kw)
 
 
 def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
@@ -303,6 +255,6 @@ def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
         plt.close(fig)
 
 
-__all__ = ["validate", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",
+__all__ = ["validate", "validate_result", "DEFAULT_HORIZON", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",
            "first_step_yaw_sign", "load_model_document",
            "format_table", "plot", "horizon_starts", "QUANTITIES", "UNITS"]

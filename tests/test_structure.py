@@ -1,0 +1,323 @@
+"""Structure of the shipid package, read from the source with :mod:`ast` (nothing is imported).
+
+Checked (issue 14, targets "no import cycle; no shipid import inside a function outside cli/; no module
+importing another module's private name; no source file over 600 lines"; DESIGN "shared layers never
+import a method"):
+
+(a) no cycle among module-level imports of shipid modules;
+(b) no ``import shipid...`` / ``from shipid... import`` (absolute or relative) inside a function, and no
+    ``importlib.import_module("shipid...")`` of a literal name there either, except in ``shipid/cli/``, in a
+    method's ``cli*.py`` modules (lazy loading for start-up) and in a package's module-level ``__getattr__``
+    (PEP 562 lazy attributes, as ``shipid.__getattr__``); the plug-in look-ups of ``shipid/registry.py``
+    and ``shipid/demo.py`` (``importlib`` on names found at run time) are allowed;
+(c) no ``from shipid.x import _name`` of a module-private name defined in another module;
+(d) every source file has at most 600 lines;
+(e) the shared layers (data, estimate, models, simulate, studies, report, analysis, result, outputs,
+    progress, registry) never import ``shipid.methods`` statically (at module level or in a function).
+
+ALLOWLIST (TEMPORARY, TO BE EMPTIED BY THE LEAD AFTER MERGING): the folders that other engineers are
+restructuring in parallel (methods/masscm, monitor, dp, mmg) and the lead's report/demo_step.py are listed
+in ``PENDING`` below under the checks they still fail. An entry silences only the named check for modules
+whose dotted name starts with the prefix; nothing else is exempt. ``python tests/test_structure.py``
+prints every violation with the allowlist ignored.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PKG = SRC / "shipid"
+MAX_LINES = 600
+
+# check -> module-name prefixes still being fixed in other branches (see the module docstring).
+# The lead empties these after merging; a prefix ends with "." to mean a whole package.
+_OTHERS = ("shipid.methods.masscm.", "shipid.methods.monitor.", "shipid.methods.dp.", "shipid.methods.mmg.")
+PENDING: dict[str, tuple[str, ...]] = {
+    "cycles": (),
+    "function_imports": _OTHERS + ("shipid.report.demo_step",),
+    "private_imports": ("shipid.methods.masscm.", "shipid.methods.mmg."),
+    "file_length": ("shipid.methods.masscm.", "shipid.methods.dp.", "shipid.methods.mmg."),
+    "shared_imports_methods": ("shipid.report.demo_step",),
+}
+
+#: Modules whose ``importlib`` calls are plug-in discovery (the method registry, the demo's steps).
+PLUGIN_LOOKUPS = ("shipid.registry", "shipid.demo")
+
+SHARED = ("data", "estimate", "models", "simulate", "studies", "report", "analysis", "result", "outputs",
+          "progress", "registry")
+
+
+def _pending(check: str, module: str) -> bool:
+    return any(module == p or module.startswith(p) for p in PENDING.get(check, ()))
+
+
+def _modules() -> dict[str, Path]:
+    """Dotted module name -> file, for every ``.py`` file under ``src/shipid``."""
+    out = {}
+    for path in sorted(PKG.rglob("*.py")):
+        parts = list(path.relative_to(SRC).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = path
+    return out
+
+
+MODULES = _modules()
+TREES = {name: ast.parse(path.read_text(encoding="utf-8"), str(path)) for name, path in MODULES.items()}
+
+
+def _is_package(module: str) -> bool:
+    return MODULES[module].name == "__init__.py"
+
+
+def _base(module: str, node: ast.ImportFrom) -> str:
+    """Absolute module named by ``from X import ...`` (relative imports resolved against ``module``)."""
+    if not node.level:
+        return node.module or ""
+    package = module if _is_package(module) else module.rpartition(".")[0]
+    for _ in range(node.level - 1):
+        package = package.rpartition(".")[0]
+    return f"{package}.{node.module}" if node.module else package
+
+
+def _targets(module: str, node: ast.AST) -> list[tuple[str, str | None]]:
+    """(shipid module imported, name taken from it or None) for one import statement."""
+    out: list[tuple[str, str | None]] = []
+    if isinstance(node, ast.Import):
+        for alias in node.names:
+            if alias.name == "shipid" or alias.name.startswith("shipid."):
+                out.append((alias.name, None))
+    elif isinstance(node, ast.ImportFrom):
+        base = _base(module, node)
+        if base == "shipid" or base.startswith("shipid."):
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                # `from a.b import c` where a.b.c is a module is an edge to a.b.c
+                out.append((sub, None) if sub in MODULES else (base, alias.name))
+    return out
+
+
+def _in_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+
+
+def _module_level_imports(module: str) -> list[tuple[ast.AST, str, str | None]]:
+    """Imports executed when the module is imported (not in functions, not under TYPE_CHECKING)."""
+    out = []
+
+    def visit(body):
+        for node in body:
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                out.extend((node, t, n) for t, n in _targets(module, node))
+            elif isinstance(node, ast.If):
+                if not _in_type_checking(node):
+                    visit(node.body)
+                visit(node.orelse)
+            elif isinstance(node, (ast.Try,)):
+                visit(node.body)
+                for h in node.handlers:
+                    visit(h.body)
+                visit(node.orelse)
+                visit(node.finalbody)
+            elif isinstance(node, (ast.With, ast.ClassDef)):
+                visit(node.body)
+
+    visit(TREES[module].body)
+    return out
+
+
+def _functions(module: str):
+    """Every function of ``module`` except a package's module-level ``__getattr__`` (PEP 562)."""
+    tree = TREES[module]
+    lazy = {id(n) for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "__getattr__"} \
+        if _is_package(module) else set()
+    for fn in ast.walk(tree):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)) and id(fn) not in lazy:
+            yield fn
+
+
+def _function_imports(module: str) -> list[tuple[ast.AST, str, str | None]]:
+    """shipid imports inside functions: import statements, and ``import_module("shipid...")`` literals."""
+    out, seen = [], set()
+    for fn in _functions(module):
+        for node in ast.walk(fn):
+            if id(node) in seen:
+                continue
+            seen.add(id(node))
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                out.extend((node, t, n) for t, n in _targets(module, node))
+            elif (isinstance(node, ast.Call) and module not in PLUGIN_LOOKUPS and node.args
+                  and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)
+                  and (node.args[0].value == "shipid" or node.args[0].value.startswith("shipid."))
+                  and ast.unparse(node.func).endswith("import_module")):
+                out.append((node, node.args[0].value, None))
+    return out
+
+
+def _resolve(target: str) -> str | None:
+    """The shipid module a dotted import target lands in (the longest existing prefix)."""
+    while target and target not in MODULES:
+        target = target.rpartition(".")[0]
+    return target or None
+
+
+def _graph() -> dict[str, set[str]]:
+    graph: dict[str, set[str]] = {m: set() for m in MODULES}
+    for module in MODULES:
+        for _node, target, _name in _module_level_imports(module):
+            dest = _resolve(target)
+            if dest is None or dest == module:
+                continue
+            # a package's __init__ importing its own submodules is not a cycle by itself
+            if _is_package(module) and dest.startswith(module + "."):
+                continue
+            graph[module].add(dest)
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    comps: list[list[str]] = []
+    counter = [0]
+
+    def strong(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                strong(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                comps.append(sorted(comp))
+
+
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, 10 * len(graph)))
+    try:
+        for v in sorted(graph):
+            if v not in index:
+                strong(v)
+    finally:
+        sys.setrecursionlimit(old)
+    return comps
+
+
+def _defined_private(module: str, name: str) -> bool:
+    """True when ``name`` is private (leading underscore, not dunder) and ``module`` is a real module."""
+    return name.startswith("_") and not name.startswith("__") and module in MODULES
+
+
+def _lazy_allowed(module: str) -> bool:
+    return module == "shipid.cli" or module.startswith("shipid.cli.") or \
+        module.rpartition(".")[2].startswith("cli")
+
+
+def test_no_import_cycles():
+    comps = [c for c in _cycles(_graph()) if not all(_pending("cycles", m) for m in c)]
+    assert not comps, "import cycles:\n" + "\n".join(" <-> ".join(c) for c in comps)
+
+
+def test_no_shipid_import_inside_functions():
+    bad = []
+    for module in MODULES:
+        if _lazy_allowed(module) or _pending("function_imports", module):
+            continue
+        for node, target, _name in _function_imports(module):
+            bad.append(f"{MODULES[module].relative_to(SRC)}:{node.lineno} imports {target}")
+    assert not bad, "shipid imports inside functions:\n" + "\n".join(sorted(set(bad)))
+
+
+def test_no_private_name_imports():
+    bad = []
+    for module in MODULES:
+        if _pending("private_imports", module):
+            continue
+        for node, target, name in _module_level_imports(module) + _function_imports(module):
+            if name is not None and _defined_private(target, name) and target != module:
+                bad.append(f"{MODULES[module].relative_to(SRC)}:{node.lineno} imports {target}.{name}")
+    assert not bad, "private names imported across modules:\n" + "\n".join(sorted(set(bad)))
+
+
+def test_files_at_most_600_lines():
+    bad = []
+    for module, path in MODULES.items():
+        if _pending("file_length", module):
+            continue
+        n = len(path.read_text(encoding="utf-8").splitlines())
+        if n > MAX_LINES:
+            bad.append(f"{path.relative_to(SRC)}: {n} lines")
+    assert not bad, f"files over {MAX_LINES} lines:\n" + "\n".join(bad)
+
+
+def test_shared_layers_never_import_methods():
+    bad = []
+    for module in MODULES:
+        parts = module.split(".")
+        if len(parts) < 2 or parts[1] not in SHARED or _pending("shared_imports_methods", module):
+            continue
+        for node, target, _name in _module_level_imports(module) + _function_imports(module):
+            if target == "shipid.methods" or target.startswith("shipid.methods."):
+                bad.append(f"{MODULES[module].relative_to(SRC)}:{node.lineno} imports {target}")
+    assert not bad, "shared layers importing a method:\n" + "\n".join(sorted(set(bad)))
+
+
+# --- the checker checks itself on small made-up packages -------------------------------------------------
+
+def test_checker_resolves_relative_and_submodule_imports():
+    node = ast.parse("from .io import read_trial").body[0]
+    assert _base("shipid.data.nmea", node) == "shipid.data.io"
+    node = ast.parse("from ..errors import InputError").body[0]
+    assert _base("shipid.data.nmea", node) == "shipid.errors"
+    node = ast.parse("from . import io").body[0]
+    assert _targets("shipid.data", node) == [("shipid.data.io", None)]
+    node = ast.parse("from shipid.data import Trial").body[0]
+    assert _targets("shipid.data.io", node) == [("shipid.data", "Trial")]
+
+
+def test_checker_sees_lazy_imports_and_spares_pep562():
+    tree = ast.parse("import importlib\ndef f():\n    from shipid.data import io\n"
+                     "    return importlib.import_module('shipid.report.html')\n"
+                     "def __getattr__(name):\n    from shipid.report import html\n")
+    MODULES["shipid._probe"] = PKG / "_probe" / "__init__.py"
+    TREES["shipid._probe"] = tree
+    try:
+        found = sorted(t for _n, t, _m in _function_imports("shipid._probe"))
+    finally:
+        del MODULES["shipid._probe"], TREES["shipid._probe"]
+    assert found == ["shipid.data.io", "shipid.report.html"]
+
+
+def test_checker_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+if __name__ == "__main__":  # pragma: no cover - a quick report of every violation, allowlist ignored
+    PENDING.clear()
+    for fn in (test_no_import_cycles, test_no_shipid_import_inside_functions, test_no_private_name_imports,
+               test_files_at_most_600_lines, test_shared_layers_never_import_methods):
+        try:
+            fn()
+        except AssertionError as exc:
+            print(exc, "\n")
