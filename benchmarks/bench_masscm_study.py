@@ -41,7 +41,7 @@ from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
 from shipid.methods.masscm.estimator import MassCMOptions
-from shipid.methods.masscm.study import _prepared, draw_initial, run_one, summarise, warm_up
+from shipid.methods.masscm.study import prepared, draw_initial, run_one, summarise, warm_up
 from shipid.models.roll_reduced import THETA_NAMES, discrete_coeffs, from_moment, to_moment
 from shipid.studies.engine import run_campaign
 
@@ -72,7 +72,7 @@ def peer_run(i, seed, prep, known):
 def per_run(n1):
     warnings.simplefilter("ignore")
     with threadpool_limits(1):
-        prep, known = _prepared(0, "fishing-vessel", MassCMOptions())
+        prep, known = prepared(0, "fishing-vessel", MassCMOptions())
         for mode in ("fast", "reference"):
             run_one(0, 1, compute=mode)                 # warm caches (datasets, kernels, first-iteration moments)
         load0 = os.getloadavg()

@@ -237,14 +237,15 @@ def _build_reports(makers: dict, folder: Path) -> dict:
 
 
 def _masscm_result():
-    from shipid.methods.masscm.estimator import estimate_mass_cm
+    from shipid.methods.masscm.estimator import fit_mass_cm
+    from shipid.methods.masscm.series import with_series
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import simulate_datasets
     from shipid.vessels import load_vessel
 
     d = simulate_datasets("fishing-vessel", seed=0)
     z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
-    return estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"), z_f=z_f, cost_map=True)
+    return with_series(fit_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"), z_f=z_f), cost_map=True)
 
 
 def _spread_result():

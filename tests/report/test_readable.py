@@ -79,7 +79,8 @@ def test_a_coverage_table_published_by_the_method_module_is_used(monkeypatch):
 
 def test_demo_masscm_setting_is_one_where_the_method_works():
     """The demo's mass-cm data (white sensor noise): no warning, white equation errors, m near the truth."""
-    from shipid.methods.masscm.estimator import estimate_mass_cm
+    from shipid.methods.masscm.estimator import fit_mass_cm
+    from shipid.methods.masscm.series import with_series
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
     from shipid.methods.masscm.demo import DEMO_MASSCM_NOISE
@@ -88,8 +89,8 @@ def test_demo_masscm_setting_is_one_where_the_method_works():
 
     v = load_vessel("fishing-vessel")
     d = simulate_datasets("fishing-vessel", seed=0, noise=NoiseSpec(**DEMO_MASSCM_NOISE))
-    r = estimate_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"),
-                         z_f=float(v.value("general", "z_f")))
+    r = with_series(fit_mass_cm(list(d.items()), KnownParams.from_vessel("fishing-vessel"),
+                                z_f=float(v.value("general", "z_f"))))
     assert r.diagnostics.get("converged") and not r.diagnostics.get("warnings")
     m = r.estimates["m"]
     assert abs(m.value - float(v.value("general", "m"))) < 3 * m.std

@@ -122,55 +122,24 @@ def test_short_wavy_record_returns_finite_or_warns(kn):
         assert r.std("m") > 0.05 * M_TRUE or r.diagnostics["warnings"]
 
 
-def test_fast_inner_map_equals_reference(kn):
-    from shipid.methods.masscm.estimator import _fast_g
-    from shipid.models.roll_reduced import discrete_coeffs, to_moment
-    th = to_moment(TABLE3_TRUE)
-    conds = ["nominal", "calibration", "loaded", "loaded"]
-    Ts = np.array([0.02, 0.02, 0.02, 0.01])
-    assert np.allclose(_fast_g(th, kn, np.array([0, 1, 2, 2]), Ts),
-                       discrete_coeffs(th, kn, conds, Ts, moment=True), rtol=1e-14, atol=0)
-
-
-def test_analytic_jacobian_equals_complex_step(kn):
-    """The search's exact Jacobian of g(theta) (33) against complex-step differentiation."""
-    from shipid.methods.masscm.estimator import _fast_g, _fast_g_jac
-    from shipid.models.roll_reduced import jacobian_complex_step, to_moment
-    th = to_moment(TABLE3_TRUE)
-    code, Ts = np.array([0, 1, 2, 2]), np.array([0.02, 0.02, 0.02, 0.01])
-    J = _fast_g_jac(th, kn, code, Ts)
-    Jc = jacobian_complex_step(lambda t: _fast_g(t, kn, code, Ts), th)
-    assert J.shape == (4, 5, 9)
-    assert np.allclose(J, Jc, rtol=1e-12, atol=1e-14 * np.max(np.abs(Jc)))
-
-
 def test_fir_fast_moments_equal_general_path(clean):
     """The FIR-prefilter fast path of the IV moments (45), (39)-(41) equals instruments + lfilter + iv_compress."""
     from shipid.estimate.arma import hannan_rissanen
     from shipid.estimate.iv import iv_compress
-    from shipid.methods.masscm.estimator import _fir_moments, _instruments, _start, prepare
+    from shipid.methods.masscm.data import first_row
+    from shipid.methods.masscm.estimator import prepare
+    from shipid.methods.masscm.moments import fir_moments, instruments
     opt = MassCMOptions()
     ds = prepare(clean, opt)[2]
     rng = np.random.default_rng(5)
     L = hannan_rissanen(rng.standard_normal(ds.y.size), opt.ar_order, 0, n_long=opt.ar_order)
     y_hat = ds.y_hat0 + 1e-3 * rng.standard_normal(ds.y.size)
-    s = _start(opt)
-    ref = iv_compress(_instruments(ds, y_hat, ds.a_hat0, ds.r_hat0, L, opt), L.prefilter(ds.y)[s:],
+    s = first_row(opt)
+    ref = iv_compress(instruments(ds, y_hat, ds.a_hat0, ds.r_hat0, L, opt), L.prefilter(ds.y)[s:],
                       L.prefilter(ds.Phi)[s:])
-    new = _fir_moments(ds, L.a, y_hat, ds.a_hat0, opt)
+    new = fir_moments(ds, L.a, y_hat, ds.a_hat0, opt)
     # R is unique up to the signs of its rows: compare R^T R, R^T r and the residual part
     assert new.n == ref.n and new.rank_ok == ref.rank_ok
     assert np.allclose(new.R.T @ new.R, ref.R.T @ ref.R, rtol=1e-10, atol=1e-12 * np.abs(ref.R).max() ** 2)
     assert np.allclose(new.R.T @ new.r, ref.R.T @ ref.r, rtol=1e-10, atol=1e-12 * np.abs(ref.R.T @ ref.r).max())
     assert np.isclose(new.rss0, ref.rss0, rtol=1e-8)
-
-
-def test_scalar_map_and_jacobian_equal_vectorised(kn):
-    """The float-arithmetic g and dg/dtheta of the search equal the vectorised map (33) and its Jacobian."""
-    from shipid.methods.masscm.estimator import _fast_g, _fast_g_jac, _g_and_jac
-    from shipid.models.roll_reduced import to_moment
-    th = to_moment(TABLE3_TRUE)
-    code, Ts = np.array([0, 1, 2, 2]), np.array([0.02, 0.02, 0.02, 0.01])
-    G, J = _g_and_jac(th, kn, list(code), list(Ts), True)
-    assert np.allclose(G, _fast_g(th, kn, code, Ts), rtol=1e-14, atol=0)
-    assert np.allclose(J, _fast_g_jac(th, kn, code, Ts), rtol=1e-12, atol=1e-15 * np.abs(J).max())

@@ -8,10 +8,16 @@ import numpy as np
 import pytest
 from known.linder2015 import TABLE3_TRUE
 
-from shipid.methods.masscm.estimator import (MassCMOptions, _fir_moments_compiled, _fir_moments_numpy, _g_and_jac,
-                                   _gauss_newton, _instruments, _residual_fun, _start, initial_state, prepare)
-from shipid.methods.masscm.search import (g_and_jac, gauss_newton, known_array, levenberg_marquardt, residual,
-                                          sim_terms)
+from shipid.methods.masscm.criterion import gauss_newton as gauss_newton_reference
+from shipid.methods.masscm.criterion import residual_function
+from shipid.methods.masscm.data import first_row
+from shipid.methods.masscm.estimator import MassCMOptions, initial_state, prepare
+from shipid.methods.masscm.iteration import step_compiled
+from shipid.methods.masscm.moments import closed_loop_sim, fir_moments_compiled, fir_moments_numpy, instruments
+from shipid.methods.masscm.search import (g_and_jac, gauss_newton, known_array, levenberg_marquardt, lstsq_qr,
+                                          residual, sim_terms, spd_solve)
+from shipid.methods.masscm.step import delayed_y_columns
+from shipid.models.roll_reduced import discrete_coeffs, jacobian_complex_step
 from shipid.methods.masscm.study import run_one
 from shipid.models.roll_reduced import KnownParams, to_moment
 from shipid.models.roll_sim import simulate_datasets
@@ -45,21 +51,37 @@ def test_compiled_fir_moments_equal_numpy_and_general_path(prep):
     for ds in prep:
         L = hannan_rissanen(ds.y - ds.Phi @ np.array([-1.99, 0.99, 0.01, 0.0, 0.002]), 40, 0, n_long=40)
         y_hat = ds.y_hat0 + 1e-3 * rng.standard_normal(ds.y.size)
-        new = _fir_moments_compiled(ds, L.a, y_hat, ds.a_hat0, opt)
-        _same_moments(new, _fir_moments_numpy(ds, L.a, y_hat, ds.a_hat0, opt))
-        s = _start(opt)
-        ref = iv_compress(_instruments(ds, y_hat, ds.a_hat0, ds.r_hat0, L, opt), L.prefilter(ds.y)[s:],
+        new = fir_moments_compiled(ds, L.a, y_hat, ds.a_hat0, opt)
+        _same_moments(new, fir_moments_numpy(ds, L.a, y_hat, ds.a_hat0, opt))
+        s = first_row(opt)
+        ref = iv_compress(instruments(ds, y_hat, ds.a_hat0, ds.r_hat0, L, opt), L.prefilter(ds.y)[s:],
                           L.prefilter(ds.Phi)[s:])
         _same_moments(new, ref)
 
 
-def test_compiled_map_and_jacobian_equal_python(kn):
-    th = to_moment(TRUE)
-    code, Ts = np.array([0, 1, 2, 2]), np.array([0.02, 0.02, 0.02, 0.01])
-    G, J = g_and_jac(th, code, Ts, known_array(kn), True)
-    Gp, Jp = _g_and_jac(th, kn, list(code), list(Ts), True)
-    assert np.allclose(G, Gp, rtol=1e-14, atol=0)
-    assert np.allclose(J, Jp, rtol=1e-13, atol=1e-15 * np.abs(Jp).max())
+def test_compiled_map_equals_the_model_source(kn):
+    """The compiled map (33) of the search against its source, shipid.models.roll_reduced.discrete_coeffs."""
+    rng = np.random.default_rng(13)
+    conds = ["nominal", "calibration", "loaded", "loaded", "calibration"]
+    code = np.array([0, 1, 2, 2, 1], dtype=np.int64)
+    Ts = np.array([0.02, 0.02, 0.02, 0.01, 0.05])
+    for _ in range(50):
+        th = to_moment(TRUE * (1 + 0.3 * rng.standard_normal(9)))
+        G, _ = g_and_jac(th, code, Ts, known_array(kn), False)
+        assert np.allclose(G, discrete_coeffs(th, kn, conds, Ts, moment=True), rtol=1e-13, atol=0)
+
+
+def test_compiled_jacobian_equals_complex_step_of_the_model_source(kn):
+    """The compiled exact Jacobian of (33) against complex-step derivatives of discrete_coeffs."""
+    rng = np.random.default_rng(14)
+    conds = ["nominal", "calibration", "loaded", "loaded"]
+    code, Ts = np.array([0, 1, 2, 2], dtype=np.int64), np.array([0.02, 0.02, 0.02, 0.01])
+    for _ in range(20):
+        th = to_moment(TRUE * (1 + 0.3 * rng.standard_normal(9)))
+        _, J = g_and_jac(th, code, Ts, known_array(kn), True)
+        Jc = jacobian_complex_step(lambda t: discrete_coeffs(t, kn, conds, Ts, moment=True), th)
+        assert J.shape == (4, 5, 9)
+        assert np.allclose(J, Jc, rtol=1e-12, atol=1e-14 * np.max(np.abs(Jc)))
 
 
 def _search_problem(prep, kn, free_zf: bool):
@@ -67,7 +89,7 @@ def _search_problem(prep, kn, free_zf: bool):
     free = np.ones(9, dtype=bool)
     free[6] = free_zf
     theta = to_moment(TRUE)
-    fun, _ = _residual_fun(st, kn, free, theta, (-0.03, 0.01) if free_zf else None)
+    fun, _ = residual_function(st, kn, free, theta, (-0.03, 0.01) if free_zf else None)
     lo, hi = np.full(int(free.sum()), -np.inf), np.full(int(free.sum()), np.inf)
     lo[-1], hi[-1] = -2.0, 2.0
     return fun, theta[free], lo, hi
@@ -82,7 +104,7 @@ def test_compiled_residuals_and_gauss_newton_equal_python(prep, kn, free_zf):
     # residuals R g - r are small differences of O(|r_i|) terms: rounding relative to those terms
     assert np.allclose(r, fun(x), rtol=0, atol=1e-14 * np.abs(args[3]).max())
     assert np.allclose(J, fun.jac(x), rtol=1e-12, atol=1e-14 * np.abs(J).max())
-    ref = _gauss_newton(fun, fun.jac, x, lo, hi)
+    ref = gauss_newton_reference(fun, fun.jac, x, lo, hi)
     ok, xg = gauss_newton(x, lo, hi, *args, 20, 1e-10, 1e-9)
     assert ref is not None and ok
     assert np.allclose(xg, ref, rtol=1e-8, atol=1e-12)
@@ -122,9 +144,8 @@ def test_study_runs_reach_the_same_solution_either_way():
 
 
 def test_fused_dataset_step_equals_reference_steps(prep, kn):
-    """Steps B(b)-(c) in one compiled call equal _noise_model (AR), _closed_loop_sim and the moments."""
+    """Steps B(b)-(c) in one compiled call equal _noise_model (AR), closed_loop_sim and the moments."""
     from shipid.estimate.arma import hannan_rissanen
-    from shipid.methods.masscm.estimator import _closed_loop_sim, _step_compiled
     from shipid.models.roll_reduced import discrete_coeffs, roll_terms
     opt = MassCMOptions()
     th = to_moment(TRUE * np.array([1.02, 0.97, 1.05, 1, 1, 0.99, 1, 1.01, 1.01]))
@@ -136,19 +157,19 @@ def test_fused_dataset_step_equals_reference_steps(prep, kn):
     sims = sim_terms(th, code, Ts, known_array(kn))
     for j, name in enumerate(("A1", "d", "k1", "Kyaw", "K_delta", "z_s")):
         assert np.allclose(sims[:, j], terms[name], rtol=1e-14, atol=0), name
-    s = _start(opt)
+    s = first_row(opt)
     for i, ds in enumerate(prep):
-        L, lam, sim, mom = _step_compiled(ds, G[i], sims[i], th, i, kn, ds.y_hat0, ds.a_hat0, opt)
+        L, lam, sim, mom = step_compiled(ds, G[i], sims[i], th, i, kn, ds.y_hat0, ds.a_hat0, opt)
         Lr = hannan_rissanen((ds.y - ds.Phi @ G[i])[s:], opt.ar_order, 0, n_long=opt.ar_order)
         assert np.allclose(L.a, Lr.a, rtol=0, atol=1e-9) and np.isclose(lam, Lr.lam, rtol=1e-10)
-        yr, ar = _closed_loop_sim(ds, terms, i, kn)
+        yr, ar = closed_loop_sim(ds, terms, i, kn)
         assert np.allclose(sim[0], yr, rtol=0, atol=1e-12 * np.abs(yr).max())
         assert np.allclose(sim[1], ar, rtol=0, atol=1e-12 * np.abs(ar).max())
         # with the AR prefilter of a real residual the compressed moments are ill-conditioned (instrument
         # eigenvalues down to ~1e-11 of the largest are kept): the numpy reference itself moves by up to
         # ~1e-8 of the largest entry when the prefilter changes by the ~1e-11 rounding difference of the
         # two AR fits; hence entries compared to 1e-7 of the largest one (not elementwise)
-        ref = _fir_moments_numpy(ds, Lr.a, yr, ar, opt)
+        ref = fir_moments_numpy(ds, Lr.a, yr, ar, opt)
         assert mom.n == ref.n and mom.rank_ok == ref.rank_ok
         for x, y in ((mom.R.T @ mom.R, ref.R.T @ ref.R), (mom.R.T @ mom.r, ref.R.T @ ref.r)):
             assert np.abs(x - y).max() <= 1e-7 * np.abs(y).max()
@@ -158,7 +179,6 @@ def test_fused_dataset_step_equals_reference_steps(prep, kn):
 def test_delayed_y_columns_equal_explicit_products():
     """The delayed-y regressor columns of Z^T Phi (37) by the window shift equal the explicit products."""
     from shipid.estimate.iv import lag_matrix
-    from shipid.methods.masscm.step import _delayed_y_columns
     rng = np.random.default_rng(10)
     n, s, nls = 500, 17, np.array([16, 3, 1, 2], dtype=np.int64)
     F = np.cumsum(rng.standard_normal((4, n)), axis=1)
@@ -166,14 +186,13 @@ def test_delayed_y_columns_equal_explicit_products():
     Z = np.column_stack([lag_matrix(F[k], int(nl), s) for k, nl in enumerate(nls)])
     Sy = Z.T @ yf[s:]
     out = np.empty((Z.shape[1], 6))
-    _delayed_y_columns(F, nls, yf, Sy, s, out)
+    delayed_y_columns(F, nls, yf, Sy, s, out)
     for d, col in ((1, 0), (2, 1)):
         ref = -(Z.T @ yf[s - d:n - d])
         assert np.allclose(out[:, col], ref, rtol=0, atol=1e-12 * np.abs(ref).max())
 
 
 def test_householder_least_squares_equals_lstsq():
-    from shipid.methods.masscm.search import lstsq_qr
     rng = np.random.default_rng(11)
     J = rng.standard_normal((15, 8)) * np.logspace(0, 4, 8)        # columns of very different scale
     b = rng.standard_normal(15)
@@ -184,10 +203,9 @@ def test_householder_least_squares_equals_lstsq():
 
 
 def test_spd_solve_equals_numpy():
-    from shipid.methods.masscm.search import _spd_solve
     rng = np.random.default_rng(12)
     A = rng.standard_normal((20, 8))
     H, b = A.T @ A + 1e-3 * np.eye(8), rng.standard_normal(8)
-    ok, x = _spd_solve(H, b)
+    ok, x = spd_solve(H, b)
     assert ok and np.allclose(x, np.linalg.solve(H, b), rtol=1e-11, atol=0)
-    assert not _spd_solve(-H, b)[0]
+    assert not spd_solve(-H, b)[0]

@@ -9,9 +9,10 @@ import pytest
 from known.linder2015 import true_value
 
 from shipid.estimate.arma import ARMA
-from shipid.methods.masscm.estimator import (MassCMOptions, _build_moments, estimate_mass_cm, implausible_identifiable,
-                                   implausible_reasons, initial_state, prepare)
-from shipid.methods.masscm.series import MAX_SERIES_POINTS
+from shipid.methods.masscm.estimator import (MassCMOptions, estimate_mass_cm, fit_mass_cm, implausible_identifiable,
+                                             implausible_reasons, initial_state, prepare)
+from shipid.methods.masscm.moments import build_moments
+from shipid.methods.masscm.series import MAX_SERIES_POINTS, with_series
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 
@@ -30,8 +31,8 @@ def test_lag_moments_of_an_iir_prefilter_equal_the_explicit_instrument_matrix(co
     prep = prepare(_data(0, 60.0), opts)
     L = [ARMA(np.array([1.0, -0.5, 0.2]), np.array([1.0, 0.0, -0.99]), 1.0)] * 3
     for Ls in (L, [None] * 3, initial_state(prep, opts).L):
-        fast = _build_moments(prep, Ls, [p.y_hat0 for p in prep], [p.a_hat0 for p in prep], opts)
-        ref = _build_moments(prep, Ls, [p.y_hat0 for p in prep], [p.a_hat0 for p in prep],
+        fast = build_moments(prep, Ls, [p.y_hat0 for p in prep], [p.a_hat0 for p in prep], opts)
+        ref = build_moments(prep, Ls, [p.y_hat0 for p in prep], [p.a_hat0 for p in prep],
                              replace(opts, explicit_moments=True))
         for a, b in zip(fast, ref):
             assert a.n == b.n
@@ -40,12 +41,15 @@ def test_lag_moments_of_an_iir_prefilter_equal_the_explicit_instrument_matrix(co
             np.testing.assert_allclose(a.R.T @ a.r, b.R.T @ b.r, rtol=1e-7, atol=1e-9 * np.abs(b.R.T @ b.r).max())
 
 
-def test_stored_series_are_bounded_and_the_cost_map_is_only_built_when_asked():
+def test_report_series_are_made_on_request_only_and_bounded():
     data = _data(1, 300.0)                                     # 15 000 samples per dataset
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = estimate_mass_cm(data, KNOWN, z_f=ZF, noise_check=False)
-        r2 = estimate_mass_cm(data, KNOWN, z_f=ZF, noise_check=False, cost_map=True)
+        bare = estimate_mass_cm(data, KNOWN, z_f=ZF, noise_check=False)
+        r = with_series(fit_mass_cm(data, KNOWN, z_f=ZF, noise_check=False))
+        r2 = with_series(fit_mass_cm(data, KNOWN, z_f=ZF, noise_check=False), cost_map=True)
+    assert not {"overlays", "residuals", "contours"} & set(bare.series)       # identify does no report work
+    assert bare.value("m") == r.value("m") and bare.std("m") == r.std("m")
     for group in ("overlays", "residuals"):
         assert len(r.series[group]) == 3
         for e in r.series[group].values():

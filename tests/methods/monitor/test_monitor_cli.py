@@ -76,11 +76,11 @@ def test_bad_stream_is_one_line(stream, capsys, tmp_path):
 def test_live_panel_renders():
     from rich.console import Console
 
-    from shipid.methods.monitor.cli import _panel
+    from shipid.methods.monitor.cli import live_panel
     from shipid.methods.monitor.estimator import MonitorUpdate
 
     u = MonitorUpdate(930.0, 0.71, 0.09, -0.141, 0.018, 3.0, 0.12, False, True, 900.0, window_s=30.0, statistic=63.0)
     con = Console(file=io.StringIO(), width=100)
-    con.print(_panel(u, "s.nominal.csv"))
+    con.print(live_panel(u, "s.nominal.csv"))
     text = con.file.getvalue()
     assert "0.71" in text and "ALARM" in text and "900" in text and "m [kg]" in text and "zm_bar [m]" in text

@@ -113,7 +113,8 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     (only zm_bar and rho = m z_m/(m_c z_c) are); the tool says so.
     """
     from shipid.data.io import read_trial
-    from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, estimate_mass_cm
+    from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
+    from shipid.methods.masscm.series import with_series
 
     kn = read_known(known_path)
     datasets = []
@@ -121,10 +122,10 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
         for p in paths:
             datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
     opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
-    res = estimate_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"],
-                           z_f_prior=kn["z_f_prior"], options=opts,
-                           init="given" if kn["theta0"] is not None else "linear", cost_map=cost_map)
-    res.provenance["known"] = known_path  # inputs: a trial summary per file (shipid.methods.masscm.series)
+    fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
+                      options=opts, init="given" if kn["theta0"] is not None else "linear")
+    res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
+    res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
     d = res.to_dict()
     flat = {k: e.value for k, e in res.estimates.items()}
@@ -176,7 +177,7 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
     s["warnings"] = loud_lines([f"{s['flagged']} of {s['runs']} runs flagged implausible or not converged "
                                 "(left out of the means)"] if s["flagged"] else [])
-    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report` (issue 8)
+    if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report`
         from shipid.methods.masscm.series import spread_result
         spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
                       f"--init {init} --data-seed {data_seed} --seed {seed}").write_json(out, force=force)
@@ -195,7 +196,7 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
 @study.command("mass-cm-coverage")
 @click.option("--regime", type=click.Choice(["waves", "sensors", "both"]), required=True,
               help="waves: 0.5 deg wave roll, noise-free sensors; sensors: gyro/accelerometer noise and biases, "
-                   "no waves; both: the two (issue-3 noise).")
+                   "no waves; both: the two together.")
 @click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
 @click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
               help="Length of each of the three datasets (s).")

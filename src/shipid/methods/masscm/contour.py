@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from shipid.methods.masscm.estimator import MassCMOptions, _residual_fun, iterate, prepare
+from shipid.methods.masscm.criterion import residual_function
+from shipid.methods.masscm.estimator import MassCMOptions, iterate, prepare
 from shipid.models.roll_reduced import KnownParams, to_moment
 from shipid.models.roll_sim import simulate_datasets
 from shipid.outputs import atomic_write
@@ -27,7 +28,7 @@ def cost_grid(data_seed: int = 0, zf_mode: str = "known", n: int = 61, span_m: f
     core = iterate(prep, known, np.zeros(9), z_f=z_f, init="linear", options=MassCMOptions(noise_model="ar"))
     th = core["theta"]
     free = np.ones(9, dtype=bool)
-    fun, _ = _residual_fun(core["state"], known, free, to_moment(th), None)
+    fun, _ = residual_function(core["state"], known, free, to_moment(th), None)
     ms = th[7] * (1 + np.linspace(-span_m, span_m, n))
     zs = th[8] + np.linspace(-span_z, span_z, n)
     C = np.empty((n, n))

@@ -67,11 +67,14 @@ from __future__ import annotations
 
 import functools
 import math
+import time
 import warnings
 
 import numpy as np
 
-from shipid.models.roll_reduced import KnownParams
+from shipid.methods.masscm.crlb import crlb, true_theta
+from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
+from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
 
@@ -86,8 +89,6 @@ QUANTITIES = ("m", "zm_bar", "rho")
 
 @functools.lru_cache(maxsize=4)
 def _truth(vessel: str) -> dict:
-    from shipid.methods.masscm.crlb import true_theta
-    from shipid.models.roll_reduced import THETA_NAMES
     th = true_theta(vessel)
     known = KnownParams.from_vessel(vessel)
     z_f, m, zm = (th[THETA_NAMES.index(n)] for n in ("z_f", "m", "zm_bar"))
@@ -102,8 +103,6 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
     Returns ``m, zm_bar, rho`` and their standard errors, ``converged``, ``implausible``, ``iterations``.
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
     """
-    from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
-
     if regime not in REGIMES:
         raise ValueError(f"regime must be one of {', '.join(REGIMES)}")
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
@@ -125,7 +124,6 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
 
 def warm_up(**_kwargs) -> float:
     """Compile / load the numba kernels once (campaign ``warm_up``); returns the seconds it took."""
-    import time
     t0 = time.perf_counter()
     run_one(0, 0, regime="sensors", duration=60.0)
     return time.perf_counter() - t0
@@ -184,7 +182,6 @@ def _ratio_ci(ratio: float, n: int) -> list:
 
 def bound_for(regime: str, duration: float, vessel: str = "fishing-vessel", seed: int = 0) -> dict:
     """Bounds on ``m, zm_bar, rho`` for the regime (:func:`shipid.methods.masscm.crlb.crlb`)."""
-    from shipid.methods.masscm.crlb import crlb
     b = crlb(vessel, duration=duration, noise=REGIMES[regime], seed=seed)
     out = {k: b["bounds"][k] for k in QUANTITIES}
     out["definition"] = b.get("definition")

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from shipid.methods.masscm.estimator import estimate_mass_cm
-from shipid.methods.masscm.series import spread_series
+from shipid.methods.masscm.estimator import fit_mass_cm
+from shipid.methods.masscm.series import spread_series, with_series
 from shipid.methods.masscm.study import run_one, summarise, table3
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
@@ -27,7 +27,7 @@ def fallback(seed: int):
     d = simulate_datasets("fishing-vessel", seed=seed, noise=NoiseSpec(**DEMO_MASSCM_NOISE))
     known = KnownParams.from_vessel("fishing-vessel")
     z_f = float(load_vessel("fishing-vessel").value("general", "z_f"))
-    res = estimate_mass_cm(list(d.items()), known, z_f=z_f, cost_map=True)
+    res = with_series(fit_mass_cm(list(d.items()), known, z_f=z_f), cost_map=True)
     res.provenance.setdefault("seed", seed)
     res.provenance.setdefault("command", "shipid demo (report step: simulated fishing-vessel datasets)")
     res.provenance.setdefault(

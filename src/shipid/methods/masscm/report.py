@@ -1,12 +1,19 @@
-"""Default report section for ``mass-cm`` (Linder et al. 2015, seed 000).
+"""Report material of ``mass-cm`` results (Linder et al. 2015, seed 000).
 
-Draws, when the result carries them: the cost over (m, z̄_m) (``contours["cost"]``,
-paper Fig. 4) and the spread of the estimates over repeated runs
-(``tables["spread"]`` and ``xy["spread"]``, paper Table 3).
+Default section: draws, when the result carries them, the cost over (m, z̄_m) (``contours["cost"]``,
+paper Fig. 4) and the spread of the estimates over repeated runs (``tables["spread"]`` and ``xy["spread"]``,
+paper Table 3).
+
+:func:`enrich` makes the report series on request for a result that has none (one from
+:func:`shipid.identify` or :func:`~shipid.methods.masscm.estimator.estimate_mass_cm`, which do no report work):
+:func:`shipid.methods.masscm.series.with_series` reads the datasets again from the files the result records,
+reruns Algorithm 1, checks that it reproduces the stored m and adds the roll-rate overlays, prefiltered equation
+errors, the Fig. 4 cost map and the trial summaries.
 """
 
 from __future__ import annotations
 
+from shipid.methods.masscm.series import with_series
 from shipid.report.registry import Entry, register_section
 from shipid.report.sections._util import entries
 
@@ -28,3 +35,12 @@ def masscm_section(result) -> list:
 
 
 register_section("mass-cm", masscm_section, default=True)
+
+
+def enrich(result):
+    """``result`` with its report series made from the files it records (:func:`~shipid.methods.masscm.series.with_series`,
+    Fig. 4 map included); ``result`` itself when it has them already or records no files."""
+    return with_series(result, cost_map=True)
+
+
+__all__ = ["masscm_section", "enrich"]

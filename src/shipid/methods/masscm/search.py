@@ -6,9 +6,10 @@ Step B(a) of Algorithm 1 minimises ``sum_i ||R_i g_i(theta) - r_i||^2 / lam_i`` 
 dataset, at most 9 unknowns), so in Python the time goes into interpreter and scipy overhead, not arithmetic;
 these kernels do the same arithmetic compiled.
 
-* :func:`g_and_jac` — the map (22), (33) and its exact Jacobian, the formulas of
-  :func:`shipid.methods.masscm.estimator._g_and_jac` (tests compare them).
-* :func:`gauss_newton` — the warm-start Gauss–Newton of :func:`shipid.methods.masscm.estimator._gauss_newton`
+* :func:`g_and_jac` — the map (22), (33) and its exact Jacobian: the compiled form of
+  :func:`shipid.models.roll_reduced.discrete_coeffs` (the reference; tests compare them, and the Jacobian with
+  complex-step derivatives of it). Both paths of the estimator evaluate the map of real arguments by this kernel.
+* :func:`gauss_newton` — the warm-start Gauss–Newton of :func:`shipid.methods.masscm.criterion.gauss_newton`
   (same acceptance and convergence rules; tests compare them).
 * :func:`levenberg_marquardt` — the cold-start search of the first iteration: Levenberg–Marquardt with
   Marquardt's scaling (``diag(J^T J)``, like ``x_scale="jac"``), iterates kept strictly inside the bounds,
@@ -52,7 +53,8 @@ def _load_moment(c, m_c, zc_bar, z_f, q, zm):
 @njit(cache=True)
 def g_and_jac(th, code, Ts, kc, jac):
     """``g_i(theta)`` (33) in the moment parameterisation for condition codes (0 nominal, 1 calibration,
-    2 loaded), shape (n, 5), and when ``jac`` its Jacobian (n, 5, 9); formulas of ``masscm._g_and_jac``."""
+    2 loaded), shape (n, 5), and when ``jac`` its Jacobian (n, 5, 9): (22), (33) as in
+    :func:`shipid.models.roll_reduced.discrete_coeffs`."""
     k, A_x, d, K_r, K_v, K_d, z_f, q, zm = th[0], th[1], th[2], th[3], th[4], th[5], th[6], th[7], th[8]
     M, g, zgb, zsb, m_c, zc_bar = kc[0], kc[1], kc[2], kc[3], kc[4], kc[5]
     zg, zs = zgb + z_f, zsb + z_f
@@ -187,7 +189,7 @@ def _norm(x):
 
 
 @njit(cache=True)
-def _spd_solve(H, b):
+def spd_solve(H, b):
     """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``."""
     n = b.size
     L = np.zeros((n, n))
@@ -278,7 +280,7 @@ def lstsq_qr(J, b):
 
 @njit(cache=True)
 def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_steps, xtol, floor):
-    """Undamped Gauss–Newton of :func:`shipid.methods.masscm.estimator._gauss_newton` (``max_steps = 20``,
+    """Undamped Gauss–Newton of :func:`shipid.methods.masscm.criterion.gauss_newton` (``max_steps = 20``,
     ``xtol = 1e-10``, ``floor = 1e-9`` there), the step by :func:`lstsq_qr` (a rank-deficient Jacobian
     returns not ok, where the reference would take a minimum-norm step); returns ``(ok, x)``. No default
     arguments: numba's dispatcher takes its slow path (~0.3 ms) for omitted ones."""
@@ -346,7 +348,7 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
                     H[k, j] = 0.0
                 H[j, j] = 1.0
                 rhs[j] = 0.0
-        ok, dx = _spd_solve(H, rhs)
+        ok, dx = spd_solve(H, rhs)
         if not ok:                        # not positive definite (rounding): more damping
             mu *= nu
             nu *= 2.0
@@ -396,4 +398,4 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["sim_terms", "lstsq_qr", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+__all__ = ["sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]

@@ -1,7 +1,7 @@
-"""Report series of the mass / centre-of-mass method (Linder et al. 2015, seed 000; issue 8).
+"""Report series of the mass / centre-of-mass method (Linder et al. 2015, seed 000).
 
 Builds the :mod:`shipid.report.convention` entries that ``shipid report`` draws for a
-``mass-cm`` result, from what Algorithm 1 already computed (no extra estimation):
+``mass-cm`` result, on request (:func:`with_series`), from what Algorithm 1 computed (no extra estimation):
 
 * ``overlays["p_<condition>"]`` — measured roll rate ``p`` (record mean removed) against the
   identified model's *simulated* roll rate: the reduced roll model (18) with the final
@@ -27,11 +27,24 @@ And, for the Table-3 study (``shipid study mass-cm-sensitivity --out``),
 
 from __future__ import annotations
 
-from typing import Sequence
+import copy
+import os
+import warnings
+from typing import Mapping, Sequence
 
 import numpy as np
 
+from shipid.data.io import read_trial
+from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
+from shipid.models.roll_reduced import KnownParams
+from shipid.methods.masscm.criterion import residual_function
+from shipid.methods.masscm.data import first_row
+from shipid.methods.masscm.moments import closed_loop_sim, transient_length
+from shipid.methods.masscm.options import REQUIRED, MassCMOptions
+from shipid.models.roll_reduced import THETA_NAMES, THETA_UNITS, discrete_coeffs, roll_terms, to_moment
+from shipid.models.roll_sim import simulate_datasets
 from shipid.report.convention import contour, overlay, residual, table, trial_summary, xy
+from shipid.result import Estimate, Result
 
 #: Grid points per axis of the Fig. 4 cost map stored with every result (coarse: cheap).
 CONTOUR_N = 25
@@ -46,12 +59,9 @@ def cost_map(core: dict, known, n: int = CONTOUR_N, span_m: float = SPAN_M, span
 
     Returns ``m`` (n,), ``zm_bar`` (n,), ``cost`` (n, n) with rows over ``zm_bar``.
     """
-    from shipid.methods.masscm.estimator import _residual_fun
-    from shipid.models.roll_reduced import THETA_NAMES, to_moment
-
     th = np.asarray(core["theta"], dtype=float)
     im, iz = THETA_NAMES.index("m"), THETA_NAMES.index("zm_bar")
-    fun, _ = _residual_fun(core["state"], known, np.ones(th.size, dtype=bool), to_moment(th), None)
+    fun, _ = residual_function(core["state"], known, np.ones(th.size, dtype=bool), to_moment(th), None)
     ms = th[im] * (1 + np.linspace(-span_m, span_m, n))
     zs = th[iz] + np.linspace(-span_z, span_z, n)
     C = np.empty((n, n))
@@ -65,8 +75,6 @@ def cost_map(core: dict, known, n: int = CONTOUR_N, span_m: float = SPAN_M, span
 
 def cost_contour(core: dict, known, n: int = CONTOUR_N, *, true: tuple[float, float] | None = None) -> dict:
     """``contours["cost"]`` (paper Fig. 4) from :func:`cost_map`; ``true`` = (m, zm_bar) adds a marker."""
-    from shipid.models.roll_reduced import THETA_NAMES
-
     g = cost_map(core, known, n)
     th = np.asarray(core["theta"], dtype=float)
     pts = [{"x": float(th[THETA_NAMES.index("m")]), "y": float(th[THETA_NAMES.index("zm_bar")]),
@@ -95,9 +103,6 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
     Returns ``(overlays, residuals)`` dicts of convention entries, each series decimated by a stride to at
     most ``max_points`` samples.
     """
-    from shipid.methods.masscm.estimator import MassCMOptions, _closed_loop_sim, _start, _transient
-    from shipid.models.roll_reduced import discrete_coeffs, roll_terms
-
     conds = [ds.condition for ds in prep]
     th_q = core["theta_q"]
     terms = roll_terms(th_q, known, conds, moment=True)
@@ -109,7 +114,7 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
         count[ds.condition] = count.get(ds.condition, 0) + 1
         tag = ds.condition if count[ds.condition] == 1 else f"{ds.condition}_{count[ds.condition]}"
         t = np.arange(ds.y.size) * ds.T
-        sim = _closed_loop_sim(ds, terms, i, known)
+        sim = closed_loop_sim(ds, terms, i, known)
         k = _stride(t.size, max_points)
         if sim is not None:
             ov[f"p_{tag}"] = overlay(t[::k], (ds.y - ds.y.mean())[::k], sim[0][::k], "rad/s", kind="fit",
@@ -121,11 +126,11 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
                                            "white-noise bounds." + _every(k))
         eps = ds.y - ds.Phi @ G[i]
         opts = options if options is not None else MassCMOptions()
-        s = _start(opts)
+        s = first_row(opts)
         L = st.L[i] if st is not None and i < len(st.L) else None
         ef = L.prefilter(eps)[s:] if L is not None else eps[s:]
-        s += _transient(L, ef.size, opts)            # the prefilter's start-up, as in the moments
-        ef = ef[s - _start(opts):]
+        s += transient_length(L, ef.size, opts)            # the prefilter's start-up, as in the moments
+        ef = ef[s - first_row(opts):]
         lam = float(st.lam[i]) if st is not None and i < len(st.lam) else float("nan")
         k = _stride(ef.size, max_points)
         ef = ef[::k]
@@ -139,8 +144,6 @@ def model_overlays(core: dict, prep, known, options=None, max_points: int = MAX_
 
 def inputs(datasets: Sequence) -> list[dict]:
     """``provenance["inputs"]``: a :func:`trial_summary` per ``(condition, Trial)``."""
-    from shipid.methods.masscm.estimator import REQUIRED
-
     out = []
     for cond, tr in datasets:
         try:
@@ -155,8 +158,7 @@ def inputs(datasets: Sequence) -> list[dict]:
 def attach(result, core: dict, prep, known, options=None, datasets=None, *, contour_n: int = CONTOUR_N) -> None:
     """Add the report series (overlays, equation errors, Fig. 4 map) and input summaries to ``result``.
 
-    ``contour_n = 0`` leaves the Fig. 4 map out (report-only work; :func:`estimate_mass_cm` asks for it
-    with ``cost_map=True``).
+    ``contour_n = 0`` leaves the Fig. 4 map out (:func:`with_series` asks for it with ``cost_map=True``).
 
     Never raises: a part that fails is skipped with a warning in ``result.diagnostics["warnings"]``.
     """
@@ -187,6 +189,68 @@ def attach(result, core: dict, prep, known, options=None, datasets=None, *, cont
         prov["inputs"] = inputs(datasets)
 
 
+def with_series(fit, *, cost_map: bool = False) -> Result:
+    """A result with its report series: roll-rate overlays, prefiltered equation errors, trial summaries and,
+    with ``cost_map=True``, the Fig. 4 cost map on a :data:`CONTOUR_N` × :data:`CONTOUR_N` grid.
+
+    ``fit`` is a :class:`~shipid.methods.masscm.assemble.MassCMFit` (:func:`~shipid.methods.masscm.assemble.fit_mass_cm`;
+    its result is completed in place and returned) or a stored mass-cm :class:`~shipid.result.Result`
+    (``Result.with_series()``, ``shipid report``): then the datasets are read again from the files the result
+    records (``provenance["mass_cm_call"]``), Algorithm 1 is run with the recorded known parameters, options and
+    initialisation, and a copy of the result gets the series when that reproduces the stored m exactly (else,
+    or when a file is missing, a copy with one warning saying why; a result that records no files, or already
+    has overlays, comes back unchanged). Report work on request: ``identify`` never does it;
+    ``shipid identify mass-cm`` does it for the result it writes (``--cost-map`` adds the map).
+    """
+    if isinstance(fit, MassCMFit):
+        attach(fit.result, fit.core, fit.prep, fit.known, fit.options, fit.datasets,
+               contour_n=CONTOUR_N if cost_map else 0)
+        return fit.result
+    return _from_files(fit, cost_map)
+
+
+def _noted(result, text: str):
+    out = copy.deepcopy(result)
+    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
+    return out
+
+
+def _from_files(result, cost_map: bool):
+    """:func:`with_series` of a stored result (see there)."""
+    series = result.series if isinstance(result.series, Mapping) else {}
+    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
+    call = prov.get("mass_cm_call")
+    if result.method != "mass-cm" or series.get("overlays") or not isinstance(call, Mapping):
+        return result
+    files = call.get("files") or []
+    if not files or any(not isinstance(p, str) for _, p in files):
+        return result
+    missing = [p for _, p in files if not os.path.isfile(p)]
+    if missing:
+        return _noted(result, f"dataset file not found: {missing[0]}")
+    try:
+        datasets = [(c, read_trial(p, required=["t", *REQUIRED], method="mass-cm")) for c, p in files]
+        known = KnownParams(**(result.model or {})["known"])
+        opts = {k: v for k, v in result.diagnostics["options"].items() if k in MassCMOptions.__dataclass_fields__}
+        prior = call.get("z_f_prior")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = fit_mass_cm(datasets, known, theta0=call.get("theta0"), z_f=call.get("z_f"),
+                              z_f_prior=None if prior is None else tuple(prior), init=call.get("init"),
+                              options=MassCMOptions(**opts), noise_check=False)
+    except Exception as err:  # noqa: BLE001 - the report must still be written
+        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    if fit.result.value("m") != result.value("m"):
+        return _noted(result, f"Algorithm 1 on the recorded files gives m = {fit.result.value('m'):.6g} kg, "
+                              f"not the stored {result.value('m'):.6g} kg (files changed?)")
+    made = with_series(fit, cost_map=cost_map)
+    out = copy.deepcopy(result)
+    out.series = {**dict(series), **{k: v for k, v in made.series.items()
+                                     if k in ("overlays", "residuals", "contours")}}
+    out.provenance = {**dict(prov), "inputs": made.provenance.get("inputs", [])}
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------
 # Table 3 (sensitivity study) as a Result
 # ---------------------------------------------------------------------------------------------------
@@ -197,8 +261,6 @@ def spread_series(summary: dict, outputs: Sequence[dict | None]) -> dict:
     initial values were drawn from, and the paper's mean and std. The scatter shows every plausible
     run's ``zm_bar`` against ``m`` (one point per run).
     """
-    from shipid.models.roll_reduced import THETA_UNITS
-
     rows = []
     for n, p in summary["parameters"].items():
         lo, hi = p["bounds"]
@@ -228,9 +290,6 @@ def spread_result(summary: dict, outputs: Sequence[dict | None], *, command: str
     Estimates are the means over the plausible runs with their run-to-run std (the spread caused
     by the initial values, not a standard error of the data).
     """
-    from shipid.models.roll_reduced import THETA_UNITS
-    from shipid.result import Estimate, Result
-
     est = {n: Estimate(float(p["mean"]), float(p["std"]), THETA_UNITS.get(n, "-"), "study mean",
                        f"mean ± std over plausible runs; true {p['true']:g}, paper {p['paper_mean']:g} ± "
                        f"{p['paper_std']:g}") for n, p in summary["parameters"].items()}
@@ -243,8 +302,6 @@ def spread_result(summary: dict, outputs: Sequence[dict | None], *, command: str
     prov = {k: summary[k] for k in ("seed", "data_seed", "init", "workers") if k in summary}
     prov["study"] = "mass-cm-sensitivity (Linder et al. 2015 §5, Table 3)"
     try:  # the three synthetic datasets every run used (cheap to re-create: seeded, noise-free)
-        from shipid.models.roll_sim import simulate_datasets
-
         d = simulate_datasets("fishing-vessel", seed=int(summary.get("data_seed", 0)))
         prov["inputs"] = inputs([(c, tr) for c, tr in d.items()])
         for e in prov["inputs"]:
@@ -258,5 +315,5 @@ def spread_result(summary: dict, outputs: Sequence[dict | None], *, command: str
                   diagnostics=diag, series=spread_series(summary, outputs), provenance=prov)
 
 
-__all__ = ["CONTOUR_N", "MAX_SERIES_POINTS", "cost_map", "cost_contour", "model_overlays", "inputs", "attach", "spread_series",
+__all__ = ["CONTOUR_N", "MAX_SERIES_POINTS", "with_series", "cost_map", "cost_contour", "model_overlays", "inputs", "attach", "spread_series",
            "spread_result"]

@@ -1,19 +1,23 @@
 """One compiled (numba) pass of steps B(b)–(c) of Algorithm 1 (Linder et al. 2015) for one dataset.
 
 For the default configuration (AR noise model ``L = A(q)``, lag instruments (45)) an iteration of
-:func:`shipid.methods.masscm.estimator.iterate` does, per dataset, at the relaxed iterate ``theta_mid``:
+:func:`shipid.methods.masscm.iteration.iterate` does, per dataset, at the relaxed iterate ``theta_mid``:
 
-1. the equation error (42) ``eps = y - Phi g_i(theta_mid)``;
-2. its AR(p) noise model (least squares, :func:`shipid.estimate.arma.fit_ar`) — the prefilter (43);
-3. the closed-loop instrument simulation (46)–(47) (:func:`shipid.methods.masscm.estimator._closed_loop_sim`);
+1. the equation error (42) ``eps = y - Phi g_i(theta_mid)`` (:func:`equation_error`);
+2. its AR(p) noise model (least squares, :func:`shipid.estimate.fir_kernels.ar_fit`) — the prefilter (43);
+3. the closed-loop instrument simulation (46)–(47) (:func:`instrument_signals`, the arithmetic of
+   :func:`shipid.methods.masscm.moments.closed_loop_sim`);
 4. the IV moments ``Z^T Z``, ``Z^T [Phi, y]`` of the prefiltered instruments
-   (:func:`shipid.methods.masscm.estimator._fir_moments_compiled`).
+   (:func:`shipid.estimate.fir_kernels.fir_filter`, :func:`~shipid.estimate.fir_kernels.lag_moments` and
+   :func:`delayed_y_columns`, as :func:`shipid.methods.masscm.moments.fir_moments_compiled`).
 
-:func:`dataset_step` does all four in one compiled call (the Python and numpy overhead of the separate
-calls was a third of a run). The arithmetic is that of the functions named above (tests compare them);
-the compression of the moments (eigen-decomposition with the rank rule) stays in
-:func:`shipid.estimate.iv.iv_compress_products`. Compiled with ``cache=True``; a cache older than
-:mod:`shipid.estimate.fir_kernels` (whose functions are compiled into these) is dropped at import.
+:func:`dataset_step` chains them (tests compare it with the reference path). The compression of the moments
+(eigen-decomposition with the rank rule) stays in :func:`shipid.estimate.iv.iv_compress_products_compiled`.
+
+Compiled with ``cache=True``. No kernel here calls a compiled function of another module: numba keys a cached
+function on its own source file only, so a kernel that compiled :mod:`shipid.estimate.fir_kernels` into itself
+would keep stale code after an edit there. :func:`dataset_step` is therefore plain Python that calls the kernels
+of this module and of ``fir_kernels`` in turn, each cached against its own file.
 """
 
 from __future__ import annotations
@@ -21,30 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from shipid.estimate import fir_kernels
 from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
-
-
-def _drop_stale_cache() -> None:
-    """Remove this module's numba cache index when :mod:`shipid.estimate.fir_kernels` is newer.
-
-    numba invalidates a cached function only when its own source file changes, but the kernels here
-    compile the ``fir_kernels`` functions into themselves: after an edit there, the cached
-    :func:`dataset_step` would silently keep the old code. Deleting the stale index files makes numba
-    compile afresh (once) and write a new cache.
-    """
-    import glob
-    import os
-    try:
-        dep = os.path.getmtime(fir_kernels.__file__)
-        for f in glob.glob(os.path.join(os.path.dirname(__file__), "__pycache__", "masscm_step.*.nbi")):
-            if os.path.getmtime(f) < dep:
-                os.remove(f)
-    except OSError:                     # read-only tree, a concurrent worker removed it first: harmless
-        pass
-
-
-_drop_stale_cache()
 
 
 @njit(cache=True)
@@ -81,7 +62,7 @@ def _mean(x):
 
 
 @njit(cache=True, fastmath={"reassoc", "contract"})
-def _delayed_y_columns(F, nls, yf, Sy, s, ZtP):
+def delayed_y_columns(F, nls, yf, Sy, s, ZtP):
     """Columns 0, 1 of ``Z^T Phi`` (37): ``-sum_t F[k, t-i] yf[t-d]``, ``d = 1, 2``, ``t = s .. n-1``.
 
     Moving the window back by ``d`` samples turns them into the y column ``Sy[(k, i-d)]`` plus edge terms:
@@ -120,29 +101,10 @@ def _delayed_y_columns(F, nls, yf, Sy, s, ZtP):
 
 
 @njit(cache=True)
-def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
-    """Steps B(b)–(c) for one dataset; see the module docstring.
-
-    Parameters
-    ----------
-    y : (n,) output (roll rate); PhiT : (5, n) regressors (37) transposed; g_mid : (5,) ``g_i(theta_mid)``.
-    s : first instrument row (:func:`shipid.methods.masscm.estimator._start`); p : AR order.
-    X : (8, n) work array whose rows 2..7 hold the iterate-independent signals of
-        :func:`shipid.methods.masscm.estimator._fir_moments_compiled` (rows 0, 1 are overwritten).
-    nls : (4,) lags (n_y, n_as, n_r, n_delta).
-    r_hat0, delta : black-box yaw rate (44) and the (mean-removed) rudder.
-    sim : ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]`` of dataset i (``roll_terms`` at theta_mid).
-    y_hat, a_hat : the previous instrument signals (kept when the model is unstable).
-
-    Returns
-    -------
-    status : 0 ok; 1 the AR normal equations are not positive definite or the residual is constant
-        (the caller redoes this dataset on the reference path).
-    stable : whether the closed-loop simulation was done (else ``y_hat``, ``a_hat`` are the inputs).
-    a, lam : AR polynomial and innovation variance; y_hat, a_hat; ZtZ, ZtP : the IV moments.
-    """
+def equation_error(y, PhiT, g_mid, s):
+    """Equation error (42) ``y_t - Phi_t^T g_mid`` for ``t = s .. n-1``, mean removed and scaled by its std
+    (the normalisation of :func:`shipid.estimate.arma.fit_ar`); returns ``(e, scale)``."""
     n = y.size
-    # (42) equation error at theta_mid, and its AR(p) model (fit_ar: mean removed, scaled by the std)
     e = np.empty(n - s)
     for t in range(s, n):
         v = y[t]
@@ -155,16 +117,22 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat)
         e[t] -= mu
         var += e[t] * e[t]
     scale = np.sqrt(var / e.size)
-    empty = np.zeros((0, 0))
-    if not (np.isfinite(scale) and scale > 0.0) or e.size <= 2 * p:
-        return 1, False, np.zeros(p + 1), 0.0, y_hat, a_hat, empty, empty
-    for t in range(e.size):
-        e[t] /= scale
-    ok, a, s2 = ar_fit(e, p)
-    if not ok:
-        return 1, False, a, 0.0, y_hat, a_hat, empty, empty
-    lam = s2 * scale * scale
-    # (46)-(47) closed-loop instruments
+    if np.isfinite(scale) and scale > 0.0:
+        for t in range(e.size):
+            e[t] /= scale
+    return e, scale
+
+
+@njit(cache=True)
+def instrument_signals(sim, r_hat0, delta, y_hat, a_hat, X):
+    """Closed-loop instruments (46)–(47) and rows 0, 1 of the work array ``X``; returns ``(stable, y_hat, a_hat)``.
+
+    ``sim = [A1, d, k1, Kyaw, K_delta, z_s, g, U, T]``: with ``v'`` neglected in (20),
+    ``(A1 s^2 + d s + k1) phi = Kyaw r + K_delta delta`` and ``a_s = z_s p' + g phi - U r``, discretised by the
+    bilinear transform; ``r`` is the black-box yaw rate (44). An unstable model keeps the given ``y_hat``,
+    ``a_hat``. ``X[0]`` is ``y_hat``, ``X[1]`` the difference ``a_hat_t - a_hat_{t-2}``, both mean removed.
+    """
+    n = r_hat0.size
     A1, d, k1, Kyaw, Kd, zs, g, U, T = sim[0], sim[1], sim[2], sim[3], sim[4], sim[5], sim[6], sim[7], sim[8]
     stable = A1 > 0 and d > 0 and k1 > 0
     if stable:
@@ -173,7 +141,6 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat)
         y_hat = _iir2(b1, a1, u)
         b2, a2 = _bilinear(zs, 0.0, g, A1, d, k1, T)
         a_hat = _iir2(b2, a2, u) - U * r_hat0
-    # iterate-dependent instrument signals: y_hat and the difference of a_hat, mean removed
     my = _mean(y_hat)
     for t in range(n):
         X[0, t] = y_hat[t] - my
@@ -184,16 +151,55 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat)
     md = _mean(X[1])
     for t in range(n):
         X[1, t] -= md
-    Fl = fir_filter(a, X)
-    # products with the measured columns of (37) and y (rows 4..7 of Fl); the two delayed-y columns
-    # follow from the y column by the window shift (see _delayed_y_columns)
-    ZtZ, ZtT = lag_moments(Fl[:4], nls, Fl[4:8], s)
+    return stable, y_hat, a_hat
+
+
+@njit(cache=True)
+def instrument_products(Fl, nls, ZtT, s):
+    """``Z^T Phi`` (37) from ``Z^T [Phi_2.., y]`` (``ZtT``, by :func:`~shipid.estimate.fir_kernels.lag_moments`
+    of the measured columns and y, rows 4..7 of the filtered ``Fl``): the two delayed-y columns by
+    :func:`delayed_y_columns`, the others copied."""
     ZtP = np.empty((ZtT.shape[0], 6))
-    _delayed_y_columns(Fl, nls, Fl[7], ZtT[:, 3], s, ZtP)
+    delayed_y_columns(Fl, nls, Fl[7], ZtT[:, 3], s, ZtP)
     for c in range(4):
         for r in range(ZtT.shape[0]):
             ZtP[r, 2 + c] = ZtT[r, c]
-    return 0, stable, a, lam, y_hat, a_hat, ZtZ, ZtP
+    return ZtP
 
 
-__all__ = ["dataset_step"]
+def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
+    """Steps B(b)–(c) for one dataset; see the module docstring.
+
+    Parameters
+    ----------
+    y : (n,) output (roll rate); PhiT : (5, n) regressors (37) transposed; g_mid : (5,) ``g_i(theta_mid)``.
+    s : first instrument row (:func:`shipid.methods.masscm.data.first_row`); p : AR order.
+    X : (8, n) work array whose rows 2..7 hold the iterate-independent signals of
+        :func:`shipid.methods.masscm.moments.work_arrays` (rows 0, 1 are overwritten).
+    nls : (4,) lags (n_y, n_as, n_r, n_delta).
+    r_hat0, delta : black-box yaw rate (44) and the (mean-removed) rudder.
+    sim : ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]`` of dataset i (``roll_terms`` at theta_mid).
+    y_hat, a_hat : the previous instrument signals (kept when the model is unstable).
+
+    Returns
+    -------
+    status : 0 ok; 1 the AR normal equations are not positive definite or the residual is constant
+        (the caller redoes this dataset on the reference path).
+    stable : whether the closed-loop simulation was done (else ``y_hat``, ``a_hat`` are the inputs).
+    a, lam : AR polynomial and innovation variance; y_hat, a_hat; ZtZ, ZtP : the IV moments.
+    """
+    e, scale = equation_error(y, PhiT, g_mid, s)
+    empty = np.zeros((0, 0))
+    if not (np.isfinite(scale) and scale > 0.0) or e.size <= 2 * p:
+        return 1, False, np.zeros(p + 1), 0.0, y_hat, a_hat, empty, empty
+    ok, a, s2 = ar_fit(e, p)
+    if not ok:
+        return 1, False, a, 0.0, y_hat, a_hat, empty, empty
+    lam = s2 * scale * scale
+    stable, y_hat, a_hat = instrument_signals(sim, r_hat0, delta, y_hat, a_hat, X)
+    Fl = fir_filter(a, X)
+    ZtZ, ZtT = lag_moments(Fl[:4], nls, Fl[4:8], s)
+    return 0, stable, a, lam, y_hat, a_hat, ZtZ, instrument_products(Fl, nls, ZtT, s)
+
+
+__all__ = ["dataset_step", "equation_error", "instrument_signals", "instrument_products", "delayed_y_columns"]

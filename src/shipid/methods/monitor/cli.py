@@ -91,7 +91,7 @@ def _header(fh, label: str) -> list[str]:
             return out
 
 
-def _panel(u, nominal_label: str):
+def live_panel(u, nominal_label: str):
     from rich.markup import escape
     from rich.table import Table
 
@@ -182,7 +182,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
                 click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
                            f"detector T = {u.statistic:.3g} > {opts.threshold:g})", err=True)
             if live is not None:
-                live.update(_panel(u, Path(nominal).name))
+                live.update(live_panel(u, Path(nominal).name))
             else:
                 click.echo(json.dumps(u.to_json()))
                 sys.stdout.flush()

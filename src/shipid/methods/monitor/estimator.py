@@ -213,7 +213,7 @@ class MassCMMonitor:
     known : KnownParams
         ``U, M, zg_bar, m_c, zc_bar, zs_bar, g`` (§4.3).
     z_f : float
-        Known centre of rotation (m); without it ``m`` is not identifiable (ERRATA, issue 3).
+        Known centre of rotation (m); without it ``m`` is not identifiable (ERRATA).
     options : MonitorOptions
 
     Use :meth:`feed` with chunks of samples (any length); it returns the updates completed by them.

@@ -1,4 +1,4 @@
-"""HTML report of a monitoring run: the JSON lines of ``shipid monitor mass-cm`` (issue 18).
+"""HTML report of a monitoring run: the JSON lines of ``shipid monitor mass-cm``.
 
 One self-contained page: m(t), zm_bar(t) and rho(t) with their ±2 std bands, the detector statistic with
 its threshold, the alarms and the located change times, and the truth when the stream was simulated
@@ -14,7 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from shipid.errors import InputError
+from shipid.errors import InputError, OutputExistsError
+from shipid.methods.monitor.estimator import MonitorOptions
+from shipid.models.roll_reduced import KnownParams
+from shipid.report.figures import new_figure, to_data_uri
+from shipid.simulate.masscm_stream import truth_at
 
 _KEYS = ("t", "m", "m_std", "zm_bar", "zm_bar_std", "rho", "rho_std", "converged", "alarm", "change_at")
 
@@ -63,7 +67,6 @@ def summary(ups: list[dict], truth: dict | None, settle: float = 300.0) -> dict:
     located = [u["change_at"] for u in ups if u["alarm"]]
     out = {"updates": len(ups), "t_end": float(t[-1]), "alarms": alarms, "located": located}
     if truth is not None:
-        from shipid.simulate.masscm_stream import truth_at
         ca = truth.get("change_at")
         out["true_change_at"] = ca
         out["false_alarms"] = [a for a in alarms if ca is None or a <= ca]
@@ -82,8 +85,6 @@ def summary(ups: list[dict], truth: dict | None, settle: float = 300.0) -> dict:
 
 def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
     """m, zm_bar, rho with ±2 std bands and the detector statistic against stream time."""
-    from shipid.report.figures import new_figure
-
     fig = new_figure(height=8.0)
     axs = fig.subplots(4, 1, sharex=True)
     t = _col(ups, "t")
@@ -91,12 +92,10 @@ def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
     located = sorted({u["change_at"] for u in ups if u["alarm"]})
     tt = None
     if truth is not None:
-        from shipid.simulate.masscm_stream import truth_at
         tt = np.linspace(0.0, float(np.nanmax(t)), 2000)
         mt, zt = truth_at(truth, tt)
         kn_rho = None
         try:
-            from shipid.models.roll_reduced import KnownParams
             kn = KnownParams.from_vessel(truth.get("vessel", "fishing-vessel"))
             zf = float(truth["z_f"])
             kn_rho = mt * (zt + zf) / (kn.m_c * (kn.zc_bar + zf))
@@ -137,10 +136,6 @@ def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
 def write_monitor_report(jsonl: str | Path, out: str | Path, *, truth_path: str | Path | None = None,
                          force: bool = False) -> Path:
     """Write the HTML page of a monitoring run (atomically; an existing ``out`` needs ``force``)."""
-    from shipid.errors import OutputExistsError
-    from shipid.methods.monitor.estimator import MonitorOptions
-    from shipid.report.figures import to_data_uri
-
     out = Path(out)
     if out.exists() and not force:
         raise OutputExistsError(str(out))

@@ -17,6 +17,7 @@ import numpy as np
 
 from shipid.methods.monitor.estimator import MonitorOptions, run_monitor
 from shipid.models.roll_reduced import KnownParams
+from shipid.models.roll_sim import NoiseSpec
 from shipid.simulate.masscm_stream import StreamSpec, simulate_stream, truth_at
 from shipid.vessels import load_vessel
 
@@ -30,7 +31,6 @@ def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: fl
     (the same wave roll, noise-free sensors: the case where the AR(40) prefilter of the offline
     estimator is known to fail, :mod:`shipid.methods.masscm.estimator` "Known limitations").
     """
-    from shipid.models.roll_sim import NoiseSpec
 
     spec_noise = {"issue3": NoiseSpec.issue3(), "waves-only": NoiseSpec(wave_roll_deg=0.5)}[noise]
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])

@@ -1,0 +1,222 @@
+"""IV moments of one iteration of Algorithm 1 (Linder et al. 2015, eqs. 43–47).
+
+For each dataset: the closed-loop instrument signals (46)–(47), the instrument matrix (45) of prefiltered lags
+of ``y_hat`` and of the differences ``mu_hat``, the prefiltered regressors (37), and their products
+``Z^T Z``, ``Z^T [Phi, y]`` compressed by :func:`shipid.estimate.iv.iv_compress_products` (the criterion (40)
+as ``||R g - r||^2``). Three equivalent ways (tests compare them): the explicit instrument matrix
+(:func:`instruments`, the reference), the lag structure without forming ``Z`` for any prefilter
+(:func:`filtered_lag_moments`), and for a FIR prefilter ``L = A(q)`` (the AR noise model) the numpy
+(:func:`fir_moments_numpy`) or compiled (:func:`fir_moments_compiled`, :mod:`shipid.estimate.fir_kernels`) path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import lfilter
+
+from shipid.estimate.fir_kernels import fir_filter, lag_moments
+from shipid.estimate.iv import iv_compress, iv_compress_products, lag_gram, lag_matrix
+from shipid.methods.masscm.data import Dataset, diff2, first_row
+from shipid.methods.masscm.options import MassCMOptions
+from shipid.models.roll_reduced import KnownParams, bilinear_tf
+
+def instruments(ds: Dataset, y_hat, a_hat, r_hat, L, options: MassCMOptions) -> np.ndarray:
+    """Instrument matrix (45): prefiltered lags of ``y_hat`` and of ``mu_hat`` (differences)."""
+    base = np.column_stack([y_hat, diff2(a_hat), diff2(r_hat), diff2(ds.delta)])
+    base = base - base.mean(axis=0)
+    if L is not None:
+        base = L.prefilter(base)
+    s = first_row(options)
+    if options.instruments == "regressors":
+        # Young's refined / optimal IV: the prefiltered noise-free regressors (37) themselves
+        return np.column_stack([-base[s - 1:-1, 0], -base[s - 2:-2, 0], base[s:, 1], base[s:, 2], base[s:, 3]])
+    return np.column_stack([lag_matrix(base[:, 0], options.n_y, s), lag_matrix(base[:, 1], options.n_as, s),
+                            lag_matrix(base[:, 2], options.n_r, s), lag_matrix(base[:, 3], options.n_delta, s)])
+
+
+def closed_loop_sim(ds: Dataset, terms: dict, i: int, known: KnownParams) -> tuple[np.ndarray, np.ndarray] | None:
+    """Noise-free instrument signals (46)–(47) for dataset i, or None if the model is unstable.
+
+    With ``v'`` neglected in (20), ``a_s = z_s p' + g phi - U r`` and (18) gives
+    ``(A1 s^2 + d s + k1) phi = (K_r + U B) r + K_delta delta``; ``r`` is the iteration-0 black-box
+    simulation. This is (46)–(47) written with physical coefficients (``G/(1 - G F_y)``, ``F_y = z_s s + g/s``).
+    """
+    A1, d, k1 = terms["A1"][i], terms["d"][i], terms["k1"][i]
+    if not (A1 > 0 and d > 0 and k1 > 0):
+        return None
+    u = terms["Kyaw"][i] * ds.r_hat0 + terms["K_delta"][i] * ds.delta
+    b, a = bilinear_tf([1.0, 0.0], [A1, d, k1], ds.T)
+    y_hat = lfilter(b, a, u)
+    b2, a2 = bilinear_tf([terms["z_s"][i], 0.0, known.g], [A1, d, k1], ds.T)
+    a_hat = lfilter(b2, a2, u) - known.U * ds.r_hat0
+    return y_hat, a_hat
+
+
+def fir_moments(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for a FIR prefilter ``L = A(q)`` (the AR noise model), lag instruments.
+
+    ``options.compute == "fast"``: :func:`fir_moments_compiled`; ``"reference"``: :func:`fir_moments_numpy`.
+    Both equal the general path of :func:`build_moments` to rounding (tests).
+    """
+    if options.compute == "fast":
+        return fir_moments_compiled(ds, a, y_hat, a_hat, options)
+    return fir_moments_numpy(ds, a, y_hat, a_hat, options)
+
+
+def fir_moments_compiled(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """:func:`fir_moments_numpy` by the compiled kernels of :mod:`shipid.estimate.fir_kernels`.
+
+    The eight distinct signals (``y_hat``, ``mu_hat`` of a_s, the iterate-independent ``mu_hat`` of r and
+    the rudder difference, the three measured differences of (37) and ``y``) are filtered by one call
+    (:func:`~shipid.estimate.fir_kernels.fir_filter`); the delayed-``y`` columns of (37) are the delayed
+    filtered ``y``; ``Z^T Z`` and ``Z^T [Phi, y]`` come from :func:`~shipid.estimate.fir_kernels.lag_moments`
+    without forming ``Z``. The compression (eigen-decomposition with the rank rule) is the same function.
+    """
+    s = first_row(options)
+    n = ds.y.size
+    X, nls = work_arrays(ds, options)
+    X[0] = y_hat - y_hat.mean()
+    da = diff2(a_hat)
+    X[1] = da - da.mean()
+    Fl = fir_filter(np.ascontiguousarray(a, dtype=float), X)
+    T = np.empty((6, n))                     # Phi columns (37) then y, prefiltered
+    T[0, 0], T[0, 1:] = 0.0, -Fl[7, :-1]      # the filter commutes with the delay
+    T[1, :2], T[1, 2:] = 0.0, -Fl[7, :-2]
+    T[2:] = Fl[4:]
+    ZtZ, ZtP = lag_moments(Fl[:4], nls, T, s)
+    return iv_compress_products(ZtZ, ZtP, n - s)
+
+
+def work_arrays(ds: Dataset, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dataset work array of the compiled moments: rows 2..7 the iterate-independent signals
+    (``mu_hat`` of the black-box r (44), the rudder difference, both mean-removed; the measured differences
+    of (37); ``y``), rows 0, 1 overwritten per call; and the lags ``(n_y, n_as, n_r, n_delta)``."""
+    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
+    key = ("work", nls)
+    if key not in ds.cache:
+        dr0, dd = diff2(ds.r_hat0), diff2(ds.delta)
+        X = np.empty((8, ds.y.size))
+        X[0:2] = 0.0
+        X[2], X[3] = dr0 - dr0.mean(), dd - dd.mean()
+        X[4:7] = ds.Phi[:, 2:].T
+        X[7] = ds.y
+        ds.cache[key] = (X, np.array(nls, dtype=np.int64))
+    return ds.cache[key]
+
+
+def fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for a FIR prefilter ``L = A(q)``, lag instruments, in numpy (reference).
+
+    The same quantities as the general path of :func:`build_moments` (``instruments`` + prefilter +
+    :func:`iv_compress`), arranged for speed: the iterate-independent columns are kept per dataset,
+    each of the ten signals is filtered once by ``np.convolve`` (what ``lfilter`` does for a FIR
+    filter), and the instrument matrix is built transposed and contiguous (one ``Z^T Z`` product).
+    """
+    s = first_row(options)
+    n = ds.y.size
+    c = ds.cache
+    if "dr0" not in c:
+        dr0, dd = diff2(ds.r_hat0), diff2(ds.delta)
+        c["dr0"], c["dd"] = dr0 - dr0.mean(), dd - dd.mean()
+        c["PhiT"] = np.ascontiguousarray(ds.Phi.T)
+    da = diff2(a_hat)
+    sig = [y_hat - y_hat.mean(), da - da.mean(), c["dr0"], c["dd"], None, None, *c["PhiT"][2:], ds.y]
+    filt = np.empty((len(sig), n))
+    for k, x in enumerate(sig):
+        if x is not None:
+            filt[k] = np.convolve(a, x)[:n]
+    # Phi columns 0, 1 are -y delayed by 1, 2 samples (37): the filter commutes with the delay
+    filt[4, 0], filt[4, 1:] = 0.0, -filt[9, :-1]
+    filt[5, :2], filt[5, 2:] = 0.0, -filt[9, :-2]
+    m = n - s
+    blocks, h, nls = [], [], []
+    for k, nl in enumerate((options.n_y, options.n_as, options.n_r, options.n_delta)):
+        if nl:
+            blocks.append(np.lib.stride_tricks.sliding_window_view(filt[k, s - nl + 1:], m)[::-1])
+            h.append(filt[k, s - 1 - np.arange(nl)])
+            nls.append(nl)
+    ZT = np.concatenate(blocks, axis=0)                       # (n_z, m): row j = lag of one signal
+    P = filt[4:, s:]                                          # Phi columns then y, prefiltered
+    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(nls)), ZT @ P.T, m)
+
+
+def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for any prefilter ``L`` (or none), lag instruments, without forming ``Z``.
+
+    The same quantities as the explicit path (:func:`instruments`, prefilter, transient drop
+    :func:`transient_length`, :func:`iv_compress`; tests compare them): the ten signals are prefiltered once
+    (``lfilter``, from rest), the two delayed-``y`` columns of (37) are the delayed filtered ``y`` (the filter
+    commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag structure
+    (:func:`shipid.estimate.fir_kernels.lag_moments` when ``compute == "fast"``, else
+    :func:`shipid.estimate.iv.lag_gram`). Cost O(n n_z) per dataset and no n × n_z matrix, which is
+    what keeps long records linear in time and bounded in memory.
+    """
+    s = first_row(options)
+    n = ds.y.size
+    da = diff2(a_hat)
+    X, _nls = work_arrays(ds, options)
+    X = X.copy()
+    X[0] = y_hat - y_hat.mean()
+    X[1] = da - da.mean()
+    F = lfilter(L.a, L.c, X, axis=1) if L is not None else X          # = L.prefilter of each row
+    T = np.empty((6, n))
+    T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
+    T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
+    T[2:] = F[4:]
+    s2 = s + transient_length(L, n - s, options)
+    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
+    if options.compute == "fast":
+        ZtZ, ZtP = lag_moments(np.ascontiguousarray(F[:4]), np.array(nls, dtype=np.int64), T, s2)
+        return iv_compress_products(ZtZ, ZtP, n - s2)
+    m = n - s2
+    blocks, h, used = [], [], []
+    for k, nl in enumerate(nls):
+        if nl:
+            blocks.append(np.lib.stride_tricks.sliding_window_view(F[k, s2 - nl + 1:], m)[::-1])
+            h.append(F[k, s2 - 1 - np.arange(nl)])
+            used.append(nl)
+    ZT = np.concatenate(blocks, axis=0)
+    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(used)), ZT @ T[:, s2:].T, m)
+
+
+def build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
+    s = first_row(options)
+    mom = []
+    for ds, Li, yh, ah in zip(prep, L, y_hats, a_hats):
+        if Li is not None and Li.c.size == 1 and Li.c[0] == 1.0 and options.instruments == "lags":
+            mom.append(fir_moments(ds, Li.a, yh, ah, options))
+            continue
+        if options.instruments == "lags" and options.explicit_moments is False:
+            mom.append(filtered_lag_moments(ds, Li, yh, ah, options))
+            continue
+        Z = instruments(ds, yh, ah, ds.r_hat0, Li, options)
+        if Li is not None:
+            yf = Li.prefilter(ds.y)[s:]
+            Pf = Li.prefilter(ds.Phi)[s:]
+        else:
+            yf, Pf = ds.y[s:], ds.Phi[s:]
+        k = transient_length(Li, yf.size, options)
+        mom.append(iv_compress(Z[k:], yf[k:], Pf[k:]))
+    return mom
+
+
+def transient_length(L, n: int, options: MassCMOptions) -> int:
+    """Samples to drop while the prefilter's start-up transient decays (*).
+
+    ``lfilter`` starts from rest; the slowly decaying response to the signals' offsets (the record's
+    mean roll rate, the constant of a gyro bias) is not orthogonal to the slow instruments and biases
+    the estimate when the prefilter has poles near 1 (as ``1/(1 - c q^-2)`` and wave-noise models do).
+    We drop the samples until the slowest pole has decayed to ``options.transient_tol``, at most
+    ``options.transient_max`` of the record.
+    """
+    if L is None or L.c.size <= 1:
+        return 0
+    r = float(np.max(np.abs(np.roots(L.c))))
+    if r <= 0:
+        return 0
+    k = int(np.ceil(np.log(options.transient_tol) / np.log(min(r, 1 - 1e-9))))
+    return int(min(k, options.transient_max * n))
+
+
+__all__ = ["instruments", "closed_loop_sim", "fir_moments", "fir_moments_compiled", "fir_moments_numpy",
+           "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]
