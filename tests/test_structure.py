@@ -34,12 +34,14 @@ MAX_LINES = 600
 
 # check -> module-name prefixes still being fixed in other branches (see the module docstring).
 # The lead empties these after merging; a prefix ends with "." to mean a whole package.
-_OTHERS = ("shipid.methods.masscm.", "shipid.methods.monitor.", "shipid.methods.dp.", "shipid.methods.mmg.")
 PENDING: dict[str, tuple[str, ...]] = {
     "cycles": (),
-    "function_imports": _OTHERS,
-    "private_imports": ("shipid.methods.masscm.", "shipid.methods.mmg."),
-    "file_length": ("shipid.methods.masscm.", "shipid.methods.dp.", "shipid.methods.mmg."),
+    # mmg.estimator.select_structure / identify call cv_fast and manoeuvres, which build on the
+    # estimator's fit and FitConfig: a real two-way dependency, broken only by moving the selection
+    # out of the estimator module.
+    "function_imports": ("shipid.methods.dp.", "shipid.methods.mmg.estimator"),
+    "private_imports": (),
+    "file_length": ("shipid.methods.dp.",),
     "shared_imports_methods": (),
 }
 

@@ -50,6 +50,9 @@ from shipid.estimate.arma import hannan_rissanen
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams, discrete_coeffs, jacobian_complex_step
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
+from shipid.models.roll import imu_outputs, params_from_vessel, simulate_zoh
+from shipid.models.roll_reduced import bilinear_tf
+from shipid.methods.masscm.crlb_kf import crlb_kf
 
 CONDS = ("nominal", "calibration", "loaded")
 
@@ -102,8 +105,6 @@ def equation_error_spectrum(vessel="fishing-vessel", *, fs: float = 50.0, noise:
     Biases add a constant, orthogonal to the mean-removed instruments, and do not enter. Returns per condition
     ``phi_v`` (``n_fft``,) with ``E|V_k|^2 / N = phi_v[k]`` (white noise of variance s^2: ``phi_v = s^2``).
     """
-    from shipid.models.roll import imu_outputs, params_from_vessel, simulate_zoh
-    from shipid.models.roll_reduced import bilinear_tf
 
     v = load_vessel(vessel)
     th = true_theta(vessel)
@@ -173,7 +174,6 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
     if method not in ("kf", "spectrum", "ar"):
         raise ValueError("method must be 'kf', 'spectrum' or 'ar'")
     if method == "kf":
-        from shipid.methods.masscm.crlb_kf import crlb_kf
         return crlb_kf(vessel, duration=duration, fs=fs, delta_amp=delta_amp, noise=noise, seed=seed,
                        n_rudder=n_datasets_per_condition, nuisance=nuisance)
     n = int(round(duration * fs))

@@ -70,6 +70,7 @@ from shipid.models.roll import params_from_vessel, state_space
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams, bilinear_tf, roll_terms
 from shipid.models.roll_sim import NoiseSpec, rudder_prbs
 from shipid.vessels import load_vessel
+from shipid.models.roll_reduced import jacobian_complex_step
 
 CONDS = ("nominal", "calibration", "loaded")
 #: the free unknowns of (30) with z_f known
@@ -406,7 +407,6 @@ def crlb_kf(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.
 
     Same return layout as :func:`shipid.methods.masscm.crlb.crlb` (``bounds``, ``names``, ``covariance``).
     """
-    from shipid.models.roll_reduced import jacobian_complex_step
 
     fi = fisher_information(vessel, duration=duration, fs=fs, delta_amp=delta_amp, noise=noise, seed=seed,
                             n_rudder=n_rudder, nuisance=nuisance, floor=floor)

@@ -71,6 +71,9 @@ from shipid.estimate.smoothers import rts_smoother
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config  # noqa: F401
 from shipid.models import mmg
 from shipid.result import Estimate, Result
+from shipid.methods.mmg.validate import trial_inputs
+from shipid.methods.mmg.kernels import kinematic_filter_smoother
+from shipid.methods.mmg.validate import validate
 
 # ----------------------------------------------------------------------------- step 1
 MEAS = ("x", "y", "psi", "u", "v", "r")
@@ -156,7 +159,6 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled:
     :func:`~shipid.estimate.cd_ekf.cd_ekf` and :func:`~shipid.estimate.smoothers.rts_smoother`.
     """
     trial.require(list(MEAS) + ["delta", "n"], method="identify mmg")
-    from shipid.methods.mmg.validate import trial_inputs
 
     z = np.stack([trial[c] for c in MEAS], axis=-1)
     z[:, 2] = np.unwrap(z[:, 2])                       # heading continuous: no wrap in the innovations
@@ -173,7 +175,6 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled:
     out = None
     try:
         if compiled:
-            from shipid.methods.mmg.kernels import kinematic_filter_smoother
             out = kinematic_filter_smoother(t, z, Q, R, x0, P0)
         if out is None:
             fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
@@ -361,7 +362,6 @@ def horizon_score(rms: Mapping[str, float]) -> float:
 def horizon_sse(model: mmg.MmgModel, trials: Sequence[Trial], horizon: float = 60.0,
                 decimate: int = 1) -> dict[str, tuple[float, int]]:
     """``{"psi" | "pos": (sum of horizon-weighted squared RMS, horizon count)}`` for pooling."""
-    from shipid.methods.mmg.validate import validate
 
     se = {"psi": 0.0, "pos": 0.0}
     n = 0

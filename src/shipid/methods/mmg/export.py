@@ -31,6 +31,7 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
+from shipid.data.io import write_trial
 
 #: Suffix of the predicted channels.
 PRED_SUFFIX = "_pred"
@@ -112,7 +113,6 @@ def diverged_from(t: np.ndarray, P: np.ndarray) -> float | None:
 def write_prediction(validation, trial: Trial, path: str | Path, *, rudder_sign: int = 1,
                      force: bool = False) -> tuple[Path, Trial]:
     """Write :func:`prediction_trial` as CSV or Parquet (by extension), atomically; no clobbering without ``force``."""
-    from shipid.data.io import write_trial
 
     pt = prediction_trial(validation, trial, rudder_sign=rudder_sign)
     units = {k: v for k, v in pt.meta["units_out"].items() if k == "t" or pt.units.get(k) != v}

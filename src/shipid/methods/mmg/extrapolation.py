@@ -43,6 +43,7 @@ from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates import CANDIDATES
 from shipid.methods.mmg.zigzag import execute_index, kvlcc2_autopilot
 from shipid.models import mmg
+from shipid.methods.mmg.study import zigzag_overshoots
 
 TRAIN = ("HSVA_CPMC_KVLCC2_Z_10_01.dat", "HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_10_10_P.dat",
          "HSVA_CPMC_KVLCC2_Z_10_10_S.dat", "HSVA_CPMC_KVLCC2_Z_15_01.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat")
@@ -89,7 +90,6 @@ def replay(model: mmg.MmgModel, tr) -> dict[str, Any]:
 def cross_validate(cands: Mapping[str, Mapping] | None = None, *, root: Path | None = None,
                    progress=None) -> dict[str, dict]:
     """Fit every candidate on :data:`TRAIN`, score it on :data:`VALIDATE` (module docstring)."""
-    from shipid.methods.mmg.study import zigzag_overshoots
 
     cands = candidates() if cands is None else cands
     prior = mmg.load_published("kvlcc2_hsva", root)

@@ -50,6 +50,7 @@ import numpy as np
 from shipid.errors import InputError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.simulate.metrics import turning_metrics, zigzag_metrics
+from shipid.methods.mmg.validate import model_from_result
 
 #: Quantiles of the band (the ±2-std probabilities of a normal).
 BAND = (2.275, 97.725)
@@ -176,7 +177,6 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
            speed: float | None = None, rps: float | None = None, rudder_rate_deg_s: float | None = None,
            dt: float = 0.1) -> dict[str, Any]:
     """All criteria of the module docstring for the MODEL.json dict ``result``."""
-    from shipid.methods.mmg.validate import model_from_result
 
     if samples < 0:
         raise InputError(f"--samples must be >= 0, got {samples}")

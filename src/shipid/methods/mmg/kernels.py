@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from shipid.estimate.cd_ekf import LOG2PI
+from shipid.estimate.linalg import check_positive_definite
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -413,7 +414,6 @@ def kinematic_filter_smoother(t: np.ndarray, z: np.ndarray, Q: np.ndarray, R: np
         The innovation covariance or the filtered covariance (checked every 50th sample and at
         the last) is not positive definite; the message is the reference's.
     """
-    from shipid.estimate.linalg import check_positive_definite
 
     c = np.ascontiguousarray
     t = c(t, dtype=float)

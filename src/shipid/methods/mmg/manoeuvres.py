@@ -38,6 +38,8 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.models import mmg
+from shipid.data.io import read_trial
+from shipid.simulate.model import ShipModel
 
 #: Rudder limit (rad) of the manoeuvres (35° hard over, MSC.137(76) 4.2.1).
 RUDDER_LIMIT = np.deg2rad(35.0)
@@ -166,7 +168,6 @@ def recorded_conditions(d: Mapping[str, Any]) -> dict[str, Any] | None:
     runs = (d.get("provenance") or {}).get("training_runs") or []
     from pathlib import Path
 
-    from shipid.data.io import read_trial
     trials = []
     for r in runs:
         f = r.get("file") if isinstance(r, Mapping) else None
@@ -231,7 +232,6 @@ def rudder_turn_sign(model: mmg.MmgModel, cond: Conditions) -> float:
 
 def ship_model(model: mmg.MmgModel, cond: Conditions):
     """:class:`shipid.simulate.model.ShipModel` of an identified MMG model in calm water at ``cond``."""
-    from shipid.simulate.model import ShipModel
 
     def outputs(t, X, U):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],

@@ -20,6 +20,10 @@ from typing import Mapping
 import numpy as np
 
 from shipid.report.render import short_path
+from shipid.data.io import read_trial
+from shipid.report.convention import overlay, signal, trial_summary
+from shipid.methods.mmg import validate as V
+from shipid.models import mmg
 
 #: (channel, label, unit) of the overlays, in the MMG state order [x, y, ψ, u, v, r].
 OVERLAY_CHANNELS = (("psi", "heading ψ", "rad"), ("r", "yaw rate r", "rad/s"), ("u", "surge speed u", "m/s"),
@@ -32,7 +36,6 @@ def _runs(prov: Mapping) -> list:
 
 
 def _read(path: str, prov: Mapping):
-    from shipid.data.io import read_trial
 
     tr = read_trial(path, fmt=prov.get("format"), channel_map=prov.get("channels"), trim_empty_rows=True,
                     interpolate_gaps=1.0, method="shipid report")
@@ -56,7 +59,6 @@ def enrich(result):
     have_overlays = bool(series.get("overlays"))
     if have_inputs and have_overlays:
         return result
-    from shipid.report.convention import overlay, signal, trial_summary
 
     inputs, overlays, signals, notes = [], {}, {}, []
     model = None
@@ -78,8 +80,6 @@ def enrich(result):
         if have_overlays:
             continue
         try:
-            from shipid.methods.mmg import validate as V
-            from shipid.models import mmg
 
             if model is None:
                 model = V.model_from_result(result.to_dict())

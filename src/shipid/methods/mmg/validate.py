@@ -30,6 +30,7 @@ from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
 from shipid.result import Result
+from shipid.outputs import atomic_write
 
 QUANTITIES = ("psi", "r", "u", "v", "pos")
 UNITS = {"psi": "deg", "r": "deg/s", "u": "m/s", "v": "m/s", "pos": "m"}
@@ -231,7 +232,6 @@ def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from shipid.outputs import atomic_write
 
     fig = plt.figure(figsize=(11, 7))
     ax = fig.add_subplot(1, 2, 1)
