@@ -75,6 +75,8 @@ def test_free_zf_is_reported_as_not_identifiable(clean, kn):
     assert r.diagnostics["z_f_mode"] == "free"
     assert math.isinf(r.std("z_f"))
     assert "NOT identifiable" in r.estimates["m"].note
+    assert r.estimates["m"].status == r.estimates["z_f"].status == "not determined"   # labelled, not an estimate
+    assert r.estimates["zm_bar"].status == "estimated" and r.estimates["rho"].status == "derived"
     assert any("not identifiable" in w for w in r.diagnostics["warnings"])
     assert abs(r.value("zm_bar") - ZM_TRUE) < 0.01 * abs(ZM_TRUE)      # still identifiable
 

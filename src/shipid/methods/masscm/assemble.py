@@ -222,18 +222,23 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
             continue
         s = std.get(n, float("inf"))
         note = ""
+        status = "estimated"
         if n == "m":
             note = m_note
+            if zf_mode == "free":
+                status = "not determined"
         elif n == "z_f" and zf_mode == "free":
             note = "not structurally identifiable (any z_f fits exactly); value is where the search stopped"
             s = float("inf")
+            status = "not determined"
         elif n in ("k", "A_x", "K_vdot", "K_r") and zf_mode == "free":
             note = "depends on the unidentified z_f; std conditional on z_f"
+            status = "not determined"
         elif n in ("K_vdot", "K_r", "K_delta"):
             note = ("weakly determined: with sensor noise the IV estimate has a finite-sample bias that can "
                     "exceed this std on short records (it shrinks with record length; module docstring, "
                     "'Known limitations'); m, zm_bar and rho are not affected")
-        est[n] = Estimate(float(theta[k]), s, THETA_UNITS[n], "estimated", note)
+        est[n] = Estimate(float(theta[k]), s, THETA_UNITS[n], status, note)
     est["rho"] = Estimate(float(rho), rho_std, "-", "derived",
                           "rho = m z_m/(m_c z_c), identifiable (invariant along the z_f family)")
     est["dm_dzf"] = Estimate(float(slope), float("nan"), "kg/m", "derived",
