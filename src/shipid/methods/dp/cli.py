@@ -7,15 +7,25 @@
 
 from __future__ import annotations
 
+import json
 import time
+from dataclasses import replace
+from pathlib import Path
 
 import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
 from shipid.cli._common import loud, strict_option
-from shipid.cli.campaign_cmds import campaign_options
-from shipid.errors import ShipidError
+from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
+from shipid.data.io import read_trial
+from shipid.errors import OutputExistsError, ShipidError
+from shipid.methods.dp.coverage import summarise
+from shipid.methods.dp.estimator import DPOptions, identify_dp
+from shipid.methods.dp.plot import plot_parameter_histories
+from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
+from shipid.models.dp import THETA_MEANING, THETA_NAMES, dp_vessel
+from shipid.vessels import load_vessel
 
 #: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
 REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
@@ -55,16 +65,12 @@ class _ManyValues(click.Option):
 
 
 def _read(paths, kind):
-    from shipid.data.io import read_trial
-
     if not paths:
         raise ShipidError(f"no {kind} trials given (--{kind} FILE [FILE ...])")
     return [read_trial(p, required=REQUIRED, manoeuvre=f"dp-{kind}") for p in paths]
 
 
 def _print_table(result, theta_true=None) -> None:
-    from shipid.models.dp import THETA_MEANING, THETA_NAMES
-
     head = f"{'param':8s} {'meaning':32s} {'estimate':>11s} {'std':>10s}"
     if theta_true is not None:
         head += f" {'true':>11s} {'error %':>8s} {'err/std':>8s}"
@@ -123,12 +129,6 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
     each processes its trials in parallel (N >= 1) and freezes what the previous found.
     Example: shipid identify dp --surge s1.csv s2.csv --sway-yaw y1.csv y2.csv --azimuth a1.csv a2.csv
     """
-    from dataclasses import replace
-
-    from shipid.methods.dp.estimator import DPOptions, identify_dp
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     v = dp_vessel(load_vessel(vessel))
     trials = {k: _read(p, k) for k, p in (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}
     opt = DPOptions()
@@ -144,10 +144,6 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
 
 
 def _check_outputs(out, plot, force):
-    from pathlib import Path
-
-    from shipid.errors import OutputExistsError
-
     for p in (out, plot):
         if p is not None and Path(p).exists() and not force:
             raise OutputExistsError(p)
@@ -158,7 +154,6 @@ def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
     if out is not None:
         res.write_json(out, force=force)
     if plot is not None:
-        from shipid.methods.dp.plot import plot_parameter_histories
         plot_parameter_histories(res, plot, force=force)
     if as_json:
         click.echo(res.to_json())
@@ -184,11 +179,6 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     disturbances: earth-fixed current 0.3 m/s, a drifting bias, white force noise;
     sensors: position 0.5 m, heading 0.25 deg (1 sigma), 1 Hz. Prints true vs estimated.
     """
-    from shipid.methods.dp.estimator import identify_dp
-    from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     if seed < 0:
         raise ShipidError(f"--seed must be >= 0, got {seed}")
     if duration < 60 or n_trials < 1:
@@ -221,12 +211,6 @@ def study_dp_coverage(runs, duration, covariance, as_json, campaign):
     factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
     of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
     """
-    import json
-    from dataclasses import replace
-
-    from shipid.cli.campaign_cmds import echo_campaign_summary
-    from shipid.methods.dp.coverage import summarise
-
     if duration < 60:
         raise ShipidError("--duration must be >= 60 s")
     res = replace(campaign, progress=not as_json).run(

@@ -39,6 +39,11 @@ import time
 
 import numpy as np
 
+from shipid.methods.dp.estimator import DPOptions, identify_dp
+from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
+from shipid.models.dp import dp_vessel
+from shipid.vessels import load_vessel
+
 #: Noise scales drawn per realisation (separately for measurement and process noise).
 SCALES = (0.5, 1.0, 2.0)
 #: Nominal levels of the study's simulated trials (see the module docstring).
@@ -51,19 +56,12 @@ BIAS_TAU = 1800.0
 
 def study_noise(s_m: float, s_p: float):
     """The :class:`TrialNoise` of one realisation with measurement scale ``s_m``, process scale ``s_p``."""
-    from shipid.methods.dp.trials import TrialNoise
-
     return TrialNoise(sigma_pos=SIGMA_POS * s_m, sigma_psi=float(np.deg2rad(SIGMA_PSI_DEG)) * s_m,
                       q_h=Q_H * s_p ** 2, q_b=0.0, b0=B0 * s_p, bias_tau=BIAS_TAU)
 
 
 def run_one(i: int, seedseq, duration: float = 1200.0, trials: int = 2, covariance: str = "observed") -> dict:
     """One realisation (campaign-engine task): simulate, identify, compare with the truth."""
-    from shipid.methods.dp.estimator import DPOptions, identify_dp
-    from shipid.methods.dp.trials import simulate_dp_trials
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     rng = np.random.default_rng(seedseq)
     s_m = float(rng.choice(SCALES))
     s_p = float(rng.choice(SCALES))
@@ -124,8 +122,18 @@ def summarise(outputs: list[dict | None]) -> dict:
 
 
 def warm_up(**_) -> None:
-    """Compile (or load) the likelihood kernels once before the runs."""
-    import shipid.methods.dp.loglik  # noqa: F401
+    """Compile (or load from numba's cache) the likelihood kernels in this process before the runs.
+
+    One call of each kernel of :mod:`shipid.methods.dp.loglik` on a three-sample track, so the
+    first realisation's ``seconds`` is not the compilation.
+    """
+    from shipid.methods.dp.loglik import momentum_loglik, surge_loglik  # numba: kept out of CLI start-up
+
+    n = 3
+    dt = np.ones(n - 1)
+    momentum_loglik(np.zeros((n, 3)), dt, np.zeros((n, 3)), np.eye(3), np.eye(3), -np.eye(3), np.full(3, 1e-8),
+                    np.full(3, 1e-10), np.full(3, 1e-4), np.zeros(9), np.eye(9))
+    surge_loglik(np.zeros(n), dt, np.zeros(n), 1.0, -0.03, 1e-8, 1e-10, 1e-4, np.zeros(3), np.eye(3))
 
 
 __all__ = ["SCALES", "study_noise", "run_one", "summarise", "warm_up"]
