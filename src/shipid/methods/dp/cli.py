@@ -228,13 +228,16 @@ def study_dp_coverage(runs, duration, covariance, as_json, campaign):
                f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
                f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
     click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "
-               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'no std':>6s} {'unreliable':>10s}")
+               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'in band':>11s} {'no std':>6s} "
+               f"{'unreliable':>10s}")
     for nm, p in s["parameters"].items():
+        band = f"{p['within_band']}/{s['ok']} {p['band_pct']:.0f}%"
         click.echo(f"  {nm:8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
                    f"{p['rms_error_over_std']:9.2f} {p['mean_rel_error_pct']:9.2f} {p['rms_rel_error_pct']:9.2f} "
-                   f"{p['max_abs_rel_error_pct']:9.2f} {p['no_std']:6d} {p['std_unreliable']:10d}")
+                   f"{p['max_abs_rel_error_pct']:9.2f} {band:>11s} {p['no_std']:6d} {p['std_unreliable']:10d}")
     if "pooled" in s:
         p = s["pooled"]
         click.echo(f"  {'pooled':8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
-                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {p['no_std']:6d}")
-    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses)")
+                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {'':11s} {p['no_std']:6d}")
+    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses;"
+               " 'in band': |error| within the band)")
