@@ -89,15 +89,15 @@ def test_identify_dp_prints_noise_and_an_unsettled_scheme(trial_files, capsys, m
     """Text output: the estimated noise levels; a scheme that has not settled is printed and its std marked."""
     from dataclasses import replace
 
-    import shipid.methods.dp.pem as pem
+    import shipid.methods.dp.estimator as estimator
 
-    real = pem.pem_stage
+    real = estimator.pem_stage        # the name the estimator calls (imported from shipid.methods.dp.pem)
 
     def stalls_in_si2(lik, *a, **k):
         out = real(lik, *a, **k)
         return replace(out, settled=False) if lik.kind == "momentum" and len(a[1]) == 6 else out
 
-    monkeypatch.setattr(pem, "pem_stage", stalls_in_si2)
+    monkeypatch.setattr(estimator, "pem_stage", stalls_in_si2)
     _, files = trial_files
     assert main(_args(files)) == 0
     cap = capsys.readouterr()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from shipid.methods.dp.estimator import DPOptions, run_stage
-from shipid.methods.dp.coverage import SCALES, study_noise
+from shipid.methods.dp.coverage import ACCURACY_BAND, SCALES, study_noise, summarise
 from shipid.methods.dp.trials import simulate_dp_trial
 from shipid.models import dp
 from shipid.vessels import load_vessel
@@ -57,7 +57,6 @@ def test_si2_std_cover_the_error_with_unknown_noise(supply):
 @pytest.mark.slow
 def test_full_pipeline_coverage_campaign():
     """12 realisations of the whole study (six 1200-s trials each) through the campaign engine."""
-    from shipid.methods.dp.coverage import summarise
     from shipid.studies.engine import run_campaign
 
     # two workers (CI has two cores); the engine's results do not depend on the number of workers
@@ -68,3 +67,17 @@ def test_full_pipeline_coverage_campaign():
     assert 0.6 <= s["pooled"]["rms_error_over_std"] <= 1.5
     for p in s["parameters"].values():
         assert p["cover_2sd"] >= 0.65
+
+
+def test_summary_counts_errors_within_the_accuracy_band():
+    """``within_band`` counts |relative error| ≤ 10 % (θ3: 25 %) per θ; a run that failed is not counted."""
+    rel = np.array([[0.05] * 9, [0.12] * 9, [-0.2] * 9, [0.3] * 9])
+    outs = [{"error_sigma": [0.5] * 9, "relative_error": r.tolist(), "status": ["estimated"] * 9,
+             "settled": {"SI1": True}, "seconds": 1.0} for r in rel] + [None]
+    s = summarise(outs)
+    assert s["ok"] == 4 and s["failed"] == 1
+    for j in range(9):
+        p = s["parameters"][f"theta{j + 1}"]
+        assert p["band_pct"] == pytest.approx(100 * ACCURACY_BAND[j])
+        assert p["within_band"] == (3 if j == 2 else 1)  # θ3: 5, 12 and -20 % (not 30 %); the rest: 5 % only
+        assert p["mean_abs_rel_error_pct"] == pytest.approx(100 * np.mean(np.abs(rel[:, j])))

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from shipid.methods.dp import estimator as m
+from shipid.methods.dp.stage_models import prepare
 from shipid.methods.dp.pem import StageLikelihood
 from shipid.methods.dp.trials import simulate_dp_trial
 from shipid.models.dp import dp_vessel
@@ -31,7 +32,7 @@ def test_loglik_equals_augmented_ekf_with_fixed_theta(supply, name, kind, free):
     theta = supply.theta * np.array([1.1, 0.9, 1.0, 1.2, 0.95, 1.05, 0.9, 1.1, 1.05])
     opt = m.DPOptions(passes=1, covariance="ekf", theta0_std=tuple([1e-12] * 9))
     ref = m.run_stage(name, trials, supply, theta, opt, free=free)
-    data = [m._prepare(t, supply, kind) for t in trials]
+    data = [prepare(t, supply, kind) for t in trials]
     lik = StageLikelihood(kind, data, supply, m.DPOptions())
     a = np.zeros(len(lik.noise_names))
     assert -lik.nll(theta, a) == pytest.approx(ref.ekf.loglik, rel=1e-9)

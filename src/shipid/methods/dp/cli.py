@@ -7,15 +7,25 @@
 
 from __future__ import annotations
 
+import json
 import time
+from dataclasses import replace
+from pathlib import Path
 
 import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
 from shipid.cli._common import ManyValues, emit, loud, out_options, refuse_existing, strict_option
-from shipid.cli.campaign_cmds import campaign_options
+from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
+from shipid.data.io import read_trial
 from shipid.errors import ShipidError
+from shipid.methods.dp.coverage import summarise
+from shipid.methods.dp.estimator import DPOptions, identify_dp
+from shipid.methods.dp.plot import plot_parameter_histories
+from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
+from shipid.models.dp import THETA_MEANING, THETA_NAMES, dp_vessel
+from shipid.vessels import load_vessel
 
 #: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
 REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
@@ -24,16 +34,12 @@ REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
 
 
 def _read(paths, kind):
-    from shipid.data.io import read_trial
-
     if not paths:
         raise ShipidError(f"no {kind} trials given (--{kind} FILE [FILE ...])")
     return [read_trial(p, required=REQUIRED, manoeuvre=f"dp-{kind}") for p in paths]
 
 
 def _print_table(result, theta_true=None) -> None:
-    from shipid.models.dp import THETA_MEANING, THETA_NAMES
-
     head = f"{'param':8s} {'meaning':32s} {'estimate':>11s} {'std':>10s}"
     if theta_true is not None:
         head += f" {'true':>11s} {'error %':>8s} {'err/std':>8s}"
@@ -90,12 +96,6 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
     each processes its trials in parallel (N >= 1) and freezes what the previous found.
     Example: shipid identify dp --surge s1.csv s2.csv --sway-yaw y1.csv y2.csv --azimuth a1.csv a2.csv
     """
-    from dataclasses import replace
-
-    from shipid.methods.dp.estimator import DPOptions, identify_dp
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     v = dp_vessel(load_vessel(vessel))
     trials = {k: _read(p, k) for k, p in (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}
     opt = DPOptions()
@@ -113,7 +113,6 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
 def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
     loud(res, trials=trials)
     if plot is not None:
-        from shipid.methods.dp.plot import plot_parameter_histories
         plot_parameter_histories(res, plot, force=force)
     emit(res, as_json=as_json, out=out, force=force, text=lambda: _print_table(res, theta_true))
 
@@ -134,11 +133,6 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     disturbances: earth-fixed current 0.3 m/s, a drifting bias, white force noise;
     sensors: position 0.5 m, heading 0.25 deg (1 sigma), 1 Hz. Prints true vs estimated.
     """
-    from shipid.methods.dp.estimator import identify_dp
-    from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     if seed < 0:
         raise ShipidError(f"--seed must be >= 0, got {seed}")
     if duration < 60 or n_trials < 1:
@@ -171,10 +165,6 @@ def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign)
     factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
     of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
     """
-    from dataclasses import replace
-
-    from shipid.methods.dp.coverage import summarise
-
     if duration < 60:
         raise ShipidError("--duration must be >= 60 s")
     res = replace(campaign, progress=not as_json).run(
@@ -189,20 +179,22 @@ def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign)
 
 
 def _coverage_table(res, s: dict, covariance: str, seed: int) -> None:
-    from shipid.cli.campaign_cmds import echo_campaign_summary
 
     echo_campaign_summary(res)
     click.echo(f"dp-coverage: {s['ok']} realisations (seed {seed}), covariance {covariance}, "
                f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
                f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
     click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "
-               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'no std':>6s} {'unreliable':>10s}")
+               f"{'mean err%':>9s} {'RMS err%':>9s} {'max|err|%':>9s} {'in band':>11s} {'no std':>6s} "
+               f"{'unreliable':>10s}")
     for nm, p in s["parameters"].items():
+        band = f"{p['within_band']}/{s['ok']} {p['band_pct']:.0f}%"
         click.echo(f"  {nm:8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
                    f"{p['rms_error_over_std']:9.2f} {p['mean_rel_error_pct']:9.2f} {p['rms_rel_error_pct']:9.2f} "
-                   f"{p['max_abs_rel_error_pct']:9.2f} {p['no_std']:6d} {p['std_unreliable']:10d}")
+                   f"{p['max_abs_rel_error_pct']:9.2f} {band:>11s} {p['no_std']:6d} {p['std_unreliable']:10d}")
     if "pooled" in s:
         p = s["pooled"]
         click.echo(f"  {'pooled':8s} {p['cover_1sd']:9.2f} {p['cover_2sd']:9.2f} {p['cover_2sd_all']:8.2f} "
-                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {p['no_std']:6d}")
-    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses)")
+                   f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {'':11s} {p['no_std']:6d}")
+    click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses;"
+               " 'in band': |error| within the band)")

@@ -31,6 +31,21 @@ the figure was 0.917 over the estimates with a std and 0.866 counting the 12 wit
 now settle with a finite std. Same seed-2 realisations with ``--covariance ekf`` (the EKF's
 P_θθ with assumed noise): pooled ±2-std coverage 0.72, RMS of error/std 2.24, 10 of 24 with
 an unsettled scheme.
+
+Accuracy against the paper's procedure (``covariance="ekf"``: the EKF's estimate with the noise
+levels assumed), the same 24 realisations of seed 4: mean |error| % of θ1…θ9 1.35 2.56 19.2
+2.17 1.10 0.38 1.22 1.08 0.91 (default) vs 1.33 3.51 27.0 4.64 1.49 0.43 1.90 1.42 0.88 (ekf);
+within the band (10 %, θ3 25 %) 24 23 17 24 24 24 24 24 24 vs 24 22 14 22 23 24 23 24 24 of 24.
+θ3's stated std is 8–37 % of its value (median 23 % at measurement scale 2), so its 25 % band
+is about one std on the noisiest data: 6 of the 7 realisations outside it have a noise scale
+of 2 and |error|/std 1.4–1.8; the seventh (scales 0.5/1) is 2.6 std off, and 27 % with ekf.
+
+Fresh seed 5 (the 24 realisations of ``--runs 24 --seed 5``, one worker, nothing chosen on it):
+pooled ±2-std coverage 0.963 (±1 std 0.68), per θ 0.917–1.00, RMS of error/std 0.97 pooled,
+0.70 (θ6, 0.698)–1.12 per θ, no unsettled scheme. Mean |error| % 1.22 2.74 17.0 1.99 0.88 0.28
+1.05 0.81 0.80 vs 1.35 4.25 22.2 5.35 1.30 0.29 1.21 2.04 0.93 with ekf; within the band 24 24
+17 23 24 24 24 24 24 vs 24 20 15 21 24 24 24 24 24 of 24 (θ4 10.7 % at 3.3 std once; the seven
+θ3 misses all have a noise scale of 2, |error|/std 0.8–2.0).
 """
 
 from __future__ import annotations
@@ -39,8 +54,16 @@ import time
 
 import numpy as np
 
+from shipid.methods.dp.estimator import DPOptions, identify_dp
+from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
+from shipid.models.dp import dp_vessel
+from shipid.vessels import load_vessel
+from shipid.methods.dp.loglik import momentum_loglik, surge_loglik
+
 #: Noise scales drawn per realisation (separately for measurement and process noise).
 SCALES = (0.5, 1.0, 2.0)
+#: Accuracy band of issue 15 for each θ (|relative error| within 10 %, the weak coupling θ3 within 25 %).
+ACCURACY_BAND = (0.10, 0.10, 0.25, 0.10, 0.10, 0.10, 0.10, 0.10, 0.10)
 #: Nominal levels of the study's simulated trials (see the module docstring).
 SIGMA_POS = 0.5
 SIGMA_PSI_DEG = 0.2
@@ -51,19 +74,12 @@ BIAS_TAU = 1800.0
 
 def study_noise(s_m: float, s_p: float):
     """The :class:`TrialNoise` of one realisation with measurement scale ``s_m``, process scale ``s_p``."""
-    from shipid.methods.dp.trials import TrialNoise
-
     return TrialNoise(sigma_pos=SIGMA_POS * s_m, sigma_psi=float(np.deg2rad(SIGMA_PSI_DEG)) * s_m,
                       q_h=Q_H * s_p ** 2, q_b=0.0, b0=B0 * s_p, bias_tau=BIAS_TAU)
 
 
 def run_one(i: int, seedseq, duration: float = 1200.0, trials: int = 2, covariance: str = "observed") -> dict:
     """One realisation (campaign-engine task): simulate, identify, compare with the truth."""
-    from shipid.methods.dp.estimator import DPOptions, identify_dp
-    from shipid.methods.dp.trials import simulate_dp_trials
-    from shipid.models.dp import dp_vessel
-    from shipid.vessels import load_vessel
-
     rng = np.random.default_rng(seedseq)
     s_m = float(rng.choice(SCALES))
     s_p = float(rng.choice(SCALES))
@@ -91,7 +107,8 @@ def summarise(outputs: list[dict | None]) -> dict:
 
     Coverage and RMS are over the estimates that have a std (an unsettled scheme whose Hessian
     is not positive definite reports none: counted in ``no_std``); ``cover_2sd_all`` counts
-    those as not covered.
+    those as not covered. ``within_band``: realisations whose |relative error| is within
+    :data:`ACCURACY_BAND` (``band_pct``).
     """
     ok = [o for o in outputs if o is not None]
     n = len(ok)
@@ -113,6 +130,9 @@ def summarise(outputs: list[dict | None]) -> dict:
             "mean_rel_error_pct": float(100 * np.mean(rel[:, j])),
             "rms_rel_error_pct": float(100 * np.sqrt(np.mean(rel[:, j] ** 2))),
             "max_abs_rel_error_pct": float(100 * np.max(np.abs(rel[:, j]))),
+            "mean_abs_rel_error_pct": float(100 * np.mean(np.abs(rel[:, j]))),
+            "band_pct": 100 * ACCURACY_BAND[j],
+            "within_band": int(np.sum(np.abs(rel[:, j]) <= ACCURACY_BAND[j])),
             "std_unreliable": int(unrel[:, j].sum())}
     e = es[fin]
     out["pooled"] = {"cover_1sd": float(np.mean(np.abs(e) <= 1.0)), "cover_2sd": float(np.mean(np.abs(e) <= 2.0)),
@@ -124,8 +144,17 @@ def summarise(outputs: list[dict | None]) -> dict:
 
 
 def warm_up(**_) -> None:
-    """Compile (or load) the likelihood kernels once before the runs."""
-    import shipid.methods.dp.loglik  # noqa: F401
+    """Compile (or load from numba's cache) the likelihood kernels in this process before the runs.
+
+    One call of each kernel of :mod:`shipid.methods.dp.loglik` on a three-sample track, so the
+    first realisation's ``seconds`` is not the compilation.
+    """
+
+    n = 3
+    dt = np.ones(n - 1)
+    momentum_loglik(np.zeros((n, 3)), dt, np.zeros((n, 3)), np.eye(3), np.eye(3), -np.eye(3), np.full(3, 1e-8),
+                    np.full(3, 1e-10), np.full(3, 1e-4), np.zeros(9), np.eye(9))
+    surge_loglik(np.zeros(n), dt, np.zeros(n), 1.0, -0.03, 1e-8, 1e-10, 1e-4, np.zeros(3), np.eye(3))
 
 
-__all__ = ["SCALES", "study_noise", "run_one", "summarise", "warm_up"]
+__all__ = ["ACCURACY_BAND", "SCALES", "study_noise", "run_one", "summarise", "warm_up"]

@@ -9,14 +9,9 @@ Decoupled identification (Fig. 4), each scheme a parallel state-augmented EKF (e
   from the full momentum model eqs. 35–38 with θ1, θ6 frozen;
 * **SI3** (azimuth trials): θ9 = K6 with θ1 … θ8 frozen.
 
-Trial data are converted to the bis system (eqs. 26–28): ``t'' = t / sqrt(L/g)``,
-``x'' = x / L``, ``y'' = y / L``; the pitch ratios become the control vector of eq. 5.
-Measured are position and heading (eqs. 44–45).
-
-Surge measurement (a reading of eq. 32 for real trials): eq. 32 needs the distance run
-along the ship's x axis. It is computed from the position fixes as
-``s_k = Σ_j (Δx_j cos ψ̄_j + Δy_j sin ψ̄_j)`` (ψ̄_j the mean measured heading over the step),
-which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ + ẏ sin ψ = u``).
+Trial data are converted to the bis system (eqs. 26–28) and the surge distance run along the
+heading is formed from the position fixes by :mod:`shipid.methods.dp.stage_models`, which also
+builds each trial's filter model.
 
 Noise levels and standard deviations (default ``DPOptions.covariance = "observed"``): the
 EKF passes of a scheme only find a starting point. Then θ of the scheme and the noise levels
@@ -63,11 +58,13 @@ import numpy as np
 
 from shipid.data.trial import Trial
 from shipid.errors import ConvergenceError, InputError
-from shipid.estimate.ekf_augmented import AugmentedModel, ParallelEKFResult, parallel_augmented_ekf, rk4_map
+from shipid.estimate.ekf_augmented import ParallelEKFResult, parallel_augmented_ekf
+from shipid.methods.dp.series import attach
+from shipid.methods.dp.stage_models import momentum_model, prepare, surge_model
 from shipid.models import dp
-from shipid.models.thrusters import control_vector
 from shipid.report.convention import history, table
 from shipid.result import Estimate, Result
+from shipid.methods.dp.pem import StageLikelihood, measurement_log_scales, noise_report, pem_stage
 
 #: Free parameters (0-based indices into θ1..θ9) of each scheme, Fig. 4 / eqs. 46–47.
 STAGES = {"SI1": (0, 5), "SI2": (1, 2, 3, 4, 6, 7), "SI3": (8,)}
@@ -183,142 +180,6 @@ class StageResult:
 
 
 # ---------------------------------------------------------------------------------------------
-# Data preparation
-# ---------------------------------------------------------------------------------------------
-def _prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
-    """Bis time, measurements and inputs of one trial."""
-    need = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6"]
-    trial.require(need, method="identify dp")
-    b = vessel.bis
-    t = trial.t
-    if t.size < 10:
-        raise InputError(f"too short for identification ({t.size} samples)", file=trial.meta.get("source"))
-    tb = b.t_to_bis(t - t[0])
-    src = trial.meta.get("source")
-    P = trial.stack([f"p{i}" for i in range(1, 7)])
-    alpha = trial["alpha6"] if "alpha6" in trial else np.full(t.size, np.pi / 2)
-    for j, col in enumerate(list(P.T) + [alpha]):
-        bad = np.flatnonzero(~np.isfinite(col))
-        if bad.size:  # inputs drive the model: no gaps allowed (measurements may have gaps)
-            name = f"p{j + 1}" if j < 6 else "alpha6"
-            raise InputError("missing input value (fill or trim the gap first)", file=src, channel=name,
-                             row=int(bad[0]) + 1)
-    U = np.column_stack([control_vector(P, vessel.p0), alpha])
-    x, y, psi = trial["x"], trial["y"], trial["psi"]
-    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
-    if ok.sum() < 10:
-        raise InputError(f"too few position/heading fixes ({int(ok.sum())})", file=src)
-    idx = np.flatnonzero(ok)
-    if kind == "surge":
-        # distance run along the heading between consecutive fixes (gaps are bridged):
-        # mean of two headings taken across the ±π cut
-        pk = psi[idx]
-        c = pk[:-1] + 0.5 * np.arctan2(np.sin(pk[1:] - pk[:-1]), np.cos(pk[1:] - pk[:-1]))
-        sk = np.concatenate([[0.0], np.cumsum(np.diff(x[idx]) * np.cos(c) + np.diff(y[idx]) * np.sin(c))])
-        Z = np.full((t.size, 1), np.nan)
-        Z[idx, 0] = sk / b.L
-    else:
-        Z = np.full((t.size, 3), np.nan)
-        Z[idx] = np.column_stack([x[idx] / b.L, y[idx] / b.L, np.unwrap(psi[idx])])
-    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0])}
-
-
-class _RK4Discrete:
-    """Discrete f and Φ of one trial by :func:`rk4_map` over its own (bis) sample intervals, cached."""
-
-    def __init__(self, fc, jc, t: np.ndarray):
-        self.fc, self.jc = fc, jc
-        self.dt = np.diff(t)
-        self._key = None
-        self._val = None
-
-    def _eval(self, k, x, u, th):
-        key = (k, x.tobytes(), th.tobytes())
-        if key != self._key:
-            self._val = rk4_map(self.fc, self.jc, x, u, th, self.dt[k])
-            self._key = key
-        return self._val
-
-    def f(self, k, x, u, th):
-        return self._eval(k, x, u, th)[0]
-
-    def jac(self, k, x, u, th):
-        v = self._eval(k, x, u, th)
-        return v[1], v[2]
-
-
-def _wrap_last(z: np.ndarray, zp: np.ndarray) -> np.ndarray:
-    d = z - zp
-    d[-1] = np.arctan2(np.sin(d[-1]), np.cos(d[-1]))
-    return d
-
-
-def _surge_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray):
-    """Eqs. 31–32 in momentum form; state [h_u, s, b_u]."""
-    m11 = vessel.M[0, 0]
-    free = list(free)
-
-    def full(th):
-        out = theta_full.copy()
-        out[free] = th
-        return out
-
-    def fc(x, u, th):
-        f = full(th)
-        return np.array([f[0] * x[0] + f[5] * (u[0] + u[1]) + f[8] * np.cos(u[6]) * u[5] + x[2], x[0] / m11, 0.0])
-
-    def jc(x, u, th):
-        f = full(th)
-        A = np.array([[f[0], 0.0, 1.0], [1.0 / m11, 0.0, 0.0], [0.0, 0.0, 0.0]])
-        Bfull = np.zeros((3, 9))
-        Bfull[0, 0] = x[0]
-        Bfull[0, 5] = u[0] + u[1]
-        Bfull[0, 8] = np.cos(u[6]) * u[5]
-        return A, Bfull[:, free]
-
-    d = _RK4Discrete(fc, jc, t)
-    H = np.array([[0.0, 1.0, 0.0]])
-    return AugmentedModel(f=d.f, h=lambda k, x, th: x[1:2], nx=3, ntheta=len(free), f_jac=d.jac,
-                          h_jac=lambda k, x, th: (H, np.zeros((1, len(free)))))
-
-
-def _momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray,
-                    current: bool = True):
-    """Eqs. 35–38 (ERRATA readings); state [h, η, b_h] (+ [V_x, V_y] bis with ``current``)."""
-    M, Minv, arms = vessel.M, vessel.Minv, vessel.arms
-    free = list(free)
-    rhs = dp.momentum_current_rhs if current else dp.momentum_rhs
-    rjac = dp.momentum_current_jacobian if current else dp.momentum_jacobian
-    nx = 11 if current else 9
-
-    cache: dict = {}
-
-    def mats(th):
-        key = th.tobytes()
-        if key not in cache:
-            cache.clear()
-            out = theta_full.copy()
-            out[free] = th
-            cache[key] = dp.matrices_from_theta(out)
-        return cache[key]
-
-    def fc(x, u, th):
-        A_h, K = mats(th)
-        return rhs(x, u[:6], u[6], M, Minv, A_h, K, arms)
-
-    def jc(x, u, th):
-        A_h, K = mats(th)
-        Fx, Ft = rjac(x, u[:6], u[6], M, Minv, A_h, K, arms)
-        return Fx, Ft[:, free]
-
-    d = _RK4Discrete(fc, jc, t)
-    H = np.zeros((3, nx))
-    H[:, 3:6] = np.eye(3)
-    return AugmentedModel(f=d.f, h=lambda k, x, th: x[3:6], nx=nx, ntheta=len(free), f_jac=d.jac,
-                          h_jac=lambda k, x, th: (H, np.zeros((3, len(free)))), residual=_wrap_last)
-
-
-# ---------------------------------------------------------------------------------------------
 # One scheme
 # ---------------------------------------------------------------------------------------------
 def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_full: np.ndarray,
@@ -356,10 +217,11 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     pem_on = options.covariance == "observed" and not options.current_states
     if options.covariance not in ("observed", "ekf"):
         raise InputError(f"unknown covariance {options.covariance!r} (observed, ekf)")
-    data = [_prepare(tr, vessel, kind) for tr in trials]
+    data = [prepare(tr, vessel, kind) for tr in trials]
     ns = dict(noise_start or {})
     if pem_on:
-        from shipid.methods.dp.pem import measurement_log_scales
+        # imported here, not at the top: pem loads the numba kernels of loglik, which would otherwise be
+        # imported (about 2 s on a loaded machine) by every shipid command through shipid.methods.dp
 
         ns.update(measurement_log_scales(kind, data, vessel, options))
     if pem_on and ns:
@@ -381,7 +243,7 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     P0t[:, fpos] = 0.0
     P0t[fpos, fpos] = std0 ** 2
     if kind == "surge":
-        models = [_surge_model(vessel, np.asarray(theta_full, float), est, d["t"]) for d in data]
+        models = [surge_model(vessel, np.asarray(theta_full, float), est, d["t"]) for d in data]
         x0 = [np.array([0.0, d["Z"][d["first"], 0], 0.0]) for d in data]
         sp = options.sigma_pos / b.L
         P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
@@ -391,7 +253,7 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
             return lambda k: np.diag([options.q_h * dt[k], 0.0, options.q_b * dt[k]])
     else:
         cur = options.current_states
-        models = [_momentum_model(vessel, np.asarray(theta_full, float), est, d["t"], cur) for d in data]
+        models = [momentum_model(vessel, np.asarray(theta_full, float), est, d["t"], cur) for d in data]
         nc = 2 if cur else 0
         x0 = [np.concatenate([np.zeros(3), d["Z"][d["first"]], np.zeros(3 + nc)]) for d in data]
         sp = options.sigma_pos / b.L
@@ -422,8 +284,6 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
         th0 = ekf.theta_final.copy()
     pem = None
     if pem_on:
-        from shipid.methods.dp.pem import StageLikelihood, noise_report, pem_stage
-
         lik = StageLikelihood(kind, data, vessel, base_options)
         a0 = np.array([ns.get(k, 0.0) for k in lik.noise_names])
         th_start = np.asarray(theta_full, dtype=float).copy()
@@ -521,8 +381,7 @@ def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequ
         noise = {**noise, **st.diagnostics.get("noise_log_scales", {})}
         stages.append(st)
     res = _result(stages, vessel, options, theta_true, provenance or {})
-    from shipid.methods.dp.series import attach  # report series: innovations with σ, inputs (issue 8)
-    attach(res, stages, vessel, surge, sway_yaw, azimuth)
+    attach(res, stages, vessel, surge, sway_yaw, azimuth)  # report series: innovations with σ, inputs
     return res
 
 

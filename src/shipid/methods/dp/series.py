@@ -23,7 +23,7 @@ import numpy as np
 
 from shipid.report.convention import overlay, residual, trial_summary
 
-#: Measured channels of each scheme's model (``_prepare`` in :mod:`shipid.methods.dp.estimator`).
+#: Measured channels of each scheme's model (:func:`shipid.methods.dp.stage_models.prepare`).
 CHANNELS = {"surge": (("s", "distance run along the heading s", "m"),),
             "momentum": (("x", "north position x", "m"), ("y", "east position y", "m"),
                          ("psi", "heading ψ", "rad"))}

@@ -1,0 +1,164 @@
+"""Trial data and filter models of the DP identification schemes (Fossen, Sagatun & Sørensen 1996, §4.3).
+
+:func:`prepare` converts one trial to the bis system (eqs. 26–28): ``t'' = t / sqrt(L/g)``,
+``x'' = x / L``, ``y'' = y / L``; the pitch ratios become the control vector of eq. 5.
+Measured are position and heading (eqs. 44–45).
+
+Surge measurement (a reading of eq. 32 for real trials): eq. 32 needs the distance run
+along the ship's x axis. It is computed from the position fixes as
+``s_k = Σ_j (Δx_j cos ψ̄_j + Δy_j sin ψ̄_j)`` (ψ̄_j the mean measured heading over the step),
+which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ + ẏ sin ψ = u``).
+
+:func:`surge_model` (SI1, eqs. 31–32 in momentum form) and :func:`momentum_model` (SI2/SI3,
+eqs. 35–38) are the :class:`~shipid.estimate.ekf_augmented.AugmentedModel` of one trial for the
+state-augmented EKF (Table 1, eqs. 17–19), discretised by RK4 over the trial's own sample
+intervals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError
+from shipid.estimate.ekf_augmented import AugmentedModel, rk4_map
+from shipid.models import dp
+from shipid.models.thrusters import control_vector
+
+# ---------------------------------------------------------------------------------------------
+# Data preparation
+# ---------------------------------------------------------------------------------------------
+def prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
+    """Bis time, measurements and inputs of one trial."""
+    need = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6"]
+    trial.require(need, method="identify dp")
+    b = vessel.bis
+    t = trial.t
+    if t.size < 10:
+        raise InputError(f"too short for identification ({t.size} samples)", file=trial.meta.get("source"))
+    tb = b.t_to_bis(t - t[0])
+    src = trial.meta.get("source")
+    P = trial.stack([f"p{i}" for i in range(1, 7)])
+    alpha = trial["alpha6"] if "alpha6" in trial else np.full(t.size, np.pi / 2)
+    for j, col in enumerate(list(P.T) + [alpha]):
+        bad = np.flatnonzero(~np.isfinite(col))
+        if bad.size:  # inputs drive the model: no gaps allowed (measurements may have gaps)
+            name = f"p{j + 1}" if j < 6 else "alpha6"
+            raise InputError("missing input value (fill or trim the gap first)", file=src, channel=name,
+                             row=int(bad[0]) + 1)
+    U = np.column_stack([control_vector(P, vessel.p0), alpha])
+    x, y, psi = trial["x"], trial["y"], trial["psi"]
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+    if ok.sum() < 10:
+        raise InputError(f"too few position/heading fixes ({int(ok.sum())})", file=src)
+    idx = np.flatnonzero(ok)
+    if kind == "surge":
+        # distance run along the heading between consecutive fixes (gaps are bridged):
+        # mean of two headings taken across the ±π cut
+        pk = psi[idx]
+        c = pk[:-1] + 0.5 * np.arctan2(np.sin(pk[1:] - pk[:-1]), np.cos(pk[1:] - pk[:-1]))
+        sk = np.concatenate([[0.0], np.cumsum(np.diff(x[idx]) * np.cos(c) + np.diff(y[idx]) * np.sin(c))])
+        Z = np.full((t.size, 1), np.nan)
+        Z[idx, 0] = sk / b.L
+    else:
+        Z = np.full((t.size, 3), np.nan)
+        Z[idx] = np.column_stack([x[idx] / b.L, y[idx] / b.L, np.unwrap(psi[idx])])
+    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0])}
+
+
+class _RK4Discrete:
+    """Discrete f and Φ of one trial by :func:`rk4_map` over its own (bis) sample intervals, cached."""
+
+    def __init__(self, fc, jc, t: np.ndarray):
+        self.fc, self.jc = fc, jc
+        self.dt = np.diff(t)
+        self._key = None
+        self._val = None
+
+    def _eval(self, k, x, u, th):
+        key = (k, x.tobytes(), th.tobytes())
+        if key != self._key:
+            self._val = rk4_map(self.fc, self.jc, x, u, th, self.dt[k])
+            self._key = key
+        return self._val
+
+    def f(self, k, x, u, th):
+        return self._eval(k, x, u, th)[0]
+
+    def jac(self, k, x, u, th):
+        v = self._eval(k, x, u, th)
+        return v[1], v[2]
+
+
+def _wrap_last(z: np.ndarray, zp: np.ndarray) -> np.ndarray:
+    d = z - zp
+    d[-1] = np.arctan2(np.sin(d[-1]), np.cos(d[-1]))
+    return d
+
+
+def surge_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray):
+    """Eqs. 31–32 in momentum form; state [h_u, s, b_u]."""
+    m11 = vessel.M[0, 0]
+    free = list(free)
+
+    def full(th):
+        out = theta_full.copy()
+        out[free] = th
+        return out
+
+    def fc(x, u, th):
+        f = full(th)
+        return np.array([f[0] * x[0] + f[5] * (u[0] + u[1]) + f[8] * np.cos(u[6]) * u[5] + x[2], x[0] / m11, 0.0])
+
+    def jc(x, u, th):
+        f = full(th)
+        A = np.array([[f[0], 0.0, 1.0], [1.0 / m11, 0.0, 0.0], [0.0, 0.0, 0.0]])
+        Bfull = np.zeros((3, 9))
+        Bfull[0, 0] = x[0]
+        Bfull[0, 5] = u[0] + u[1]
+        Bfull[0, 8] = np.cos(u[6]) * u[5]
+        return A, Bfull[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.array([[0.0, 1.0, 0.0]])
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[1:2], nx=3, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((1, len(free)))))
+
+
+def momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ...], t: np.ndarray,
+                    current: bool = True):
+    """Eqs. 35–38 (ERRATA readings); state [h, η, b_h] (+ [V_x, V_y] bis with ``current``)."""
+    M, Minv, arms = vessel.M, vessel.Minv, vessel.arms
+    free = list(free)
+    rhs = dp.momentum_current_rhs if current else dp.momentum_rhs
+    rjac = dp.momentum_current_jacobian if current else dp.momentum_jacobian
+    nx = 11 if current else 9
+
+    cache: dict = {}
+
+    def mats(th):
+        key = th.tobytes()
+        if key not in cache:
+            cache.clear()
+            out = theta_full.copy()
+            out[free] = th
+            cache[key] = dp.matrices_from_theta(out)
+        return cache[key]
+
+    def fc(x, u, th):
+        A_h, K = mats(th)
+        return rhs(x, u[:6], u[6], M, Minv, A_h, K, arms)
+
+    def jc(x, u, th):
+        A_h, K = mats(th)
+        Fx, Ft = rjac(x, u[:6], u[6], M, Minv, A_h, K, arms)
+        return Fx, Ft[:, free]
+
+    d = _RK4Discrete(fc, jc, t)
+    H = np.zeros((3, nx))
+    H[:, 3:6] = np.eye(3)
+    return AugmentedModel(f=d.f, h=lambda k, x, th: x[3:6], nx=nx, ntheta=len(free), f_jac=d.jac,
+                          h_jac=lambda k, x, th: (H, np.zeros((3, len(free)))), residual=_wrap_last)
+
+
+__all__ = ["prepare", "surge_model", "momentum_model"]
