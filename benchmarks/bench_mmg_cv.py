@@ -46,7 +46,7 @@ def _runs(limit: int | None):
 @contextlib.contextmanager
 def previous_path():
     """Run the pipeline with the reference step 1 and stacked fold fits (the peer)."""
-    from shipid.methods.mmg import cv_fast, estimator as R
+    from shipid.methods.mmg import cv_fast, estimator as R, pipeline as P
 
     saved = R.smooth_run, cv_fast.cross_validate_horizons
     R.smooth_run = functools.partial(saved[0], compiled=False)
@@ -85,7 +85,7 @@ def main() -> None:
 
     import numpy as np
 
-    from shipid.methods.mmg import cv_fast, estimator as R, kernels  # noqa: F401  (compiles / loads the cache)
+    from shipid.methods.mmg import cv_fast, estimator as R, kernels, pipeline as P  # noqa: F401  (compiles / loads the cache)
     from shipid.methods.mmg import study as S
     from shipid.models import mmg
 
@@ -110,9 +110,9 @@ def main() -> None:
     print(f"2. CV table ({len(cands)} candidates, {a.folds} folds): moments {cpu[True]:.1f} s, stacked "
           f"{cpu[False]:.1f} s CPU, ratio {cpu[False] / cpu[True]:.2f}x; largest relative score difference "
           f"{diff:.1e}")
-    res, c1, w1 = _timed(lambda: R.identify(trials, prior, folds=a.folds))
+    res, c1, w1 = _timed(lambda: P.identify(trials, prior, folds=a.folds))
     with previous_path():
-        res0, c0, w0 = _timed(lambda: R.identify(trials, prior, folds=a.folds))
+        res0, c0, w0 = _timed(lambda: P.identify(trials, prior, folds=a.folds))
     th = np.array([e.value for e in res.estimates.values()])
     th0 = np.array([e.value for e in res0.estimates.values()])
     rel = float(np.max(np.abs(th - th0) / np.maximum(np.abs(th0), 1e-300)))

@@ -15,11 +15,9 @@ import a method"):
 (e) the shared layers (data, estimate, models, simulate, studies, report, analysis, result, outputs,
     progress, registry) never import ``shipid.methods`` statically (at module level or in a function).
 
-ALLOWLIST (TEMPORARY, TO BE EMPTIED BY THE LEAD AFTER MERGING): the folders that other engineers are
-restructuring in parallel (methods/masscm, monitor, dp, mmg) and the lead's report/demo_step.py are listed
-in ``PENDING`` below under the checks they still fail. An entry silences only the named check for modules
-whose dotted name starts with the prefix; nothing else is exempt. ``python tests/test_structure.py``
-prints every violation with the allowlist ignored.
+``PENDING`` below can name module prefixes that a check skips while a restructuring is under way (an
+entry silences only the named check); it is empty: every check holds for the whole package.
+``python tests/test_structure.py`` prints every violation, ignoring ``PENDING``.
 """
 
 from __future__ import annotations
@@ -36,10 +34,7 @@ MAX_LINES = 600
 # The lead empties these after merging; a prefix ends with "." to mean a whole package.
 PENDING: dict[str, tuple[str, ...]] = {
     "cycles": (),
-    # mmg.estimator.select_structure / identify call cv_fast and manoeuvres, which build on the
-    # estimator's fit and FitConfig: a real two-way dependency, broken only by moving the selection
-    # out of the estimator module.
-    "function_imports": ("shipid.methods.mmg.estimator",),
+    "function_imports": (),
     "private_imports": (),
     "file_length": (),
     "shared_imports_methods": (),

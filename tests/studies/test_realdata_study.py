@@ -18,6 +18,7 @@ from shipid.data import data_root
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import study as S
 
 ROOT = data_root()
@@ -111,7 +112,7 @@ def test_esso_selection_sees_training_runs_only_and_precedes_every_test_read(spl
         return "hull-only", {"hull-only": {"score": 0.0, "folds": 0}}
 
     monkeypatch.setattr(S, "read_esso", spy_read)
-    monkeypatch.setattr(R, "select_structure", spy_select)
+    monkeypatch.setattr(P, "select_structure", spy_select)
     monkeypatch.setattr(S, "evaluate", _stub_evaluate(log))
     sp = S.SPLITS[split]
     st = S.esso_heldout(split, max_train=2)

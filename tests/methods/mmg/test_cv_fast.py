@@ -6,6 +6,7 @@ import pytest
 from shipid.data import data_root
 from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import pipeline as P
 from shipid.models import mmg
 
 ROOT = data_root()
@@ -47,8 +48,8 @@ def test_batched_cv_table_equals_the_reference(problem, folds):
     truth, trials, runs = problem
     c = R.CANDIDATES["esso-lowspeed"]
     cands = {k: c[k] for k in ("hull+rudder+thrust", "hull-only", "cubic-hull-only", "hull-only/nondimensional")}
-    b_best, b = R.select_structure(trials, runs, truth, cands, folds=folds, batched=True)
-    r_best, r = R.select_structure(trials, runs, truth, cands, folds=folds, batched=False)
+    b_best, b = P.select_structure(trials, runs, truth, cands, folds=folds, batched=True)
+    r_best, r = P.select_structure(trials, runs, truth, cands, folds=folds, batched=False)
     assert b_best == r_best
     assert list(b) == list(r)
     for k in r:
@@ -62,5 +63,5 @@ def test_batched_cv_fails_a_candidate_whose_fit_fails(problem):
     truth, trials, runs = problem
     cands = {"ok": R.CANDIDATES["esso-lowspeed"]["hull-only"],
              "broken": dict(R.CANDIDATES["esso-lowspeed"]["hull-only"], weighting="no-such")}
-    _, table = R.select_structure(trials, runs, truth, cands, batched=True)
+    _, table = P.select_structure(trials, runs, truth, cands, batched=True)
     assert np.isfinite(table["ok"]["score"]) and table["broken"]["score"] == float("inf")

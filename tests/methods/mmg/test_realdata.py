@@ -16,6 +16,7 @@ from shipid.cli import main
 from shipid.data import data_root, write_trial
 from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 
@@ -70,7 +71,7 @@ def test_identified_model_predicts_a_new_noisy_run_as_well_as_the_truth():
     truth = mmg.load_published("esso_osaka_3m")
     train = [_sim_trial(truth, s, seconds=90.0, noise=1.0) for s in (3, 4)]
     test = _sim_trial(truth, 5, seconds=90.0, noise=1.0)
-    res = R.identify(train, truth, structure="hull+rudder+thrust")
+    res = P.identify(train, truth, structure="hull+rudder+thrust")
     ident = V.model_from_result(res.to_dict())
     si = R.heldout_score(ident, [test])
     st = R.heldout_score(truth, [test])

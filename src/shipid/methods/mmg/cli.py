@@ -273,6 +273,7 @@ def _print_result(res) -> None:
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
     from shipid.methods.mmg import estimator as R
+    from shipid.methods.mmg import pipeline as P
 
     if not paths:
         raise ShipidError("no training runs given")
@@ -298,7 +299,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         trials.append(tr)
     pm, prior_info = _prior(prior, profiles, notes)
     st = None if structure in (None, "auto") else structure
-    res = R.identify(trials, pm, structure=st, select=st is None, folds=folds,
+    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds,
                      extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
     res.model["prior"] = prior_info
     res.model["conventions"] = {

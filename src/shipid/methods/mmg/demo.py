@@ -5,6 +5,7 @@ from __future__ import annotations
 from shipid.data.basins import read_kvlcc2
 from shipid.data.paths import data_root
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 from shipid.report.convention import overlay, table, trial_summary
@@ -24,7 +25,7 @@ def real_data(seed: int):
     if root is None or not (root / "kvlcc2_hsva").is_dir():
         return None
     train = [read_kvlcc2(n) for n in KVLCC2_TRAIN]
-    res = R.identify(train, mmg.load_published("kvlcc2_hsva"), structure=None, select=True,
+    res = P.identify(train, mmg.load_published("kvlcc2_hsva"), structure=None, select=True,
                      extra_provenance={"command": "shipid demo (report step: real KVLCC2 HSVA zig-zags)",
                                        "seed": seed})
     test = read_kvlcc2(KVLCC2_TEST)

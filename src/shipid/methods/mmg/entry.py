@@ -1,10 +1,10 @@
-"""``shipid.methods.mmg.identify``: the common entry shape around :func:`shipid.methods.mmg.estimator.identify`."""
+"""``shipid.methods.mmg.identify``: the common entry shape around :func:`shipid.methods.mmg.pipeline.identify`."""
 
 from __future__ import annotations
 
 from shipid.errors import InputError
 from shipid.methods._trials import as_list, as_trial
-from shipid.methods.mmg import estimator
+from shipid.methods.mmg import pipeline
 from shipid.methods.mmg.estimator import FitConfig
 from shipid.methods.mmg.validate import load_model
 from shipid.models import mmg as mmg_model
@@ -25,7 +25,7 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         an identified model JSON; ``vessel`` is accepted as the same argument.
     options : FitConfig, optional
     **kw
-        ``structure=``, ``folds=``, ... of :func:`shipid.methods.mmg.estimator.identify`.
+        ``structure=``, ``folds=``, ... of :func:`shipid.methods.mmg.pipeline.identify`.
     """
     data = [as_trial(x, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.identify mmg")
             for x in as_list(trials)]
@@ -38,4 +38,4 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
                  else mmg_model.load_published(prior.replace("published:", "")))
     if options is not None:
         kw["fit_config"] = options
-    return estimator.identify(data, prior, **kw)
+    return pipeline.identify(data, prior, **kw)

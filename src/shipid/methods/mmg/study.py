@@ -182,6 +182,7 @@ from shipid.data.basins import esso_dir as _esso_dir  # noqa: F401  (kept for ca
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.zigzag import (execute_index, first_side, kvlcc2_autopilot, overshoots,  # noqa: F401
                                        reversal_delays, reversal_times, rudder_rate, simulate_zigzag,
@@ -286,7 +287,7 @@ def esso_train(split: str = "miyauchi2022", *, root: Path | None = None, folds: 
     prior = mmg.load_published("esso_osaka_3m", root)
     say(f"{split}: identifying (structure by {'leave-one-run-out' if folds is None else f'{folds}-fold'} "
         f"CV over {len(R.CANDIDATES[prior.structure])} candidates within the training runs)")
-    res = R.identify(train, prior, structure=structure, select=structure is None, folds=folds,
+    res = P.identify(train, prior, structure=structure, select=structure is None, folds=folds,
                      name=f"esso-osaka-3m-ebm-{split}",
                      extra_provenance={"split": split, "train_label": sp["train_label"],
                                        "test_runs_never_used": sp["test"],
@@ -433,7 +434,7 @@ def kvlcc2_train(*, root: Path | None = None, folds: int | None = None, structur
     say(f"kvlcc2: identifying from {len(trs)} zig-zags (structure by "
         f"{'leave-one-run-out' if folds is None else f'{folds}-fold'} overshoot CV over "
         f"{len(R.CANDIDATES[prior.structure])} candidates)")
-    res = R.identify(trs, prior, structure=structure, select=structure is None, folds=folds,
+    res = P.identify(trs, prior, structure=structure, select=structure is None, folds=folds,
                      name="kvlcc2-hsva-ebm", selector=select_by_overshoots,
                      extra_provenance={"test_runs_never_used": list(test),
                                        "config_fingerprint": config_fingerprint()})
