@@ -44,3 +44,12 @@ def test_source_key_is_a_hash_of_the_file_and_none_without_one():
     assert isinstance(key, str) and len(key) == 16
     assert nl.source_key(SimpleNamespace(__file__=None)) is None          # built-in module
     assert nl.source_key(SimpleNamespace(__file__="/nonexistent/x.py")) is None
+
+
+def test_symmetrise_inplace_touches_the_leading_block_only():
+    rng = np.random.default_rng(13)
+    A = rng.standard_normal((5, 5))
+    want = A.copy()
+    want[:3, :3] = 0.5 * (A[:3, :3] + A[:3, :3].T)
+    nl.symmetrise_inplace(A, 3)
+    np.testing.assert_array_equal(A, want)

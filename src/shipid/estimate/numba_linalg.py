@@ -2,9 +2,10 @@
 
 The compiled EBM loops (:mod:`shipid.methods.ebm.kernels`) and the compiled MMG step 1
 (:mod:`shipid.methods.mmg.kernels`) call these without allocating: the Cholesky factor of
-a leading block and the Cholesky solve that the batch EKF update of Yoon & Rhee 2003
-(seed 002, eq. 9) and the RTS gain need. float64, no ``fastmath``; a matrix that is not
-positive definite (or holds NaN) is reported by a False return, never factored.
+a leading block, the Cholesky solve and the symmetrisation that the batch EKF update of
+Yoon & Rhee 2003 (seed 002, eq. 9) and the RTS gain need. float64, no ``fastmath``; a
+matrix that is not positive definite (or holds NaN) is reported by a False return, never
+factored.
 
 Cache. numba keys the on-disk cache of a compiled function on the file that defines it
 only, not on the compiled functions it calls from other files. A compiled caller in
@@ -80,4 +81,14 @@ def cho_solve_inplace(L, n, B):
             B[i, c] /= d
 
 
-__all__ = ["source_key", "cholesky_into", "cho_solve_inplace"]
+@njit(**_JIT)
+def symmetrise_inplace(A, n):
+    """Replace the leading n × n block of ``A`` by its symmetric part ``(A + Aᵀ)/2``, in place."""
+    for i in range(n):
+        for j in range(i + 1, n):
+            s = 0.5 * (A[i, j] + A[j, i])
+            A[i, j] = s
+            A[j, i] = s
+
+
+__all__ = ["source_key", "cholesky_into", "cho_solve_inplace", "symmetrise_inplace"]

@@ -6,7 +6,7 @@ functions call these loops and turn their status codes into results or errors.
 Cache. Compilation is cached on disk (``cache=True``, in ``__pycache__``). numba keys the
 cache of a function on the file that defines it only, not on the compiled functions it calls
 from other files; the loops here call the model kernels of
-:mod:`shipid.methods.ebm.model_kernels` and the Cholesky kernels of
+:mod:`shipid.methods.ebm.model_kernels` and the linear-algebra kernels of
 :mod:`shipid.estimate.numba_linalg`. So this file carries :data:`MODEL_KERNELS_KEY` and
 :data:`NUMBA_LINALG_KEY`, the hashes of those files: an edit there must update the key here
 (which changes this file and so invalidates its cache; ``tests/methods/ebm/test_kernels.py``
@@ -21,7 +21,7 @@ from numba import njit
 
 from shipid.estimate import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
-from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key
+from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 from shipid.methods.ebm import model_kernels
 from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into, ebm_H_into
 
@@ -29,7 +29,7 @@ from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into,
 MODEL_KERNELS_KEY = "f76451348711c0e0"
 
 #: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
-NUMBA_LINALG_KEY = "9edd99da9aa64a48"
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the keys name.
 CACHE_VALID = (source_key(model_kernels) == MODEL_KERNELS_KEY
@@ -290,11 +290,7 @@ def ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
                         if v != 0.0:
                             s += HP[a, j] * v
                     S[a, b] = s + Rm[a, b]
-            for a in range(mk):
-                for b in range(a + 1, mk):
-                    s = 0.5 * (S[a, b] + S[b, a])
-                    S[a, b] = s
-                    S[b, a] = s
+            symmetrise_inplace(S, mk)
             if not cholesky_into(S, mk, Ls):
                 return S_NOT_PD, k
             # B = S⁻¹ [Hm | H P | ν]  ->  S⁻¹H,  Kᵀ = S⁻¹ H P  (P Hᵀ S⁻¹ with P, S symmetric),  S⁻¹ν

@@ -25,10 +25,11 @@ Numerics (the standards of :mod:`shipid.estimate.linalg`, kept): float64, no ``f
 
 Cache. Compilation is cached on disk (``cache=True``). numba keys the cache of a function
 on the file that defines it only, not on the compiled functions it calls from other files;
-the loop here calls the Cholesky kernels of :mod:`shipid.estimate.numba_linalg`. So this
-file carries :data:`NUMBA_LINALG_KEY`, the hash of that file: an edit there must update the
-key here (``tests/methods/mmg/test_kernels.py`` checks it). If the key does not match the
-file found at import, the loops here are compiled without the disk cache, never run stale.
+the loop here calls the Cholesky and symmetrisation kernels of
+:mod:`shipid.estimate.numba_linalg`. So this file carries :data:`NUMBA_LINALG_KEY`, the hash
+of that file: an edit there must update the key here (``tests/methods/mmg/test_kernels.py``
+checks it). If the key does not match the file found at import, the loops here are compiled
+without the disk cache, never run stale.
 """
 
 from __future__ import annotations
@@ -39,10 +40,10 @@ from numba import njit
 from shipid.estimate import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
 from shipid.estimate.linalg import check_positive_definite
-from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key
+from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 
 #: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
-NUMBA_LINALG_KEY = "9edd99da9aa64a48"
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the key names.
 CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
@@ -78,16 +79,6 @@ def _mmT(A, B, out):
             for k in range(p):
                 s += A[i, k] * B[j, k]
             out[i, j] = s
-
-
-@njit(**_JIT)
-def _sym(A):
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(i + 1, n):
-            s = 0.5 * (A[i, j] + A[j, i])
-            A[i, j] = s
-            A[j, i] = s
 
 
 @njit(**_JIT)
@@ -183,7 +174,7 @@ def _taylor(rows, cols, vals, nz, Q, h, tol, max_terms, Phi, Qd, term, C, T1, T2
                 if abs(C[i, j]) > cmax:
                     cmax = abs(C[i, j])
         if tmax <= tol and cmax <= tol * qscale:
-            _sym(Qd)
+            symmetrise_inplace(Qd, Qd.shape[0])
             return True
     return False
 
@@ -195,7 +186,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
     n = NS
     x = x0.copy()
     P = P0.copy()
-    _sym(P)
+    symmetrise_inplace(P, P.shape[0])
     rows = np.empty(16, np.int64)
     cols = np.empty(16, np.int64)
     vals = np.empty(16)
@@ -231,7 +222,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
             for i in range(n):
                 for j in range(n):
                     P[i, j] += Qd[i, j]
-            _sym(P)
+            symmetrise_inplace(P, P.shape[0])
             Phi_all[k - 1] = Phi
         x_pred[k] = x
         P_pred[k] = P
@@ -245,11 +236,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                 nu[a] = z[k, idx[a]] - x[idx[a]]
                 for b in range(mo):
                     S[a, b] = P[idx[a], idx[b]] + R[idx[a], idx[b]]
-            for a in range(mo):
-                for b in range(a + 1, mo):
-                    s = 0.5 * (S[a, b] + S[b, a])
-                    S[a, b] = s
-                    S[b, a] = s
+            symmetrise_inplace(S, mo)
             if not cholesky_into(S, mo, Ls):
                 return S_NOT_PD, k
             # B = S⁻¹ [H | ν]
@@ -287,7 +274,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                         for b in range(mo):
                             s += ka * R[idx[a], idx[b]] * K[j, b]
                     P[i, j] = T2[i, j] + s
-            _sym(P)
+            symmetrise_inplace(P, P.shape[0])
             q = 0.0
             logdet = 0.0
             for a in range(mo):
@@ -347,7 +334,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                 for a in range(n):
                     s += T2[i, a] * T1[a, j]
                 Pn[i, j] = Pf[i, j] + s
-        _sym(Pn)
+        symmetrise_inplace(Pn, Pn.shape[0])
         Ps[:, :] = Pn
         for i in range(n):
             std[k, i] = np.sqrt(max(Ps[i, i], 0.0))
