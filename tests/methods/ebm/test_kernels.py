@@ -18,6 +18,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from shipid.estimate import numba_linalg
 from shipid.estimate.cd_ekf import cd_ekf
 from shipid.estimate.linalg import NotPositiveDefiniteError
 from shipid.estimate.smoothers import mbf_smoother, rts_smoother
@@ -145,13 +146,16 @@ def test_compiled_rk4_equals_the_one_rk4(substeps):
 
 
 def test_model_kernels_cache_key_is_current():
-    """kernels.py keys its numba disk cache on model_kernels.py (numba does not see that dependency).
+    """kernels.py keys its numba disk cache on model_kernels.py and estimate/numba_linalg.py
+    (numba does not see those dependencies).
 
-    If this fails, model_kernels.py was edited: set ``MODEL_KERNELS_KEY`` in
-    ``shipid/methods/ebm/kernels.py`` to the value printed, which also refreshes that file's cache.
+    If this fails, one of them was edited: set the key named in ``shipid/methods/ebm/kernels.py``
+    to the value printed, which also refreshes that file's cache.
     """
     key = kernels.source_key(model_kernels)
     assert key == kernels.MODEL_KERNELS_KEY, f"set MODEL_KERNELS_KEY = {key!r} in shipid/methods/ebm/kernels.py"
+    key = kernels.source_key(numba_linalg)
+    assert key == kernels.NUMBA_LINALG_KEY, f"set NUMBA_LINALG_KEY = {key!r} in shipid/methods/ebm/kernels.py"
     assert kernels.CACHE_VALID
 
 

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 
 from shipid.data import data_root
-from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P
 from shipid.models import mmg
@@ -17,27 +16,11 @@ def need_params():
         pytest.skip("shared data (params/) not found (set SHIPID_DATA)")
 
 
-def _sim_trial(model, seed, seconds, noise=1.0):
-    """Random rudder/propeller orders with a steady wind, seeded measurement noise."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, seconds, 0.1)
-    k = np.arange(t.size) // 80
-    U = np.zeros((t.size, 4))
-    U[:, 0] = np.deg2rad(rng.uniform(-30, 30, k.max() + 1))[k]
-    U[:, 1] = rng.uniform(6, 12, k.max() + 1)[k]
-    U[:, 2], U[:, 3] = 1.0, 0.7
-    X = mmg.simulate_batch(model, t, np.array([[0, 0, 0, 0.35, 0, 0]]), U)[0]
-    ch = {c: X[:, i] + noise * s * rng.standard_normal(t.size)
-          for i, (c, s) in enumerate(zip(mmg.STATE_NAMES, (0.02, 0.02, 0.005, 0.01, 0.01, 0.003)))}
-    ch.update(delta=U[:, 0], n=U[:, 1], wind_speed=U[:, 2], wind_dir=U[:, 3])
-    return Trial(t, ch, {}, {"source": f"sim {seed}"})
-
-
 @pytest.fixture(scope="module")
-def problem():
+def problem(noisy_run):
     need_params()
     truth = mmg.load_published("esso_osaka_3m")
-    trials = [_sim_trial(truth, s, sec) for s, sec in ((31, 130.0), (32, 70.0), (33, 40.0), (34, 20.0))]
+    trials = [noisy_run(truth, s, sec) for s, sec in ((31, 130.0), (32, 70.0), (33, 40.0), (34, 20.0))]
     return truth, trials, [R.smooth_run(tr) for tr in trials]
 
 

@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 
 from shipid.data.trial import Trial
+from shipid.estimate import numba_linalg
 from shipid.errors import ShipidError
 from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import kernels
 
 
 def _trial(seed: int, n: int = 900, gaps: bool = False) -> Trial:
@@ -44,3 +46,14 @@ def test_compiled_step1_fails_loudly_on_a_broken_run():
     bad = tr.with_channels(u=np.full(len(tr), np.inf))
     with pytest.raises(ShipidError, match="motion estimation failed"):
         R.smooth_run(bad, compiled=True)
+
+
+def test_numba_linalg_cache_key_is_current():
+    """kernels.py keys its numba disk cache on estimate/numba_linalg.py (numba does not see that dependency).
+
+    If this fails, numba_linalg.py was edited: set ``NUMBA_LINALG_KEY`` in
+    ``shipid/methods/mmg/kernels.py`` to the value printed, which also refreshes that file's cache.
+    """
+    key = numba_linalg.source_key(numba_linalg)
+    assert key == kernels.NUMBA_LINALG_KEY, f"set NUMBA_LINALG_KEY = {key!r} in shipid/methods/mmg/kernels.py"
+    assert kernels.CACHE_VALID

@@ -4,34 +4,16 @@ import numpy as np
 import pytest
 
 from shipid.data import data_root
-from shipid.data.trial import Trial
 from shipid.estimate.ridge import ridge
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg.moments import fit_from_moments, ridge_theta, run_moments
 from shipid.models import mmg
 
 
-
 def need_params():
     root = data_root()
     if root is None or not (root / "params").is_dir():
         pytest.skip("shared data (params/) not found (set SHIPID_DATA)")
-
-
-def _sim_trial(model, seed, seconds):
-    """Random rudder/propeller orders, steady wind, seeded measurement noise (as test_cv_fast)."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, seconds, 0.1)
-    k = np.arange(t.size) // 80
-    U = np.zeros((t.size, 4))
-    U[:, 0] = np.deg2rad(rng.uniform(-30, 30, k.max() + 1))[k]
-    U[:, 1] = rng.uniform(6, 12, k.max() + 1)[k]
-    U[:, 2], U[:, 3] = 1.0, 0.7
-    X = mmg.simulate_batch(model, t, np.array([[0, 0, 0, 0.35, 0, 0]]), U)[0]
-    ch = {c: X[:, i] + s * rng.standard_normal(t.size)
-          for i, (c, s) in enumerate(zip(mmg.STATE_NAMES, (0.02, 0.02, 0.005, 0.01, 0.01, 0.003)))}
-    ch.update(delta=U[:, 0], n=U[:, 1], wind_speed=U[:, 2], wind_dir=U[:, 3])
-    return Trial(t, ch, {}, {"source": f"sim {seed}"})
 
 
 def test_ridge_theta_from_moments_equals_ridge():
@@ -47,10 +29,10 @@ def test_ridge_theta_from_moments_equals_ridge():
 
 
 @pytest.mark.parametrize("cand", ["hull+rudder+4-quadrant-propeller/nondimensional", "cubic-hull+rudder+thrust"])
-def test_fold_fit_from_moments_equals_stacked_fit(cand):
+def test_fold_fit_from_moments_equals_stacked_fit(cand, noisy_run):
     need_params()
     truth = mmg.load_published("esso_osaka_3m")
-    runs = [R.smooth_run(_sim_trial(truth, s, 60.0)) for s in (41, 42, 43)]
+    runs = [R.smooth_run(noisy_run(truth, s, 60.0)) for s in (41, 42, 43)]
     c = R.CANDIDATES["esso-lowspeed"][cand]
     cprior, free = R.apply_candidate(truth, c)
     cfg = R.candidate_config(R.FitConfig(), c)

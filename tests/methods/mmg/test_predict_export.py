@@ -21,23 +21,13 @@ def need(path="params"):
         pytest.skip("shared data not found (set SHIPID_DATA)")
 
 
-def _own_run(model, seconds=80.0):
-    t = np.arange(0.0, seconds, 0.1)
-    U = np.zeros((t.size, 4))
-    U[:, 0] = np.deg2rad(20) * np.sign(np.sin(2 * np.pi * t / 50))
-    U[:, 1] = 10.0
-    X = mmg.simulate_batch(model, t, np.array([[0, 0, 3.0, 0.4, 0, 0]]), U)[0]
-    ch = {c: X[:, i] for i, c in enumerate(mmg.STATE_NAMES)}
-    ch.update(delta=U[:, 0], n=U[:, 1])
-    return t, ch
-
-
-def test_prediction_of_own_simulation_reads_back_in_file_names_and_units(tmp_path):
+def test_prediction_of_own_simulation_reads_back_in_file_names_and_units(tmp_path, own_run):
     """A run the model itself produced, stored with own column names and degrees: the exported
     prediction equals the measured channels, under '<column>_pred' in the file's unit."""
     need()
     m = mmg.load_published("esso_osaka_3m")
-    t, ch = _own_run(m)
+    own = own_run(m, rudder_deg=20.0, period=50.0, psi0=3.0)
+    t, ch = own.t, dict(own.channels)
     ch["psi"] = np.angle(np.exp(1j * ch["psi"]))          # the logger wraps heading to (-180, 180]
     run = tmp_path / "run.csv"
     write_trial(Trial(t, ch, {}, {}), run, units={"psi": "deg", "delta": "deg", "r": "deg/s"})
@@ -59,11 +49,10 @@ def test_prediction_of_own_simulation_reads_back_in_file_names_and_units(tmp_pat
     np.testing.assert_allclose(back["delta"], tr["delta"], atol=1e-12)
 
 
-def test_rudder_written_in_the_files_convention_and_errors_match_the_table(tmp_path):
+def test_rudder_written_in_the_files_convention_and_errors_match_the_table(tmp_path, own_run):
     need()
     m = mmg.load_published("esso_osaka_3m")
-    t, ch = _own_run(m, 60.0)
-    tr = Trial(t, ch, {}, {"source": "own"})
+    tr = own_run(m, 60.0, rudder_deg=20.0, period=50.0, psi0=3.0, source="own")
     other = m.with_coef({"NR_arm": 0.7 * m.coef["NR_arm"]}, name="other")
     v = V.validate(other, tr)
     pt = PE.prediction_trial(v, tr, rudder_sign=-1)

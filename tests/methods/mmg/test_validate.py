@@ -9,7 +9,6 @@ import pytest
 
 from shipid.cli import main
 from shipid.data import data_root
-from shipid.data.trial import Trial
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 
@@ -22,22 +21,10 @@ def need_data():
         pytest.skip("shared data not found (set SHIPID_DATA)")
 
 
-def _simulated_trial(model, seconds=70.0):
-    t = np.arange(0.0, seconds, 0.1)
-    U = np.zeros((t.size, 4))
-    U[:, 0] = np.deg2rad(15) * np.sign(np.sin(2 * np.pi * t / 40))
-    U[:, 1] = 10.0
-    X = mmg.simulate_batch(model, t, np.array([[0, 0, 0, 0.4, 0, 0]]), U)[0]
-    ch = {c: X[:, i] for i, c in enumerate(mmg.STATE_NAMES)}
-    ch.update(delta=U[:, 0], n=U[:, 1])
-    units = {"x": "m", "y": "m", "psi": "rad", "u": "m/s", "v": "m/s", "r": "rad/s", "delta": "rad", "n": "1/s"}
-    return Trial(t, ch, units, {"source": "simulated"})
-
-
-def test_model_validated_on_its_own_simulation_has_zero_error():
+def test_model_validated_on_its_own_simulation_has_zero_error(own_run):
     need_data()
     m = mmg.load_published("esso_osaka_3m")
-    tr = _simulated_trial(m, seconds=100.0)
+    tr = own_run(m, 100.0, units=True)
     v = V.validate(m, tr)
     for block in list(v.windows.values()) + [v.horizons]:
         for q in V.QUANTITIES:
@@ -45,10 +32,10 @@ def test_model_validated_on_its_own_simulation_has_zero_error():
     assert v.horizons["count"] == 2      # starts at 0 s and 60 s (the second is 40 s long, >= half of 60 s)
 
 
-def test_wrong_model_has_error_and_heading_is_wrapped():
+def test_wrong_model_has_error_and_heading_is_wrapped(own_run):
     need_data()
     m = mmg.load_published("esso_osaka_3m")
-    tr = _simulated_trial(m)
+    tr = own_run(m, 70.0, units=True)
     other = m.with_coef({"NR_arm": 0.5 * m.coef["NR_arm"]}, name="half-rudder")
     v = V.validate(other, tr)
     assert v.windows["first_60s"]["psi"]["rms"] > 0.5

@@ -1,12 +1,10 @@
 """The common validate entry for MMG: shipid.validate on a Result, a MODEL.json path and the registry dispatch."""
 
-import numpy as np
 import pytest
 
 import shipid
 from shipid import registry
 from shipid.data import data_root
-from shipid.data.trial import Trial
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 from shipid.result import Result
@@ -19,17 +17,6 @@ def need_data():
         pytest.skip("shared data not found (set SHIPID_DATA)")
 
 
-def _run(model, seconds=80.0):
-    t = np.arange(0.0, seconds, 0.1)
-    U = np.zeros((t.size, 4))
-    U[:, 0] = np.deg2rad(15) * np.sign(np.sin(2 * np.pi * t / 40))
-    U[:, 1] = 10.0
-    X = mmg.simulate_batch(model, t, np.array([[0, 0, 0, 0.4, 0, 0]]), U)[0]
-    ch = {c: X[:, i] for i, c in enumerate(mmg.STATE_NAMES)}
-    ch.update(delta=U[:, 0], n=U[:, 1])
-    return Trial(t, ch, {}, {"source": "simulated"})
-
-
 def test_every_method_with_a_model_has_the_same_validate_entry():
     have = {k for k, v in registry.methods().items() if v.has_module("validate")}
     assert {"mmg", "ebm", "dp", "mass-cm"} <= have
@@ -38,10 +25,10 @@ def test_every_method_with_a_model_has_the_same_validate_entry():
         assert callable(mod.validate_result) and mod.DEFAULT_HORIZON > 0
 
 
-def test_result_and_json_path_validate_like_the_model(tmp_path):
+def test_result_and_json_path_validate_like_the_model(tmp_path, own_run):
     need_data()
     m = mmg.load_published("esso_osaka_3m")
-    tr = _run(m)
+    tr = own_run(m)
     res = Result(method="mmg-ebm", estimates={}, model=m.to_dict())
     v = shipid.validate(res, tr)
     assert v.method == "mmg-ebm" and v.quantities == V.QUANTITIES

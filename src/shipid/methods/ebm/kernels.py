@@ -5,40 +5,35 @@ functions call these loops and turn their status codes into results or errors.
 
 Cache. Compilation is cached on disk (``cache=True``, in ``__pycache__``). numba keys the
 cache of a function on the file that defines it only, not on the compiled functions it calls
-from other files; the filter loop here calls the model kernels of
-:mod:`shipid.methods.ebm.model_kernels`. So this file carries :data:`MODEL_KERNELS_KEY`, the
-hash of that file: an edit there must update the key here (which changes this file and so
-invalidates its cache; ``tests/methods/ebm/test_kernels.py`` checks the key). If the key does not
-match the file found at import, the loops here are compiled without the disk cache, never run
-stale.
+from other files; the loops here call the model kernels of
+:mod:`shipid.methods.ebm.model_kernels` and the linear-algebra kernels of
+:mod:`shipid.estimate.numba_linalg`. So this file carries :data:`MODEL_KERNELS_KEY` and
+:data:`NUMBA_LINALG_KEY`, the hashes of those files: an edit there must update the key here
+(which changes this file and so invalidates its cache; ``tests/methods/ebm/test_kernels.py``
+checks the keys). If a key does not match the file found at import, the loops here are
+compiled without the disk cache, never run stale.
 """
 
 from __future__ import annotations
 
-import hashlib
-from pathlib import Path
-
 import numpy as np
 from numba import njit
 
+from shipid.estimate import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
+from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 from shipid.methods.ebm import model_kernels
 from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into, ebm_H_into
 
 #: First 16 hex digits of the SHA-256 of ``model_kernels.py`` (see the module docstring).
 MODEL_KERNELS_KEY = "f76451348711c0e0"
 
+#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
-def source_key(module) -> str | None:
-    """First 16 hex digits of the SHA-256 of ``module``'s source file; None if it cannot be read."""
-    try:
-        return hashlib.sha256(Path(module.__file__).read_bytes()).hexdigest()[:16]
-    except (OSError, TypeError):
-        return None
-
-
-#: True when the on-disk cache may be used: the model kernels are the ones the key names.
-CACHE_VALID = source_key(model_kernels) == MODEL_KERNELS_KEY
+#: True when the on-disk cache may be used: the compiled callees are the ones the keys name.
+CACHE_VALID = (source_key(model_kernels) == MODEL_KERNELS_KEY
+               and source_key(numba_linalg) == NUMBA_LINALG_KEY)
 _JIT = dict(cache=CACHE_VALID, nogil=True, error_model="numpy")  # no ZeroDivisionError checks in loops
 
 # status codes returned by the compiled loops
@@ -48,49 +43,6 @@ OK, P_NOT_PD, S_NOT_PD, TAYLOR_NOT_CONVERGED = 0, 1, 2, 3
 # ---------------------------------------------------------------------------------------
 # small dense / structured linear algebra
 # ---------------------------------------------------------------------------------------
-@njit(**_JIT)
-def _cholesky_into(A, n, L):
-    """Lower Cholesky factor of the leading n × n block of ``A`` into ``L``; False if not PD."""
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= L[j, k] * L[j, k]
-        if not (s > 0.0):  # also catches NaN
-            return False
-        d = np.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / d
-        for i in range(j):
-            L[i, j] = 0.0
-    return True
-
-
-@njit(**_JIT)
-def _cho_solve_inplace(L, n, B):
-    """Solve (L Lᵀ) X = B in place, B (n × ncol)."""
-    ncol = B.shape[1]
-    for i in range(n):  # forward: L Y = B
-        d = L[i, i]
-        for k in range(i):
-            lik = L[i, k]
-            for c in range(ncol):
-                B[i, c] -= lik * B[k, c]
-        for c in range(ncol):
-            B[i, c] /= d
-    for i in range(n - 1, -1, -1):  # backward: Lᵀ X = Y
-        d = L[i, i]
-        for k in range(i + 1, n):
-            lki = L[k, i]
-            for c in range(ncol):
-                B[i, c] -= lki * B[k, c]
-        for c in range(ncol):
-            B[i, c] /= d
-
-
 @njit(**_JIT)
 def _csr_into(A, rowptr, cols, vals):
     """Non-zeros of the square matrix ``A`` by rows (CSR) into the given buffers."""
@@ -338,12 +290,8 @@ def ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
                         if v != 0.0:
                             s += HP[a, j] * v
                     S[a, b] = s + Rm[a, b]
-            for a in range(mk):
-                for b in range(a + 1, mk):
-                    s = 0.5 * (S[a, b] + S[b, a])
-                    S[a, b] = s
-                    S[b, a] = s
-            if not _cholesky_into(S, mk, Ls):
+            symmetrise_inplace(S, mk)
+            if not cholesky_into(S, mk, Ls):
                 return S_NOT_PD, k
             # B = S⁻¹ [Hm | H P | ν]  ->  S⁻¹H,  Kᵀ = S⁻¹ H P  (P Hᵀ S⁻¹ with P, S symmetric),  S⁻¹ν
             for a in range(mk):
@@ -351,7 +299,7 @@ def ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
                     B[a, j] = Hm[a, j]
                     B[a, n + j] = HP[a, j]
                 B[a, 2 * n] = nu[a]
-            _cho_solve_inplace(Ls, mk, B)
+            cho_solve_inplace(Ls, mk, B)
             for a in range(mk):  # x += K ν = Σ_a Kᵀ[a, :] ν_a
                 va = nu[a]
                 for i in range(n):
@@ -417,7 +365,7 @@ def ebm_filter_loop(p, Q, R, t, z, x0, P0, substeps, check_pd, tol, max_terms,
                     K_all[k, i, ia] = B[a, n + i]
         x_filt[k] = x
         P_filt[k] = P
-        if check_pd and not _cholesky_into(P, n, Lp):
+        if check_pd and not cholesky_into(P, n, Lp):
             out[0] = loglik
             return P_NOT_PD, k
     out[0] = loglik
@@ -539,7 +487,7 @@ def rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
         for i in range(n):
             for j in range(n):
                 Pp[i, j] = 0.5 * (P_pred[k + 1, i, j] + P_pred[k + 1, j, i])
-        if not _cholesky_into(Pp, n, L):
+        if not cholesky_into(Pp, n, L):
             return k + 1
         # X = Φ P_f  ->  X = P_p⁻¹ Φ P_f,  C = Xᵀ = P_f Φᵀ P_p⁻¹
         Ph = Phi_all[k]
@@ -550,7 +498,7 @@ def rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
                 if a != 0.0:
                     for j in range(n):
                         X[i, j] += a * Pf[l, j]
-        _cho_solve_inplace(L, n, X)
+        cho_solve_inplace(L, n, X)
         for i in range(n):
             for j in range(n):
                 Cm[i, j] = X[j, i]
@@ -582,5 +530,5 @@ def rts_loop(x_filt, P_filt, x_pred, P_pred, Phi_all, xs, Ps):
     return -1
 
 
-__all__ = ["OK", "P_NOT_PD", "S_NOT_PD", "TAYLOR_NOT_CONVERGED", "MODEL_KERNELS_KEY", "CACHE_VALID",
+__all__ = ["OK", "P_NOT_PD", "S_NOT_PD", "TAYLOR_NOT_CONVERGED", "MODEL_KERNELS_KEY", "NUMBA_LINALG_KEY", "CACHE_VALID",
            "source_key", "rk4_into", "ebm_filter_loop", "mbf_loop", "rts_loop"]

@@ -23,8 +23,13 @@ Numerics (the standards of :mod:`shipid.estimate.linalg`, kept): float64, no ``f
   raised by the caller with the reference's message.
 * RTS: ``C_k = P(k|k) Φ_kᵀ P(k+1|k)⁻¹`` through a Cholesky solve with ``P(k+1|k)``.
 
-Compilation is cached on disk (``cache=True``); everything compiled lives in this file
-because numba's cache is invalidated by changes to the file that holds a function.
+Cache. Compilation is cached on disk (``cache=True``). numba keys the cache of a function
+on the file that defines it only, not on the compiled functions it calls from other files;
+the loop here calls the Cholesky and symmetrisation kernels of
+:mod:`shipid.estimate.numba_linalg`. So this file carries :data:`NUMBA_LINALG_KEY`, the hash
+of that file: an edit there must update the key here (``tests/methods/mmg/test_kernels.py``
+checks it). If the key does not match the file found at import, the loops here are compiled
+without the disk cache, never run stale.
 """
 
 from __future__ import annotations
@@ -32,58 +37,22 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from shipid.estimate import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
 from shipid.estimate.linalg import check_positive_definite
+from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+
+#: True when the on-disk cache may be used: the compiled callees are the ones the key names.
+CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
+_JIT = dict(cache=CACHE_VALID, nogil=True, error_model="numpy")
 
 # status codes of the compiled loop
 OK, P_NOT_PD, S_NOT_PD, TAYLOR_NOT_CONVERGED = 0, 1, 2, 3
 NS = 9          # states
 NM = 6          # measurements: the first six states
-
-
-@njit(**_JIT)
-def _chol(A, n, L):
-    """Lower Cholesky factor of the leading n × n block of ``A`` into ``L``; False if not PD."""
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= L[j, k] * L[j, k]
-        if not (s > 0.0):
-            return False
-        d = np.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / d
-        for i in range(j):
-            L[i, j] = 0.0
-    return True
-
-
-@njit(**_JIT)
-def _cho_solve(L, n, B):
-    """Solve (L Lᵀ) X = B in place for the leading n rows of B (n × ncol)."""
-    ncol = B.shape[1]
-    for i in range(n):
-        d = L[i, i]
-        for k in range(i):
-            lik = L[i, k]
-            for c in range(ncol):
-                B[i, c] -= lik * B[k, c]
-        for c in range(ncol):
-            B[i, c] /= d
-    for i in range(n - 1, -1, -1):
-        d = L[i, i]
-        for k in range(i + 1, n):
-            lki = L[k, i]
-            for c in range(ncol):
-                B[i, c] -= lki * B[k, c]
-        for c in range(ncol):
-            B[i, c] /= d
 
 
 @njit(**_JIT)
@@ -110,16 +79,6 @@ def _mmT(A, B, out):
             for k in range(p):
                 s += A[i, k] * B[j, k]
             out[i, j] = s
-
-
-@njit(**_JIT)
-def _sym(A):
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(i + 1, n):
-            s = 0.5 * (A[i, j] + A[j, i])
-            A[i, j] = s
-            A[j, i] = s
 
 
 @njit(**_JIT)
@@ -215,7 +174,7 @@ def _taylor(rows, cols, vals, nz, Q, h, tol, max_terms, Phi, Qd, term, C, T1, T2
                 if abs(C[i, j]) > cmax:
                     cmax = abs(C[i, j])
         if tmax <= tol and cmax <= tol * qscale:
-            _sym(Qd)
+            symmetrise_inplace(Qd, Qd.shape[0])
             return True
     return False
 
@@ -227,7 +186,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
     n = NS
     x = x0.copy()
     P = P0.copy()
-    _sym(P)
+    symmetrise_inplace(P, P.shape[0])
     rows = np.empty(16, np.int64)
     cols = np.empty(16, np.int64)
     vals = np.empty(16)
@@ -263,7 +222,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
             for i in range(n):
                 for j in range(n):
                     P[i, j] += Qd[i, j]
-            _sym(P)
+            symmetrise_inplace(P, P.shape[0])
             Phi_all[k - 1] = Phi
         x_pred[k] = x
         P_pred[k] = P
@@ -277,12 +236,8 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                 nu[a] = z[k, idx[a]] - x[idx[a]]
                 for b in range(mo):
                     S[a, b] = P[idx[a], idx[b]] + R[idx[a], idx[b]]
-            for a in range(mo):
-                for b in range(a + 1, mo):
-                    s = 0.5 * (S[a, b] + S[b, a])
-                    S[a, b] = s
-                    S[b, a] = s
-            if not _chol(S, mo, Ls):
+            symmetrise_inplace(S, mo)
+            if not cholesky_into(S, mo, Ls):
                 return S_NOT_PD, k
             # B = S⁻¹ [H | ν]
             for a in range(mo):
@@ -290,7 +245,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                     B[a, j] = 0.0
                 B[a, idx[a]] = 1.0
                 B[a, n] = nu[a]
-            _cho_solve(Ls, mo, B)
+            cho_solve_inplace(Ls, mo, B)
             # K = (S⁻¹ H P)ᵀ = P Hᵀ S⁻¹
             for i in range(n):
                 for a in range(mo):
@@ -319,7 +274,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                         for b in range(mo):
                             s += ka * R[idx[a], idx[b]] * K[j, b]
                     P[i, j] = T2[i, j] + s
-            _sym(P)
+            symmetrise_inplace(P, P.shape[0])
             q = 0.0
             logdet = 0.0
             for a in range(mo):
@@ -335,7 +290,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                 for j in range(n):
                     if not np.isfinite(P[i, j]):
                         ok = False
-            if not ok or not _chol(P, n, L):
+            if not ok or not cholesky_into(P, n, L):
                 return P_NOT_PD, k
         x_filt[k] = x
         P_filt[k] = P
@@ -352,10 +307,10 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
         for i in range(n):
             for j in range(n):
                 A[i, j] = 0.5 * (Pp[i, j] + Pp[j, i])
-        if not _chol(A, n, L):
+        if not cholesky_into(A, n, L):
             return P_NOT_PD, k + 1
         _mm(Phi_all[k], Pf, T1)           # Φ P_f
-        _cho_solve(L, n, T1)              # Pp⁻¹ Φ P_f = Cᵀ
+        cho_solve_inplace(L, n, T1)              # Pp⁻¹ Φ P_f = Cᵀ
         for i in range(n):
             dx[i] = xs[k + 1, i] - x_pred[k + 1, i]
         for i in range(n):
@@ -379,7 +334,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
                 for a in range(n):
                     s += T2[i, a] * T1[a, j]
                 Pn[i, j] = Pf[i, j] + s
-        _sym(Pn)
+        symmetrise_inplace(Pn, Pn.shape[0])
         Ps[:, :] = Pn
         for i in range(n):
             std[k, i] = np.sqrt(max(Ps[i, i], 0.0))
@@ -443,4 +398,4 @@ def kinematic_filter_smoother(t: np.ndarray, z: np.ndarray, Q: np.ndarray, R: np
     return xs, std, nis, float(out[0])
 
 
-__all__ = ["kinematic_filter_smoother"]
+__all__ = ["NUMBA_LINALG_KEY", "CACHE_VALID", "kinematic_filter_smoother"]

@@ -25,12 +25,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from shipid.analysis.openloop import Validation, format_table, horizon_starts, summarise
+from shipid.analysis.openloop import Validation, format_table, horizon_starts, plot_series, summarise
 from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
 from shipid.result import Result
-from shipid.outputs import atomic_write
 
 QUANTITIES = ("psi", "r", "u", "v", "pos")
 UNITS = {"psi": "deg", "r": "deg/s", "u": "m/s", "v": "m/s", "pos": "m"}
@@ -228,31 +227,10 @@ def validate_result(result: Result, trial: Trial, *, horizon: float | None = Non
 
 
 def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
-    """Overlay measured and predicted trajectory and time series; written atomically."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig = plt.figure(figsize=(11, 7))
-    ax = fig.add_subplot(1, 2, 1)
-    ax.plot(v.measured[:, 1], v.measured[:, 0], "k-", label="measured")
-    ax.plot(v.predicted[:, 1], v.predicted[:, 0], "r--", label="predicted")
-    ax.set_xlabel("y0 [m]"); ax.set_ylabel("x0 [m]"); ax.set_aspect("equal", "datalim"); ax.legend()
-    names = [("psi", 2, np.degrees, "ψ [deg]"), ("r", 5, np.degrees, "r [deg/s]"),
-             ("u", 3, lambda a: a, "u [m/s]"), ("v", 4, lambda a: a, "v [m/s]")]
-    for i, (_, j, f, lab) in enumerate(names):
-        a = fig.add_subplot(4, 2, 2 * i + 2)
-        a.plot(v.t, f(v.measured[:, j]), "k-", lw=0.8)
-        a.plot(v.t, f(v.predicted[:, j]), "r--", lw=0.8)
-        a.set_ylabel(lab)
-    a.set_xlabel("t [s]")
-    fig.suptitle(f"{v.model_name}: {Path(v.source).name}")
-    fig.tight_layout()
-    fmt = Path(path).suffix.lstrip(".") or "png"
-    try:
-        return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=110), force=force)
-    finally:
-        plt.close(fig)
+    """Overlay measured and predicted trajectory and time series (ψ, r, u, v); written atomically."""
+    return plot_series(v, path, [(2, np.degrees, "ψ [deg]"), (5, np.degrees, "r [deg/s]"),
+                                 (3, lambda a: a, "u [m/s]"), (4, lambda a: a, "v [m/s]")],
+                       trajectory=(0, 1), force=force)
 
 
 __all__ = ["validate", "validate_result", "DEFAULT_HORIZON", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",

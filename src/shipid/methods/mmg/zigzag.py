@@ -2,11 +2,12 @@
 
 Kempf's zig-zag manoeuvre (the rudder reversed to ±δ_z whenever the heading passes
 ±ψ_switch from its value at execute): the overshoot angles read from a heading record
-(:func:`overshoots`), the tank autopilot's reaction delay and steering gear measured
-from the training runs' rudder records (:func:`reversal_delays`, :func:`steering_gear`,
-:func:`kvlcc2_autopilot`), and the closed-loop simulation of an MMG model with that
-autopilot from the measured state at execute (:func:`simulate_zigzag`). The reasons for
-each choice are in :mod:`shipid.methods.mmg.study`.
+(:func:`overshoots`, which is :func:`shipid.simulate.metrics.heading_overshoots`), the
+tank autopilot's reaction delay and steering gear measured from the training runs' rudder
+records (:func:`reversal_delays`, :func:`steering_gear`, :func:`kvlcc2_autopilot`), and
+the closed-loop simulation of an MMG model with that autopilot from the measured state at
+execute (:func:`simulate_zigzag`). The reasons for each choice are in
+:mod:`shipid.methods.mmg.study`.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
+from shipid.simulate.metrics import heading_overshoots as overshoots  # the one overshoot rule
 
 
 def zigzag_angles(name: str) -> tuple[float, float]:
@@ -36,34 +38,6 @@ def execute_index(delta: np.ndarray, threshold: float = np.deg2rad(1.0)) -> int:
     if k.size == 0:
         raise InputError("no rudder execute found")
     return max(int(k[0]) - 1, 0)
-
-
-def overshoots(t: np.ndarray, psi: np.ndarray, k_exec: int, psi_switch: float, side: int,
-               count: int = 2) -> list[float]:
-    """Overshoot angles (rad) from the heading alone.
-
-    ``ψ₀ = ψ(k_exec)``; the i-th reversal is where ``d_i (ψ − ψ₀)`` first reaches the
-    switch angle (``d_1 = side``, alternating); the i-th overshoot is the largest
-    ``d_i (ψ − ψ₀) − ψ_switch`` between that reversal and the next. The same rule is
-    applied to measured and predicted headings, so their overshoots are comparable
-    whatever the rudder signal's noise.
-    """
-    p = np.unwrap(psi) - np.unwrap(psi)[k_exec]
-    out, k, d = [], k_exec, side
-    for _ in range(count):
-        hit = np.flatnonzero(d * p[k:] >= psi_switch)
-        if hit.size == 0:
-            break
-        k1 = k + int(hit[0])
-        nxt = np.flatnonzero(-d * p[k1:] >= psi_switch)
-        end = k1 + int(nxt[0]) if nxt.size else p.size
-        seg = d * p[k1:end]
-        j = int(np.argmax(seg))
-        if end == p.size and j == seg.size - 1:
-            break                                   # still turning when the record ends
-        out.append(float(seg[j] - psi_switch))
-        k, d = k1, -d
-    return out
 
 
 def reversal_delays(tr: Trial, psi_switch: float, threshold: float = np.deg2rad(0.5)) -> list[float]:
