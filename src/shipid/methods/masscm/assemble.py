@@ -246,6 +246,11 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
     conds = [ds.condition for ds in prep]
     reasons = implausible_identifiable(theta, known, conds, {"m": std.get("m", 0.0), "zm_bar": std.get("zm_bar", 0.0)})
     nuisance = [w for w in implausible_reasons(theta, known, conds) if w not in ("non-finite estimate",)]
+    if reasons:  # an implausible solution is not an estimate of the load: say so in each entry, not only in a warning
+        why = "implausible solution (" + ", ".join(reasons) + "): not an estimate of the load"
+        for n in ("m", "zm_bar", "rho"):
+            e = est[n]
+            est[n] = replace(e, status="not determined", note=f"{why}; {e.note}" if e.note else why)
     warn = list(core["warnings"])
     if not core["converged"]:
         warn.append(f"not converged after {core['iterations']} iterations (tol {options.tol:g} on g)")
