@@ -20,13 +20,8 @@ Examples
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
-
-import numpy as np
 
 from shipid import registry
-from shipid.data.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.linalg import single_threaded
 from shipid.methods._trials import Trialish, as_trial
@@ -39,8 +34,6 @@ from shipid.simulate.run import simulate_vessel
 
 #: Method name -> :class:`~shipid.registry.MethodInfo` (paper, options class, trials taken).
 METHODS: dict[str, MethodInfo] = registry.identifying()
-
-_Trialish = Trialish
 
 
 @single_threaded
@@ -78,7 +71,7 @@ def identify(method: str, trials, *, vessel: str | None = None, options=None, **
 
 
 @single_threaded
-def validate(model, trial: _Trialish, *, horizon: float | None = None, **kwargs):
+def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     """Open-loop prediction of a held-out run by an identified model (``shipid validate``).
 
     Parameters
