@@ -8,6 +8,7 @@ import pytest
 from shipid.errors import ConvergenceError
 from shipid.estimate.ekf_augmented import (AugmentedModel, augmented_ekf, numerical_jacobian,
                                            parallel_augmented_ekf, rk4_map)
+from shipid.simulate.integrate import rk4_step
 
 
 def _linear_system(seed=0, n=200):
@@ -141,20 +142,38 @@ def test_divergence_is_reported():
         augmented_ekf(model, np.ones(1), np.zeros(0), np.eye(1), np.eye(1), np.eye(1), np.ones((10, 1)))
 
 
-def test_rk4_map_jacobian_is_exact_derivative():
-    def fc(x, u, th):
-        return np.array([x[1], -th[0] * np.sin(x[0]) - th[1] * x[1] + u[0]])
+def _pendulum():
+    """A forced damped pendulum ``f(t, x, u, θ)`` (time enters through the forcing) and its Jacobians."""
+    def f(t, x, u, th):
+        return np.array([x[1], -th[0] * np.sin(x[0]) - th[1] * x[1] + u[0] * np.cos(t)])
 
-    def jc(x, u, th):
+    def jac(t, x, u, th):
         return (np.array([[0.0, 1.0], [-th[0] * np.cos(x[0]), -th[1]]]),
                 np.array([[0.0, 0.0], [-np.sin(x[0]), -x[1]]]))
+    return f, jac
 
-    x, u, th, dt = np.array([0.4, -0.2]), np.array([0.3]), np.array([2.0, 0.5]), 0.3
-    xn, Px, Pt = rk4_map(fc, jc, x, u, th, dt)
-    Jx = numerical_jacobian(lambda s: rk4_map(fc, jc, s, u, th, dt)[0], x, 1e-6)
-    Jt = numerical_jacobian(lambda s: rk4_map(fc, jc, x, u, s, dt)[0], th, 1e-6)
+
+def test_rk4_map_jacobian_is_exact_derivative():
+    f, jac = _pendulum()
+    t, x, u, th, dt = 0.7, np.array([0.4, -0.2]), np.array([0.3]), np.array([2.0, 0.5]), 0.3
+    xn, Px, Pt = rk4_map(f, jac, t, x, u, th, dt)
+    Jx = numerical_jacobian(lambda s: rk4_map(f, jac, t, s, u, th, dt)[0], x, 1e-6)
+    Jt = numerical_jacobian(lambda s: rk4_map(f, jac, t, x, u, s, dt)[0], th, 1e-6)
     np.testing.assert_allclose(Px, Jx, atol=1e-8)
     np.testing.assert_allclose(Pt, Jt, atol=1e-8)
+
+
+def test_rk4_map_state_is_the_one_rk4():
+    """The discrete map of eq. 15 is the simulators' RK4 step, to the last bit; t is threaded through."""
+    f, jac = _pendulum()
+    t, x, u, th, dt = 0.7, np.array([0.4, -0.2]), np.array([0.3]), np.array([2.0, 0.5]), 0.3
+    xn, _, _ = rk4_map(f, jac, t, x, u, th, dt)
+    np.testing.assert_array_equal(xn, rk4_step(f, t, x, u, th, dt))
+    assert not np.allclose(xn, rk4_map(f, jac, t + 1.0, x, u, th, dt)[0])
+    _, Px, Pt = rk4_map(lambda tt, s, uu, p: f(tt, s, uu, th), lambda tt, s, uu, p: (jac(tt, s, uu, th)[0],
+                                                                                       np.zeros((2, 0))),
+                        t, x, u, np.zeros(0), dt)
+    assert Px.shape == (2, 2) and Pt.shape == (2, 0)
 
 
 def test_consider_states_keep_their_estimate_and_inflate_the_others():

@@ -31,6 +31,7 @@ import numpy as np
 from shipid.errors import ConvergenceError
 from shipid.estimate.linalg import (NotPositiveDefiniteError, check_positive_definite, joseph_update,
                                     kalman_gain, symmetrize)
+from shipid.simulate.integrate import rk4_step_jacobians
 
 # f(k, x, u, theta) -> x_next ; h(k, x, theta) -> z
 DiscreteDynamics = Callable[[int, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -144,45 +145,23 @@ def numerical_jacobian(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray, r
     return np.column_stack(cols)
 
 
-def rk4_map(fc: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray],
-            jc: Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
-            x: np.ndarray, u: np.ndarray, theta: np.ndarray, dt: float
+def rk4_map(f: Callable[[float, np.ndarray, np.ndarray, np.ndarray], np.ndarray],
+            jac: Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]],
+            t: float, x: np.ndarray, u: np.ndarray, theta: np.ndarray, dt: float
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One RK4 step of ``ẋ = fc(x, u, θ)`` and its exact Jacobians (discretisation of eq. 15).
+    """One RK4 step of ``ẋ = f(t, x, u, θ)`` and its exact Jacobians (discretisation of eq. 15).
 
-    The Jacobians of the RK4 map are propagated through the four stages by the chain rule,
-    so ``Φ`` of Table 1 is the derivative of the very map the filter propagates with.
+    The discrete map ``f(k, x, u, θ)`` of eq. 15 and its ``Φ`` (Table 1) from the continuous
+    model ``f(t, x, u, θ)`` with Jacobians ``jac(t, x, u, θ) -> (∂f/∂x, ∂f/∂θ)``, by the package's
+    one RK4 (:func:`shipid.simulate.integrate.rk4_step_jacobians`): the Jacobians are propagated
+    through the four stages by the chain rule, so ``Φ`` is the derivative of the very map the
+    filter propagates with.
 
     Returns
     -------
     x_next, dx_next/dx (nx, nx), dx_next/dθ (nx, p)
     """
-    nx = x.size
-    p = theta.size
-    k1 = fc(x, u, theta)
-    A1, B1 = jc(x, u, theta)
-    x2 = x + 0.5 * dt * k1
-    k2 = fc(x2, u, theta)
-    A2, B2 = jc(x2, u, theta)
-    # d x2 / d(x, θ)
-    X2x = np.eye(nx) + 0.5 * dt * A1
-    X2t = 0.5 * dt * B1
-    K2x = A2 @ X2x
-    K2t = A2 @ X2t + B2
-    x3 = x + 0.5 * dt * k2
-    k3 = fc(x3, u, theta)
-    A3, B3 = jc(x3, u, theta)
-    K3x = A3 @ (np.eye(nx) + 0.5 * dt * K2x)
-    K3t = A3 @ (0.5 * dt * K2t) + B3
-    x4 = x + dt * k3
-    k4 = fc(x4, u, theta)
-    A4, B4 = jc(x4, u, theta)
-    K4x = A4 @ (np.eye(nx) + dt * K3x)
-    K4t = A4 @ (dt * K3t) + B4
-    xn = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    Phx = np.eye(nx) + dt / 6.0 * (A1 + 2 * K2x + 2 * K3x + K4x)
-    Pht = dt / 6.0 * (B1 + 2 * K2t + 2 * K3t + K4t) if p else np.zeros((nx, 0))
-    return xn, Phx, Pht
+    return rk4_step_jacobians(f, jac, t, x, u, theta, dt)
 
 
 def _as_callable(a: Any) -> Callable[[int], np.ndarray]:

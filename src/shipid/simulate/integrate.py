@@ -42,10 +42,12 @@ def rk4_propagate(f: Callable[..., np.ndarray], t: float, x: np.ndarray, h: floa
     """Integrate ``ẋ = f(t, x, *args)`` over ``h`` by ``substeps`` classical Runge–Kutta steps.
 
     The one RK4 of the package: with ``args = (u, θ)`` it steps the dynamics ``f(t, x, u, θ)`` with
-    ``u`` held (:func:`rk4_step`, the simulators); the continuous–discrete EKF
-    (:func:`shipid.estimate.cd_ekf.cd_ekf`) calls it with ``args = ()`` on its ``f(t, x)``. ``x`` may
-    carry leading batch axes when ``f`` does (e.g. :func:`shipid.models.mmg.simulate_batch`).
-    The compiled twins (:func:`shipid.methods.ebm.kernels.rk4_into`) are tested against it.
+    ``u`` held (:func:`rk4_step`, the simulators, and the continuous–discrete EKF
+    :func:`shipid.estimate.cd_ekf.cd_ekf`); :func:`rk4_step_jacobians` steps the variational system
+    with it (the state-augmented EKF's discrete map and Φ). ``x`` may carry leading batch axes when
+    ``f`` does (e.g. :func:`shipid.models.mmg.simulate_batch`,
+    :func:`shipid.methods.mmg.manoeuvres.rows_rk4`). Each compiled twin (numba) is tested against it;
+    ``tests/test_one_rk4.py`` lists them and fails on any other RK4 in the package.
     """
     hs = h / substeps
     for _ in range(substeps):
@@ -56,6 +58,38 @@ def rk4_propagate(f: Callable[..., np.ndarray], t: float, x: np.ndarray, h: floa
         x = x + (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         t += hs
     return x
+
+
+def rk4_step_jacobians(f: Dynamics, jac: Callable[..., tuple[np.ndarray, np.ndarray]], t: float,
+                       x: np.ndarray, u: np.ndarray, theta: np.ndarray, h: float
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One RK4 step of ``f(t, x, u, θ)`` (``u`` held) and the exact Jacobians of that step.
+
+    :func:`rk4_propagate` steps the variational system ``ẋ = f``, ``Ṡ_x = A S_x``,
+    ``Ṡ_θ = A S_θ + B`` (``A, B = jac(t, x, u, θ)``, the derivatives ``∂f/∂x`` (nx, nx) and
+    ``∂f/∂θ`` (nx, p)) from ``S_x = I``, ``S_θ = 0``. The RK4 stages of the tangent are the
+    chain rule through the stages of the state, so the returned matrices are the derivatives
+    of the very map returned (the ``Φ`` the state-augmented EKF of Fossen et al. 1996, Table 1,
+    needs for its discretised eq. 15), not of the flow.
+
+    Returns
+    -------
+    x_next (nx,), ∂x_next/∂x (nx, nx), ∂x_next/∂θ (nx, p)
+    """
+    x = np.asarray(x, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    nx, p = x.size, theta.size
+    ix, it = nx + nx * nx, nx + nx * nx + nx * p
+
+    def variational(tt, s, uu, th):
+        xs = s[:nx]
+        A, B = jac(tt, xs, uu, th)
+        return np.concatenate([f(tt, xs, uu, th), (A @ s[nx:ix].reshape(nx, nx)).ravel(),
+                               (A @ s[ix:it].reshape(nx, p) + B).ravel()])
+
+    s0 = np.concatenate([x, np.eye(nx).ravel(), np.zeros(nx * p)])
+    s1 = rk4_propagate(variational, t, s0, h, 1, (u, theta))
+    return s1[:nx], s1[nx:ix].reshape(nx, nx), s1[ix:it].reshape(nx, p)
 
 
 def rk4_step(f: Dynamics, t: float, x: np.ndarray, u: np.ndarray, theta: Any, h: float) -> np.ndarray:
@@ -138,4 +172,4 @@ def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLa
     return Simulation(t=t, x=X, u=U)
 
 
-__all__ = ["Dynamics", "InputLaw", "Simulation", "rk4_propagate", "rk4_step", "simulate"]
+__all__ = ["Dynamics", "InputLaw", "Simulation", "rk4_propagate", "rk4_step", "rk4_step_jacobians", "simulate"]

@@ -11,8 +11,10 @@ which is exact for ``η̇ = J(ψ) ν`` whatever the sway and yaw (``ẋ cos ψ +
 
 :func:`surge_model` (SI1, eqs. 31–32 in momentum form) and :func:`momentum_model` (SI2/SI3,
 eqs. 35–38) are the :class:`~shipid.estimate.ekf_augmented.AugmentedModel` of one trial for the
-state-augmented EKF (Table 1, eqs. 17–19), discretised by RK4 over the trial's own sample
-intervals.
+state-augmented EKF (Table 1, eqs. 17–19). Each is written once as a continuous model
+``f(t, x, u, θ)`` with its Jacobians; the discrete map ``f(k, x, u, θ)`` of eq. 15 and its Φ are the
+package's one RK4 over the trial's own sample intervals (:func:`~shipid.estimate.ekf_augmented.rk4_map`).
+The compiled likelihood kernels of :mod:`shipid.methods.dp.loglik` are tested against these maps.
 """
 
 from __future__ import annotations
@@ -67,18 +69,20 @@ def prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
 
 
 class _RK4Discrete:
-    """Discrete f and Φ of one trial by :func:`rk4_map` over its own (bis) sample intervals, cached."""
+    """Discrete f(k, x, u, θ) and Φ of one trial: :func:`rk4_map` of the continuous ``f(t, x, u, θ)``
+    over the trial's own (bis) sample intervals, cached."""
 
     def __init__(self, fc, jc, t: np.ndarray):
         self.fc, self.jc = fc, jc
-        self.dt = np.diff(t)
+        self.t = np.asarray(t, dtype=float)
+        self.dt = np.diff(self.t)
         self._key = None
         self._val = None
 
     def _eval(self, k, x, u, th):
         key = (k, x.tobytes(), th.tobytes())
         if key != self._key:
-            self._val = rk4_map(self.fc, self.jc, x, u, th, self.dt[k])
+            self._val = rk4_map(self.fc, self.jc, self.t[k], x, u, th, self.dt[k])
             self._key = key
         return self._val
 
@@ -106,11 +110,12 @@ def surge_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int, ..
         out[free] = th
         return out
 
-    def fc(x, u, th):
+    def fc(t, x, u, th):
+        """Eqs. 31–32 (momentum form), ``f(t, x, u, θ)``; autonomous."""
         f = full(th)
         return np.array([f[0] * x[0] + f[5] * (u[0] + u[1]) + f[8] * np.cos(u[6]) * u[5] + x[2], x[0] / m11, 0.0])
 
-    def jc(x, u, th):
+    def jc(t, x, u, th):
         f = full(th)
         A = np.array([[f[0], 0.0, 1.0], [1.0 / m11, 0.0, 0.0], [0.0, 0.0, 0.0]])
         Bfull = np.zeros((3, 9))
@@ -145,11 +150,12 @@ def momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int,
             cache[key] = dp.matrices_from_theta(out)
         return cache[key]
 
-    def fc(x, u, th):
+    def fc(t, x, u, th):
+        """Eqs. 35–38, ``f(t, x, u, θ)`` with ``u = [u1 … u6, α6]``; autonomous."""
         A_h, K = mats(th)
         return rhs(x, u[:6], u[6], M, Minv, A_h, K, arms)
 
-    def jc(x, u, th):
+    def jc(t, x, u, th):
         A_h, K = mats(th)
         Fx, Ft = rjac(x, u[:6], u[6], M, Minv, A_h, K, arms)
         return Fx, Ft[:, free]
