@@ -39,6 +39,7 @@ from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.models import mmg
 from shipid.data.io import read_trial
+from shipid.simulate.integrate import rk4_propagate
 from shipid.simulate.model import ShipModel
 
 #: Rudder limit (rad) of the manoeuvres (35° hard over, MSC.137(76) 4.2.1).
@@ -281,17 +282,20 @@ def rows_deriv(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray,
     return np.stack([x[:, 3] * c - x[:, 4] * s, x[:, 3] * s + x[:, 4] * c, x[:, 5], du, dv, dr], axis=-1)
 
 
+def rows_dynamics(t: float, x: np.ndarray, u: tuple, theta: tuple) -> np.ndarray:
+    """:func:`rows_deriv` as ``f(t, x, u, θ)``: ``u = (δ, n, wind)``, ``θ = (model, Th)``; autonomous."""
+    model, Th = theta
+    delta, n, wind = u
+    return rows_deriv(model, Th, x, delta, n, wind)
+
+
 def rows_rk4(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, h, wind=None):
     """One RK4 step of every row (inputs held), as :func:`shipid.models.mmg.simulate_batch`; ``h`` scalar or (B, 1).
+
+    The package's one RK4 (:func:`shipid.simulate.integrate.rk4_propagate`) on :func:`rows_dynamics`.
     A state beyond 1e6 becomes NaN (a diverging row)."""
-    k1 = rows_deriv(model, Th, x, delta, n, wind)
-    k2 = rows_deriv(model, Th, x + 0.5 * h * k1, delta, n, wind)
-    k3 = rows_deriv(model, Th, x + 0.5 * h * k2, delta, n, wind)
-    k4 = rows_deriv(model, Th, x + h * k3, delta, n, wind)
-    x = x + (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+    x = rk4_propagate(rows_dynamics, 0.0, x, h, 1, ((delta, n, wind), (model, Th)))
     return np.where(np.abs(x) < 1e6, x, np.nan)
-
-
 
 
 @dataclass(frozen=True)
@@ -427,4 +431,4 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
 
 __all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
-           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH"]
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH"]
