@@ -11,7 +11,9 @@ is the criterion of the prediction-error method around the filter; :mod:`shipid.
 maximises it over θ and the noise intensities and differentiates it for the observed
 information. The filter here is the one :func:`shipid.estimate.ekf_augmented.augmented_ekf`
 runs with a zero parameter covariance: the same RK4 map and its exact chain-rule Jacobian
-(:func:`~shipid.estimate.ekf_augmented.rk4_map`), the Joseph-form update, the symmetrised
+(:func:`~shipid.estimate.ekf_augmented.rk4_map` of the continuous models of
+:mod:`shipid.methods.dp.stage_models`; ``tests/methods/dp/test_rk4_kernels.py`` checks each compiled
+step against it), the Joseph-form update, the symmetrised
 covariance, the heading innovation wrapped to (−π, π]; ``tests/methods/dp/test_loglik.py``
 checks the two agree.
 
@@ -88,7 +90,11 @@ def _mom_jac(x, M, Minv, A, F):
 
 @njit(**_JIT)
 def _mom_rk4(x, tau, M, Minv, A, dt, Phi):
-    """One RK4 step of eqs. 35–37 and its exact Jacobian into ``Phi`` (as ``rk4_map``)."""
+    """One RK4 step of eqs. 35–37 and its exact Jacobian into ``Phi``.
+
+    The compiled twin of ``rk4_map`` on :func:`shipid.methods.dp.stage_models.momentum_model`
+    (without current states); ``tests/methods/dp/test_rk4_kernels.py`` checks they agree.
+    """
     n = 9
     I = np.eye(n)
     k1 = np.empty(n)
@@ -115,6 +121,27 @@ def _mom_rk4(x, tau, M, Minv, A, dt, Phi):
     K4 = A4 @ (I + dt * K3)
     Phi[:, :] = I + dt / 6.0 * (A1 + 2.0 * K2 + 2.0 * K3 + K4)
     return x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@njit(**_JIT)
+def _surge_rk4(x, tau, Ac, h):
+    """One RK4 step of eqs. 31–32 (momentum form), the linear ``ẋ = Ac x + [τ, 0, 0]``, and its Φ.
+
+    Returns ``(x_next, Φ)``: the compiled twin of ``rk4_map`` on
+    :func:`shipid.methods.dp.stage_models.surge_model`; ``tests/methods/dp/test_rk4_kernels.py``
+    checks they agree.
+    """
+    I = np.eye(3)
+    c = np.array([tau, 0.0, 0.0])
+    k1 = Ac @ x + c
+    k2 = Ac @ (x + 0.5 * h * k1) + c
+    k3 = Ac @ (x + 0.5 * h * k2) + c
+    k4 = Ac @ (x + h * k3) + c
+    K2 = Ac @ (I + 0.5 * h * Ac)
+    K3 = Ac @ (I + 0.5 * h * K2)
+    K4 = Ac @ (I + h * K3)
+    Phi = I + h / 6.0 * (Ac + 2.0 * K2 + 2.0 * K3 + K4)
+    return x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4), Phi
 
 
 @njit(**_JIT)
@@ -254,7 +281,6 @@ def surge_loglik(Z, dt, tau, m11, a11, qh, qb, R, x0, P0):
     Ac[0, 0] = a11
     Ac[0, 2] = 1.0
     Ac[1, 0] = 1.0 / m11
-    I = np.eye(3)
     for k in range(n):
         if np.isfinite(Z[k]):
             nu = np.array([Z[k] - x[1]])
@@ -263,17 +289,7 @@ def surge_loglik(Z, dt, tau, m11, a11, qh, qb, R, x0, P0):
         if k == n - 1:
             break
         h = dt[k]
-        # RK4 of the linear system ẋ = Ac x + c (c = [τ, 0, 0]) and its Jacobian
-        c = np.array([tau[k], 0.0, 0.0])
-        k1 = Ac @ x + c
-        k2 = Ac @ (x + 0.5 * h * k1) + c
-        k3 = Ac @ (x + 0.5 * h * k2) + c
-        k4 = Ac @ (x + h * k3) + c
-        K2 = Ac @ (I + 0.5 * h * Ac)
-        K3 = Ac @ (I + 0.5 * h * K2)
-        K4 = Ac @ (I + h * K3)
-        Phi = I + h / 6.0 * (Ac + 2.0 * K2 + 2.0 * K3 + K4)
-        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        x, Phi = _surge_rk4(x, tau[k], Ac, h)
         Pn = Phi @ P @ Phi.T
         Pn[0, 0] += qh * h
         Pn[2, 2] += qb * h
