@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from shipid.estimate.cd_ekf import cd_ekf, taylor_discretise, van_loan
+from shipid.simulate.integrate import rk4_step
 
 
 def _double_integrator(q=0.5, r=0.3, h=0.5, n=200, seed=0):
@@ -27,8 +28,30 @@ def _double_integrator(q=0.5, r=0.3, h=0.5, n=200, seed=0):
 
 
 def _run(m, x0, P0):
-    return cd_ekf(lambda t, x: m["F"] @ x, lambda t, x: m["F"], lambda t, x: m["H"] @ x,
+    return cd_ekf(lambda t, x, u, th: m["F"] @ x, lambda t, x, u, th: m["F"], lambda t, x: m["H"] @ x,
                   lambda t, x: m["H"], m["Q"], m["R"], m["t"], m["Z"], x0, P0)
+
+
+def test_prediction_is_the_one_rk4_with_held_input_and_parameters():
+    """f(t, x, u, θ): between t_k and t_{k+1} the state follows rk4_step with u[k] held and θ passed."""
+    m = _double_integrator(n=30)
+    n = m["t"].size
+    u = np.column_stack([np.sin(0.3 * m["t"])])
+
+    def f(t, x, uk, th):
+        return np.array([x[1], -th[0] * np.sin(x[0]) + th[1] * uk[0] + 0.1 * np.cos(t)])
+
+    def F(t, x, uk, th):
+        return np.array([[0.0, 1.0], [-th[0] * np.cos(x[0]), 0.0]])
+
+    th = np.array([0.8, 2.0])
+    fr = cd_ekf(f, F, lambda t, x: m["H"] @ x, lambda t, x: m["H"], m["Q"], m["R"], m["t"], m["Z"],
+                np.zeros(2), np.eye(2), u=u, theta=th, substeps=2)
+    for k in range(1, n):
+        h = m["t"][k] - m["t"][k - 1]
+        x = rk4_step(f, m["t"][k - 1], fr.x_filt[k - 1], u[k - 1], th, 0.5 * h)
+        x = rk4_step(f, m["t"][k - 1] + 0.5 * h, x, u[k - 1], th, 0.5 * h)
+        np.testing.assert_array_equal(fr.x_pred[k], x)
 
 
 def test_discretisation_matches_closed_form():

@@ -25,7 +25,7 @@ def _linear_problem(n=300, seed=1):
         X[k] = x
         Z[k] = H @ x + rng.multivariate_normal(np.zeros(2), R)
     t = np.arange(n) * h
-    fr = cd_ekf(lambda t, x: F @ x, lambda t, x: F, lambda t, x: H @ x, lambda t, x: H, Q, R, t, Z,
+    fr = cd_ekf(lambda t, x, u, th: F @ x, lambda t, x, u, th: F, lambda t, x: H @ x, lambda t, x: H, Q, R, t, Z,
                 np.zeros(3), np.eye(3))
     return fr, X
 

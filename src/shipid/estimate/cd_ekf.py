@@ -1,9 +1,11 @@
 """Continuous–discrete extended Kalman filter (seed 002, Yoon & Rhee 2003, §3.1, eq. 9, Fig. 3).
 
-Continuous state equation ``ẋ = f(t, x) + w(t)``, ``E[w wᵀ] = Q δ(t−s)``, discrete
-measurements ``z_k = h(t_k, x_k) + v_k``, ``E[v vᵀ] = R``.
+Continuous state equation ``ẋ = f(t, x, u, θ) + w(t)`` (the package's one dynamics signature),
+``E[w wᵀ] = Q δ(t−s)``, with the input ``u`` held over each sample interval and parameters ``θ``
+passed through; discrete measurements ``z_k = h(t_k, x_k) + v_k``, ``E[v vᵀ] = R``.
 
-Between samples the estimate follows ``f`` (fixed-step RK4), and the covariance
+Between samples the estimate follows ``f`` (the one RK4,
+:func:`shipid.simulate.integrate.rk4_propagate`), and the covariance
 follows the matrix Riccati equation ``Ṗ = F P + P Fᵀ + Q`` with the Jacobian ``F``
 frozen at the start of the interval, solved exactly by Van Loan's method::
 
@@ -21,13 +23,13 @@ The function is pure: it takes the model and data and returns a
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 import scipy.linalg as sla
 
 from shipid.estimate.linalg import check_positive_definite, symmetrize
-from shipid.simulate.integrate import rk4_propagate
+from shipid.simulate.integrate import Dynamics, rk4_propagate
 
 LOG2PI = float(np.log(2.0 * np.pi))
 
@@ -144,16 +146,17 @@ def taylor_discretise(F: np.ndarray, Q: np.ndarray, h: float, *, tol: float = 1e
     return van_loan(F, Q, h)
 
 
-def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.ndarray], np.ndarray],
+def cd_ekf(f: Dynamics, F: Callable[[float, np.ndarray, np.ndarray, Any], np.ndarray],
            h: Callable[[float, np.ndarray], np.ndarray], H: Callable[[float, np.ndarray], np.ndarray],
            Q: np.ndarray, R: np.ndarray, t: np.ndarray, z: np.ndarray, x0: np.ndarray,
-           P0: np.ndarray, *, substeps: int = 1, check_pd: bool = True) -> FilterResult:
+           P0: np.ndarray, *, u: np.ndarray | None = None, theta: Any = None, substeps: int = 1,
+           check_pd: bool = True) -> FilterResult:
     """Run the continuous–discrete EKF over measurements ``z`` at times ``t``.
 
     Parameters
     ----------
     f, F : callable
-        ``f(t, x)`` state derivative and its Jacobian ``F(t, x)``.
+        ``f(t, x, u, θ)`` state derivative and its Jacobian ``F(t, x, u, θ) = ∂f/∂x``.
     h, H : callable
         ``h(t, x)`` measurement function and its Jacobian.
     Q : ndarray (n, n) or (N−1, n, n)
@@ -165,6 +168,11 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     z : ndarray (N, m)
         Measurements; a NaN entry is a missing measurement (skipped in the update).
     x0, P0 : prior at ``t[0]`` (before the first measurement).
+    u : ndarray (N, nu), optional
+        Inputs on the sample grid; ``u[k]`` is held over ``[t_k, t_{k+1})`` (zero-order hold).
+        None: ``f`` and ``F`` get an empty input.
+    theta : object, optional
+        Parameters passed through to ``f`` and ``F``.
     substeps : int
         RK4 steps per sample interval for the state.
     check_pd : bool
@@ -189,12 +197,14 @@ def cd_ekf(f: Callable[[float, np.ndarray], np.ndarray], F: Callable[[float, np.
     I = np.eye(n)
     Q = np.asarray(Q, dtype=float)
     Q_per_step = Q.ndim == 3
+    U = np.zeros((N, 0)) if u is None else np.asarray(u, dtype=float).reshape(N, -1)
     for k in range(N):
         if k > 0:
             hk = t[k] - t[k - 1]
-            Fk = F(t[k - 1], x)
+            uk = U[k - 1]
+            Fk = F(t[k - 1], x, uk, theta)
             Phi_k, Qd_k = taylor_discretise(Fk, Q[k - 1] if Q_per_step else Q, hk)
-            x = rk4_propagate(f, t[k - 1], x, hk, substeps)
+            x = rk4_propagate(f, t[k - 1], x, hk, substeps, (uk, theta))
             P = Phi_k @ P @ Phi_k.T + Qd_k
             P = 0.5 * (P + P.T)
             Phi[k - 1] = Phi_k

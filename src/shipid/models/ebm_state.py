@@ -118,8 +118,8 @@ class EbmModel:
         dx[12], dx[13] = x[13], x[14]
         return dx
 
-    def F(self, t: float, x: np.ndarray) -> np.ndarray:
-        """Jacobian ∂f/∂x (17 × 17)."""
+    def F(self, t: float, x: np.ndarray, u=None, theta=None) -> np.ndarray:
+        """Jacobian ∂f/∂x (17 × 17); signature ``F(t, x, u, θ)`` as :meth:`f`."""
         ur, vr, r, psi = x[0], x[1], x[2], x[5]
         m, xg = self.m, self.x_G
         # d rhs / d (ur, vr, r)

@@ -216,7 +216,7 @@ def test_generic_smoothers_equal_reference_on_linear_model():
     t = np.arange(200) * 0.5
     Z = rng.normal(size=(200, 2))
     Z[50] = np.nan
-    fr = cd_ekf(lambda t, x: F @ x, lambda t, x: F, lambda t, x: H @ x, lambda t, x: H,
+    fr = cd_ekf(lambda t, x, u, th: F @ x, lambda t, x, u, th: F, lambda t, x: H @ x, lambda t, x: H,
                 np.diag([0.0, 0.02, 0.01]), np.diag([0.04, 0.25]), t, Z, np.zeros(3), np.eye(3))
     _assert_smoothers_equal(fast.mbf_smoother_fast(fr), mbf_smoother(fr), fr)
     _assert_smoothers_equal(fast.rts_smoother_fast(fr), rts_smoother(fr), fr)

@@ -8,6 +8,7 @@ from shipid.estimate import numba_linalg
 from shipid.errors import ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import kernels
+from shipid.simulate.integrate import rk4_propagate
 
 
 def _trial(seed: int, n: int = 900, gaps: bool = False) -> Trial:
@@ -57,3 +58,18 @@ def test_numba_linalg_cache_key_is_current():
     key = numba_linalg.source_key(numba_linalg)
     assert key == kernels.NUMBA_LINALG_KEY, f"set NUMBA_LINALG_KEY = {key!r} in shipid/methods/mmg/kernels.py"
     assert kernels.CACHE_VALID
+
+
+def test_compiled_kinematic_rk4_is_the_one_rk4():
+    """kernels._kin_rk4 (inside the compiled filter) = simulate.integrate.rk4_propagate on estimator.kinematic_f."""
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        x = np.concatenate([rng.normal(0, 50, 2), [rng.uniform(-np.pi, np.pi)], rng.normal(0, 1, 3),
+                            rng.normal(0, 0.1, 3)])
+        h = rng.uniform(0.01, 1.0)
+        want = rk4_propagate(R.kinematic_f, 0.0, x, h, 1, (np.zeros(0), None))
+        got = x.copy()
+        w = [np.empty(9) for _ in range(5)]
+        kernels._kin_rk4(got, h, *w)
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+        assert not np.allclose(got, x)

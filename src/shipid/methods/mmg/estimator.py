@@ -130,13 +130,16 @@ class SmoothedRun:
     sigma: np.ndarray             # (6,) measurement noise standard deviations used
 
 
-def _kin_f(t, s):
+def kinematic_f(t, s, u, theta):
+    """The 9-state kinematic model of step 1 as ``f(t, x, u, θ)`` (autonomous, no input, no parameter):
+    ``s = [x0, y0, ψ, u, v, r, u̇, v̇, ṙ]``, white jerk noise enters the last three."""
     psi, u, v, r = s[2], s[3], s[4], s[5]
     c, sn = np.cos(psi), np.sin(psi)
     return np.array([u * c - v * sn, u * sn + v * c, r, s[6], s[7], s[8], 0.0, 0.0, 0.0])
 
 
-def _kin_F(t, s):
+def kinematic_F(t, s, u, theta):
+    """∂f/∂s of :func:`kinematic_f`."""
     psi, u, v = s[2], s[3], s[4]
     c, sn = np.cos(psi), np.sin(psi)
     F = np.zeros((9, 9))
@@ -177,7 +180,7 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled:
         if compiled:
             out = kinematic_filter_smoother(t, z, Q, R, x0, P0)
         if out is None:
-            fr = cd_ekf(_kin_f, _kin_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
+            fr = cd_ekf(kinematic_f, kinematic_F, lambda tt, s: _H @ s, lambda tt, s: _H, Q, R, t, z, x0, P0)
             sm = rts_smoother(fr)
             out = (sm.x, sm.std, fr.nis, float(fr.loglik))
     except Exception as err:   # a filter breakdown is reported in one line, never a traceback
@@ -440,5 +443,5 @@ def cross_validate(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, candidates:
 
 
 __all__ = ["SmoothConfig", "SmoothedRun", "smooth_run", "FitConfig", "CANDIDATES", "regression_data", "fit",
-           "apply_candidate", "candidate_config", "row_weights", "subsample", "noise_from_data",
-           "MmgFit", "heldout_score", "horizon_sse", "horizon_score", "fold_groups", "cross_validate"]
+           "kinematic_f", "kinematic_F", "apply_candidate", "candidate_config", "row_weights", "subsample",
+           "noise_from_data", "MmgFit", "heldout_score", "horizon_sse", "horizon_score", "fold_groups", "cross_validate"]

@@ -96,6 +96,28 @@ def _kin_f(x, out):
 
 
 @njit(**_JIT)
+def _kin_rk4(x, h, k1, k2, k3, k4, xt):
+    """One RK4 step of length ``h`` of :func:`_kin_f`, in place on ``x`` (``k1..k4``, ``xt``: work arrays).
+
+    The compiled twin of :func:`shipid.simulate.integrate.rk4_propagate` on
+    :func:`shipid.methods.mmg.estimator.kinematic_f`; ``tests/methods/mmg/test_kernels.py`` checks they agree.
+    """
+    n = x.size
+    _kin_f(x, k1)
+    for i in range(n):
+        xt[i] = x[i] + 0.5 * h * k1[i]
+    _kin_f(xt, k2)
+    for i in range(n):
+        xt[i] = x[i] + 0.5 * h * k2[i]
+    _kin_f(xt, k3)
+    for i in range(n):
+        xt[i] = x[i] + h * k3[i]
+    _kin_f(xt, k4)
+    for i in range(n):
+        x[i] = x[i] + (h / 6.0) * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+
+
+@njit(**_JIT)
 def _kin_F_nz(x, h, rows, cols, vals):
     """Non-zeros of ``F(x) h`` of the kinematic model (10 entries; their count is returned)."""
     psi, u, v = x[2], x[3], x[4]
@@ -203,19 +225,7 @@ def _filter_smooth(t, z, Q, R, x0, P0, tol, max_terms, check_pd,
             nz = _kin_F_nz(x, hk, rows, cols, vals)
             if not _taylor(rows, cols, vals, nz, Q, hk, tol, max_terms, Phi, Qd, term, C, T1, T2):
                 return TAYLOR_NOT_CONVERGED, k
-            # RK4 (one step) of the kinematic model
-            _kin_f(x, k1)
-            for i in range(n):
-                xt[i] = x[i] + 0.5 * hk * k1[i]
-            _kin_f(xt, k2)
-            for i in range(n):
-                xt[i] = x[i] + 0.5 * hk * k2[i]
-            _kin_f(xt, k3)
-            for i in range(n):
-                xt[i] = x[i] + hk * k3[i]
-            _kin_f(xt, k4)
-            for i in range(n):
-                x[i] = x[i] + (hk / 6.0) * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i])
+            _kin_rk4(x, hk, k1, k2, k3, k4, xt)
             # P = Φ P Φᵀ + Q_d
             _mm(Phi, P, T1)
             _mmT(T1, Phi, P)
