@@ -14,8 +14,10 @@ import json
 import click
 import pytest
 
-from shipid.cli import cli, main
+from shipid.cli import cli, load_all_commands, main
 from shipid.cli._common import out_options
+
+load_all_commands()         # the commands are imported when used; the walk needs them all
 
 #: Groups whose every command produces a result (JSON and -o/--out) ...
 RESULT_GROUPS = ("identify", "study", "design", "analyse")
