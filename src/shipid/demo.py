@@ -82,7 +82,7 @@ def demo_step(name: str, *, order: int = 100, description: str = "") -> Callable
 SKIPPED: dict[str, str] = {}
 
 
-def _discover() -> None:
+def discover() -> None:
     """Import every module of :mod:`shipid.methods` (and the CLI) so their steps register.
 
     A module that needs an optional third-party package which is not installed
@@ -103,7 +103,7 @@ def _discover() -> None:
 
 def demo_steps() -> list[DemoStep]:
     """All registered steps, in order."""
-    _discover()
+    discover()
     return sorted(_STEPS.values(), key=lambda s: (s.order, s.name))
 
 

@@ -1,6 +1,6 @@
 """Lazy command loading (issue 14): ``shipid --help``, ``shipid vessels`` and ``shipid check`` import no method.
 
-The groups list their commands from the generated index ``shipid.cli._index.INDEX``; a command's
+The groups list their commands from the generated index ``shipid.cli.INDEX``; a command's
 module is imported when the command is resolved. The index must be what the command modules say
 (names, modules, summaries), and the lazy help must be the help of the fully loaded tree.
 """
@@ -16,8 +16,7 @@ from pathlib import Path
 import pytest
 
 import shipid
-from shipid.cli import build_index, load_all_commands, main
-from shipid.cli._index import INDEX
+from shipid.cli import INDEX, build_index, load_all_commands, main
 
 SRC = str(Path(shipid.__file__).resolve().parents[1])
 PROBE = """

@@ -220,11 +220,15 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script: run the CLI, turning known errors into one line."""
     _common.begin()
     with _common.recording():
-        rv = _run(argv)
+        rv = dispatch(argv)
         return _common.finish(rv)
 
 
-def _run(argv: list[str] | None) -> int:
+def dispatch(argv: list[str] | None) -> int:
+    """Run the command of ``argv``; each known error becomes one line on stderr and its exit status.
+
+    :func:`main` is this inside the warning recording of :mod:`shipid.cli._common`.
+    """
     try:
         rv = cli.main(args=argv, prog_name="shipid", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as err:     # bare `shipid` or `shipid study`: the help, not an error
