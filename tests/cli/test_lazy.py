@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 import shipid
+import shipid.cli
 from shipid.cli import INDEX, build_index, load_all_commands, main
 
 SRC = str(Path(shipid.__file__).resolve().parents[1])
@@ -40,7 +41,18 @@ def _fresh(body: str) -> tuple[str, dict]:
 
 def test_the_index_is_current():
     """If this fails, refresh it: python -c "import shipid.cli as c; c.write_index()"."""
+    assert shipid.cli.INDEX_CURRENT, "a command module changed since the index was written: refresh it"
     assert build_index() == INDEX
+
+
+def test_an_out_of_date_index_is_not_used():
+    """With an index whose source key does not match, every command module is imported (slow, never wrong)."""
+    body = ("import types; fake = types.ModuleType('shipid.cli._index'); fake.SOURCES = 'stale'; fake.INDEX = {}; "
+            "sys.modules['shipid.cli._index'] = fake; import shipid.cli as c; assert not c.INDEX_CURRENT; "
+            "c.main(['identify', '--help'])")
+    out, probe = _fresh(body)
+    assert probe["numba"] and {"shipid.methods.masscm", "shipid.methods.mmg"} <= set(probe["methods"])
+    assert "mass-cm" in out and "realdata" in out
 
 
 @pytest.mark.parametrize("args", [["--help"], ["identify", "--help"], ["study", "--help"], ["analyse", "--help"]],
