@@ -98,7 +98,7 @@ def no_raw_warnings(request, monkeypatch):
         warnings.simplefilter("always")
         for cat in _QUIET:
             warnings.simplefilter("ignore", cat)
-        real_inner = cli_mod._run
+        real_inner = cli_mod.dispatch
 
         def inner(*args, **kwargs):  # what reaches this recorder while main runs escaped main's own
             i = len(rec)
@@ -107,7 +107,7 @@ def no_raw_warnings(request, monkeypatch):
             finally:
                 escaped.extend(w for w in rec[i:] if not issubclass(w.category, _QUIET))
 
-        monkeypatch.setattr(cli_mod, "_run", inner)
+        monkeypatch.setattr(cli_mod, "dispatch", inner)
         yield
     if escaped:
         w = escaped[0]

@@ -11,14 +11,8 @@ From Python: ``shipid.identify(method, trials, vessel=..., options=...)``, ``shi
 ``shipid.simulate``, ``shipid.read_trial``, ``shipid.load_vessel`` (:mod:`shipid.api`).
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("shipid")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
-
-#: The public names, loaded on first use (PEP 562) so that ``import shipid`` stays cheap.
+#: The public names, loaded on first use (PEP 562) so that ``import shipid`` stays cheap
+#: (``__version__`` too: importlib.metadata alone takes about 0.1 s to import).
 _LAZY = {
     "identify": "shipid.api", "validate": "shipid.api", "METHODS": "shipid.api",
     "read_trial": "shipid.data.io", "write_trial": "shipid.data.io", "Trial": "shipid.data.trial",
@@ -28,7 +22,20 @@ _LAZY = {
 __all__ = ["__version__", "simulate", *_LAZY]
 
 
+def _version() -> str:
+    """The installed distribution's version (``0.0.0+unknown`` in a source tree without installation)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("shipid")
+    except PackageNotFoundError:
+        return "0.0.0+unknown"
+
+
 def __getattr__(name: str):
+    if name == "__version__":
+        globals()["__version__"] = v = _version()
+        return v
     if name == "simulate":       # the subpackage, callable as shipid.api.simulate
         import importlib
 
@@ -41,4 +48,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(globals()) | set(_LAZY) | {"__version__", "simulate"})

@@ -13,9 +13,9 @@ decorator::
         return [{"vessel": "fishing-vessel", "m [kg]": "22.1 ± 0.3"}]
 
 Steps run in ``order`` (ties by name). Modules are discovered by importing every
-module of :mod:`shipid.methods` (and :mod:`shipid.cli`, which imports the command
-modules), so a method registers its step simply by being in the package. Every
-step must be quick (see ``shipid demo --help`` for the measured time). A step that
+module of :mod:`shipid.methods` and every command module of :mod:`shipid.cli`
+(:func:`shipid.cli.load_all_commands`), so a method registers its step simply by
+being in the package. Every step must be quick (see ``shipid demo --help`` for the measured time). A step that
 leaves out a part of its work (real data missing, an optional package absent)
 says so with ``ctx.skip(what, why)``; the demo lists every skipped part at the end.
 
@@ -82,7 +82,7 @@ def demo_step(name: str, *, order: int = 100, description: str = "") -> Callable
 SKIPPED: dict[str, str] = {}
 
 
-def _discover() -> None:
+def discover() -> None:
     """Import every module of :mod:`shipid.methods` (and the CLI) so their steps register.
 
     A module that needs an optional third-party package which is not installed
@@ -98,12 +98,12 @@ def _discover() -> None:
             if not err.name or err.name.split(".")[0] == "shipid":
                 raise
             SKIPPED[mod.name] = f"needs the optional package {err.name!r}"
-    importlib.import_module("shipid.cli")
+    importlib.import_module("shipid.cli").load_all_commands()     # the command modules load lazily otherwise
 
 
 def demo_steps() -> list[DemoStep]:
     """All registered steps, in order."""
-    _discover()
+    discover()
     return sorted(_STEPS.values(), key=lambda s: (s.order, s.name))
 
 

@@ -37,3 +37,15 @@ def test_check_kvlcc2_json_says_how_u_was_derived(tmp_path, capsys):
     assert d["channels"]["u"]["column"] is None
     assert d["channels"]["u"]["derived"].startswith("x_dot*cos(psi)")
     assert d["channels"]["x"]["derived"] is None
+
+
+def test_check_out_writes_the_json_it_prints_and_refuses_to_clobber(tmp_path, capsys):
+    f = _kvlcc2_like(tmp_path / "HSVA_CPMC_KVLCC2_Z_10_10_S.dat")
+    out = tmp_path / "summary.json"
+    assert main(["check", str(f), "--json", "-o", str(out)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert json.loads(out.read_text(encoding="utf-8")) == printed and printed["samples"] == 200
+    assert main(["check", str(f), "-o", str(out)]) == 2
+    assert capsys.readouterr().err.strip() == f"shipid: error: {out}: output file exists (use --force to overwrite)"
+    assert main(["check", str(f), "-o", str(out), "--force"]) == 0
+    assert "200 samples" in capsys.readouterr().out          # without --json: the text summary on stdout

@@ -14,13 +14,16 @@ import json
 import click
 import pytest
 
-from shipid.cli import cli, main
+from shipid.cli import cli, load_all_commands, main
 from shipid.cli._common import out_options
+
+load_all_commands()         # the commands are imported when used; the walk needs them all
 
 #: Groups whose every command produces a result (JSON and -o/--out) ...
 RESULT_GROUPS = ("identify", "study", "design", "analyse")
-#: ... and top-level commands that do.
-RESULT_COMMANDS = (("imo",),)
+#: ... and the commands outside them that do (``check``: the summary of a trial; ``monitor mass-cm``: the
+#: JSON lines of a monitoring run).
+RESULT_COMMANDS = (("imo",), ("check",), ("monitor", "mass-cm"))
 
 
 def _walk(group: click.Group, path: tuple[str, ...] = ()):
@@ -45,7 +48,7 @@ def test_the_walk_finds_every_method_command():
     names = {" ".join(p) for p, _ in RESULTS}
     for expected in ("identify mass-cm", "identify dp", "identify ebm", "identify mmg", "study mass-cm-contour",
                      "study dp-supply", "study ebm-esso-osaka", "study kvlcc2-zigzag", "design prbs",
-                     "analyse crlb mass-cm", "imo"):
+                     "analyse crlb mass-cm", "imo", "check", "monitor mass-cm"):
         assert expected in names
 
 

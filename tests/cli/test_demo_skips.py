@@ -15,7 +15,7 @@ def only_steps(monkeypatch):
     """Run the demo with the given steps only (the real ones are tested in test_simulate_cli.py)."""
     def use(*steps):
         monkeypatch.setattr(D, "_STEPS", {s.name: s for s in steps})
-        monkeypatch.setattr(D, "_discover", lambda: None)
+        monkeypatch.setattr(D, "discover", lambda: None)
     return use
 
 

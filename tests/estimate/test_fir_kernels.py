@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.estimate.arma import _lag_gram, _solve_normal, fit_ar, hannan_rissanen
+from shipid.estimate.arma import ar_gram, ar_solve_normal, fit_ar, hannan_rissanen
 from shipid.estimate.fir_kernels import ar_normal_equations, fir_filter, lag_moments, ridge_cholesky_solve
 from shipid.estimate.iv import lag_matrix
 
@@ -36,7 +36,7 @@ def test_ar_normal_equations_equal_reference_gram():
     x = np.cumsum(np.random.default_rng(3).standard_normal(900))
     for p in (1, 2, 40):
         G, g, xx = ar_normal_equations(x, p)
-        Gr, gr = _lag_gram(x, p)
+        Gr, gr = ar_gram(x, p)
         assert np.allclose(G, Gr, rtol=0, atol=1e-13 * np.abs(Gr).max())
         assert np.allclose(g, gr, rtol=0, atol=1e-13 * np.abs(gr).max())
         assert np.isclose(xx, x[p:] @ x[p:], rtol=1e-13)
@@ -47,7 +47,7 @@ def test_ridge_cholesky_solve_equals_reference():
     A = rng.standard_normal((200, 12))
     G, g = A.T @ A, A.T @ rng.standard_normal(200)
     ok, th = ridge_cholesky_solve(G, g)
-    assert ok and np.allclose(th, _solve_normal(G, g, None, 12), rtol=1e-11)
+    assert ok and np.allclose(th, ar_solve_normal(G, g, None, 12), rtol=1e-11)
     ok, _ = ridge_cholesky_solve(-G, g)                  # not positive definite: reported, not solved
     assert not ok
 

@@ -1,9 +1,14 @@
 """The shared numba Cholesky kernels (shipid.estimate.numba_linalg) against numpy."""
 
+import importlib
+import re
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
+import shipid
 from shipid.estimate import numba_linalg as nl
 
 
@@ -53,3 +58,28 @@ def test_symmetrise_inplace_touches_the_leading_block_only():
     want[:3, :3] = 0.5 * (A[:3, :3] + A[:3, :3].T)
     nl.symmetrise_inplace(A, 3)
     np.testing.assert_array_equal(A, want)
+
+
+def _callers() -> list[str]:
+    """The modules that carry a ``NUMBA_LINALG_KEY`` (the compiled callers of these kernels)."""
+    root = Path(shipid.__file__).parent
+    return sorted(".".join(("shipid", *f.relative_to(root).with_suffix("").parts)) for f in root.rglob("*.py")
+                  if re.search(r"^NUMBA_LINALG_KEY = ", f.read_text(encoding="utf-8"), re.M))
+
+
+def test_the_callers_are_found():
+    assert {"shipid.methods.ebm.kernels", "shipid.methods.mmg.kernels", "shipid.methods.dp.loglik",
+            "shipid.methods.masscm.search"} <= set(_callers())
+
+
+@pytest.mark.parametrize("name", _callers())
+def test_every_caller_cache_key_is_current(name):
+    """A compiled caller in another file keys its disk cache on this file (numba does not see the dependency).
+
+    If this fails, numba_linalg.py was edited: set ``NUMBA_LINALG_KEY`` in the module named to the value
+    printed, which also refreshes that module's cache.
+    """
+    mod = importlib.import_module(name)
+    key = nl.source_key(nl)
+    assert mod.NUMBA_LINALG_KEY == key, f"set NUMBA_LINALG_KEY = {key!r} in {name}"
+    assert mod.CACHE_VALID

@@ -83,7 +83,7 @@ def test_configuration_is_the_frozen_one():
 def test_a_test_run_is_refused_for_training():
     sp = S.SPLITS["miyauchi2022"]
     with pytest.raises(InputError, match="test run"):
-        S._only_training(sp["train"] + sp["test"][:1], sp["test"])
+        S.check_only_training(sp["train"] + sp["test"][:1], sp["test"])
     with pytest.raises(InputError, match="test run"):
         S.kvlcc2_train(train=S.KVLCC2_TRAIN + S.KVLCC2_TEST[:1])
 

@@ -2,14 +2,26 @@
 
 The top-level group and its sub-groups (``identify``, ``study``, ``analyse``,
 ``design``) live here. Commands live in the sibling modules of this package, one
-module per topic; every module is imported by :func:`_load_commands`, so adding a
-command never needs an edit to this file. A module registers its commands on the
-groups below with the usual click decorators, e.g.::
+module per topic, and in each method's ``cli*`` modules; :func:`load_all_commands`
+finds and imports them all, so adding a command never needs an edit to this file. A
+module registers its commands on the groups below with the usual click decorators,
+e.g.::
 
     from shipid.cli import identify
 
     @identify.command("mass-cm")
     ...
+
+Start-up. The command modules import the methods, and the methods numba, which costs
+seconds; so a command's module is imported only when that command runs (or its help
+is asked for). The names, modules and one-line summaries of all commands are in the
+generated index :data:`shipid.cli._index.INDEX`, from which every group lists its
+commands without importing them. The index records a hash of the command modules it
+was built from (:func:`sources_key`); when a command module has been added or edited
+since, the index is not used and every command module is imported at start-up, as
+without an index (correct, only slow). Refresh it after such an edit with
+``python -c "import shipid.cli as c; c.write_index()"`` (``tests/cli/test_lazy.py``
+fails until then).
 
 Errors: anything derived from :class:`shipid.errors.ShipidError` is printed as one
 line on stderr (``shipid: error: ...``) and the process exits with status 2.
@@ -21,43 +33,95 @@ the JSON; with ``--strict`` a command that warned exits with status 3
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import os
 import pkgutil
 import sys
+from pathlib import Path
+from typing import Iterator
 
 import click
 
 import shipid
 from shipid.cli import _common
+from shipid.cli import _index
 from shipid.errors import ShipidError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+#: The command index (path -> module, summary, hidden): :data:`shipid.cli._index.INDEX`.
+INDEX = _index.INDEX
+
+
+def summary(cmd: click.Command) -> str:
+    """The one-line summary of ``cmd`` that its group's help shows: ``short_help``, else the first paragraph."""
+    return cmd.short_help or " ".join((cmd.help or "").split("\b")[0].split("\n\n")[0].split())
 
 
 class Group(click.Group):
-    """A click group whose command list shows each summary whole (click cuts them at 45 characters,
-    and at the first '. ', which turned "Fig. 4 ..." into "Fig.")."""
+    """A click group whose commands are imported when used, and whose command list shows each summary whole.
+
+    The commands not yet imported are known from :data:`INDEX` (name, module, summary): listing
+    them, or the group's help, imports nothing; resolving one (to run it or show its help)
+    imports its module, which registers it. Summaries are shown whole (click cuts them at 45
+    characters, and at the first '. ', which turned "Fig. 4 ..." into "Fig.").
+    """
 
     group_class = type      # sub-groups made with @cli.group are of this class too (not a change to click's Group)
 
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.parent: tuple[Group, str] | None = None
+
+    @property
+    def path(self) -> tuple[str, ...]:
+        """The names from the top-level group down to this one (``()`` for ``shipid`` itself)."""
+        return () if self.parent is None else (*self.parent[0].path, self.parent[1])
+
+    def add_command(self, cmd: click.Command, name: str | None = None) -> None:
+        super().add_command(cmd, name)
+        if isinstance(cmd, Group):
+            cmd.parent = (self, name or cmd.name)
+
+    def indexed(self) -> dict[str, tuple[str, str, bool]]:
+        """This group's commands in :data:`INDEX`: name -> (module, summary, hidden)."""
+        p = self.path
+        return {k[-1]: v for k, v in INDEX.items() if k[:-1] == p}
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(set(self.commands) | set(self.indexed()))
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        if name not in self.commands:
+            entry = self.indexed().get(name)
+            if entry is not None:
+                importlib.import_module(entry[0])
+                if name not in self.commands:       # the index is out of date: import every command module
+                    load_all_commands()
+        return self.commands.get(name)
+
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        indexed = self.indexed()
         rows = []
         for name in self.list_commands(ctx):
-            cmd = self.get_command(ctx, name)
-            if cmd is None or cmd.hidden:
-                continue
-            text = cmd.short_help or " ".join((cmd.help or "").split("\b")[0].split("\n\n")[0].split())
-            rows.append((name, text))
+            cmd = self.commands.get(name)
+            text, hidden = (summary(cmd), cmd.hidden) if cmd is not None else indexed[name][1:]
+            if not hidden:
+                rows.append((name, text))
         if rows:
             with formatter.section("Commands"):
                 formatter.write_dl(rows)
 
 
+def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    if value and not ctx.resilient_parsing:
+        click.echo(f"shipid, version {shipid.__version__}")
+        ctx.exit()
 
 
 @click.group(cls=Group, context_settings=CONTEXT)
-@click.version_option(shipid.__version__, "-V", "--version", prog_name="shipid")
+@click.option("-V", "--version", is_flag=True, expose_value=False, is_eager=True, callback=_print_version,
+              help="Show the version and exit.")
 @click.option("--strict", is_flag=True, expose_value=False, callback=_common.set_strict,
               help="Exit with status 3 if the command warns (non-convergence, implausible or undetermined "
                    "estimates, data repairs).")
@@ -90,34 +154,110 @@ def design() -> None:
     """Design inputs for identification (D-optimal manoeuvres)."""
 
 
-def _load_commands() -> None:
-    """Import the shared command modules of this package, then each method's ``cli*`` modules."""
-    for mod in pkgutil.iter_modules(__path__):
-        if not mod.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{mod.name}")
-    import shipid.methods as methods_pkg
+def command_files() -> dict[str, Path]:
+    """Every module that defines commands, with its file: this package's public modules, then each
+    method's ``cli*`` modules. Found on disk (nothing is imported to list them)."""
+    here = Path(__file__).parent
+    out = {f"{__name__}.{m.name}": here / f"{m.name}.py" for m in pkgutil.iter_modules([str(here)])
+           if not m.name.startswith("_") and not m.ispkg}
+    methods = here.parent / "methods"
+    for pkg in pkgutil.iter_modules([str(methods)]):
+        if pkg.ispkg:
+            out.update({f"shipid.methods.{pkg.name}.{m.name}": methods / pkg.name / f"{m.name}.py"
+                        for m in pkgutil.iter_modules([str(methods / pkg.name)])
+                        if (m.name == "cli" or m.name.startswith("cli_")) and not m.ispkg})
+    return out
 
-    for pkg in pkgutil.iter_modules(methods_pkg.__path__):
-        if not pkg.ispkg:
-            continue
-        sub = importlib.import_module(f"shipid.methods.{pkg.name}")
-        for mod in pkgutil.iter_modules(sub.__path__):
-            if mod.name == "cli" or mod.name.startswith("cli_"):
-                importlib.import_module(f"shipid.methods.{pkg.name}.{mod.name}")
+
+def command_modules() -> list[str]:
+    """The names of :func:`command_files`, in the order :func:`load_all_commands` imports them."""
+    return list(command_files())
 
 
-_load_commands()
+def sources_key() -> str:
+    """First 16 hex digits of the SHA-256 of the names and contents of every command module.
+
+    The index records the key of the sources it was built from; at start-up a different key
+    means the index is out of date, and every command module is imported instead.
+    """
+    h = hashlib.sha256()
+    for name, path in command_files().items():
+        h.update(name.encode() + b"\0")
+        try:
+            h.update(path.read_bytes())
+        except OSError:
+            h.update(b"(unreadable)")
+    return h.hexdigest()[:16]
+
+
+def load_all_commands() -> None:
+    """Import every command module (:func:`command_modules`), so that every group holds all its commands."""
+    for name in command_modules():
+        importlib.import_module(name)
+
+
+def walk(group: click.Group, path: tuple[str, ...] = ()) -> Iterator[tuple[tuple[str, ...], click.Command]]:
+    """Every command and sub-group registered below ``group`` so far, with its path, sorted by name."""
+    for name, cmd in sorted(group.commands.items()):
+        yield (*path, name), cmd
+        if isinstance(cmd, click.Group):
+            yield from walk(cmd, (*path, name))
+
+
+def build_index() -> dict[tuple[str, ...], tuple[str, str, bool]]:
+    """The index of every command below the groups of this file: path -> (module, summary, hidden).
+
+    Imports every command module. The module of a command is the one its function is defined
+    in, which must be one of :func:`command_modules` (importing it registers the command).
+    """
+    load_all_commands()
+    modules = set(command_modules())
+    index = {}
+    for path, cmd in walk(cli):
+        mod = getattr(cmd.callback, "__module__", None)
+        if mod == __name__:
+            continue                        # the groups defined above: always there
+        if mod not in modules:
+            raise RuntimeError(f"shipid {' '.join(path)}: defined in {mod}, which is not a command module "
+                               f"(a cli.py or cli_*.py of a method, or a module of shipid.cli)")
+        index[path] = (mod, summary(cmd), bool(cmd.hidden))
+    return index
+
+
+def write_index(path: str | Path | None = None) -> Path:
+    """Write :func:`build_index` as ``shipid/cli/_index.py`` (or to ``path``); returns the path written."""
+    out = Path(path) if path is not None else Path(__file__).with_name("_index.py")
+    lines = ['"""The index of ``shipid``\'s commands: what every group lists without importing its commands.',
+             "",
+             'Generated by :func:`shipid.cli.write_index` (``python -c "import shipid.cli as c; c.write_index()"``);',
+             "do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.",
+             '"""',
+             "",
+             "#: :func:`shipid.cli.sources_key` of the command modules this index was built from",
+             f"SOURCES = {sources_key()!r}",
+             "",
+             "#: command path -> (module whose import registers the command, summary its group shows, hidden)",
+             "INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {"]
+    for key, val in build_index().items():
+        lines += [f"    {key!r}:", f"        {val!r},"]
+    lines += ["}", ""]
+    out.write_text("\n".join(lines), encoding="utf-8")
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script: run the CLI, turning known errors into one line."""
     _common.begin()
     with _common.recording():
-        rv = _run(argv)
+        rv = dispatch(argv)
         return _common.finish(rv)
 
 
-def _run(argv: list[str] | None) -> int:
+def dispatch(argv: list[str] | None) -> int:
+    """Run the command of ``argv``; each known error becomes one line on stderr and its exit status.
+
+    :func:`main` is this inside the warning recording of :mod:`shipid.cli._common`.
+    """
     try:
         rv = cli.main(args=argv, prog_name="shipid", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as err:     # bare `shipid` or `shipid study`: the help, not an error
@@ -152,3 +292,11 @@ def _run(argv: list[str] | None) -> int:
 
 def run() -> None:  # pragma: no cover - console script shim
     sys.exit(main())
+
+
+#: True when :data:`INDEX` was built from the command modules on disk; otherwise (a command module was
+#: added or edited since ``write_index``) every command module is imported now, as without an index.
+INDEX_CURRENT = sources_key() == getattr(_index, "SOURCES", None)
+if not INDEX_CURRENT:
+    INDEX = {}
+    load_all_commands()

@@ -6,12 +6,11 @@ is answered with one line naming file, channel and row, and exit status 2.
 
 from __future__ import annotations
 
-import json
-
 import click
 import numpy as np
 
 from shipid.cli import cli
+from shipid.cli._common import emit, out_options
 from shipid.data.io import FORMATS, parse_channel_map, read_trial, write_trial
 
 
@@ -43,8 +42,9 @@ def _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
 @cli.command("check")
 @click.argument("file", type=click.Path(dir_okay=False))
 @_read_options
-@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, as_json, skip_bad):
+@out_options(json_help="Print the summary as JSON.",
+             out_help="Write the summary as JSON to FILE (atomically; an existing FILE needs --force).")
+def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, as_json, out, force, skip_bad):
     """Read and validate a trial FILE; print what it holds (exit 2 with one line if it is bad)."""
     trial = _read(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, skip_bad)
     derived = trial.meta.get("derived") or {}
@@ -58,11 +58,14 @@ def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
                      for name, v in trial.channels.items()},
         "repairs": [r["text"] for r in trial.meta.get("repairs", [])],
     }
-    if as_json:
-        click.echo(json.dumps(summary, indent=2))
-        return 0
+    emit(summary, as_json=as_json, out=out, force=force, text=lambda: _print_summary(trial, summary))
+    return 0
+
+
+def _print_summary(trial, summary: dict) -> None:
+    """The text form of ``shipid check``: one line for the file, one per channel, one per repair."""
     prof = f", profile {summary['profile']}" if summary["profile"] else ""
-    click.echo(f"{file}: {summary['format']}{prof}, {len(trial)} samples, dt {trial.dt:.6g} s, "
+    click.echo(f"{summary['file']}: {summary['format']}{prof}, {len(trial)} samples, dt {trial.dt:.6g} s, "
                f"t {trial.t[0]:.6g}..{trial.t[-1]:.6g} s ({trial.duration:.6g} s)")
     width = max(len(n) for n in trial.channels)
     for name, c in summary["channels"].items():
@@ -70,7 +73,6 @@ def check(file, fmt, channels, require, interpolate_gaps, resample, trim_empty, 
         click.echo(f"  {name:<{width}}  {c['unit']:<7} {c['min']:>12.6g} .. {c['max']:<12.6g}  {src}")
     for text in summary["repairs"]:
         click.echo(f"  repaired: {text}")
-    return 0
 
 
 def _source_text(c: dict) -> str:

@@ -31,8 +31,8 @@ class ARMA:
         return lfilter(self.a, self.c, x, axis=0)
 
 
-def _lagged(x: np.ndarray, lags: int, start: int) -> np.ndarray:
-    """Columns x_{t-1} ... x_{t-lags} for rows t = start .. n-1."""
+def lagged_columns(x: np.ndarray, lags: int, start: int) -> np.ndarray:
+    """The lag matrix of an AR regression: columns x_{t-1} ... x_{t-lags} for rows t = start .. n-1 (a view)."""
     n = x.size
     if not lags:
         return np.empty((n - start, 0))
@@ -65,8 +65,8 @@ def _ls(X: np.ndarray, y: np.ndarray) -> np.ndarray:
         return np.linalg.lstsq(X, y, rcond=None)[0]
 
 
-def _lag_gram(x: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
-    """``X^T X`` and ``X^T x[p:]`` for ``X = _lagged(x, p, p)`` in O(n p) instead of O(n p^2).
+def ar_gram(x: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+    """``X^T X`` and ``X^T x[p:]`` for ``X = lagged_columns(x, p, p)`` in O(n p) instead of O(n p^2).
 
     Column i of X holds ``x_{t-1-i}``, rows ``t = p .. n-1``. The first row of the Gram matrix is a
     correlation; shifting both lags by one moves the summation window by one sample, so
@@ -94,13 +94,13 @@ def _lag_gram(x: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
     return G, g
 
 
-def _solve_normal(G: np.ndarray, g: np.ndarray, x: np.ndarray, p: int) -> np.ndarray:
+def ar_solve_normal(G: np.ndarray, g: np.ndarray, x: np.ndarray, p: int) -> np.ndarray:
     """Solve ``G th = g`` as :func:`_ls` does (ridge-regularised Cholesky, least-squares fallback)."""
     try:
         c = np.linalg.cholesky(G + 1e-12 * np.trace(G) / G.shape[0] * np.eye(G.shape[0]))
         return np.linalg.solve(c.T, np.linalg.solve(c, g))
     except np.linalg.LinAlgError:
-        return np.linalg.lstsq(_lagged(x, p, p), x[p:], rcond=None)[0]
+        return np.linalg.lstsq(lagged_columns(x, p, p), x[p:], rcond=None)[0]
 
 
 def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None = None) -> ARMA:
@@ -130,19 +130,19 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
         start = na
         if not na:
             return ARMA(np.ones(1), np.ones(1), float(np.mean(xs**2)) * scale**2)
-        G, g = _lag_gram(xs, na)
-        th = _solve_normal(G, g, xs, na)
+        G, g = ar_gram(xs, na)
+        th = ar_solve_normal(G, g, xs, na)
         a = np.concatenate([[1.0], -th])           # the prefilter A(q) is FIR: stable whatever its roots
         eps = np.convolve(a, xs)[start:n]          # = xs[start:] - X @ th
         return ARMA(a, np.ones(1), float(np.mean(eps**2)) * scale**2)
     nl = n_long if n_long is not None else max(20, 2 * (na + nc))
     nl = int(min(nl, max(1, n // 5)))
-    X = _lagged(xs, nl, nl)
+    X = lagged_columns(xs, nl, nl)
     ar = _ls(X, xs[nl:])
     e = np.zeros(n)
     e[nl:] = xs[nl:] - X @ ar
     start = nl + max(na, nc)
-    R = np.column_stack([-_lagged(xs, na, start), _lagged(e, nc, start)])
+    R = np.column_stack([-lagged_columns(xs, na, start), lagged_columns(e, nc, start)])
     th = _ls(R, xs[start:])
     a = _stabilise(np.concatenate([[1.0], th[:na]]))
     c = _stabilise(np.concatenate([[1.0], th[na:]]))
@@ -155,7 +155,7 @@ def fit_ar(x: np.ndarray, p: int) -> ARMA:
     """Pure AR(p) by least squares: ``hannan_rissanen(x, p, 0)`` computed by compiled kernels.
 
     The same estimator and the same arithmetic steps (mean removal, scaling by the std, the O(n p) normal
-    equations of :func:`_lag_gram`, the ridge-regularised Cholesky solve of :func:`_solve_normal`, the
+    equations of :func:`ar_gram`, the ridge-regularised Cholesky solve of :func:`ar_solve_normal`, the
     residual variance of ``A(q) x``) done by :func:`shipid.estimate.fir_kernels.ar_fit`; only the summation
     order differs (rounding level; ``tests/estimate`` compares the two). Falls back to
     :func:`hannan_rissanen` (its least-squares fallback) when the normal equations are not positive definite.
@@ -172,4 +172,4 @@ def fit_ar(x: np.ndarray, p: int) -> ARMA:
     return ARMA(a, np.ones(1), float(s2) * scale**2)
 
 
-__all__ = ["ARMA", "hannan_rissanen", "fit_ar"]
+__all__ = ["ARMA", "hannan_rissanen", "fit_ar", "lagged_columns", "ar_gram", "ar_solve_normal"]

@@ -13,7 +13,7 @@ regressor matrix) remain in :mod:`shipid.estimate.iv`, :mod:`shipid.estimate.arm
   ``t = s .. n-1``, without forming ``Z``: the products with the lag-0 rows, then every other entry of
   ``Z^T Z`` from a lag-0 entry plus the diagonal edge corrections of :func:`shipid.estimate.iv.lag_gram`.
 * :func:`ar_normal_equations` — ``X^T X``, ``X^T x`` and ``x^T x`` of the AR(p) regression
-  (:func:`shipid.estimate.arma._lag_gram`): lag-0 correlations plus edge corrections.
+  (:func:`shipid.estimate.arma.ar_gram`): lag-0 correlations plus edge corrections.
 
 Compiled with ``cache=True``. The long dot products of :func:`lag_moments` (:func:`_lag_products`),
 :func:`ar_normal_equations` and the Cholesky solve may be reassociated (``fastmath={"reassoc",
@@ -186,7 +186,7 @@ def ar_normal_equations(x, p):
     """``(X^T X, X^T x[p:], x[p:]^T x[p:])`` for ``X[t, i] = x[t - 1 - i]``, ``t = p .. n-1``, ``i < p``.
 
     ``G[i, i+d] = G[0, d] + sum_{l < i} (x[p-2-l] x[p-2-l-d] - x[n-2-l] x[n-2-l-d])`` (the O(n p) form of
-    :func:`shipid.estimate.arma._lag_gram`).
+    :func:`shipid.estimate.arma.ar_gram`).
     """
     n = x.size
     m = n - p
@@ -231,7 +231,7 @@ __all__ = ["fir_filter", "lag_moments", "ar_normal_equations"]
 @njit(cache=True, fastmath={"reassoc", "contract"})
 def ridge_cholesky_solve(G, g):
     """Solve ``(G + 1e-12 tr(G)/p I) th = g`` by Cholesky (the regularised normal equations of
-    :func:`shipid.estimate.arma._solve_normal`); returns ``(ok, th)``, ``ok`` False if not positive definite."""
+    :func:`shipid.estimate.arma.ar_solve_normal`); returns ``(ok, th)``, ``ok`` False if not positive definite."""
     p = G.shape[0]
     ridge = 0.0
     for i in range(p):

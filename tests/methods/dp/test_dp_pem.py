@@ -1,7 +1,7 @@
 """Observed information of the DP prediction-error stage with noise levels the data do not determine.
 
 :func:`shipid.methods.dp.pem.pem_stage` on quadratic stand-ins for −ℓ (known optimum and
-Hessian), and the rule :func:`shipid.methods.dp.pem._undetermined` that picks the noise
+Hessian), and the rule :func:`shipid.methods.dp.pem.undetermined_noise` that picks the noise
 log-scales held at their optimum when the observed information is formed.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shipid.methods.dp.pem import A_BOUND, _undetermined, pem_stage
+from shipid.methods.dp.pem import A_BOUND, undetermined_noise, pem_stage
 
 
 class _Quadratic:
@@ -35,7 +35,7 @@ def _spd(n, rng):
 def test_positive_definite_hessian_holds_nothing():
     rng = np.random.default_rng(11)
     H = _spd(5, rng)
-    assert _undetermined(H, np.zeros(5), 2) == []
+    assert undetermined_noise(H, np.zeros(5), 2) == []
 
 
 def test_flat_or_concave_noise_direction_is_held_theta_never():
@@ -43,23 +43,23 @@ def test_flat_or_concave_noise_direction_is_held_theta_never():
     H = _spd(5, rng)
     H[3, :] = H[:, 3] = 0.0
     H[3, 3] = -1.0  # noise coordinate 1 (index 3) concave
-    assert _undetermined(H, np.zeros(5), 2) == [3]
+    assert undetermined_noise(H, np.zeros(5), 2) == [3]
     # indefinite through the coupling only (every diagonal positive): the coupled noise coordinate goes
     H2 = np.diag([4.0, 4.0, 1.0, 1.0, 1.0])
     H2[1, 4] = H2[4, 1] = 3.0
-    held = _undetermined(H2, np.zeros(5), 2)
+    held = undetermined_noise(H2, np.zeros(5), 2)
     assert held == [4]
     keep = [0, 1, 2, 3]
     np.linalg.cholesky(H2[np.ix_(keep, keep)])
     # an indefinite theta block cannot be repaired by holding noise: every noise held, still not PD
     H3 = np.diag([1.0, -1.0, 1.0, 1.0, 1.0])
-    assert _undetermined(H3, np.zeros(5), 2) == [2, 3, 4]
+    assert undetermined_noise(H3, np.zeros(5), 2) == [2, 3, 4]
 
 
 def test_noise_next_to_bound_is_held():
     H = np.eye(4)
     y = np.array([0.0, 0.0, A_BOUND - 0.1, 0.5])
-    assert _undetermined(H, y, 2) == [2]
+    assert undetermined_noise(H, y, 2) == [2]
 
 
 def test_pem_stage_flat_noise_direction_settles_with_theta_block_covariance():

@@ -26,14 +26,14 @@ def test_bound_grows_with_noise():
 
 
 def _noise_only_equation_error(noise, duration=600.0, seed=3):
-    from shipid.methods.masscm.crlb import CONDS, _regressors, true_theta
+    from shipid.methods.masscm.crlb import CONDS, equation_regressors, true_theta
     from shipid.models.roll_reduced import KnownParams, discrete_coeffs
     from shipid.models.roll_sim import simulate_datasets
     d = simulate_datasets(seed=seed, duration=duration, noise=noise, delta_amp=0.0)
     th, known = true_theta(), KnownParams.from_vessel("fishing-vessel")
     out = {}
     for c in CONDS:
-        y, Phi = _regressors(d[c])
+        y, Phi = equation_regressors(d[c])
         e = (y - Phi @ discrete_coeffs(th, known, [c], 0.02)[0])[100:]
         out[c] = e - e.mean()
     return out

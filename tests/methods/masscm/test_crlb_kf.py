@@ -69,10 +69,10 @@ def test_model_is_the_simulator_ship_and_its_rudder_response():
     idx = [0, 2, 3, 4]
     for cond in K.CONDS:
         cv, cr = K.true_nuisance(VESSEL, cond)
-        Ac, Bc, C, D = K.continuous_model(K._theta_true(VESSEL), cv, cr, known, Z_F, cond)
+        Ac, Bc, C, D = K.continuous_model(K.true_free_theta(VESSEL), cv, cr, known, Z_F, cond)
         A0, B0 = state_space(params_from_vessel(VESSEL, cond))
         assert np.allclose(Ac, A0[np.ix_(idx, idx)], atol=1e-12) and np.allclose(Bc, B0[idx], atol=1e-12)
-    c = K._Cond(VESSEL, "loaded", known, Z_F, NoiseSpec(gyro_std=0.002), 0.02)
+    c = K.DatasetModel(VESSEL, "loaded", known, Z_F, NoiseSpec(gyro_std=0.002), 0.02)
     d = rudder_prbs(1500, 0.02, np.deg2rad(5.0), 0.5, np.random.default_rng(3))
     th = params_from_vessel(VESSEL, "loaded")
     X, Xd = simulate_zoh(th, d, 0.02)
@@ -86,7 +86,7 @@ def test_noise_model_matches_simulated_wave_records():
     """Stationary variance and lag-1 correlation of p, a_s, r of the noise model against the simulator."""
     known = KnownParams.from_vessel(VESSEL)
     noise = NoiseSpec(wave_roll_deg=0.5)
-    c = K._Cond(VESSEL, "calibration", known, Z_F, noise, 0.02)
+    c = K.DatasetModel(VESSEL, "calibration", known, Z_F, noise, 0.02)
     from scipy.linalg import solve_discrete_lyapunov
     F, G, H, J, _ = c.noise_ss(c.p0)
     Pi = solve_discrete_lyapunov(F, np.outer(G, G))
@@ -96,7 +96,7 @@ def test_noise_model_matches_simulated_wave_records():
     Y = np.vstack([np.column_stack([t["p"], t["a_s"], t["r"]])[1000:]
                    for t in (simulate_condition(th, duration=600.0, noise=noise, delta_amp=0.0, seed=s)
                              for s in (11, 12))])
-    assert np.rad2deg(np.sqrt(c._roll_var(c.p0))) == pytest.approx(0.5, rel=1e-9)
+    assert np.rad2deg(np.sqrt(c.roll_var(c.p0))) == pytest.approx(0.5, rel=1e-9)
     assert Y.var(axis=0) == pytest.approx(var, rel=0.12)
     sim_lag1 = [np.mean(Y[1:, i] * Y[:-1, i]) / Y[:, i].var() for i in range(3)]
     assert sim_lag1 == pytest.approx(lag1, abs=2e-3)

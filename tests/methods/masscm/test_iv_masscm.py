@@ -71,11 +71,11 @@ def test_pure_ar_fit():
 
 def test_lag_gram_equals_explicit_products():
     """The O(n p) Gram of the AR regression equals X^T X, X^T x built from the explicit lag matrix."""
-    from shipid.estimate.arma import _lag_gram, _lagged
+    from shipid.estimate.arma import ar_gram, lagged_columns
     x = np.cumsum(np.random.default_rng(11).standard_normal(700))
     for p in (1, 3, 40):
-        X = np.ascontiguousarray(_lagged(x, p, p))
-        G, g = _lag_gram(x, p)
+        X = np.ascontiguousarray(lagged_columns(x, p, p))
+        G, g = ar_gram(x, p)
         assert np.allclose(G, X.T @ X, rtol=1e-12, atol=1e-12 * np.abs(G).max())
         assert np.allclose(g, X.T @ x[p:], rtol=1e-12, atol=1e-12 * np.abs(g).max())
 

@@ -32,7 +32,7 @@ def test_equilibrium_speed_and_rps_are_inverse_and_hold_the_speed(kv):
     u = MM.equilibrium_speed(kv, 10.23)
     assert 0.8 < u < 1.6                                   # the HSVA tests ran 1.179 m/s at 10.23 rev/s
     assert MM.equilibrium_rps(kv, u) == pytest.approx(10.23, rel=1e-8)
-    assert abs(MM._straight_du(kv, u, 10.23)) < 1e-9
+    assert abs(MM.straight_du(kv, u, 10.23)) < 1e-9
 
 
 def test_training_conditions_from_constructed_runs():

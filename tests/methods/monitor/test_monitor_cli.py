@@ -45,9 +45,15 @@ def test_monitor_file_and_stdin_agree(stream, capsys, monkeypatch):
     assert "alarm at t =" in cap.err
     (stream / "run.jsonl").write_text(cap.out)
     monkeypatch.setattr(sys, "stdin", io.StringIO((stream / "s.csv").read_text()))
-    rc = main(_args(stream, "--stream", "-", "--jsonl"))
+    out = stream / "stdin-run.jsonl"
+    rc = main(_args(stream, "--stream", "-", "--json", "-o", str(out)))
     assert rc == 0
-    assert [json.loads(x) for x in capsys.readouterr().out.splitlines()] == lines
+    printed = capsys.readouterr().out
+    assert [json.loads(x) for x in printed.splitlines()] == lines
+    assert out.read_text(encoding="utf-8") == printed          # -o writes the lines --json prints
+    rc = main(_args(stream, "--stream", str(stream / "s.csv"), "-o", str(out)))
+    assert rc == 2 and capsys.readouterr().err.strip() == f"shipid: error: {out}: output file exists (use --force to overwrite)"
+    assert out.read_text(encoding="utf-8") == printed
 
 
 def test_report_of_a_run(stream, capsys):

@@ -25,7 +25,7 @@ estimate with a std (no unsettled scheme; in one realisation q_h of SI2 was held
 determined), per θ 0.875 (θ5)–1.00; RMS of error/std 1.01 (0.76–1.28 per θ, θ3 the largest);
 RMS relative error 0.6–3.7 % except θ3 (23 %), largest |error| θ2 12.9 %, θ3 49 %. θ1, θ2,
 θ4…θ9 all within 10 % in 23 of 24 realisations (θ2 12.9 % at scales 2/2), θ3 within 25 % in
-17 of 24. On seed 2 (before undetermined noise levels were held, :func:`shipid.methods.dp.pem._undetermined`)
+17 of 24. On seed 2 (before undetermined noise levels were held, :func:`shipid.methods.dp.pem.undetermined_noise`)
 the figure was 0.917 over the estimates with a std and 0.866 counting the 12 without one
 (two realisations with measurement scale 2 whose SI2 Hessian was indefinite along q_h); both
 now settle with a finite std. Same seed-2 realisations with ``--covariance ekf`` (the EKF's

@@ -18,10 +18,14 @@ covariance, the heading innovation wrapped to (−π, π]; ``tests/methods/dp/te
 checks the two agree.
 
 Positive definiteness of the filtered covariance is checked by a Cholesky factorisation at
-every sample; on failure the kernels return the failing step (the caller raises).
+every sample (:func:`shipid.estimate.numba_linalg.cholesky_into`); on failure the kernels
+return the failing step (the caller raises).
 
-Everything compiled lives in this one file (numba's ``cache=True`` is invalidated by
-changes to the file that holds a function).
+Cache. Everything compiled here lives in this one file except that Cholesky kernel. numba
+keys the on-disk cache of a function on the file that defines it only, so this file carries
+:data:`NUMBA_LINALG_KEY`, the hash of ``shipid/estimate/numba_linalg.py``: an edit there must
+update the key here (``tests/methods/dp/test_loglik.py`` checks it). If the key does not match
+the file found at import, the kernels are compiled without the disk cache, never run stale.
 """
 
 from __future__ import annotations
@@ -29,7 +33,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+from shipid.estimate import numba_linalg
+from shipid.estimate.numba_linalg import cholesky_into, source_key
+
+#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+
+#: True when the on-disk cache may be used: the compiled callee is the one the key names.
+CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
+_JIT = dict(cache=CACHE_VALID, nogil=True, error_model="numpy")
 LOG2PI = float(np.log(2.0 * np.pi))
 
 
@@ -196,21 +208,7 @@ def _update(x, P, nu, Hidx, R, nis_ll):
     for i in range(n):
         if not P[i, i] > 0.0:
             return False
-    # Cholesky check of positive definiteness
-    for j in range(n):
-        d = P[j, j]
-        for k in range(j):
-            d -= Pn[j, k] * Pn[j, k]
-        if not d > 0.0:
-            return False
-        d = np.sqrt(d)
-        Pn[j, j] = d
-        for i in range(j + 1, n):
-            s = P[i, j]
-            for k in range(j):
-                s -= Pn[i, k] * Pn[j, k]
-            Pn[i, j] = s / d
-    return True
+    return cholesky_into(P, n, Pn)         # positive definiteness (Pn, no longer needed, holds the factor)
 
 
 @njit(**_JIT)
@@ -297,4 +295,4 @@ def surge_loglik(Z, dt, tau, m11, a11, qh, qb, R, x0, P0):
     return -0.5 * (acc[0] + acc[1]), acc[0], acc[2], -1
 
 
-__all__ = ["momentum_loglik", "surge_loglik", "LOG2PI"]
+__all__ = ["NUMBA_LINALG_KEY", "CACHE_VALID", "momentum_loglik", "surge_loglik", "LOG2PI"]

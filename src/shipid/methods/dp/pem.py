@@ -32,7 +32,7 @@ paper (fixed at their values) and their uncertainty is propagated to first order
 
 Noise levels the data do not determine -- at a bound of the log-scale, within 0.25 of it, or
 with a curvature that is not positive (the likelihood flat or concave along it) -- are held
-at their optimum when H is formed (:func:`_undetermined`), so ``cov(θ̂_f)`` comes from the θ
+at their optimum when H is formed (:func:`undetermined_noise`), so ``cov(θ̂_f)`` comes from the θ
 block and the noise directions the data do determine; they are listed in
 ``diagnostics["noise_at_bound"]`` and reported as not determined.
 
@@ -311,7 +311,7 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
     H = _hessian(fa, zact, h1, f0)
     # noise directions the data do not determine (curvature not positive, or the optimum next
     # to a bound) are held at their optimum too, so θ's covariance comes from the rest
-    held = _undetermined(H, z[act], p)
+    held = undetermined_noise(H, z[act], p)
     if held:
         keep = [k for k in range(len(act)) if k not in held]
         at_bound = sorted(at_bound + [act[k] - p for k in held])
@@ -418,7 +418,7 @@ def _is_pd(H: np.ndarray) -> bool:
         return False
 
 
-def _undetermined(H: np.ndarray, y: np.ndarray, p: int, margin: float = 0.25) -> list[int]:
+def undetermined_noise(H: np.ndarray, y: np.ndarray, p: int, margin: float = 0.25) -> list[int]:
     """Noise coordinates (index ≥ ``p`` of ``H``) to hold fixed when forming the observed information.
 
     First every noise log-scale whose own curvature ``H[k, k]`` is not positive or whose value
@@ -449,4 +449,4 @@ def _full(z: np.ndarray, act: list[int], y: np.ndarray) -> np.ndarray:
     return out
 
 
-__all__ = ["measurement_log_scales", "NOISE_NAMES", "PEMResult", "StageLikelihood", "pem_stage", "thrust_force", "noise_report"]
+__all__ = ["measurement_log_scales", "NOISE_NAMES", "PEMResult", "StageLikelihood", "pem_stage", "thrust_force", "noise_report", "undetermined_noise"]

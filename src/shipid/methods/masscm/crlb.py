@@ -57,7 +57,12 @@ from shipid.methods.masscm.crlb_kf import crlb_kf
 CONDS = ("nominal", "calibration", "loaded")
 
 
-def _regressors(tr):
+def equation_regressors(tr):
+    """The equation-error regression of one dataset: ``y = p`` and the columns ``[-p_{k-1}, -p_{k-2}, Δ²a_s, Δ²r, Δ²δ]``.
+
+    The ARX form of the reduced roll model (Linder et al. 2015, eqs. 22 and 33) whose Fisher information the
+    OLS/GLS bounds of :func:`crlb` use; ``Δ²x_k = x_k − x_{k−2}``, zero for the first two samples.
+    """
     y, a, r, d = tr["p"], tr["a_s"], tr["r"], tr["delta"]
 
     def d2(x):
@@ -81,7 +86,7 @@ def noise_models(vessel="fishing-vessel", *, fs: float = 50.0, noise: NoiseSpec,
                           noise=noise, delta_amp=0.0)
     out = []
     for cond in CONDS:
-        y, Phi = _regressors(d[cond])
+        y, Phi = equation_regressors(d[cond])
         g = discrete_coeffs(th, known, [cond], 1.0 / fs)[0]
         eps = (y - Phi @ g)[10:]
         out.append(hannan_rissanen(eps, na=ar_order, nc=0, n_long=ar_order))
@@ -128,7 +133,7 @@ def equation_error_spectrum(vessel="fishing-vessel", *, fs: float = 50.0, noise:
             io = imu_outputs(ship, X, Xdot)
             scale = np.deg2rad(noise.wave_roll_deg) / np.sqrt(np.sum(X[:, 0] ** 2))
             tr = {"p": io["p"], "a_s": io["a_s"], "r": io["r"], "delta": np.zeros(n_fft)}
-            y, Phi = _regressors(tr)
+            y, Phi = equation_regressors(tr)
             hv = scale * (y - Phi @ g)
             phi = phi + np.abs(np.fft.fft(hv)) ** 2
         out[cond] = phi
@@ -185,7 +190,7 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
         clean = simulate_datasets(vessel, seed=np.random.SeedSequence([int(seed), 2, rep]), duration=duration,
                                   fs=fs, noise=NoiseSpec(), delta_amp=delta_amp)
         for ci, cond in enumerate(CONDS):
-            _, Phi = _regressors(clean[cond])
+            _, Phi = equation_regressors(clean[cond])
 
             def g_of(x, cond=cond):
                 full = th.astype(x.dtype).copy()
@@ -228,4 +233,4 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
                               "an AR(40) noise model") + "; = optimal-IV covariance (Söderström & Stoica 1989 §8.2)")}
 
 
-__all__ = ["crlb", "noise_models", "true_theta"]
+__all__ = ["crlb", "noise_models", "true_theta", "equation_regressors"]

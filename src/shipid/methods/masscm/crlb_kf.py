@@ -144,7 +144,7 @@ def _bilinear2(num_s, den_s, T):
     return [x / a[0] for x in b], [x / a[0] for x in a]
 
 
-class _Cond:
+class DatasetModel:
     """Parameter layout of one dataset: ``theta (8) | c_v (6) | c_r (6) | wave (w, zeta, sigma) | sensor var (3)``."""
 
     def __init__(self, vessel, cond, known, z_f, noise: NoiseSpec, T: float):
@@ -153,10 +153,10 @@ class _Cond:
         self.R_floor = np.zeros(3)
         cv, cr = true_nuisance(vessel, cond)
         w = 2 * np.pi / noise.wave_period
-        self.p0 = np.concatenate([_theta_true(vessel), cv, cr, [w, noise.wave_damping, 1.0],
+        self.p0 = np.concatenate([true_free_theta(vessel), cv, cr, [w, noise.wave_damping, 1.0],
                                   [noise.gyro_std ** 2, noise.acc_std ** 2, noise.gyro_std ** 2]])
         if self.waves:   # scale so that the stationary roll std is wave_roll_deg
-            self.p0[22] = np.deg2rad(noise.wave_roll_deg) / np.sqrt(self._roll_var(self.p0))
+            self.p0[22] = np.deg2rad(noise.wave_roll_deg) / np.sqrt(self.roll_var(self.p0))
         self.floor_rel = self.waves and noise.gyro_std == 0 and noise.acc_std == 0
 
     def ship(self, p):
@@ -182,7 +182,8 @@ class _Cond:
         J = s * Dw * Ct
         return F, G, H, J, R
 
-    def _roll_var(self, p):
+    def roll_var(self, p):
+        """Stationary variance of the roll angle (rad²) the ship and wave model of ``p`` imply."""
         Ad, B0, B1, C, D = self.ship(p)
         F, G, H, J, _ = self.noise_ss(p)
         Pi = solve_discrete_lyapunov(F, np.outer(G, G))
@@ -224,7 +225,8 @@ class _Cond:
         return np.imag(Y) / H_CS
 
 
-def _theta_true(vessel) -> np.ndarray:
+def true_free_theta(vessel) -> np.ndarray:
+    """The packaged true θ of ``vessel`` (its ``table3_true`` values) for the names in :data:`FREE`."""
     t = load_vessel(vessel).values("table3_true")
     return np.array([t[n] for n in FREE], dtype=float)
 
@@ -324,7 +326,7 @@ def fisher_information(vessel="fishing-vessel", *, duration=300.0, fs=50.0, delt
     z_f = float(load_vessel(vessel).value("general", "z_f"))
     T = 1.0 / fs
     n = int(round(duration * fs))
-    conds = [_Cond(vessel, c, known, z_f, noise, T) for c in CONDS]
+    conds = [DatasetModel(vessel, c, known, z_f, noise, T) for c in CONDS]
     # per-dataset local parameters that enter the model: theta 0..7, c_v 8..13, c_r 14..19, wave 20..22, R 23..25
     local_noise = ([20, 21, 22] if conds[0].waves else []) + ([23, 24, 25] if noise.gyro_std or noise.acc_std else [])
     rows = list(range(8, 20)) if nuisance == "free-rows" else []
@@ -413,7 +415,7 @@ def crlb_kf(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.
     cov = theta_covariance(fi["info"], fi["theta_index"], fi["nuisance_index"])
     known = KnownParams.from_vessel(vessel)
     z_f = float(load_vessel(vessel).value("general", "z_f"))
-    th = _theta_true(vessel)
+    th = true_free_theta(vessel)
     bounds = {nm: {"true": float(th[k]), "std": float(np.sqrt(cov[k, k])),
                    "rel": float(np.sqrt(cov[k, k]) / abs(th[k])) if th[k] else float("nan")}
               for k, nm in enumerate(FREE)}
@@ -432,4 +434,4 @@ def crlb_kf(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.
 
 
 __all__ = ["crlb_kf", "fisher_information", "theta_covariance", "continuous_model", "true_nuisance", "whiten",
-           "spectral_info", "foh", "wave_ss", "FREE", "CONDS"]
+           "spectral_info", "foh", "wave_ss", "FREE", "CONDS", "DatasetModel", "true_free_theta"]

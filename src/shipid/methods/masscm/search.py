@@ -29,6 +29,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from shipid.estimate import numba_linalg
+from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key
+
+#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py``: :func:`spd_solve` (and
+#: :func:`levenberg_marquardt`, which calls it) compile its kernels in, and numba keys their disk cache on this
+#: file only. An edit there must update the key (``tests/methods/masscm/test_masscm_compiled.py`` checks it).
+NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+
+#: True when the on-disk cache of those two may be used (else they compile without it, never run stale).
+CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
+
 #: Layout of the ``kc`` array of known constants used by the kernels.
 KC_FIELDS = ("M", "g", "zg_bar", "zs_bar", "m_c", "zc_bar", "U")
 
@@ -188,37 +199,20 @@ def _norm(x):
     return np.sqrt(np.sum(x * x))
 
 
-@njit(cache=True)
+@njit(cache=CACHE_VALID)
 def spd_solve(H, b):
-    """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``."""
+    """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``.
+
+    :func:`shipid.estimate.numba_linalg.cholesky_into` and ``cho_solve_inplace``; ``ok`` False (and x zero)
+    when ``H`` is not positive definite.
+    """
     n = b.size
     L = np.zeros((n, n))
-    for j in range(n):
-        d = H[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not d > 0.0:
-            return False, np.zeros(n)
-        d = np.sqrt(d)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            v = H[i, j]
-            for k in range(j):
-                v -= L[i, k] * L[j, k]
-            L[i, j] = v / d
-    z = np.empty(n)
-    for i in range(n):
-        v = b[i]
-        for k in range(i):
-            v -= L[i, k] * z[k]
-        z[i] = v / L[i, i]
-    x = np.empty(n)
-    for i in range(n - 1, -1, -1):
-        v = z[i]
-        for k in range(i + 1, n):
-            v -= L[k, i] * x[k]
-        x[i] = v / L[i, i]
-    return True, x
+    if not cholesky_into(H, n, L):
+        return False, np.zeros(n)
+    x = b.copy().reshape((n, 1))
+    cho_solve_inplace(L, n, x)
+    return True, x.reshape(n)
 
 
 @njit(cache=True)
@@ -306,7 +300,7 @@ def gauss_newton(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, ma
     return False, x
 
 
-@njit(cache=True)
+@njit(cache=CACHE_VALID)
 def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, prior, max_iter, xtol, ftol, gtol, mu0):
     """Bounded Levenberg–Marquardt (Marquardt scaling, Nielsen's damping update), iterates strictly
     inside ``(lo, hi)`` (a component that would cross a bound stops 0.995 of the way to it). Returns
@@ -398,4 +392,4 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+__all__ = ["NUMBA_LINALG_KEY", "CACHE_VALID", "sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]

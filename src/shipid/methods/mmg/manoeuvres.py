@@ -111,7 +111,11 @@ def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
             "runs": len(trials)}
 
 
-def _straight_du(model: mmg.MmgModel, u: float, n: float) -> float:
+def straight_du(model: mmg.MmgModel, u: float, n: float) -> float:
+    """Surge acceleration ``du/dt`` of ``model`` running straight (v = r = δ = 0) at speed ``u`` and propeller rate ``n``.
+
+    Zero at the equilibrium that :func:`equilibrium_speed` and :func:`equilibrium_rps` solve for (still air).
+    """
     UA, gA = mmg.apparent_wind(0.0, 0.0, 0.0, np.array([u]), np.array([0.0]))    # still air: the ship's own speed
     X, _, _ = mmg.forces(model, np.array([u]), np.array([0.0]), np.array([0.0]), np.array([0.0]), np.array([n]),
                          UA, gA)
@@ -124,11 +128,11 @@ def equilibrium_speed(model: mmg.MmgModel, rps: float) -> float:
 
     L = model.particulars["L"]
     lo, hi = 1e-3, 3.0 * np.sqrt(9.81 * L)            # up to Froude number 3
-    flo, fhi = _straight_du(model, lo, rps), _straight_du(model, hi, rps)
+    flo, fhi = straight_du(model, lo, rps), straight_du(model, hi, rps)
     if not (flo > 0 > fhi):
         raise ShipidError(f"model {model.name!r} has no straight-line equilibrium speed at {rps:g} rev/s "
                           f"(surge acceleration {flo:.3g} at {lo:g} m/s, {fhi:.3g} at {hi:.3g} m/s); give --speed")
-    return float(brentq(lambda u: _straight_du(model, u, rps), lo, hi, xtol=1e-10))
+    return float(brentq(lambda u: straight_du(model, u, rps), lo, hi, xtol=1e-10))
 
 
 def equilibrium_rps(model: mmg.MmgModel, speed: float) -> float:
@@ -136,11 +140,11 @@ def equilibrium_rps(model: mmg.MmgModel, speed: float) -> float:
     from scipy.optimize import brentq
 
     lo, hi = 1e-3, 200.0
-    flo, fhi = _straight_du(model, speed, lo), _straight_du(model, speed, hi)
+    flo, fhi = straight_du(model, speed, lo), straight_du(model, speed, hi)
     if not (flo < 0 < fhi):
         raise ShipidError(f"model {model.name!r}: no propeller rate in (0, {hi:g}] rev/s holds {speed:g} m/s; "
                           "give --rps")
-    return float(brentq(lambda n: _straight_du(model, speed, n), lo, hi, xtol=1e-10))
+    return float(brentq(lambda n: straight_du(model, speed, n), lo, hi, xtol=1e-10))
 
 
 @dataclass(frozen=True)
@@ -205,7 +209,7 @@ def resolve_conditions(model: mmg.MmgModel, result: Mapping[str, Any] | None = N
         rps = equilibrium_rps(model, speed)
         notes.append(f"propeller rate {rps:.4g} rev/s: the model's straight-line equilibrium at {speed:.4g} m/s")
     else:
-        du = _straight_du(model, speed, rps)
+        du = straight_du(model, speed, rps)
         notes.append(f"speed and rate as given; the model's surge acceleration at the approach is {du:.3g} m/s^2")
     if rudder_rate_deg_s is not None:
         rate = float(np.deg2rad(rudder_rate_deg_s))
@@ -431,4 +435,4 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
 
 __all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
-           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH"]
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH", "straight_du"]

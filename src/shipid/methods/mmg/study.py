@@ -261,8 +261,8 @@ FROZEN_FINGERPRINT = "5e4de07b27a9d62a"
 
 
 # --------------------------------------------------------------------------- Esso Osaka
-def _only_training(names: Sequence[str], test: Sequence[str]) -> None:
-    """Refuse to pass a test run to anything that fits or selects."""
+def check_only_training(names: Sequence[str], test: Sequence[str]) -> None:
+    """Refuse to pass a test run to anything that fits or selects: :class:`~shipid.errors.InputError` naming it."""
     leak = sorted(set(names) & set(test))
     if leak:
         raise InputError(f"test run(s) in the training set: {', '.join(leak)}")
@@ -281,7 +281,7 @@ def esso_train(split: str = "miyauchi2022", *, root: Path | None = None, folds: 
     sp = SPLITS[split]
     say = progress or (lambda s: None)
     train_files = sp["train"][:max_train] if max_train else sp["train"]
-    _only_training(train_files, sp["test"])
+    check_only_training(train_files, sp["test"])
     say(f"{split}: reading {len(train_files)} training runs")
     train = [read_esso(f, root) for f in train_files]
     prior = mmg.load_published("esso_osaka_3m", root)
@@ -427,7 +427,7 @@ def kvlcc2_train(*, root: Path | None = None, folds: int | None = None, structur
                  progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Training side of the KVLCC2 study: autopilot, structure by overshoot CV, fit. Reads no test run."""
     say = progress or (lambda s: None)
-    _only_training(train, test)
+    check_only_training(train, test)
     prior = mmg.load_published("kvlcc2_hsva", root)
     trs = [read_kvlcc2(f, root) for f in train]
     ap = kvlcc2_autopilot(trs, train)
@@ -519,7 +519,7 @@ def format_kvlcc2(study: dict[str, Any]) -> str:
     return out + ("\n" + format_kvlcc2_heldout(study) if "overshoots" in study else "")
 
 
-__all__ = ["SPLITS", "esso_train", "esso_evaluate", "esso_heldout", "format_esso", "format_esso_training",
+__all__ = ["SPLITS", "check_only_training", "esso_train", "esso_evaluate", "esso_heldout", "format_esso", "format_esso_training",
            "format_esso_heldout", "kvlcc2_train", "kvlcc2_evaluate", "kvlcc2_zigzag", "format_kvlcc2",
            "format_kvlcc2_training", "format_kvlcc2_heldout", "select_by_overshoots", "zigzag_overshoots",
            "kvlcc2_autopilot", "steering_gear", "reversal_times", "evaluate", "overshoots", "simulate_zigzag", "read_esso", "read_kvlcc2",

@@ -1,7 +1,8 @@
 """``shipid monitor mass-cm``: online mass / centre-of-mass monitoring of a loaded-condition stream (seed 000).
 
 A thin loop over :class:`shipid.methods.monitor.estimator.MassCMMonitor`: read the stream in chunks, feed them,
-print each update (one JSON line, or a live panel on a terminal).
+print each update (one JSON line, or a live panel on a terminal); ``-o/--out FILE`` also writes the JSON lines
+of the whole run to FILE (atomically, when the stream ends), the input of ``shipid report``.
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
+from shipid.cli._common import emit as emit_out
+from shipid.cli._common import out_options
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -114,11 +117,11 @@ def live_panel(u, nominal_label: str):
 
 
 @monitor.command("mass-cm")
-@click.option("--nominal", required=True, type=click.Path(dir_okay=False, exists=True),
+@click.option("--nominal", required=True, type=click.Path(dir_okay=False),
               help="Nominal-condition trial (recorded once).")
-@click.option("--calibration", required=True, type=click.Path(dir_okay=False, exists=True),
+@click.option("--calibration", required=True, type=click.Path(dir_okay=False),
               help="Calibration trial (known extra m_c at zc_bar, recorded once).")
-@click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False, exists=True),
+@click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False),
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g and z_f (required here).")
 @click.option("--stream", required=True, type=str,
               help="Loaded-condition stream: a trial file, '-' for standard input (CSV), or with --follow a "
@@ -131,13 +134,16 @@ def live_panel(u, nominal_label: str):
               help="Stream seconds used by the start-up run of Algorithm 1 before the first estimate.")
 @click.option("--threshold", type=click.FloatRange(min=0), default=None,
               help="Alarm threshold of the detector's Wald statistic [default: MonitorOptions.threshold].")
-@click.option("--jsonl", is_flag=True, help="One JSON line per update (the default when stdout is not a terminal).")
+@click.option("--json", "--jsonl", "as_json", is_flag=True,
+              help="One JSON line per update on stdout (the default when stdout is not a terminal).")
+@out_options(json_flag=False, out_help="Also write the JSON lines of the run to FILE (atomically, when the stream "
+                                       "ends; an existing FILE needs --force).")
 @click.option("--follow", is_flag=True, help="Keep reading a CSV file that is still being written (as tail -f).")
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
               help="With --follow: stop after this many seconds without new data [default: never].")
 @click.option("--strict", is_flag=True, help="Exit with status 3 if any warning was raised.")
-def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, jsonl, follow,
-                    idle_timeout, strict):
+def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, as_json, out, force,
+                    follow, idle_timeout, strict):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
 
     Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
@@ -145,7 +151,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
     `shipid identify mass-cm`: t, p, a_s, r, delta.
     Example: shipid simulate fishing-vessel mass-cm-stream --change-at 900 --to 0.7,-0.14 --out s.csv;
     shipid monitor mass-cm --nominal s.nominal.csv --calibration s.calibration.csv --known s.known.toml
-    --stream s.csv --jsonl > run.jsonl
+    --stream s.csv -o run.jsonl
     """
     from dataclasses import replace
 
@@ -165,7 +171,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
     mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)
     mon.keep_updates = False
     live = None
-    as_json = jsonl or not sys.stdout.isatty()
+    lines: list[str] | None = [] if out else None
+    as_json = as_json or not sys.stdout.isatty()
     if not as_json:
         from rich.live import Live
         live = Live(refresh_per_second=4)
@@ -181,10 +188,13 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
             if u.alarm:
                 click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
                            f"detector T = {u.statistic:.3g} > {opts.threshold:g})", err=True)
+            line = json.dumps(u.to_json())
+            if lines is not None:
+                lines.append(line)
             if live is not None:
                 live.update(live_panel(u, Path(nominal).name))
             else:
-                click.echo(json.dumps(u.to_json()))
+                click.echo(line)
                 sys.stdout.flush()
 
     try:
@@ -209,5 +219,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
     finally:
         if live is not None:
             live.stop()
+    if lines is not None:
+        emit_out("".join(f"{ln}\n" for ln in lines), as_json=False, out=out, force=force)
     if strict and n_warn:
         sys.exit(3)

@@ -1,0 +1,89 @@
+"""Lazy command loading (issue 14): ``shipid --help``, ``shipid vessels`` and ``shipid check`` import no method.
+
+The groups list their commands from the generated index ``shipid.cli.INDEX``; a command's
+module is imported when the command is resolved. The index must be what the command modules say
+(names, modules, summaries), and the lazy help must be the help of the fully loaded tree.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import shipid
+import shipid.cli
+from shipid.cli import INDEX, build_index, load_all_commands, main
+
+SRC = str(Path(shipid.__file__).resolve().parents[1])
+PROBE = """
+import json, sys
+{body}
+mods = sys.modules
+sys.stderr.write("\\nPROBE " + json.dumps({{"numba": "numba" in mods,
+    "methods": sorted(m for m in mods if m.startswith("shipid.methods.") and m.count(".") == 2)}}) + "\\n")
+"""
+
+
+def _fresh(body: str) -> tuple[str, dict]:
+    """Run ``body`` in a fresh interpreter; its stdout and what it had imported."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([SRC, *filter(None, [os.environ.get("PYTHONPATH")])]))
+    p = subprocess.run([sys.executable, "-c", PROBE.format(body=body)], env=env, capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr
+    probe = json.loads(p.stderr.rsplit("PROBE ", 1)[1])
+    return p.stdout, probe
+
+
+def test_the_index_is_current():
+    """If this fails, refresh it: python -c "import shipid.cli as c; c.write_index()"."""
+    assert shipid.cli.INDEX_CURRENT, "a command module changed since the index was written: refresh it"
+    assert build_index() == INDEX
+
+
+def test_an_out_of_date_index_is_not_used():
+    """With an index whose source key does not match, every command module is imported (slow, never wrong)."""
+    body = ("import types; fake = types.ModuleType('shipid.cli._index'); fake.SOURCES = 'stale'; fake.INDEX = {}; "
+            "sys.modules['shipid.cli._index'] = fake; import shipid.cli as c; assert not c.INDEX_CURRENT; "
+            "c.main(['identify', '--help'])")
+    out, probe = _fresh(body)
+    assert probe["numba"] and {"shipid.methods.masscm", "shipid.methods.mmg"} <= set(probe["methods"])
+    assert "mass-cm" in out and "realdata" in out
+
+
+@pytest.mark.parametrize("args", [["--help"], ["identify", "--help"], ["study", "--help"], ["analyse", "--help"]],
+                         ids=" ".join)
+def test_group_help_imports_no_method_and_equals_the_loaded_help(args, capsys):
+    out, probe = _fresh(f"from shipid.cli import main; main({args!r})")
+    assert probe == {"numba": False, "methods": []}
+    load_all_commands()
+    assert main(args) == 0
+    assert capsys.readouterr().out == out
+
+
+def test_vessels_and_check_import_no_method(tmp_path):
+    f = tmp_path / "t.csv"
+    f.write_text("t [s],u [m/s],r [rad/s],delta [rad]\n0,1,0,0\n0.1,1,0,0.01\n0.2,1,0.001,0.02\n", encoding="utf-8")
+    body = f"from shipid.cli import main; assert main(['vessels']) == 0; assert main(['check', {str(f)!r}]) == 0"
+    out, probe = _fresh(body)
+    assert probe == {"numba": False, "methods": []}
+    assert "fishing-vessel" in out and "3 samples" in out
+
+
+def test_a_command_is_imported_when_it_runs():
+    out, probe = _fresh("from shipid.cli import main; assert main(['identify', 'mass-cm', '--help']) == 0")
+    assert "shipid.methods.masscm" in probe["methods"] and "shipid.methods.mmg" not in probe["methods"]
+    assert "Usage: shipid identify mass-cm" in out
+
+
+def test_import_shipid_is_cheap_and_keeps_its_api():
+    out, probe = _fresh("import shipid; print(sorted(m for m in ('numpy', 'numba', 'click') if m in sys.modules)); "
+                        "print(shipid.__version__, callable(shipid.identify), shipid.Result.__name__)")
+    first, second = out.splitlines()
+    assert first == "[]"                                  # import shipid alone: none of them
+    assert second.split() == [shipid.__version__, "True", "Result"]
+    assert probe["numba"]                                 # shipid.identify loaded the methods
