@@ -1,9 +1,9 @@
-"""Report material for ``mmg-ebm`` results of ``shipid identify mmg`` (real free-running runs).
+"""Report series of ``mmg-ebm`` results of ``shipid identify mmg`` (real free-running runs).
 
 Such a result records its training runs by file name and checksum only
-(``provenance["training_runs"]``) and carries no series. When the files can still be
-read, :func:`enrich` computes the report's material on request (DESIGN: report series are
-computed on request, not inside ``identify``): the "Data used" summary of each run
+(``provenance["training_runs"]``) and carries no series. :func:`with_series` computes the report's
+material on request (``Result.with_series()``, ``shipid report``; ``identify`` never does it) from the
+trials given, or else from the recorded files when they can still be read: the "Data used" summary of each run
 (samples, duration, sampling, channels with units) and, per run, an open-loop simulation of
 the identified model from the run's measured initial state driven by its measured rudder,
 propeller revolutions and wind (:func:`shipid.methods.mmg.validate.validate`), drawn as
@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from shipid.report.render import short_path
 from shipid.data.io import read_trial
+from shipid.data.trial import Trial
+from shipid.errors import InputError
 from shipid.report.convention import overlay, signal, trial_summary
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
@@ -44,16 +46,23 @@ def _read(path: str, prov: Mapping):
     return tr
 
 
-def enrich(result):
-    """A copy of ``result`` with ``provenance["inputs"]`` and fit overlays, when its runs are readable.
+def with_series(result, *, trials: Sequence | None = None):
+    """A copy of ``result`` with ``provenance["inputs"]``, fit overlays and input signals.
 
-    Returns ``result`` itself when it already records inputs and overlays, when it is not an
-    ``mmg-ebm`` result, or when none of its training runs can be read (a note says why).
+    ``trials``: the training runs (trials or paths, in the order of ``provenance["training_runs"]``, as
+    ``shipid.identify("mmg", ...)`` took them); None reads the recorded files again (with the recorded
+    format, channel map and rudder sign). Returns ``result`` itself when it already records inputs and
+    overlays, when it is not an ``mmg-ebm`` result, or when it records no training runs; a run that cannot
+    be read gets a note in its input summary.
     """
     prov = dict(result.provenance or {})
     runs = _runs(prov)
     if result.method != "mmg-ebm" or not runs:
         return result
+    given = None if trials is None else (list(trials) if not isinstance(trials, (Trial, str, os.PathLike))
+                                         else [trials])
+    if given is not None and len(given) != len(runs):
+        raise InputError(f"mmg: {len(given)} trials given for the {len(runs)} training runs the result records")
     series = {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in (result.series or {}).items()}
     have_inputs = isinstance(prov.get("inputs"), (list, tuple)) and prov["inputs"]
     have_overlays = bool(series.get("overlays"))
@@ -65,11 +74,12 @@ def enrich(result):
     for k, run in enumerate(runs):
         path = str(run.get("file") if isinstance(run, Mapping) else run)
         name = short_path(path) if os.path.isabs(path) else path
-        if not os.path.isfile(path):
+        src = path if given is None else given[k]
+        if not isinstance(src, Trial) and not os.path.isfile(str(src)):
             inputs.append({"name": name, "note": "file not found where the report was built: no summary"})
             continue
         try:
-            tr = _read(path, prov)
+            tr = src if isinstance(src, Trial) else _read(str(src), prov)
         except Exception as err:  # noqa: BLE001 - the report must still be written
             inputs.append({"name": name, "note": f"could not be read again: {' '.join(str(err).split())[:160]}"})
             continue
@@ -112,3 +122,6 @@ def enrich(result):
     if notes:
         diag["warnings"] = list(diag.get("warnings") or []) + notes
     return dataclasses.replace(result, provenance=prov, series=series, diagnostics=diag)
+
+
+__all__ = ["OVERLAY_CHANNELS", "with_series"]
