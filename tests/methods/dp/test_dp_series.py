@@ -9,7 +9,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import shipid
 from shipid.cli import main
 from shipid.data.io import read_trial, write_trial
 from shipid.methods.dp.entry import REQUIRED
@@ -34,32 +33,31 @@ def _figures(html: str) -> list[tuple[str, str]]:
 
 @pytest.fixture(scope="module")
 def made(tmp_path_factory):
-    """One 200-s trial per scheme (seed 5) as CSV; identified by the API (bare) and in memory (with series)."""
+    """One 200-s trial per scheme (seed 5) as CSV, read and identified; kept bare as JSON and completed in memory."""
     d = tmp_path_factory.mktemp("dp_series")
     v = dp.dp_vessel(load_vessel("supply"))
     files = {}
     for kind, trs in simulate_dp_trials(v, 5, duration=200.0, n_per_kind=1).items():
         files[kind] = [str(d / f"{kind}.csv")]
         write_trial(trs[0], files[kind][0])
-    bare = shipid.identify("dp", files)                      # the API: no report work
     trials = {k: [read_trial(p, required=list(REQUIRED), manoeuvre=f"dp-{k}") for p in files[k]] for k in KINDS}
     fit = fit_dp(*(trials[k] for k in KINDS), v)
-    stored = Result.from_json(fit.result.to_json())
+    stored = Result.from_json(fit.result.to_json())          # identify_dp's (and shipid.identify's) result
     full = with_series(fit)                                  # the in-memory path (CLI, demo)
-    return d, files, bare, stored, full, trials
+    return d, files, stored, full, trials
 
 
 def test_identify_makes_no_report_series_and_records_its_files(made):
-    _, files, bare, stored, full, _ = made
-    assert bare.series == {} and stored.series == {}        # no theta_true: not even the true-vs-estimated table
-    assert bare.provenance["dp_call"] == {"vessel": "supply", "files": files}
+    _, files, stored, full, _ = made
+    assert stored.series == {}                               # no theta_true: not even the true-vs-estimated table
+    assert stored.provenance["dp_call"] == {"vessel": "supply", "files": files}
     assert set(full.series["histories"]) == set(dp.THETA_NAMES)
     assert {"innovation_SI1_s", "innovation_SI2_psi", "innovation_SI3_x"} <= set(full.series["residuals"])
-    assert {k: e.value for k, e in bare.estimates.items()} == {k: e.value for k, e in full.estimates.items()}
+    assert {k: e.value for k, e in stored.estimates.items()} == {k: e.value for k, e in full.estimates.items()}
 
 
 def test_with_series_of_a_stored_result_reproduces_the_series_bit_for_bit(made):
-    _, _, _, stored, full, trials = made
+    _, _, stored, full, trials = made
     again = stored.with_series()                              # reads the recorded files, reruns SI1 -> SI3
     assert _canon(Result.from_json(again.to_json()).to_dict()["series"]) == _canon(full.to_dict()["series"])
     assert _canon(again.provenance["inputs"]) == _canon(full.provenance["inputs"])
@@ -73,7 +71,7 @@ def test_with_series_of_a_stored_result_reproduces_the_series_bit_for_bit(made):
 
 
 def test_with_series_refuses_trials_that_do_not_reproduce_the_estimates(made):
-    _, _, _, stored, _, trials = made
+    _, _, stored, _, trials = made
     s = trials["surge"][0]
     other = {**trials, "surge": [s.with_channels(x=s["x"] + np.linspace(0.0, 3.0, s.t.size))]}
     out = stored.with_series(trials=other)
@@ -83,7 +81,7 @@ def test_with_series_refuses_trials_that_do_not_reproduce_the_estimates(made):
 
 @pytest.mark.slow  # ~40 s on 2 loaded cores: the report of the bare JSON reruns SI1 -> SI3
 def test_shipid_report_of_the_bare_json_draws_the_same_figures(made, capsys):
-    d, _, _, stored, full, _ = made
+    d, _, stored, full, _ = made
     htmls = []
     for name, res in (("bare", stored), ("full", full)):
         res.write_json(d / f"{name}.json")

@@ -76,7 +76,8 @@ def test_with_series_says_when_the_recorded_file_is_gone(made):
     gone = replace(stored, provenance={**stored.provenance,
                                        "ebm_call": {**stored.provenance["ebm_call"], "files": ["/nonexistent/zz.csv"]}})
     out = gone.with_series()
-    assert out.series == {} and out.warnings[-1] == "report series not made: trial file not found: /nonexistent/zz.csv"
+    assert out.series == {} and out.warnings[-1] == ("report series not made: trial file not found: /nonexistent/zz.csv "
+                                                     "(give the trials: with_series(trials=...))")
 
 
 def test_shipid_report_of_the_bare_json_draws_the_same_figures(made, capsys):

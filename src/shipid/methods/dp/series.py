@@ -184,7 +184,7 @@ def _from_trials(result, trials):
             return result
         missing = [p for p in paths if not os.path.isfile(p)]
         if missing:
-            return _noted(result, f"trial file not found: {missing[0]}")
+            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
         trials = files
     try:
         groups = grouped(trials, ("surge", "sway-yaw", "azimuth"), "dp")

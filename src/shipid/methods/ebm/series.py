@@ -247,7 +247,7 @@ def _from_trials(result, trials):
             return result
         missing = [p for p in files if not os.path.isfile(p)]
         if missing:
-            return _noted(result, f"trial file not found: {missing[0]}")
+            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
         trials = files
     try:
         data = [as_trial(x, required=list(REQUIRED), method="ebm", vessel=vessel) for x in as_list(trials)]
