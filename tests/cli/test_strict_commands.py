@@ -85,14 +85,14 @@ def test_ebm_converged_reaches_the_text_output(ebm_files, capsys, monkeypatch):
 
     from shipid.methods.ebm import estimator as ebm
 
-    real = ebm.identify
+    real = ebm.identify_run
 
     def not_converged(*a, **k):
-        res = real(*a, **k)
-        res.diagnostics["converged"] = False
-        return res
+        run = real(*a, **k)
+        run.result.diagnostics["converged"] = False
+        return run
 
-    monkeypatch.setattr(ebm, "identify", not_converged)
+    monkeypatch.setattr(ebm, "identify_run", not_converged)
     assert main(argv) == 0
     cap = capsys.readouterr()
     assert "converged: NO" in cap.out

@@ -259,14 +259,15 @@ def _spread_result():
 
 
 def _dp_result():
-    from shipid.methods.dp.estimator import identify_dp
+    from shipid.methods.dp.estimator import fit_dp
+    from shipid.methods.dp.series import with_series
     from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
 
     v = dp_vessel(load_vessel("supply"))
     trials = simulate_dp_trials(v, 0, duration=300.0, n_per_kind=1, noise=TrialNoise())
-    return identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta)
+    return with_series(fit_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta))
 
 
 def _ebm_result():
@@ -275,7 +276,7 @@ def _ebm_result():
     from shipid.methods.ebm import series as ebm_series
     from shipid.methods.ebm.trials import simulate_trial
 
-    res = ebm.identify([simulate_trial("zigzag-20", 300.0, seed=11)])
+    res = ebm_series.with_series(ebm.identify_run([simulate_trial("zigzag-20", 300.0, seed=11)]))
     # the opt-in extras, small: held-out validation (Figs 6, 10) and a 2 x 2 D-optimal map (Fig. 7)
     res.series["overlays"].update(ebm_series.validation_overlays(res, duration=100.0))
     res.series["contours"] = {"d_optimal": ebm_series.d_optimal_contour(

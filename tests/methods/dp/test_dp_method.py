@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from known.fossen1996 import THETA_EQ46_49
 
-from shipid.methods.dp.estimator import DPOptions, identify_dp, run_stage
+from shipid.methods.dp.estimator import DPOptions, fit_dp, identify_dp, run_stage
+from shipid.methods.dp.series import with_series
 from shipid.methods.dp.trials import DP_CHANNELS, simulate_dp_trial, simulate_dp_trials
 from shipid.models import dp
 from shipid.result import Result
@@ -28,10 +29,12 @@ def supply():
 
 @pytest.fixture(scope="module")
 def short_run(supply):
-    """Six 600-s trials (seed 0), identified: the unmarked, fast version of the study."""
+    """Six 600-s trials (seed 0), identified, with the report series: the unmarked, fast version of the study."""
     trials = simulate_dp_trials(supply, 0, duration=600.0)
-    res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], supply, theta_true=supply.theta)
-    return trials, res
+    fit = fit_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], supply, theta_true=supply.theta)
+    # identify makes no report series: with the truth given, only the true-vs-estimated table
+    assert set(fit.result.series) == {"tables"}
+    return trials, with_series(fit)
 
 
 def test_simulated_trials_have_the_cli_channels(short_run):

@@ -50,3 +50,18 @@ def test_report_says_why_when_the_files_are_gone(datasets, tmp_path):
     out = enrich(r)
     assert "overlays" not in out.series
     assert any("report series not made: dataset file not found" in w for w in out.diagnostics["warnings"])
+
+
+def test_report_series_from_the_trials_given(datasets):
+    """``with_series(trials=...)``: the datasets handed over (the mapping identify takes) instead of the files."""
+    r = Result.from_json(estimate_mass_cm(datasets, KNOWN, z_f=ZF).to_json())
+    r.provenance["mass_cm_call"]["files"] = [[c, None] for c, _ in r.provenance["mass_cm_call"]["files"]]
+    assert r.with_series() is r                                      # no files recorded, no trials: unchanged
+    by: dict = {}
+    for cond, tr in datasets:
+        by.setdefault(cond, []).append(tr)
+    out = r.with_series(trials=by)
+    want = with_series(fit_mass_cm(datasets, KNOWN, z_f=ZF))
+    for kind in ("overlays", "residuals"):
+        assert json.dumps(out.series[kind], sort_keys=True) == json.dumps(want.series[kind], sort_keys=True)
+    assert not any("report series not made" in w for w in out.diagnostics["warnings"])

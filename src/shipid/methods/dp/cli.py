@@ -21,7 +21,8 @@ from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
 from shipid.data.io import read_trial
 from shipid.errors import ShipidError
 from shipid.methods.dp.coverage import summarise
-from shipid.methods.dp.estimator import DPOptions, identify_dp
+from shipid.methods.dp.estimator import DPOptions, fit_dp
+from shipid.methods.dp.series import with_series
 from shipid.methods.dp.plot import plot_parameter_histories
 from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
 from shipid.models.dp import THETA_MEANING, THETA_NAMES, dp_vessel
@@ -104,9 +105,9 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
     if sigma_psi is not None:
         opt = replace(opt, sigma_psi=float(np.deg2rad(sigma_psi)))
     refuse_existing(plot, force=force)
-    res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, opt,
-                      provenance={"inputs": [str(p) for p in (*surge, *sway_yaw, *azimuth)],
-                                  "command": "shipid identify dp"})
+    res = with_series(fit_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, opt,
+                             provenance={"inputs": [str(p) for p in (*surge, *sway_yaw, *azimuth)],
+                                         "command": "shipid identify dp"}))   # the report series of the result it prints
     _emit(res, as_json, out, plot, force, trials=[tr for k in trials for tr in trials[k]])
 
 
@@ -143,9 +144,10 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     noise = TrialNoise()
     trials = simulate_dp_trials(v, seed, duration=duration, n_per_kind=n_trials, noise=noise)
     t_sim = time.perf_counter() - t0
-    res = identify_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta,
-                      provenance={"seed": seed, "command": f"shipid study dp-supply --seed {seed}",
-                                  "noise": noise.as_dict(), "duration_s": duration, "trials_per_kind": n_trials})
+    res = with_series(fit_dp(trials["surge"], trials["sway-yaw"], trials["azimuth"], v, theta_true=v.theta,
+                             provenance={"seed": seed, "command": f"shipid study dp-supply --seed {seed}",
+                                         "noise": noise.as_dict(), "duration_s": duration,
+                                         "trials_per_kind": n_trials}))
     res.diagnostics["simulation_seconds"] = t_sim
     _emit(res, as_json, out, plot, force, theta_true=v.theta)
 

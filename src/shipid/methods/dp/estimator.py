@@ -50,6 +50,7 @@ Measured with ``covariance="ekf"`` (the EKF's σ) on simulated supply-vessel tri
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import asdict, dataclass, field, replace
 from typing import Sequence
@@ -59,10 +60,9 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import ConvergenceError, InputError
 from shipid.estimate.ekf_augmented import ParallelEKFResult, parallel_augmented_ekf
-from shipid.methods.dp.series import attach
 from shipid.methods.dp.stage_models import momentum_model, prepare, surge_model
 from shipid.models import dp
-from shipid.report.convention import history, table
+from shipid.report.convention import table
 from shipid.result import Estimate, Result
 from shipid.methods.dp.pem import StageLikelihood, measurement_log_scales, noise_report, pem_stage
 
@@ -368,8 +368,36 @@ def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequ
     -------
     Result
         ``estimates``: θ1..θ9 (bis) with std; ``model``: A_h, K, A'', B'' (eqs. 48–52 form),
-        M'', T''; ``series``: parameter histories of every scheme (Fig. 8);
-        ``diagnostics``: per-scheme convergence, NIS, log-likelihood, run times.
+        M'', T''; ``diagnostics``: per-scheme convergence, NIS, log-likelihood, run times.
+        ``series`` holds only ``tables["true_vs_estimated"]`` when ``theta_true`` is given (a summary
+        of the estimates, no data); the report series (parameter histories of Fig. 8, innovations,
+        trial summaries) are made on request by :func:`shipid.methods.dp.series.with_series`.
+    """
+    return fit_dp(surge, sway_yaw, azimuth, vessel, options, theta_true=theta_true, provenance=provenance).result
+
+
+@dataclass(frozen=True)
+class DPFit:
+    """An estimate with what its report series are computed from (:func:`shipid.methods.dp.series.with_series`).
+
+    ``stages`` are the three :class:`StageResult` (their EKF runs), ``trials`` the trials given, by scheme
+    (``{"SI1": [...], "SI2": [...], "SI3": [...]}``).
+    """
+
+    result: Result
+    stages: list
+    vessel: dp.DPVessel
+    trials: dict
+    theta_true: np.ndarray | None = None
+
+
+def fit_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequence[Trial],
+           vessel: dp.DPVessel, options: DPOptions = DPOptions(), *,
+           theta_true: np.ndarray | None = None, provenance: dict | None = None) -> DPFit:
+    """:func:`identify_dp` returning a :class:`DPFit` (the same Result, and its schemes and trials).
+
+    The result records in ``provenance["dp_call"]`` the trial files (where the trials were read from
+    files) and the vessel, so that ``shipid report`` can make the report series again.
     """
     theta = np.asarray(options.theta0, dtype=float).copy()
     cov = np.zeros((9, 9))
@@ -381,8 +409,17 @@ def identify_dp(surge: Sequence[Trial], sway_yaw: Sequence[Trial], azimuth: Sequ
         noise = {**noise, **st.diagnostics.get("noise_log_scales", {})}
         stages.append(st)
     res = _result(stages, vessel, options, theta_true, provenance or {})
-    attach(res, stages, vessel, surge, sway_yaw, azimuth)  # report series: innovations with σ, inputs
-    return res
+    res.provenance["dp_call"] = {"vessel": vessel.name,
+                                 "files": {k: [_file_of(tr) for tr in trs] for k, trs in
+                                           (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}}
+    return DPFit(res, stages, vessel, {"SI1": list(surge), "SI2": list(sway_yaw), "SI3": list(azimuth)},
+                 None if theta_true is None else np.asarray(theta_true, dtype=float))
+
+
+def _file_of(trial) -> str | None:
+    """The absolute path of the file a trial was read from, or its ``source`` label when that is not a file."""
+    src = (getattr(trial, "meta", None) or {}).get("source")
+    return os.path.abspath(src) if isinstance(src, str) and os.path.isfile(src) else src
 
 
 def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, theta_true, provenance) -> Result:
@@ -437,14 +474,7 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
         diagnostics["error"] = theta - tt
         diagnostics["error_sigma"] = (theta - tt) / std
         diagnostics["relative_error"] = (theta - tt) / np.abs(tt)
-    hist = {}
-    for st in stages:
-        for j, i in enumerate(st.free):
-            nm = dp.THETA_NAMES[i]
-            hist[nm] = history(st.t, st.free_theta[:, j], st.free_std[:, j], "- (bis)",
-                               true=None if theta_true is None else float(theta_true[i]),
-                               label=f"θ{i + 1}'' = {dp.THETA_MEANING[nm]} ({st.name})", paper="Fig. 8")
-    series = {"histories": hist}
+    series: dict = {}
     if theta_true is not None:
         rows = [[nm, float(theta_true[i]), float(theta[i]), float(std[i]),
                  float(100 * (theta[i] - theta_true[i]) / abs(theta_true[i])),
@@ -463,4 +493,5 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
 #: with unknown noise scales; every estimate had a std. RMS of error/std 1.01 pooled.
 COVERAGE = {"coverage": 0.949, "n": 24, "nominal": 0.954, "note": "pooled over theta1..theta9; lowest theta5 at "
             "0.875", "source": "shipid study dp-coverage --runs 24 --seed 4 --workers 2"}
-__all__ = ["COVERAGE", "STAGES", "STAGE_KIND", "DPOptions", "StageResult", "run_stage", "identify_dp"]
+__all__ = ["COVERAGE", "STAGES", "STAGE_KIND", "DPOptions", "StageResult", "DPFit", "run_stage", "identify_dp",
+           "fit_dp"]

@@ -11,7 +11,7 @@ from shipid.result import Result
 def plot_parameter_histories(result: Result, path: str | os.PathLike, *, force: bool = False):
     """Draw θ1''…θ9'' versus time with ±2σ bands (and the true value when known); write a PNG.
 
-    Uses ``result.series["histories"]`` (see :func:`shipid.methods.dp.estimator.identify_dp`).
+    Uses ``result.series["histories"]`` (made by :func:`shipid.methods.dp.series.with_series`).
     Each scheme (SI1–SI3) has its own time axis: the time of its longest trial.
     """
     import matplotlib

@@ -4,10 +4,16 @@ Draws, when the result carries them: every parameter history with its ±σ band
 (``histories``, paper Fig. 8, as small multiples), then the innovation checks:
 each ``residuals`` entry whose name starts with ``innovation`` with its predicted
 ±2σ band and autocorrelation, followed by the table of residual statistics.
+
+:func:`enrich` makes those series on request for a result that has none (one from :func:`shipid.identify`
+or :func:`~shipid.methods.dp.estimator.identify_dp`, which do no report work):
+:func:`shipid.methods.dp.series.with_series` reads the trials again from the files the result records,
+reruns SI1 → SI3, checks that it reproduces the stored estimates and adds the series.
 """
 
 from __future__ import annotations
 
+from shipid.methods.dp.series import with_series
 from shipid.report.registry import Entry, Group, register_section
 from shipid.report.render import paper_ref
 from shipid.report.sections._util import entries
@@ -36,3 +42,12 @@ def dp_section(result) -> list:
 
 
 register_section("dp", dp_section, default=True)
+
+
+def enrich(result):
+    """``result`` with its report series made from the files it records (:func:`~shipid.methods.dp.series.with_series`);
+    ``result`` itself when it has them already or records no files."""
+    return with_series(result)
+
+
+__all__ = ["dp_section", "enrich"]

@@ -1,7 +1,10 @@
 """Report series of the DP identification (Fossen, Sagatun & Sørensen 1996, seed 001; issue 8).
 
-Adds to a ``dp`` :class:`~shipid.result.Result` what ``shipid report`` draws beyond the
-parameter histories (Fig. 8, built by :mod:`shipid.methods.dp.estimator`):
+Adds to a ``dp`` :class:`~shipid.result.Result`, on request (:func:`with_series`), what ``shipid report``
+draws; ``identify`` never does this work:
+
+* ``histories["theta<i>"]`` — the parameter estimate of the final EKF pass of its scheme against
+  time, with its ±σ band and the true value where known (paper Fig. 8).
 
 * ``residuals["innovation_<scheme>_<channel>"]`` — the innovations of the final filter pass of
   each scheme (SI1: distance run along the heading, eq. 32; SI2, SI3: x, y, ψ, eqs. 44–45) for
@@ -17,11 +20,20 @@ Positions are converted from the bis system (eqs. 26–28) back to metres, time 
 
 from __future__ import annotations
 
-from typing import Sequence
+import copy
+import os
+import warnings
+from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.report.convention import overlay, residual, trial_summary
+from shipid.methods._trials import as_trial, grouped
+from shipid.methods.dp.entry import REQUIRED
+from shipid.methods.dp.estimator import DPFit, DPOptions, fit_dp
+from shipid.models import dp
+from shipid.report.convention import history, overlay, residual, trial_summary
+from shipid.result import Result
+from shipid.vessels import load_vessel
 
 #: Measured channels of each scheme's model (:func:`shipid.methods.dp.stage_models.prepare`).
 CHANNELS = {"surge": (("s", "distance run along the heading s", "m"),),
@@ -90,9 +102,29 @@ def inputs(trials_by_stage: dict[str, Sequence]) -> list[dict]:
     return out
 
 
-def attach(result, stages, vessel, surge, sway_yaw, azimuth) -> None:
-    """Add innovations, one-step overlays and input summaries to ``result`` (never raises)."""
-    by = {"SI1": list(surge), "SI2": list(sway_yaw), "SI3": list(azimuth)}
+def histories(stages, theta_true=None) -> dict:
+    """Fig. 8: every free parameter of every scheme against time, with ±σ and the true value where known."""
+    hist = {}
+    for st in stages:
+        for j, i in enumerate(st.free):
+            nm = dp.THETA_NAMES[i]
+            hist[nm] = history(st.t, st.free_theta[:, j], st.free_std[:, j], "- (bis)",
+                               true=None if theta_true is None else float(theta_true[i]),
+                               label=f"θ{i + 1}'' = {dp.THETA_MEANING[nm]} ({st.name})", paper="Fig. 8")
+    return hist
+
+
+def attach(result, stages, vessel, trials_by_stage: Mapping[str, Sequence], theta_true=None) -> None:
+    """Add histories, innovations, one-step overlays and input summaries to ``result`` (never raises)."""
+    by = {k: list(trials_by_stage.get(k) or []) for k in ("SI1", "SI2", "SI3")}
+    series = {}
+    try:
+        series["histories"] = histories(stages, theta_true)
+    except Exception as err:  # noqa: BLE001 - report extras must never lose the estimate
+        result.diagnostics.setdefault("warnings", []).append(
+            f"report series: parameter histories not built ({type(err).__name__}: {err})")
+    series.update(result.series)
+    result.series = series
     try:
         res, ov = innovations(stages, vessel, by)
         if res:
@@ -112,4 +144,71 @@ def attach(result, stages, vessel, surge, sway_yaw, azimuth) -> None:
         prov["inputs"] = summ
 
 
-__all__ = ["innovations", "inputs", "attach"]
+def with_series(fit, *, trials: Mapping | None = None) -> Result:
+    """A result with its report series: parameter histories (Fig. 8), innovations with σ, the SI2 heading
+    overlay and the trial summaries.
+
+    ``fit`` is a :class:`~shipid.methods.dp.estimator.DPFit` (:func:`~shipid.methods.dp.estimator.fit_dp`;
+    its result is completed in place and returned) or a stored ``dp`` :class:`~shipid.result.Result`
+    (``Result.with_series()``, ``shipid report``). For a stored result the trials are ``trials`` (the
+    mapping ``{"surge": [...], "sway-yaw": [...], "azimuth": [...]}`` of trials or paths that
+    ``shipid.identify("dp", ...)`` takes), else the files it records (``provenance["dp_call"]``); SI1 → SI2
+    → SI3 is run again with the recorded vessel and options, and a copy of the result gets the series
+    when that reproduces every stored estimate exactly (else, or when a file is missing, a copy with one
+    warning saying why). A result that records no files and is given no trials, or that already has
+    the histories, comes back unchanged.
+    """
+    if isinstance(fit, DPFit):
+        attach(fit.result, fit.stages, fit.vessel, fit.trials, fit.theta_true)
+        return fit.result
+    return _from_trials(fit, trials)
+
+
+def _noted(result, text: str):
+    out = copy.deepcopy(result)
+    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
+    return out
+
+
+def _from_trials(result, trials):
+    """:func:`with_series` of a stored result (see there)."""
+    series = result.series if isinstance(result.series, Mapping) else {}
+    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
+    call = prov.get("dp_call")
+    if result.method != "dp" or series.get("histories") or not isinstance(call, Mapping):
+        return result
+    if trials is None:
+        files = call.get("files") or {}
+        paths = [p for ps in files.values() for p in ps]
+        if not paths or any(not isinstance(p, str) for p in paths):
+            return result
+        missing = [p for p in paths if not os.path.isfile(p)]
+        if missing:
+            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
+        trials = files
+    try:
+        groups = grouped(trials, ("surge", "sway-yaw", "azimuth"), "dp")
+        t = {g: [as_trial(x, required=list(REQUIRED), manoeuvre=f"dp-{g}") for x in ts] for g, ts in groups.items()}
+        vessel = dp.dp_vessel(load_vessel(str(call.get("vessel") or "supply")))
+        known = DPOptions.__dataclass_fields__
+        opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in (prov.get("options") or {}).items()
+                if k in known}
+        tt = result.diagnostics.get("theta_true")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fit = fit_dp(t["surge"], t["sway-yaw"], t["azimuth"], vessel, DPOptions(**opts),
+                         theta_true=None if tt is None else np.asarray(tt, dtype=float))
+    except Exception as err:  # noqa: BLE001 - the report must still be written
+        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    diff = [n for n, e in result.estimates.items()
+            if n in fit.result.estimates and fit.result.value(n) != e.value]
+    if diff:
+        n = diff[0]
+        return _noted(result, f"SI1 -> SI3 on these trials gives {n} = {fit.result.value(n):.6g}, not the stored "
+                              f"{result.value(n):.6g} (other trials or files changed?)")
+    out = copy.deepcopy(result)
+    attach(out, fit.stages, fit.vessel, fit.trials, fit.theta_true)
+    return out
+
+
+__all__ = ["histories", "innovations", "inputs", "attach", "with_series"]

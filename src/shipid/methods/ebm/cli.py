@@ -87,6 +87,7 @@ def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figure
 
     from shipid.data.io import read_trial
     from shipid.methods.ebm import estimator as ebm
+    from shipid.methods.ebm.series import with_series
     from shipid.progress import progress_bar
 
     vessel = _check_vessel(vessel)
@@ -99,7 +100,8 @@ def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figure
             raise ShipidError(f"--antenna needs X,Y in metres, got {antenna!r}") from None
         cfg = replace(cfg, sensors=(xa, ya, float(log_offset or 0.0)))
     with progress_bar(len(data), "EBM step 1 (EKF + smoother)") as advance:
-        res = ebm.identify(data, vessel, config=cfg, progress=advance)
+        run = ebm.identify_run(data, vessel, config=cfg, progress=advance)
+    res = with_series(run)     # the report series of the result it prints
     if figures:  # opt-in: the coarse Fig. 7 map of this vessel (shipid.methods.ebm.series)
         from shipid.methods.ebm.series import coarse_d_optimal
         res.series.setdefault("contours", {})["d_optimal"] = coarse_d_optimal(vessel)

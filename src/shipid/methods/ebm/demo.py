@@ -11,7 +11,7 @@ def fallback(seed: int):
     """Yoon & Rhee (2003): a simulated 20/20 zig-zag and a 35 deg turn of ESSO OSAKA."""
     trials = [ebm_trials.simulate_trial("zigzag-20", 600.0, seed=seed + 1),
               ebm_trials.simulate_trial("turning-35", 600.0, seed=seed + 2)]
-    res = ebm.identify(trials)
+    res = ebm_series.with_series(ebm.identify_run(trials))
     res.provenance.setdefault("seed", seed)
     res.provenance.setdefault("command", "shipid demo (report step: simulated ESSO OSAKA trials)")
 

@@ -49,7 +49,8 @@ Required trial channels: ``x, y`` (DGPS antenna, m), ``x_dot, y_dot`` (m/s),
 
 from __future__ import annotations
 
-from dataclasses import replace
+import os
+from dataclasses import asdict, dataclass, replace
 from typing import Sequence
 
 import numpy as np
@@ -63,7 +64,6 @@ from shipid.methods.ebm.pipeline import (REQUIRED, EbmConfig, EbmFit, Regression
                                          fit_coefficients, measurements, observability_report, process_noise,
                                          prior_cov, regression_data, sensor_positions, sensor_source,
                                          slope_alpha)
-from shipid.methods.ebm.series import attach
 from shipid.methods.ebm.verdict import check_excitation, coefficient_verdicts
 from shipid.models import abkowitz as ab
 from shipid.result import Estimate, Result
@@ -110,10 +110,47 @@ def identify(trials: Sequence[Trial], vessel="esso-osaka", *,
     κ, R², C_p, k per mode (Table 4), the correlation matrices (Tables 1–2), the
     combined coefficients of eq. 21, the step-1 consistency (mean NIS), the approach
     condition taken from the trials and ``warnings``. Nothing of the vessel file's
-    [abkowitz] coefficients enters (:func:`identify_states`).
+    [abkowitz] coefficients enters (:func:`identify_states`). ``series`` is empty: the report
+    series (smoothed states, force fits, innovations, Tables 1, 2, 4) are made on request by
+    :func:`shipid.methods.ebm.series.with_series`.
+    """
+    return identify_run(trials, vessel, config=config, progress=progress).result
+
+
+@dataclass(frozen=True)
+class EbmRun:
+    """An estimate with what its report series are computed from (:func:`shipid.methods.ebm.series.with_series`).
+
+    ``states`` are the step-1 :class:`StateEstimate` per trial, ``fit`` the step-2 :class:`EbmFit`,
+    ``params`` the particulars with the approach condition.
+    """
+
+    result: Result
+    states: list
+    fit: EbmFit
+    params: object
+
+
+def identify_run(trials: Sequence[Trial], vessel="esso-osaka", *, config: EbmConfig = EbmConfig(),
+                 progress=None) -> EbmRun:
+    """:func:`identify` returning an :class:`EbmRun` (the same Result, and its states and fit).
+
+    The result records in ``provenance["ebm_call"]`` the trial files (where the trials were read from
+    files), the vessel and the whole configuration, so that ``shipid report`` can make the report
+    series again.
     """
     states, fit, p = identify_states(trials, vessel, config=config, progress=progress)
-    return build_result(states, fit, p, config, vessel)
+    res = build_result(states, fit, p, config, vessel)
+    res.provenance["ebm_call"] = {"files": [_file_of(tr) for tr in trials],
+                                  "vessel": vessel if isinstance(vessel, str) else getattr(vessel, "name", None),
+                                  "config": asdict(config)}
+    return EbmRun(res, list(states), fit, p)
+
+
+def _file_of(trial) -> str | None:
+    """The absolute path of the file a trial was read from, or its ``source`` label when that is not a file."""
+    src = (getattr(trial, "meta", None) or {}).get("source")
+    return os.path.abspath(src) if isinstance(src, str) and os.path.isfile(src) else src
 
 
 def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Result:
@@ -187,10 +224,6 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
         "hac_bandwidth": {m: f.bandwidth for m, f in (("surge", fit.surge), ("sway", fit.sway), ("yaw", fit.yaw))},
         "warnings": warn,
     }
-    st0 = states[0]
-    series = {"t": st0.smooth.t[::5], "u_r": st0.smooth.x[::5, 0], "v_r": st0.smooth.x[::5, 1],
-              "r": st0.smooth.x[::5, 2], "X": st0.smooth.x[::5, 6], "Y": st0.smooth.x[::5, 9],
-              "N": st0.smooth.x[::5, 12]}
     model = {"family": "modified Abkowitz (Hwang 1980), Yoon & Rhee 2003 eqs. 13-15",
              "vessel": vessel if isinstance(vessel, str) else vessel.name,
              "L": p.L, "rho": p.rho, "c0": p.c0, "U0": p.U0, "n0": p.n0,
@@ -199,10 +232,7 @@ def build_result(states, fit: EbmFit, p, config: EbmConfig, vessel: str) -> Resu
     prov = {"config": {"q_force": list(config.q_force), "q_current": config.q_current,
                        "passes": config.passes, "smoother": config.smoother, "ridge_k": config.ridge_k},
             "inputs": [s.trial.meta.get("source", "") for s in states]}
-    res = Result(method="ebm", estimates=est, model=model, diagnostics=diag, series=series, provenance=prov)
-    # report series (signals, Tables 1-2, 4, inputs; issue 8)
-    attach(res, states, fit)
-    return res
+    return Result(method="ebm", estimates=est, model=model, diagnostics=diag, provenance=prov)
 
 
 #: The last coverage study of the stated std (read by the report's verdict panel): ±2-std coverage
@@ -213,6 +243,6 @@ COVERAGE = {"coverage": 0.923, "n": 50, "nominal": 0.954,
             "source": "shipid study ebm-coverage --runs 50 --seed 100"}
 
 __all__ = ["COVERAGE", "EbmConfig", "StateEstimate", "RegressionData", "EbmFit", "estimate_states",
-           "regression_data", "fit_coefficients", "identify", "identify_states", "combined_coefficients",
+           "regression_data", "fit_coefficients", "identify", "identify_run", "EbmRun", "identify_states", "combined_coefficients",
            "slope_alpha", "measurements", "build_result", "REQUIRED", "process_noise", "prior_cov",
            "sensor_positions", "sensor_source", "observability_report", "approach_condition"]

@@ -6,6 +6,11 @@ Draws, when the result carries them: smoothed motion, forces and current
 κ / R / Cp (``tables["conditioning"]``, Table 4), the D-optimal input map
 (``contours["d_optimal"]``, Fig. 7) and validation overlays (``overlays`` with
 ``kind = "validation"``, Figs 6 and 10).
+
+:func:`enrich` makes the report series on request for an ``ebm`` result that has none (one from
+:func:`shipid.identify` or :func:`~shipid.methods.ebm.estimator.identify`, which do no report work):
+:func:`shipid.methods.ebm.series.with_series` reads the trials again from the files the result records,
+reruns both EBM steps, checks that they reproduce the stored estimates and adds the series.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from typing import Mapping
 
 import numpy as np
 
+from shipid.methods.ebm.series import with_series
 from shipid.report import figures as F
 from shipid.report.registry import Entry, Group, register_section
 from shipid.report.render import paper_ref
@@ -107,3 +113,9 @@ def _conditioning_from_diagnostics(result) -> list:
 register_section("ebm", ebm_section, default=True)
 register_section("mmg-ebm", ebm_section, default=True)
 register_section("ebm-study", ebm_section, default=True)  # shipid study ebm-esso-osaka  # real-data EBM with the MMG model (issue 6)
+
+
+def enrich(result):
+    """``result`` with its report series made from the files it records (:func:`~shipid.methods.ebm.series.with_series`);
+    ``result`` itself when it has them already or records no files."""
+    return with_series(result)

@@ -1,7 +1,8 @@
 """Report series of Estimation-Before-Modelling (Yoon & Rhee 2003, seed 002; issue 8).
 
-:func:`build` turns the step-1 state estimates and the step-2 ridge fits into the
-:mod:`shipid.report.convention` entries that ``shipid report`` draws for an ``ebm`` result:
+On request (:func:`with_series`; ``identify`` never does this work), :func:`build` turns the step-1
+state estimates and the step-2 ridge fits into the :mod:`shipid.report.convention` entries that
+``shipid report`` draws for an ``ebm`` result:
 
 * ``signals`` (paper Figs 4, 9) — per trial, the smoothed relative velocities ``u_r, v_r``,
   yaw rate ``r``, hydrodynamic forces ``X, Y`` and moment ``N`` and the current ``c_x, c_y``
@@ -26,11 +27,16 @@ Opt-in extras (they simulate the ship, seconds each):
 
 from __future__ import annotations
 
-from typing import Sequence
+import copy
+import os
+import warnings
+from typing import Mapping, Sequence
 
 import numpy as np
 
+from shipid.methods._trials import as_list, as_trial
 from shipid.methods.ebm.design import paper_comparison, prbs_grid
+from shipid.methods.ebm.estimator import EbmConfig, EbmRun, identify_run
 from shipid.methods.ebm.pipeline import REQUIRED
 from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
@@ -183,12 +189,82 @@ def build(states, fit) -> dict:
 
 
 def attach(result, states, fit) -> None:
-    """Replace ``result.series`` by :func:`build` and record the inputs (issue 8)."""
+    """Add :func:`build` to ``result.series`` (entries already there are kept) and record the inputs."""
     series = build(states, fit)
     for p in series.pop("_problems", []):
         result.diagnostics.setdefault("warnings", []).append(p)
+    for kind, part in (result.series or {}).items():
+        if isinstance(part, Mapping) and isinstance(series.get(kind), dict):
+            series[kind].update(part)
+        else:
+            series[kind] = part
     result.series = series
     result.provenance["inputs"] = inputs(states)
+
+
+def with_series(fit, *, trials: Sequence | None = None):
+    """A result with its report series: smoothed states and forces (Figs 4, 9), Tables 1, 2 and 4, force fits,
+    step-1 innovations and the trial summaries.
+
+    ``fit`` is an :class:`~shipid.methods.ebm.estimator.EbmRun` (:func:`~shipid.methods.ebm.estimator.identify_run`;
+    its result is completed in place and returned) or a stored ``ebm`` :class:`~shipid.result.Result`
+    (``Result.with_series()``, ``shipid report``). For a stored result the trials are ``trials`` (trials or
+    paths, as ``shipid.identify("ebm", ...)`` takes them), else the files it records
+    (``provenance["ebm_call"]``); both EBM steps are run again with the recorded vessel and configuration,
+    and a copy of the result gets the series when that reproduces every stored estimate exactly (else,
+    or when a file is missing, a copy with one warning saying why). A result that records no files and is
+    given no trials, or that already has the smoothed signals, comes back unchanged.
+    """
+    if isinstance(fit, EbmRun):
+        attach(fit.result, fit.states, fit.fit)
+        return fit.result
+    return _from_trials(fit, trials)
+
+
+def _noted(result, text: str):
+    out = copy.deepcopy(result)
+    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
+    return out
+
+
+def _config(d: Mapping | None) -> EbmConfig:
+    """The :class:`EbmConfig` recorded in ``provenance["ebm_call"]["config"]`` (lists back to tuples)."""
+    known = EbmConfig.__dataclass_fields__
+    return EbmConfig(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in dict(d or {}).items() if k in known})
+
+
+def _from_trials(result, trials):
+    """:func:`with_series` of a stored result (see there)."""
+    series = result.series if isinstance(result.series, Mapping) else {}
+    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
+    call = prov.get("ebm_call")
+    if result.method != "ebm" or series.get("signals") or not isinstance(call, Mapping):
+        return result
+    vessel = str(call.get("vessel") or "esso-osaka")
+    if trials is None:
+        files = call.get("files") or []
+        if not files or any(not isinstance(p, str) for p in files):
+            return result
+        missing = [p for p in files if not os.path.isfile(p)]
+        if missing:
+            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
+        trials = files
+    try:
+        data = [as_trial(x, required=list(REQUIRED), method="ebm", vessel=vessel) for x in as_list(trials)]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run = identify_run(data, vessel, config=_config(call.get("config")))
+    except Exception as err:  # noqa: BLE001 - the report must still be written
+        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    diff = [n for n, e in result.estimates.items()
+            if n in run.result.estimates and run.result.value(n) != e.value]
+    if diff:
+        n = diff[0]
+        return _noted(result, f"EBM on these trials gives {n} = {run.result.value(n):.6g}, not the stored "
+                              f"{result.value(n):.6g} (other trials or files changed?)")
+    out = copy.deepcopy(result)
+    attach(out, run.states, run.fit)
+    return out
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -280,4 +356,4 @@ def coarse_d_optimal(vessel: str = "esso-osaka", *, amplitudes: Sequence[float] 
 
 
 __all__ = ["signals", "correlation_matrices", "conditioning_table", "force_fit_overlays", "innovations", "inputs",
-           "build", "attach", "validation_overlays", "add_validation", "d_optimal_contour", "coarse_d_optimal"]
+           "build", "attach", "with_series", "validation_overlays", "add_validation", "d_optimal_contour", "coarse_d_optimal"]

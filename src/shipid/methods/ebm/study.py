@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.methods.ebm import estimator as ebm
-from shipid.methods.ebm.series import add_validation
+from shipid.methods.ebm.series import add_validation, with_series
 from shipid.methods.ebm.trials import STANDARD_TRIALS, VALIDATION_TRIAL, simulate_trial
 from shipid.models import abkowitz as ab
 from shipid.result import Result
@@ -94,7 +94,7 @@ def study(kind: str = "standard", seed: int = 0, *, scale: float = 1.0,
     p = ab.params_from_vessel()  # the simulated ship: for the comparison with the truth only
     trials = make_trials(kind, seed, scale)
     states, fit, p_id = ebm.identify_states(trials, "esso-osaka", config=config, progress=progress)
-    res = ebm.build_result(states, fit, p_id, config, "esso-osaka")
+    res = with_series(ebm.EbmRun(ebm.build_result(states, fit, p_id, config, "esso-osaka"), states, fit, p_id))
     truth = true_coefficients(p)
     table = []
     paper = PAPER_TABLE3 if kind == "standard" else PAPER_TABLE5

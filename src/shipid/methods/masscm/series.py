@@ -35,6 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.data.io import read_trial
+from shipid.methods._trials import as_trial, grouped
 from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.methods.masscm.criterion import residual_function
@@ -189,24 +190,26 @@ def attach(result, core: dict, prep, known, options=None, datasets=None, *, cont
         prov["inputs"] = inputs(datasets)
 
 
-def with_series(fit, *, cost_map: bool = False) -> Result:
+def with_series(fit, *, cost_map: bool = False, trials: Mapping | None = None) -> Result:
     """A result with its report series: roll-rate overlays, prefiltered equation errors, trial summaries and,
     with ``cost_map=True``, the Fig. 4 cost map on a :data:`CONTOUR_N` × :data:`CONTOUR_N` grid.
 
     ``fit`` is a :class:`~shipid.methods.masscm.assemble.MassCMFit` (:func:`~shipid.methods.masscm.assemble.fit_mass_cm`;
     its result is completed in place and returned) or a stored mass-cm :class:`~shipid.result.Result`
-    (``Result.with_series()``, ``shipid report``): then the datasets are read again from the files the result
-    records (``provenance["mass_cm_call"]``), Algorithm 1 is run with the recorded known parameters, options and
+    (``Result.with_series()``, ``shipid report``): then the datasets are ``trials`` (the mapping
+    ``{"nominal": ..., "calibration": ..., "loaded": ...}`` of trials or paths that ``shipid.identify("mass-cm", ...)``
+    takes), else they are read again from the files the result records (``provenance["mass_cm_call"]``),
+    Algorithm 1 is run with the recorded known parameters, options and
     initialisation, and a copy of the result gets the series when that reproduces the stored m exactly (else,
-    or when a file is missing, a copy with one warning saying why; a result that records no files, or already
-    has overlays, comes back unchanged). Report work on request: ``identify`` never does it;
+    or when a file is missing, a copy with one warning saying why; a result that records no files and is given
+    no trials, or already has overlays, comes back unchanged). Report work on request: ``identify`` never does it;
     ``shipid identify mass-cm`` does it for the result it writes (``--cost-map`` adds the map).
     """
     if isinstance(fit, MassCMFit):
         attach(fit.result, fit.core, fit.prep, fit.known, fit.options, fit.datasets,
                contour_n=CONTOUR_N if cost_map else 0)
         return fit.result
-    return _from_files(fit, cost_map)
+    return _from_files(fit, cost_map, trials)
 
 
 def _noted(result, text: str):
@@ -215,7 +218,7 @@ def _noted(result, text: str):
     return out
 
 
-def _from_files(result, cost_map: bool):
+def _from_files(result, cost_map: bool, trials: Mapping | None = None):
     """:func:`with_series` of a stored result (see there)."""
     series = result.series if isinstance(result.series, Mapping) else {}
     prov = result.provenance if isinstance(result.provenance, Mapping) else {}
@@ -223,13 +226,19 @@ def _from_files(result, cost_map: bool):
     if result.method != "mass-cm" or series.get("overlays") or not isinstance(call, Mapping):
         return result
     files = call.get("files") or []
-    if not files or any(not isinstance(p, str) for _, p in files):
-        return result
-    missing = [p for _, p in files if not os.path.isfile(p)]
-    if missing:
-        return _noted(result, f"dataset file not found: {missing[0]}")
+    if trials is None:
+        if not files or any(not isinstance(p, str) for _, p in files):
+            return result
+        missing = [p for _, p in files if not os.path.isfile(p)]
+        if missing:
+            return _noted(result, f"dataset file not found: {missing[0]}")
     try:
-        datasets = [(c, read_trial(p, required=["t", *REQUIRED], method="mass-cm")) for c, p in files]
+        if trials is None:
+            datasets = [(c, read_trial(p, required=["t", *REQUIRED], method="mass-cm")) for c, p in files]
+        else:
+            datasets = [(c, as_trial(t, required=["t", *REQUIRED], method="mass-cm"))
+                        for c, ts in grouped(trials, ("nominal", "calibration", "loaded"), "mass-cm").items()
+                        for t in ts]
         known = KnownParams(**(result.model or {})["known"])
         opts = {k: v for k, v in result.diagnostics["options"].items() if k in MassCMOptions.__dataclass_fields__}
         prior = call.get("z_f_prior")
