@@ -57,3 +57,20 @@ def test_with_series_needs_one_trial_per_training_run(made):
     files, stored, _ = made
     with pytest.raises(InputError, match="1 trials given for the 2 training runs"):
         with_series(stored, trials=files[:1])
+
+
+def test_runs_read_with_the_hsva_rudder_flip_are_reread_with_it():
+    """A result identified from read_kvlcc2 runs (δ = −δ_HSVA) records rudder sign −1, so the series made
+    from the recorded files equal those made from the flipped runs themselves."""
+    from shipid.data.basins import read_kvlcc2
+    from shipid.methods.mmg.pipeline import identify as mmg_identify
+
+    root = data_root()
+    if root is None or not (root / "kvlcc2_hsva").is_dir():
+        pytest.skip("KVLCC2 HSVA data not found (set SHIPID_DATA)")
+    runs = [read_kvlcc2("HSVA_CPMC_KVLCC2_Z_10_05.dat"), read_kvlcc2("HSVA_CPMC_KVLCC2_Z_20_05.dat")]
+    res = mmg_identify(runs, mmg.load_published("kvlcc2_hsva"), select=False)
+    assert res.provenance["rudder_sign"] == -1
+    stored = Result.from_json(res.to_json())
+    a, b = stored.with_series(), stored.with_series(trials=runs)
+    assert _canon(a.to_dict()["series"]) == _canon(b.to_dict()["series"])

@@ -161,6 +161,11 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
+    extra_provenance = dict(extra_provenance or {})
+    if "rudder_sign" not in extra_provenance and all(tr.meta.get("rudder_sign_flipped") for tr in trials):
+        # the reader (e.g. data.basins.read_kvlcc2) flipped the file's rudder: a report that reads the
+        # recorded files again must flip it too
+        extra_provenance["rudder_sign"] = -1
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"))
