@@ -200,7 +200,7 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
 @click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
 @click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
               help="Length of each of the three datasets (s).")
-@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto"]), default=None,
+@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
 @out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options

@@ -19,6 +19,7 @@ from shipid.methods.masscm.criterion import (CONDITION_CODES, IVState, coeffs, c
 from shipid.methods.masscm.data import Dataset, first_row
 from shipid.methods.masscm.moments import build_moments, closed_loop_sim, work_arrays
 from shipid.methods.masscm.noise import AUTO_HOLD, fit_noise_model, initial_prefilter, ma_c, noise_model_auto
+from shipid.methods.masscm.noise_bj import held_noise_model
 from shipid.methods.masscm.options import I_ZF, I_ZM, MassCMOptions
 from shipid.methods.masscm.search import sim_terms
 from shipid.methods.masscm.step import dataset_step
@@ -223,6 +224,8 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             if options.prefilter:
                 if options.noise_model == "auto" and j >= AUTO_HOLD:       # (*) c held (see noise_model_auto)
                     arma = noise_model_auto(eps[s:], options, (ma_c(state.L[i]),))
+                elif options.noise_model == "bj" and j >= AUTO_HOLD:       # (*) (c, k) held (noise_bj)
+                    arma = held_noise_model(eps[s:], options, state.L[i])
                 else:
                     arma = fit_noise_model(eps[s:], options)
                 newL.append(arma)

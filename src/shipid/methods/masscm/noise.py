@@ -14,6 +14,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
+from shipid.methods.masscm.noise_bj import noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
 
 def initial_prefilter(options: MassCMOptions):
@@ -40,6 +41,8 @@ def fit_noise_model(eps: np.ndarray, options: MassCMOptions):
     ARMA(na, nc) model to ``eps / (1 - c q^-2)`` (``c = options.initial_c``) and use
     ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
     """
+    if options.noise_model == "bj":
+        return noise_model_bj(eps, options)
     if options.noise_model == "auto":
         return noise_model_auto(eps, options)
     if options.noise_model == "ar":

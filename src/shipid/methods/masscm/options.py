@@ -41,7 +41,9 @@ class MassCMOptions:
     noise_model: str = "auto"        # "auto": AR(ar_order) of eps/(1 - c q^-2) with c chosen by the innovation
     #                                 likelihood among AUTO_C (c = 0 is "ar"), see noise_model_auto; "ar": AR(ar_order)
     #                                 of the residuals, prefilter = FIR A(q); "ar-structured": AR(ar_order) of
-    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA
+    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA;
+    #                                 "bj": Box-Jenkins eps = (1 - c q^-2)^k / A(q) e, (c, k) with k <= 2 chosen by
+    #                                 the innovation likelihood among noise_bj.BJ_CANDIDATES (see noise_bj)
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
