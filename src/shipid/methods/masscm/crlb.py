@@ -233,4 +233,7 @@ def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
                               "an AR(40) noise model") + "; = optimal-IV covariance (Söderström & Stoica 1989 §8.2)")}
 
 
-__all__ = ["crlb", "noise_models", "true_theta"]
+#: The regressors (37) of a trial (``y``, ``Phi``), zero before the record; shared with :mod:`~shipid.methods.masscm.crlb_iv`.
+regressors = _regressors
+
+__all__ = ["crlb", "noise_models", "true_theta", "regressors"]
