@@ -147,12 +147,26 @@ def test_fir_fast_moments_equal_general_path(clean):
     assert np.isclose(new.rss0, ref.rss0, rtol=1e-8)
 
 
-def test_an_implausible_solution_is_labelled_not_determined(kn):
-    """Regressor instruments in narrow-band wave roll diverge (m = -3e16 on this seed, with a 0 std):
-    the result is flagged implausible and m, zm_bar, rho carry "not determined", not "estimated"."""
+def test_an_implausible_solution_is_labelled_not_determined(kn, monkeypatch):
+    """Regressor instruments in narrow-band wave roll diverge (m = -3e16 on this seed, with a 0 std) when the
+    iteration is let follow its search out of the physical region (the guard of iteration.left_physical_region
+    switched off here to produce the divergent solution): the result is flagged implausible and m, zm_bar, rho
+    carry "not determined", not "estimated"."""
+    import shipid.methods.masscm.iteration as iteration
+    monkeypatch.setattr(iteration, "left_physical_region", lambda *a: False)
     d = simulate_datasets("fishing-vessel", seed=0, noise=NoiseSpec(wave_roll_deg=0.5))
     r = estimate_mass_cm(list(d.items()), kn, z_f=true_value("z_f"), options=MassCMOptions(instruments="regressors", noise_model="ar"))
     assert r.diagnostics["implausible"]
     assert any(w.startswith("implausible solution") for w in r.diagnostics["warnings"])
     for n in ("m", "zm_bar", "rho"):
         assert r.estimates[n].status == "not determined" and "implausible" in r.estimates[n].note
+
+
+def test_a_search_leaving_the_physical_region_keeps_the_last_physical_iterate(kn):
+    """The same divergent case with the guard (the default): the iteration stops at the last iterate whose
+    identified roll mode is physical, says so in one warning, is not converged, and m is finite and plausible."""
+    d = simulate_datasets("fishing-vessel", seed=0, noise=NoiseSpec(wave_roll_deg=0.5))
+    r = estimate_mass_cm(list(d.items()), kn, z_f=true_value("z_f"), options=MassCMOptions(instruments="regressors", noise_model="ar"))
+    assert any("left the physical region" in w for w in r.diagnostics["warnings"])
+    assert not r.diagnostics["converged"] and not r.diagnostics["implausible"]
+    assert 0 < r.value("m") < 2 and np.isfinite(r.std("m")) and r.std("m") > 0

@@ -74,8 +74,9 @@ def test_crlb_json(capsys):
     assert rc == 0
     for k in ("zm_bar", "rho", "m"):
         assert d["bounds"][k]["std"] > 0
-    # issue 3: 60 s with 1 deg wave roll is close to unidentifiable, the optimal-IV bound on m over 30 %
-    assert d["bounds"]["m"]["rel"] > 0.30
+    # issue 3: 60 s with 1 deg wave roll is close to unidentifiable, the optimal-IV bound on m over 20 % (0.26 with
+    # the exact wave spectrum; > 0.30 while the spectrum had a spurious low-frequency floor, see test_crlb)
+    assert d["bounds"]["m"]["rel"] > 0.20
     rc = main(["analyse", "crlb", "mass-cm", "--duration", "60", "--wave-roll", "1.0", "--json"])
     kf = json.loads(capsys.readouterr().out)
     assert rc == 0 and kf["method"] == "kf"

@@ -24,7 +24,7 @@ from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.data import Dataset, first_row, prepare
 from shipid.methods.masscm.iteration import iterate
 from shipid.methods.masscm.moments import transient_length
-from shipid.methods.masscm.noise import ma_c
+from shipid.methods.masscm.noise_bj import ma_structure
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, MassCMOptions
 from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable, implausible_reasons, rho_of
 from shipid.models.roll_reduced import THETA_NAMES, THETA_UNITS, KnownParams, discrete_coeffs, from_moment
@@ -138,8 +138,9 @@ def fit_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
     if options.prefilter and core["state"] is not None:
         res.diagnostics["noise_model_selected"] = {
             "noise_model": options.noise_model,
-            "c": [ma_c(L) for L in core["state"].L],
-            "structure": "prefilter L = A(q)/(1 - c q^-2) per dataset (c = 0: AR)"}
+            "c": [ma_structure(L)[0] for L in core["state"].L],
+            "k": [ma_structure(L)[1] for L in core["state"].L],
+            "structure": "prefilter L = A(q)/(1 - c q^-2)^k per dataset (c = 0 or k = 0: AR)"}
     if (noise_check and options.prefilter and options.noise_model == "ar"
             and (z_f is not None or z_f_prior is not None)):
         noise_model_check(res, prep, known, th0, z_f, z_f_prior, options, init)

@@ -97,7 +97,7 @@ def _fmt(v: float) -> str:
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
 @click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
-@click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma"]), default="auto",
+@click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma", "bj"]), default="auto",
               show_default=True,
               help="Noise model of the prefilter (43): auto: AR(40) of eps/(1 - c q^-2) with c chosen by the data "
                    "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
@@ -200,7 +200,7 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
 @click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
 @click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
               help="Length of each of the three datasets (s).")
-@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto"]), default=None,
+@click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
 @out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options

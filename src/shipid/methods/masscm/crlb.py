@@ -132,9 +132,14 @@ def equation_error_spectrum(vessel="fishing-vessel", *, fs: float = 50.0, noise:
             X, Xdot = simulate_zoh(ship, np.zeros(n_fft), dt, tau=tau)
             io = imu_outputs(ship, X, Xdot)
             scale = np.deg2rad(noise.wave_roll_deg) / np.sqrt(np.sum(X[:, 0] ** 2))
-            tr = {"p": io["p"], "a_s": io["a_s"], "r": io["r"], "delta": np.zeros(n_fft)}
+            # the impulse response starts from rest: two zero samples before it, so that the differences
+            # a_t - a_{t-2}, r_t - r_{t-2} of the first two samples are not dropped (``equation_regressors`` sets them to
+            # 0, which put a flat floor of ~1e-6 into the spectrum where the wave equation error falls as w^4)
+            pad = np.zeros(2)
+            tr = {k: np.concatenate([pad, io[k]]) for k in ("p", "a_s", "r")}
+            tr["delta"] = np.zeros(n_fft + 2)
             y, Phi = equation_regressors(tr)
-            hv = scale * (y - Phi @ g)
+            hv = scale * (y - Phi @ g)[2:]
             phi = phi + np.abs(np.fft.fft(hv)) ** 2
         out[cond] = phi
     return out

@@ -56,7 +56,8 @@ m 0.0182 / 0.0173 / 0.0144 for ``floor`` 1e-2 / 1e-3 / 3e-4, zm_bar 0.0095 / 0.0
 sensors whose noise is ``floor`` of the signal (1e-3 by default; a hundred times below the sensor regime's noise),
 not as the noise-free limit. Checked by Monte Carlo (:mod:`shipid.methods.masscm.coverage`, 300-s records, 100 runs per regime at a seed not
 used before): Algorithm 1's spread over this bound is 0.95-0.99 with sensor noise alone (chi-square 95 % intervals
-include 1), 1.37-1.52 with waves and sensor noise (intervals 1.21-1.76) and 1.9 (zm_bar) with waves alone; no
+include 1), 1.37-1.52 with waves and sensor noise (intervals 1.21-1.76) and 1.9 (zm_bar) with waves alone (former
+"auto" noise model; the Box-Jenkins default: :mod:`shipid.methods.masscm.coverage`); no
 spread is below it beyond sampling error. Not modelled: the simulator starts the ship at rest (the filter starts from the stationary covariance) and
 scales each wave realisation by its own sample std (here by the stationary std); both are O(1/N).
 """

@@ -23,9 +23,9 @@ B. Iterate ``j = 1, 2, ...`` (:func:`~shipid.methods.masscm.iteration.iterate`):
        iterations by Gauss–Newton*; ``Q_i = (Z_i^T Z_i)^-1``* (two-stage least squares) and ``lam_i`` the
        innovation variance of dataset i's noise model* (1 in the first iteration);
    (b) residuals (42) and noise models (43)* (:mod:`~shipid.methods.masscm.noise`): by default
-       (``noise_model="auto"``) per dataset ``eps = (1 - c q^-2)/A(q) e``, ``A`` AR(40) by least squares, ``c``
-       chosen among :data:`AUTO_C` by the innovation likelihood (Young & Jakeman's refined IV), prefilter
-       ``L = A/(1 - c q^-2)``; ``"ar"`` is plain AR(40), ``L = A``; built at the mean of the last two iterates*
+       (``noise_model="auto"``) per dataset the Box–Jenkins model ``eps = (1 - c q^-2)^k/A(q) e``, ``A`` AR(40) by
+       least squares, ``(c, k)``, ``k <= 2``, chosen among ``noise_bj.BJ_CANDIDATES`` by the innovation likelihood
+       (Young & Jakeman's refined IV; :mod:`~shipid.methods.masscm.noise_bj`), prefilter ``L = A/(1 - c q^-2)^k``; ``"ar"`` is plain AR(40), ``L = A``; built at the mean of the last two iterates*
        (relaxation against period-2 cycles), of the last four from iteration ``cycle_after`` (10) on* (a
        period-4 cycle cannot persist under it); the prefilter start-up transient is dropped*;
    (c) instruments re-simulated in closed loop from the rudder with the current model (46)–(47) and the

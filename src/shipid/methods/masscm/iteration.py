@@ -18,8 +18,10 @@ from shipid.methods.masscm.criterion import (CONDITION_CODES, IVState, coeffs, c
                                              known_constants, linear_initial, residual_function)
 from shipid.methods.masscm.data import Dataset, first_row
 from shipid.methods.masscm.moments import build_moments, closed_loop_sim, work_arrays
-from shipid.methods.masscm.noise import AUTO_HOLD, fit_noise_model, initial_prefilter, ma_c, noise_model_auto
+from shipid.methods.masscm.noise import AUTO_HOLD, fit_noise_model, initial_prefilter
+from shipid.methods.masscm.noise_bj import held_noise_model
 from shipid.methods.masscm.options import I_ZF, I_ZM, MassCMOptions
+from shipid.methods.masscm.plausibility import implausible_identifiable
 from shipid.methods.masscm.search import sim_terms
 from shipid.methods.masscm.step import dataset_step
 from shipid.models.roll_reduced import KnownParams, from_moment, roll_terms, to_moment
@@ -57,6 +59,23 @@ def step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.nd
         return L, L.lam, sim_out, build_moments([ds], [L], [yh], [ah], options)[0]
     L = ARMA(a, np.ones(1), float(lam))
     return L, float(lam), ((yh, ah) if stable else None), iv_compress_products_compiled(ZtZ, ZtP, ds.y.size - s)
+
+
+def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, conds) -> bool:
+    """Whether a search moved from an iterate whose identified roll mode is physical to one whose is not
+    (:func:`shipid.methods.masscm.plausibility.implausible_identifiable`, point values; moment parameterisation).
+
+    (*) Beyond the paper. With noise-free sensors the data obey, besides the roll dynamics (35), a near-exact
+    kinematic identity of the IMU (``a_s`` contains ``z_s p'``, so ``y_t - 2 y_{t-1} + y_{t-2}`` is close to
+    ``(T/2 z_s)(a_t - a_{t-2})`` for any motion, rudder- or wave-driven); the IV criterion (40) then has a second
+    near-zero minimum at ``alpha1 ~ -2, alpha2 ~ 1`` (all physical coefficients -> infinity, no restoring), which
+    an iteration can jump to after a prefilter update (seen in wave roll without sensor noise, a few runs in 100).
+    """
+    if not np.all(np.isfinite(theta_q)):
+        return True
+    if implausible_identifiable(from_moment(theta_prev_q), known, conds):
+        return False
+    return bool(implausible_identifiable(from_moment(theta_q), known, conds))
 
 
 def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions()) -> "IVState":
@@ -144,7 +163,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         held = (free_held, np.delete(lo, izf), np.delete(hi, izf), np.delete(lo_in, izf), np.delete(hi_in, izf))
     search_state = state
     for j in range(1, options.max_iter + 1):
-        search_state = state
+        prev_search, search_state = search_state, state
         if flat and j == 2:
             free, lo, hi, lo_in, hi_in = held
         cold_flat = flat and j == 1
@@ -173,6 +192,14 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         theta[free] = x
         if cold_flat:
             theta = held_cold_search(theta, theta_start, fun, x, state, known, held, prior, options)
+        if j >= 2 and left_physical_region(theta, theta_start, known, conds):
+            # (*) the search left the physical region (identified roll mode not that of a ship) from a physical
+            # iterate: the criterion's second, degenerate minimum (see left_physical_region); the last physical
+            # iterate is kept and the iteration stops, not converged, with a warning
+            warn.append(f"iteration {j}: the search left the physical region (degenerate minimum of (40)); "
+                        f"the estimate of iteration {j - 1} is kept")
+            theta, search_state = theta_start, prev_search
+            break
         G = coeffs(theta, known, conds, Ts, options)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
@@ -221,8 +248,8 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             eps = ds.y - ds.Phi @ G_mid[i]
             s = first_row(options)
             if options.prefilter:
-                if options.noise_model == "auto" and j >= AUTO_HOLD:       # (*) c held (see noise_model_auto)
-                    arma = noise_model_auto(eps[s:], options, (ma_c(state.L[i]),))
+                if options.noise_model in ("auto", "bj") and j >= AUTO_HOLD:   # (*) (c, k) held (noise_bj)
+                    arma = held_noise_model(eps[s:], options, state.L[i])
                 else:
                     arma = fit_noise_model(eps[s:], options)
                 newL.append(arma)
@@ -245,4 +272,4 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             "history": np.array(history), "dg": dgs, "state": state, "warnings": warn, "prior": prior}
 
 
-__all__ = ["fused", "step_compiled", "initial_state", "iterate"]
+__all__ = ["fused", "step_compiled", "left_physical_region", "initial_state", "iterate"]

@@ -2,9 +2,11 @@
 
 The residuals (42) get a noise model whose inverse is the prefilter ``L`` (43) of the next iteration:
 ``"ar"`` AR(p) by least squares, ``L = A(q)``; ``"ar-structured"`` AR(p) of ``eps / (1 - c q^-2)``,
-``L = A(q)/(1 - c q^-2)``; ``"arma"`` a structured ARMA by Hannan–Rissanen; ``"auto"`` (default) the
-``c`` of :data:`AUTO_C` with the smallest innovation variance (:func:`noise_model_auto`, the refined-IV
-noise model of Young, Automatica 52, 2015). The first iteration uses ``L = 1/(1 - c q^-2)``
+``L = A(q)/(1 - c q^-2)``; ``"arma"`` a structured ARMA by Hannan–Rissanen; ``"auto"`` (default) and ``"bj"``
+the Box–Jenkins model ``(1 - c q^-2)^k / D(q)`` of :mod:`shipid.methods.masscm.noise_bj`, ``(c, k)`` with the
+smallest innovation variance among :data:`~shipid.methods.masscm.noise_bj.BJ_CANDIDATES` (the refined-IV noise
+model of Young, Automatica 52, 2015). :func:`noise_model_auto` is the former ``"auto"``, the ``k <= 1``
+subset :data:`AUTO_C`, kept callable for comparison. The first iteration uses ``L = 1/(1 - c q^-2)``
 (:func:`initial_prefilter`; the paper: ``L = 1``).
 """
 
@@ -14,6 +16,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
+from shipid.methods.masscm.noise_bj import noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
 
 def initial_prefilter(options: MassCMOptions):
@@ -40,8 +43,8 @@ def fit_noise_model(eps: np.ndarray, options: MassCMOptions):
     ARMA(na, nc) model to ``eps / (1 - c q^-2)`` (``c = options.initial_c``) and use
     ``L = A / (C (1 - c q^-2))``; with ``c = 0`` this is the plain ARMA prefilter of the paper.
     """
-    if options.noise_model == "auto":
-        return noise_model_auto(eps, options)
+    if options.noise_model in ("auto", "bj"):
+        return noise_model_bj(eps, options)
     if options.noise_model == "ar":
         if options.compute == "fast":
             return fit_ar(eps, options.ar_order)         # the same AR fit by compiled kernels

@@ -38,10 +38,12 @@ class MassCMOptions:
     instruments: str = "lags"       # "lags": (45) with n_y, n_as, n_r, n_delta; "regressors": noise-free (37)
     transient_tol: float = 0.01      # prefilter start-up: drop samples until the slowest pole decays to this
     transient_max: float = 0.2       # ... but at most this fraction of the record
-    noise_model: str = "auto"        # "auto": AR(ar_order) of eps/(1 - c q^-2) with c chosen by the innovation
-    #                                 likelihood among AUTO_C (c = 0 is "ar"), see noise_model_auto; "ar": AR(ar_order)
+    noise_model: str = "auto"        # "auto" (= "bj"): AR(ar_order) of eps/(1 - c q^-2)^k with (c, k), k <= 2, chosen by
+    #                                 the innovation likelihood among noise_bj.BJ_CANDIDATES (c = 0 is "ar"); "ar": AR(ar_order)
     #                                 of the residuals, prefilter = FIR A(q); "ar-structured": AR(ar_order) of
-    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA
+    #                                 eps/(1 - c q^-2), c = initial_c, L = A/(1 - c q^-2); "arma": structured ARMA;
+    #                                 "bj": Box-Jenkins eps = (1 - c q^-2)^k / A(q) e, (c, k) with k <= 2 chosen by
+    #                                 the innovation likelihood among noise_bj.BJ_CANDIDATES (see noise_bj)
     ar_order: int = 40
     zm_bound: float = 2.0           # |zm_bar| bound (m) of the search
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
