@@ -21,6 +21,7 @@ from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
                                           horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
+from shipid.methods.mmg.output_error import OEConfig, refined_fit
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -119,10 +120,23 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
                   diagnostics=diag, provenance=prov)
 
 
+#: Prior structures whose identification is refined by output error by default: chosen by
+#: training-run CV (:func:`shipid.methods.mmg.study_oe.cv_refinement`).
+REFINE_BY_DEFAULT = ("esso-lowspeed",)
+
+
+def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
+    """``refine`` unless it is ``"auto"``: then ``"output-error"`` for :data:`REFINE_BY_DEFAULT`, else ``"none"``."""
+    if refine != "auto":
+        return refine
+    return "output-error" if prior.structure in REFINE_BY_DEFAULT else "none"
+
+
 def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | None = None,
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
-             extra_provenance: Mapping | None = None, selector=None) -> Result:
+             extra_provenance: Mapping | None = None, selector=None, refine: str = "none",
+             oe_config: OEConfig = OEConfig()) -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -137,6 +151,10 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
         runs only.
+    refine : {"none", "output-error"}
+        ``"output-error"``: refine the chosen structure's regression estimate on the
+        training runs' restarted 60-s horizons (:func:`shipid.methods.mmg.output_error.refined_fit`);
+        the refined coefficients carry the horizon-cluster sandwich standard errors.
     """
     if not trials:
         raise InputError("no training runs given")
@@ -161,11 +179,35 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
+    oe = None
+    if refine == "output-error":
+        f, oe = refined_fit(f, trials, oe_config)
+    elif refine != "none":
+        raise InputError(f"unknown refinement '{refine}' (none, output-error)")
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"))
     res.model["training_conditions"] = training_conditions(trials)
+    if oe is not None:
+        for c in oe.names:
+            e = res.estimates[c]
+            ok = np.isfinite(e.std)
+            res.estimates[c] = Estimate(e.value, e.std, e.unit, e.status if ok else "not determined",
+                                        "output-error refinement on 60-s restarted horizons; horizon-cluster "
+                                        "sandwich SE" + ("" if ok else " not finite: not determined by the data"))
+            if not ok:
+                res.diagnostics.warnings.append(f"{c}: not determined by the output-error refinement "
+                                                "(sandwich variance not finite)")
+        res.diagnostics["output_error"] = {
+            "refined": list(oe.names), "cost_start": oe.cost0, "cost_end": oe.cost, "iterations": oe.iterations,
+            "rtol_reached": oe.converged, "horizons": oe.horizons,
+            "note": "Levenberg-Marquardt stopped after at most max_iter iterations (early stopping, the "
+                    "setting the training-run CV compared)",
+            "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in oe_config.__dict__.items()}}
+        if not oe.cost < oe.cost0:
+            res.diagnostics.warnings.append("output-error refinement did not lower the horizon error; the "
+                                            "regression estimate is kept")
     return res
 
 
-__all__ = ["select_structure", "build_result", "identify"]
+__all__ = ["select_structure", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT"]
