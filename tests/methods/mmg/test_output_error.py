@@ -117,3 +117,27 @@ def test_heldout9_split_is_disjoint_and_contains_both_papers_tests():
     assert set(SPLITS["miyauchi2022"]["test"]) | set(SPLITS["wakita2022"]["test"]) < set(sp["test"])
     assert sp["test"][-1].startswith("random/")
     assert sp == S.heldout9_split()
+
+
+def test_broyden_jacobian_lowers_the_cost_and_gives_the_exact_covariance(truth, runs_of_truth):
+    """jacobian='broyden': the cost falls and the covariance is the finite-difference one at the end
+    point: refine restarted there with no iteration gives it again (to 5 %: its forward-difference step
+    scales with the new start values, so the two Jacobians differ at the step's order)."""
+    start = truth.with_coef({c: 1.1 * truth.coef[c] for c in NAMES})
+    b = OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=2, jacobian="broyden"))
+    assert b.cost < b.cost0
+    again = OE.refine(b.model, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=0))
+    np.testing.assert_allclose(np.sqrt(np.diag(b.cov)), np.sqrt(np.diag(again.cov)), rtol=0.05)
+    with pytest.raises(ValueError, match="unknown jacobian"):
+        OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(jacobian="secant"))
+
+
+def test_cli_has_the_refine_option_and_the_heldout9_study():
+    from click.testing import CliRunner
+
+    from shipid.cli import cli
+
+    out = CliRunner().invoke(cli, ["identify", "mmg", "--help"]).output
+    assert "--refine" in out and "output-error" in out
+    out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
+    assert "--train-only" in out and "--folds" in out

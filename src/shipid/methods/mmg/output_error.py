@@ -66,6 +66,7 @@ class OEConfig:
     rtol: float = 1e-3
     fd_step: float = 1e-3
     mu0: float = 1e-2
+    jacobian: str = "every"
     exclude_prefixes: tuple[str, ...] = ("YP_a", "NP_b", "XP_c")
 
 
@@ -183,15 +184,21 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     def cost_of(r):
         return float(np.sum(r * r))
 
+    def fd_jacobian(z):
+        R = residuals(simulate(model, names, th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S, H), H)
+        return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
+
+    if config.jacobian not in ("every", "broyden"):
+        raise ValueError(f"unknown jacobian '{config.jacobian}' (every, broyden)")
     z = np.zeros(p)
-    r = residuals(simulate(model, names, th0[None], H), H)[0]
+    r, J = fd_jacobian(z)
+    exact = True                               # J is the finite-difference Jacobian at z
     c0 = c = cost_of(r)
-    mu, it, converged, J = config.mu0, 0, False, None
+    mu, it, converged = config.mu0, 0, False
     for it in range(1, config.max_iter + 1):
-        Zs = np.vstack([z, z + config.fd_step * np.eye(p)])
-        R = residuals(simulate(model, names, th0 + Zs * S, H), H)
-        r = R[0]
-        J = ((R[1:] - r[None]) / config.fd_step).reshape(p, -1).T          # (N, p)
+        if not exact and config.jacobian == "every":
+            r, J = fd_jacobian(z)
+            exact = True
         g = J.T @ r.ravel()
         A = J.T @ J
         dA = np.diag(np.diag(A))
@@ -204,30 +211,33 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
                 continue
             rn = residuals(simulate(model, names, (th0 + (z + dz) * S)[None], H), H)[0]
             cn = cost_of(rn)
+            if config.jacobian == "broyden":
+                J = J + np.outer(rn.ravel() - r.ravel() - J @ dz, dz) / float(dz @ dz)
+                exact = False
             if cn < c:
                 improved = True
                 rel = (c - cn) / c
                 z, c, r = z + dz, cn, rn
+                exact = False
                 mu = max(mu / 3.0, 1e-6)
                 break
             mu *= 4.0
         if not improved or rel < config.rtol:
             converged = True
             break
-    # sandwich covariance (clusters = horizons) with the Jacobian of the last iteration
-    if J is None:
+    if not exact:
+        r, J = fd_jacobian(z)
+    # sandwich covariance (clusters = horizons) with the finite-difference Jacobian at the final point
+    Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
+    rh = r.reshape(H.count, -1)
+    A = np.einsum("pbn,qbn->pq", Jh, Jh)
+    G = np.einsum("pbn,bn->bp", Jh, rh)
+    try:
+        Ai = np.linalg.inv(A)
+        cov_z = Ai @ (G.T @ G) @ Ai
+        cov_z = 0.5 * (cov_z + cov_z.T)
+    except np.linalg.LinAlgError:
         cov_z = np.full((p, p), np.nan)
-    else:
-        Jh = J.T.reshape(p, H.count, -1)                                   # (p, B, n_h)
-        rh = r.reshape(H.count, -1)
-        A = np.einsum("pbn,qbn->pq", Jh, Jh)
-        G = np.einsum("pbn,bn->bp", Jh, rh)
-        try:
-            Ai = np.linalg.inv(A)
-            cov_z = Ai @ (G.T @ G) @ Ai
-            cov_z = 0.5 * (cov_z + cov_z.T)
-        except np.linalg.LinAlgError:
-            cov_z = np.full((p, p), np.nan)
     theta = th0 + z * S
     cov = cov_z * np.outer(S, S)
     out = model.with_coef(dict(zip(names, theta)))

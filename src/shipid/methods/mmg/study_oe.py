@@ -148,7 +148,7 @@ def heldout9_evaluate(trained: dict[str, Any], *, root: Path | None = None) -> d
 
 
 def format_heldout9(st: dict[str, Any]) -> str:
-    """The two CV tables, the choice and (if evaluated) the held-out table."""
+    """The two CV tables of :func:`heldout9_train` and the choice."""
     lines = [f"Esso Osaka 9-run held-out split: {len(st['split']['train'])} training runs, "
              f"test runs {', '.join(st['split']['test'])}",
              "  regression CV (training runs): candidate, score, pooled RMS psi [deg] / pos [m]"]
@@ -159,6 +159,12 @@ def format_heldout9(st: dict[str, Any]) -> str:
         mark = " <- chosen" if c == st["chosen"] else ""
         lines.append(f"    {c:<56} {r['score']:7.3f} {r['psi_rms']:7.2f} {r['pos_rms']:7.3f} "
                      f"{r['psi_mean_of_runs']:7.2f} {r['pos_mean_of_runs']:7.3f}{mark}")
+    return "\n".join(lines)
+
+
+def format_heldout9_test(st: dict[str, Any]) -> str:
+    """The held-out table of :func:`heldout9_evaluate` (``st["heldout"]``)."""
+    lines = []
     if "heldout" in st:
         ev = st["heldout"]
         lines.append("  held-out (read once, after the choice): run, identified psi [deg] / pos [m], published")
@@ -173,4 +179,4 @@ def format_heldout9(st: dict[str, Any]) -> str:
 
 
 __all__ = ["RANDOM_SEED", "heldout9_split", "cv_refinement", "heldout9_train", "heldout9_evaluate",
-           "format_heldout9"]
+           "format_heldout9", "format_heldout9_test"]
