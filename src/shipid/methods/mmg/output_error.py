@@ -57,7 +57,9 @@ class OEConfig:
     falls by less than this fraction; ``fd_step`` forward-difference step in the
     scaled coordinates; ``exclude`` coefficients never refined (their regressors are
     rarely excited, e.g. the astern side-force polynomials), which keep the
-    regression value and its standard error.
+    regression value and its standard error. ``run_weighting``: ``"pooled"`` every horizon
+    counts the same (the pooled RMS the CV scores); ``"per-run"`` each run's horizons share
+    a weight of one run (the mean over runs of the per-run mean square).
     """
 
     horizon: float = 60.0
@@ -68,18 +70,20 @@ class OEConfig:
     mu0: float = 1e-2
     jacobian: str = "every"
     exclude_prefixes: tuple[str, ...] = ("YP_a", "NP_b", "XP_c")
+    run_weighting: str = "pooled"
 
 
 @dataclass(frozen=True)
 class Horizons:
     """Restarted horizons of several runs stacked: ``x0`` (B, 6), ``U`` (B, L, 4), ``Z`` (B, L, 6),
-    ``valid`` (B, L), step ``h`` (B, L − 1)."""
+    ``valid`` (B, L), step ``h`` (B, L − 1), the index of each horizon's run ``run`` (B,)."""
 
     x0: np.ndarray
     U: np.ndarray
     Z: np.ndarray
     valid: np.ndarray
     h: np.ndarray
+    run: np.ndarray
 
     @property
     def count(self) -> int:
@@ -88,14 +92,15 @@ class Horizons:
 
 def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int = 2) -> Horizons:
     """The horizons of :func:`shipid.methods.mmg.cv_fast.run_horizons` of every run, padded to one length."""
-    hz = []
-    for tr in trials:
+    hz, run = [], []
+    for i, tr in enumerate(trials):
         try:
             H = run_horizons(tr, horizon, decimate)
         except ShipidError:
             H = None
         if H is not None:
             hz.append(H)
+            run += [i] * H["count"]
     if not hz:
         raise ShipidError("output-error refinement: no horizon in the training runs")
     L = max(H["U"].shape[1] for H in hz)
@@ -108,7 +113,8 @@ def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int
                     U=np.concatenate([pad(H["U"]) for H in hz]),
                     Z=np.concatenate([pad(H["Z"]) for H in hz]),
                     valid=np.concatenate([pad(H["valid"], edge=False) for H in hz]),
-                    h=np.concatenate([pad(np.repeat(H["h"][None], H["count"], 0)) for H in hz]))
+                    h=np.concatenate([pad(np.repeat(H["h"][None], H["count"], 0)) for H in hz]),
+                    run=np.asarray(run, int))
 
 
 def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons) -> np.ndarray:
@@ -175,6 +181,14 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     """
     names = tuple(c for c in names if not c.startswith(config.exclude_prefixes))
     H = stack_horizons(trials, config.horizon, config.decimate) if H is None else H
+    if config.run_weighting == "per-run":
+        _, inv, cnt = np.unique(H.run, return_inverse=True, return_counts=True)
+        wh = np.sqrt(H.count / (cnt.size * cnt[inv]))          # mean weight 1 per horizon
+    elif config.run_weighting == "pooled":
+        wh = np.ones(H.count)
+    else:
+        raise ValueError(f"unknown run_weighting '{config.run_weighting}' (pooled, per-run)")
+    wh = wh[None, :, None, None]
     th0 = np.array([model.coef[c] for c in names], float)
     se = np.array([float((se0 or {}).get(c, 0.0)) for c in names])
     S = np.maximum(np.abs(th0), np.nan_to_num(se))
@@ -184,8 +198,11 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     def cost_of(r):
         return float(np.sum(r * r))
 
+    def res_of(values):
+        return residuals(simulate(model, names, values, H), H) * wh
+
     def fd_jacobian(z):
-        R = residuals(simulate(model, names, th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S, H), H)
+        R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
         return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
 
     if config.jacobian not in ("every", "broyden"):
@@ -209,7 +226,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
             except np.linalg.LinAlgError:
                 mu *= 10.0
                 continue
-            rn = residuals(simulate(model, names, (th0 + (z + dz) * S)[None], H), H)[0]
+            rn = res_of((th0 + (z + dz) * S)[None])[0]
             cn = cost_of(rn)
             if config.jacobian == "broyden":
                 J = J + np.outer(rn.ravel() - r.ravel() - J @ dz, dz) / float(dz @ dz)

@@ -191,13 +191,13 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     if oe is not None:
         for c in oe.names:
             e = res.estimates[c]
-            ok = np.isfinite(e.std)
+            # the data do not determine a coefficient whose SE is not finite or not below its magnitude
+            ok = bool(np.isfinite(e.std) and e.std < abs(e.value))
+            why = "" if ok else ("; SE not finite" if not np.isfinite(e.std) else "; SE not below |value|") + \
+                ": not determined by the data (the value is kept in the model)"
             res.estimates[c] = Estimate(e.value, e.std, e.unit, e.status if ok else "not determined",
                                         "output-error refinement on 60-s restarted horizons; horizon-cluster "
-                                        "sandwich SE" + ("" if ok else " not finite: not determined by the data"))
-            if not ok:
-                res.diagnostics.warnings.append(f"{c}: not determined by the output-error refinement "
-                                                "(sandwich variance not finite)")
+                                        "sandwich SE" + why)
         res.diagnostics["output_error"] = {
             "refined": list(oe.names), "cost_start": oe.cost0, "cost_end": oe.cost, "iterations": oe.iterations,
             "rtol_reached": oe.converged, "horizons": oe.horizons,
