@@ -123,7 +123,7 @@ def main() -> None:
           f"previous path {w0:.1f} s wall ({c0:.1f} s CPU); ratio {w0 / w1:.1f}x wall; chosen "
           f"'{res.model['structure_candidate']}' (previous '{res0.model['structure_candidate']}'), largest "
           f"relative estimate difference {rel:.1e}")
-    rp = P.default_refine(prior)
+    rp = "auto"
     res2, c2, w2 = _timed(lambda: P.identify(trials, prior, folds=a.folds, refine=rp))
     oe = res2.diagnostics.get("output_error", {})
     print(f"3b. identify as 'shipid identify mmg --folds {a.folds}' (refine '{rp}'): {w2:.1f} s wall "

@@ -141,3 +141,14 @@ def test_cli_has_the_refine_option_and_the_heldout9_study():
     assert "--refine" in out and "output-error" in out
     out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
     assert "--train-only" in out and "--folds" in out
+
+
+def test_auto_refines_only_with_enough_horizons(truth, runs_of_truth):
+    """refine='auto' on two 70-s runs (2 horizons for 15 coefficients): the regression estimate, with the
+    reason recorded; the same call with refine='output-error' does refine."""
+    auto = P.identify(runs_of_truth, truth, structure="hull+rudder+thrust", select=False, refine="auto")
+    reg = P.identify(runs_of_truth, truth, structure="hull+rudder+thrust", select=False, refine="none")
+    assert auto.diagnostics["output_error"]["refined"] == []
+    assert "2 restarted horizons for 15 coefficients" in auto.diagnostics["output_error"]["note"]
+    assert {k: e.value for k, e in auto.estimates.items()} == {k: e.value for k, e in reg.estimates.items()}
+    assert P.MIN_HORIZONS_PER_COEFFICIENT * 15 > 2

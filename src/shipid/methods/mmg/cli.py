@@ -299,7 +299,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         trials.append(tr)
     pm, prior_info = _prior(prior, profiles, notes)
     st = None if structure in (None, "auto") else structure
-    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=P.default_refine(pm, refine),
+    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine,
                      extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
     res.model["prior"] = prior_info
     res.model["conventions"] = {
@@ -335,7 +335,8 @@ _ID_OPTS = [
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "
                       "(shipid.methods.mmg.output_error); 'auto': for the Esso low-speed structure, where "
-                      "training-run CV favours it (shipid study esso-osaka-heldout9), else none."),
+                      "training-run CV favours it (shipid study esso-osaka-heldout9), and only with at least "
+                      "5 horizons per refined coefficient; else none."),
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),

@@ -26,7 +26,7 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
     options : FitConfig, optional
     **kw
         ``structure=``, ``folds=``, ``refine=`` ... of :func:`shipid.methods.mmg.pipeline.identify`;
-        ``refine`` defaults to ``"auto"`` (:func:`shipid.methods.mmg.pipeline.default_refine`).
+        ``refine`` defaults to ``"auto"`` (see :func:`shipid.methods.mmg.pipeline.identify`).
     """
     data = [as_trial(x, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.identify mmg")
             for x in as_list(trials)]
@@ -39,5 +39,5 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
                  else mmg_model.load_published(prior.replace("published:", "")))
     if options is not None:
         kw["fit_config"] = options
-    kw["refine"] = pipeline.default_refine(prior, kw.get("refine", "auto"))
+    kw.setdefault("refine", "auto")
     return pipeline.identify(data, prior, **kw)

@@ -262,7 +262,12 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
                  converged=converged, horizons=H.count)
 
 
-def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig()):
+def refinable(f, config: OEConfig = OEConfig()) -> tuple[str, ...]:
+    """The free coefficients of the fit ``f`` that :func:`refine` refines (``config.exclude_prefixes`` left out)."""
+    return tuple(c for m in mmg.MODES for c in f.free.get(m, ()) if not c.startswith(config.exclude_prefixes))
+
+
+def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None):
     """An :class:`~shipid.methods.mmg.estimator.MmgFit` with its free coefficients refined by :func:`refine`.
 
     The refined coefficients' ``theta``, ``se`` and covariance block in each mode's fit
@@ -271,7 +276,7 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig()):
     """
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
     se0 = {c: float(f.fits[m].se[f.free[m].index(c)]) for m in mmg.MODES for c in f.free.get(m, ())}
-    oe = refine(f.model, names, trials, se0, config)
+    oe = refine(f.model, names, trials, se0, config, H=H)
     fits = dict(f.fits)
     for m in mmg.MODES:
         if m not in fits:
@@ -292,4 +297,5 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig()):
     return replace(f, model=oe.model.with_coef({}, name=f.model.name), fits=fits), oe
 
 
-__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "simulate", "residuals", "refine", "refined_fit"]
+__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "simulate", "residuals", "refine", "refinable",
+           "refined_fit"]

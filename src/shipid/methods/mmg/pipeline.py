@@ -15,13 +15,13 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.data.trial import Trial
-from shipid.errors import InputError
+from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
                                           horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
-from shipid.methods.mmg.output_error import OEConfig, refined_fit
+from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -123,6 +123,10 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
 #: Prior structures whose identification is refined by output error by default: chosen by
 #: training-run CV (:func:`shipid.methods.mmg.study_oe.cv_refinement`).
 REFINE_BY_DEFAULT = ("esso-lowspeed",)
+#: ``refine="auto"`` refines only with at least this many restarted horizons per refined
+#: coefficient: the horizons are the clusters of the sandwich covariance (its rank is at most
+#: their number) and the independent pieces of evidence of the criterion.
+MIN_HORIZONS_PER_COEFFICIENT = 5
 
 
 def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
@@ -151,10 +155,13 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
         runs only.
-    refine : {"none", "output-error"}
+    refine : {"none", "output-error", "auto"}
         ``"output-error"``: refine the chosen structure's regression estimate on the
         training runs' restarted 60-s horizons (:func:`shipid.methods.mmg.output_error.refined_fit`);
         the refined coefficients carry the horizon-cluster sandwich standard errors.
+        ``"auto"``: :func:`default_refine`, and refine only when the training runs hold at least
+        :data:`MIN_HORIZONS_PER_COEFFICIENT` horizons per refined coefficient (else the
+        regression estimate, with the reason in ``diagnostics["output_error"]``).
     """
     if not trials:
         raise InputError("no training runs given")
@@ -179,15 +186,31 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
-    oe = None
+    oe, skipped = None, None
+    auto = refine == "auto"
+    if auto:
+        refine = default_refine(cprior, "auto")
     if refine == "output-error":
-        f, oe = refined_fit(f, trials, oe_config)
+        try:
+            H = stack_horizons(trials, oe_config.horizon, oe_config.decimate)
+        except ShipidError:
+            if not auto:
+                raise
+            H = None
+        p = len(refinable(f, oe_config))
+        if auto and (H is None or H.count < MIN_HORIZONS_PER_COEFFICIENT * p):
+            skipped = (f"not refined: {0 if H is None else H.count} restarted horizons for {p} coefficients "
+                       f"(refine='auto' needs {MIN_HORIZONS_PER_COEFFICIENT} per coefficient)")
+        else:
+            f, oe = refined_fit(f, trials, oe_config, H=H)
     elif refine != "none":
         raise InputError(f"unknown refinement '{refine}' (none, output-error)")
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"))
     res.model["training_conditions"] = training_conditions(trials)
+    if skipped:
+        res.diagnostics["output_error"] = {"refined": [], "note": skipped}
     if oe is not None:
         for c in oe.names:
             e = res.estimates[c]
@@ -210,4 +233,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     return res
 
 
-__all__ = ["select_structure", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT"]
+__all__ = ["select_structure", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
+           "MIN_HORIZONS_PER_COEFFICIENT"]
