@@ -36,7 +36,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.data.trial import Trial
-from shipid.errors import ShipidError
+from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg.cv_fast import run_horizons
 from shipid.models import mmg
@@ -187,7 +187,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     elif config.run_weighting == "pooled":
         wh = np.ones(H.count)
     else:
-        raise ValueError(f"unknown run_weighting '{config.run_weighting}' (pooled, per-run)")
+        raise InputError(f"unknown run_weighting '{config.run_weighting}' (pooled, per-run)")
     wh = wh[None, :, None, None]
     th0 = np.array([model.coef[c] for c in names], float)
     se = np.array([float((se0 or {}).get(c, 0.0)) for c in names])
@@ -206,7 +206,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
 
     if config.jacobian not in ("every", "broyden"):
-        raise ValueError(f"unknown jacobian '{config.jacobian}' (every, broyden)")
+        raise InputError(f"unknown jacobian '{config.jacobian}' (every, broyden)")
     z = np.zeros(p)
     r, J = fd_jacobian(z)
     exact = True                               # J is the finite-difference Jacobian at z
