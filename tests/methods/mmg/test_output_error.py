@@ -110,12 +110,16 @@ def test_heldout9_split_is_disjoint_and_contains_both_papers_tests():
 
     if ROOT is None or not (ROOT / "esso_osaka_3m").is_dir():
         pytest.skip("Esso Osaka data not found (set SHIPID_DATA)")
-    sp = S.heldout9_split()
-    assert len(sp["test"]) == 9 and len(sp["train"]) == 32
-    assert not set(sp["test"]) & set(sp["train"])
-    assert set(SPLITS["miyauchi2022"]["test"]) | set(SPLITS["wakita2022"]["test"]) < set(sp["test"])
-    assert sp["test"][-1].startswith("random/")
-    assert sp == S.heldout9_split()
+    for ninth in S.NINTH:
+        sp = S.heldout9_split(ninth=ninth)
+        assert len(sp["test"]) == 9 and len(sp["train"]) == 32
+        assert not set(sp["test"]) & set(sp["train"])
+        assert set(SPLITS["miyauchi2022"]["test"]) | set(SPLITS["wakita2022"]["test"]) < set(sp["test"])
+        assert sp["test"][-1].startswith("random/")
+        assert sp == S.heldout9_split(ninth=ninth)
+    assert S.heldout9_split(ninth="seeded")["test"][-1] == "random/random_06-Aug-2020_16_24_25_6.csv"
+    with pytest.raises(InputError, match="ninth"):
+        S.heldout9_split(ninth="other")
 
 
 def test_broyden_jacobian_lowers_the_cost_and_gives_the_exact_covariance(truth, runs_of_truth):
