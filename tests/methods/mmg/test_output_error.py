@@ -51,22 +51,22 @@ def test_refine_recovers_perturbed_coefficients(truth, own_run):
     """From the truth with four coefficients 20 % off, LM on noise-free zig-zags of the truth comes back
     to the truth: errors below 4 % (the refinement integrates at 0.2 s, the runs were made at 0.1 s: a
     discretisation bias; measured 0.2-2.7 %),
-    the cost falls by two orders of magnitude, the sandwich covariance is symmetric positive definite."""
+    the cost falls by two orders of magnitude; with 2 horizons for 4 coefficients the horizon-cluster
+    covariance is singular, so it is NaN (not determined)."""
     runs = [own_run(truth, 70.0, rudder_deg=a, period=p) for a, p in ((15.0, 40.0), (25.0, 30.0))]
     start = truth.with_coef({c: 1.2 * truth.coef[c] for c in NAMES})
     oe = OE.refine(start, NAMES, runs, config=OE.OEConfig(max_iter=8, decimate=2, rtol=1e-6))
     assert oe.cost < 1e-2 * oe.cost0
     true = np.array([truth.coef[c] for c in NAMES])
     assert np.all(np.abs(oe.theta - true) < 0.04 * np.abs(true)), (oe.theta, true)
-    np.testing.assert_allclose(oe.cov, oe.cov.T, rtol=0, atol=0)
-    assert np.all(np.linalg.eigvalsh(oe.cov) > 0)
+    assert oe.horizons == 2 and np.all(np.isnan(oe.cov))
 
 
 def test_refine_is_deterministic(truth, runs_of_truth):
     start = truth.with_coef({c: 1.1 * truth.coef[c] for c in NAMES})
     a = OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=2))
     b = OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=2))
-    assert np.array_equal(a.theta, b.theta) and np.array_equal(a.cov, b.cov)
+    assert np.array_equal(a.theta, b.theta) and np.array_equal(a.cov, b.cov, equal_nan=True)
 
 
 def test_excluded_prefixes_are_not_refined(truth, runs_of_truth):
@@ -126,10 +126,12 @@ def test_broyden_jacobian_lowers_the_cost_and_gives_the_exact_covariance(truth, 
     """jacobian='broyden': the cost falls and the covariance is the finite-difference one at the end
     point: refine restarted there with no iteration gives it again (to 5 %: its forward-difference step
     scales with the new start values, so the two Jacobians differ at the step's order)."""
-    start = truth.with_coef({c: 1.1 * truth.coef[c] for c in NAMES})
-    b = OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=2, jacobian="broyden"))
+    one = ("N_r",)                    # 2 horizons: enough clusters for one coefficient
+    start = truth.with_coef({"N_r": 1.1 * truth.coef["N_r"]})
+    b = OE.refine(start, one, runs_of_truth, config=OE.OEConfig(max_iter=2, jacobian="broyden"))
     assert b.cost < b.cost0
-    again = OE.refine(b.model, NAMES, runs_of_truth, config=OE.OEConfig(max_iter=0))
+    again = OE.refine(b.model, one, runs_of_truth, config=OE.OEConfig(max_iter=0))
+    assert np.isfinite(b.cov).all() and b.cov[0, 0] > 0
     np.testing.assert_allclose(np.sqrt(np.diag(b.cov)), np.sqrt(np.diag(again.cov)), rtol=0.05)
     with pytest.raises(InputError, match="unknown jacobian"):
         OE.refine(start, NAMES, runs_of_truth, config=OE.OEConfig(jacobian="secant"))

@@ -25,7 +25,8 @@ cap, so a step into an unstable model is rejected.
 Standard errors: the horizon-cluster sandwich ``(JᵀJ)⁻¹ (Σ_h J_hᵀ r_h r_hᵀ J_h) (JᵀJ)⁻¹``
 (White 1980; clusters = horizons, which do not overlap), because residuals within a
 horizon are strongly serially correlated and the plain ``σ² (JᵀJ)⁻¹`` would be far too
-small. A parameter whose sandwich variance is not finite is reported without one.
+small. With no more horizons than refined coefficients the sandwich is singular (its rank
+is at most the number of clusters) and the covariance is returned as NaN: not determined.
 """
 
 from __future__ import annotations
@@ -254,6 +255,8 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         cov_z = Ai @ (G.T @ G) @ Ai
         cov_z = 0.5 * (cov_z + cov_z.T)
     except np.linalg.LinAlgError:
+        cov_z = np.full((p, p), np.nan)
+    if H.count <= p:                 # the sandwich's rank is at most the number of clusters
         cov_z = np.full((p, p), np.nan)
     theta = th0 + z * S
     cov = cov_z * np.outer(S, S)
