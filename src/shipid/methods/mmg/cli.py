@@ -358,7 +358,7 @@ def _with_id_opts(f):
               help="A training run (repeat for several).")
 @_with_id_opts
 def identify_mmg(trials, fmt, channels, prior, structure, folds, refine, rudder_sign, as_json, out, force):
-    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode).
+    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
     given runs unless --structure names one. The result is a self-describing MODEL.json
