@@ -14,8 +14,11 @@ the ninth held-out run; ``--runs`` takes fewer). Needs ``$SHIPID_DATA`` (or ../s
 
 1. Step 1 of every run: compiled vs reference, process CPU time, ratio.
 2. The batched CV table, ``--folds`` folds over all 12 candidates: moments vs stacked fits.
-3. ``identify`` as ``shipid identify mmg --folds 4`` runs it (step 1, CV, final fit): wall and
-   CPU time of the current path and of the previous one; the ratio.
+3. ``identify`` (step 1, CV, final fit) without the output-error refinement: wall and CPU time of
+   the current path and of the previous one; the ratio. Then as ``shipid identify mmg --folds 4``
+   runs it (``--refine auto``: the output-error refinement of
+   :mod:`shipid.methods.mmg.output_error` for the Esso structure): wall and CPU time, and the ratio
+   to the same identify without the refinement measured just before.
 4. With ``--study``: ``shipid study esso-osaka-heldout`` (both splits, leave-one-run-out CV,
    held-out evaluation) wall time; with ``--study-reference`` also the previous path's (slow).
 
@@ -120,6 +123,13 @@ def main() -> None:
           f"previous path {w0:.1f} s wall ({c0:.1f} s CPU); ratio {w0 / w1:.1f}x wall; chosen "
           f"'{res.model['structure_candidate']}' (previous '{res0.model['structure_candidate']}'), largest "
           f"relative estimate difference {rel:.1e}")
+    rp = "auto"
+    res2, c2, w2 = _timed(lambda: P.identify(trials, prior, folds=a.folds, refine=rp))
+    oe = res2.diagnostics.get("output_error", {})
+    print(f"3b. identify as 'shipid identify mmg --folds {a.folds}' (refine '{rp}'): {w2:.1f} s wall "
+          f"({c2:.1f} s CPU), {w2 / w1:.2f}x the wall time without the refinement; horizon cost "
+          f"{oe.get('cost_start', float('nan')):.4g} -> {oe.get('cost_end', float('nan')):.4g} in "
+          f"{oe.get('iterations', 0)} iterations")
     if a.study or a.study_reference:
         out, cs, ws = _timed(_study)
         print(f"4. study esso-osaka-heldout (both splits, LOO CV, held-out evaluation): {ws:.1f} s wall "

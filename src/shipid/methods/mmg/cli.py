@@ -271,7 +271,7 @@ def _print_result(res) -> None:
         click.echo(f"mode {m}: R2 {d['R2']:.3f}, k {d['k']:.3g}, kappa {d['kappa']:.3g}, n {d['n']}")
 
 
-def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force):
+def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
 
@@ -299,7 +299,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         trials.append(tr)
     pm, prior_info = _prior(prior, profiles, notes)
     st = None if structure in (None, "auto") else structure
-    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds,
+    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine,
                      extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
     res.model["prior"] = prior_info
     res.model["conventions"] = {
@@ -331,6 +331,12 @@ _ID_OPTS = [
     click.option("--structure", default="auto", show_default=True,
                  help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
     click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
+    click.option("--refine", default="auto", show_default=True,
+                 type=click.Choice(["auto", "none", "output-error"]),
+                 help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "
+                      "(shipid.methods.mmg.output_error); 'auto': for the Esso low-speed structure, where "
+                      "training-run CV favours it (shipid study esso-osaka-heldout9), and only with at least "
+                      "5 horizons per refined coefficient; else none."),
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
@@ -351,14 +357,14 @@ def _with_id_opts(f):
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="A training run (repeat for several).")
 @_with_id_opts
-def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force):
-    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode).
+def identify_mmg(trials, fmt, channels, prior, structure, folds, refine, rudder_sign, as_json, out, force):
+    """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
     given runs unless --structure names one. The result is a self-describing MODEL.json
     for 'shipid validate'.
     """
-    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force)
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine)
 
 
 
@@ -367,9 +373,9 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, rudder_sign, as
 @click.option("--train", "train", cls=ManyValues, required=True, type=click.Path(dir_okay=False),
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
-def identify_realdata(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force):
+def identify_realdata(train, fmt, channels, prior, structure, folds, refine, rudder_sign, as_json, out, force):
     """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
-    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force)
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine)
 
 
 # ----------------------------------------------------------------------------- studies

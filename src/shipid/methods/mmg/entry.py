@@ -25,7 +25,8 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         an identified model JSON; ``vessel`` is accepted as the same argument.
     options : FitConfig, optional
     **kw
-        ``structure=``, ``folds=``, ... of :func:`shipid.methods.mmg.pipeline.identify`.
+        ``structure=``, ``folds=``, ``refine=`` ... of :func:`shipid.methods.mmg.pipeline.identify`;
+        ``refine`` defaults to ``"auto"`` (see :func:`shipid.methods.mmg.pipeline.identify`).
     """
     data = [as_trial(x, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.identify mmg")
             for x in as_list(trials)]
@@ -38,4 +39,5 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
                  else mmg_model.load_published(prior.replace("published:", "")))
     if options is not None:
         kw["fit_config"] = options
+    kw.setdefault("refine", "auto")
     return pipeline.identify(data, prior, **kw)

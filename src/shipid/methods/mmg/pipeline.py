@@ -15,12 +15,13 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.data.trial import Trial
-from shipid.errors import InputError
+from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
                                           horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
+from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -119,10 +120,27 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
                   diagnostics=diag, provenance=prov)
 
 
+#: Prior structures whose identification is refined by output error by default: chosen by
+#: training-run CV (:func:`shipid.methods.mmg.study_oe.cv_refinement`).
+REFINE_BY_DEFAULT = ("esso-lowspeed",)
+#: ``refine="auto"`` refines only with at least this many restarted horizons per refined
+#: coefficient: the horizons are the clusters of the sandwich covariance (its rank is at most
+#: their number) and the independent pieces of evidence of the criterion.
+MIN_HORIZONS_PER_COEFFICIENT = 5
+
+
+def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
+    """``refine`` unless it is ``"auto"``: then ``"output-error"`` for :data:`REFINE_BY_DEFAULT`, else ``"none"``."""
+    if refine != "auto":
+        return refine
+    return "output-error" if prior.structure in REFINE_BY_DEFAULT else "none"
+
+
 def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | None = None,
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
-             extra_provenance: Mapping | None = None, selector=None) -> Result:
+             extra_provenance: Mapping | None = None, selector=None, refine: str = "none",
+             oe_config: OEConfig = OEConfig()) -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -137,6 +155,13 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
         runs only.
+    refine : {"none", "output-error", "auto"}
+        ``"output-error"``: refine the chosen structure's regression estimate on the
+        training runs' restarted 60-s horizons (:func:`shipid.methods.mmg.output_error.refined_fit`);
+        the refined coefficients carry the horizon-cluster sandwich standard errors.
+        ``"auto"``: :func:`default_refine`, and refine only when the training runs hold at least
+        :data:`MIN_HORIZONS_PER_COEFFICIENT` horizons per refined coefficient (else the
+        regression estimate, with the reason in ``diagnostics["output_error"]``).
     """
     if not trials:
         raise InputError("no training runs given")
@@ -161,6 +186,25 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
     f = fit(runs, cprior, free, fit_config, name=name)
+    oe, skipped = None, None
+    auto = refine == "auto"
+    if auto:
+        refine = default_refine(cprior, "auto")
+    if refine == "output-error":
+        try:
+            H = stack_horizons(trials, oe_config.horizon, oe_config.decimate)
+        except ShipidError:
+            if not auto:
+                raise
+            H = None
+        p = len(refinable(f, oe_config))
+        if auto and (H is None or H.count < MIN_HORIZONS_PER_COEFFICIENT * p):
+            skipped = (f"not refined: {0 if H is None else H.count} restarted horizons for {p} coefficients "
+                       f"(refine='auto' needs {MIN_HORIZONS_PER_COEFFICIENT} per coefficient)")
+        else:
+            f, oe = refined_fit(f, trials, oe_config, H=H)
+    elif refine != "none":
+        raise InputError(f"unknown refinement '{refine}' (none, output-error)")
     extra_provenance = dict(extra_provenance or {})
     if "rudder_sign" not in extra_provenance and all(tr.meta.get("rudder_sign_flipped") for tr in trials):
         # the reader (e.g. data.basins.read_kvlcc2) flipped the file's rudder: a report that reads the
@@ -170,7 +214,29 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"))
     res.model["training_conditions"] = training_conditions(trials)
+    if skipped:
+        res.diagnostics["output_error"] = {"refined": [], "note": skipped}
+    if oe is not None:
+        for c in oe.names:
+            e = res.estimates[c]
+            # the data do not determine a coefficient whose SE is not finite or not below its magnitude
+            ok = bool(np.isfinite(e.std) and e.std < abs(e.value))
+            why = "" if ok else ("; SE not finite" if not np.isfinite(e.std) else "; SE not below |value|") + \
+                ": not determined by the data (the value is kept in the model)"
+            res.estimates[c] = Estimate(e.value, e.std, e.unit, e.status if ok else "not determined",
+                                        "output-error refinement on 60-s restarted horizons; horizon-cluster "
+                                        "sandwich SE" + why)
+        res.diagnostics["output_error"] = {
+            "refined": list(oe.names), "cost_start": oe.cost0, "cost_end": oe.cost, "iterations": oe.iterations,
+            "rtol_reached": oe.converged, "horizons": oe.horizons,
+            "note": "Levenberg-Marquardt stopped after at most max_iter iterations (early stopping, the "
+                    "setting the training-run CV compared)",
+            "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in oe_config.__dict__.items()}}
+        if not oe.cost < oe.cost0:
+            res.diagnostics.warnings.append("output-error refinement did not lower the horizon error; the "
+                                            "regression estimate is kept")
     return res
 
 
-__all__ = ["select_structure", "build_result", "identify"]
+__all__ = ["select_structure", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
+           "MIN_HORIZONS_PER_COEFFICIENT"]

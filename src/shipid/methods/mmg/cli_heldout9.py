@@ -1,0 +1,40 @@
+"""``shipid study esso-osaka-heldout9 [--folds K] [--train-only] [--json] [-o R.json]``.
+
+The Esso Osaka 9-run held-out study of :mod:`shipid.methods.mmg.study_oe`: structure by
+regression CV and regression vs output-error refinement by CV, both on the 32 training
+runs; then, unless ``--train-only``, the 9 test runs are read once and the identified and
+published models compared (mean over runs of the 60-s restarted-horizon RMS).
+"""
+
+from __future__ import annotations
+
+import click
+
+from shipid.cli import CONTEXT, study
+from shipid.cli._common import emit, loud_lines, out_options, strict_option
+
+
+@study.command("esso-osaka-heldout9", context_settings=CONTEXT)
+@click.option("--ninth", type=click.Choice(["issue", "seeded", "bench"]), default="issue", show_default=True,
+              help="The ninth test run (shipid.methods.mmg.study_oe.NINTH).")
+@click.option("--folds", default=4, show_default=True, type=int, help="CV folds within the 32 training runs.")
+@click.option("--train-only", is_flag=True, help="Stop after the CV tables and the choice: no test run is read.")
+@out_options(json_help="Print everything as JSON on stdout.")
+@strict_option
+def heldout9_cmd(ninth, folds, train_only, as_json, out, force):
+    """Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on
+    the other 32 (structure; regression vs output-error refinement), then the held-out table."""
+    from shipid.methods.mmg import study_oe as S
+
+    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
+    st = S.heldout9_train(ninth=ninth, folds=folds, progress=say)
+    if not as_json:
+        click.echo(S.format_heldout9(st))
+    if not train_only:
+        st["heldout"] = S.heldout9_evaluate(st)
+        if not as_json:
+            click.echo(S.format_heldout9_test(st))
+    warns = loud_lines(list(st["result"].get("diagnostics", {}).get("warnings", [])))
+    if warns:
+        st["warnings"] = warns
+    emit(st, as_json=as_json, out=out, force=force, indent=1)

@@ -1,0 +1,304 @@
+"""Output-error refinement of an MMG fit on restarted horizons (multiple shooting from the measured state).
+
+The step-2 regression (:func:`shipid.methods.mmg.estimator.fit`) minimises the equation
+error of the smoothed forces. What the Esso study scores is different: the heading and
+position errors of the model simulated open loop over 60-s horizons restarted from the
+measured state (:func:`shipid.methods.mmg.validate.validate`). This module takes the
+regression estimate as the starting point and minimises that output error directly
+over the TRAINING runs' horizons — the multiple-shooting output-error criterion of
+Ljung (1999, *System Identification*, §7.3 and §10.2; Bock & Plitt 1984 for the shooting
+nodes), here with the shooting nodes fixed at the measured states::
+
+    J(θ) = Σ_h Σ_k [ (wrap(ψ̂_hk(θ) − ψ_hk) / 10°)² + ((x̂_hk − x_hk)² + (ŷ_hk − y_hk)²) / (1 m)² ]
+
+the same weighting as the CV score :func:`shipid.methods.mmg.estimator.horizon_score`
+(10° of heading ~ 1 m of position). Each horizon starts at the measured state of its
+first sample and is integrated with the measured inputs held over each step
+(:func:`shipid.methods.mmg.manoeuvres.rows_rk4`), every ``decimate``-th sample.
+
+Minimisation: Levenberg–Marquardt (Marquardt 1963) in coordinates scaled by the
+starting values, ``θ = θ₀ + S z``, ``S = diag(max(|θ₀|, se₀))``; forward-difference
+Jacobian with every perturbed parameter vector simulated in the same batch as the
+nominal one. A diverging horizon (non-finite state) has its residuals set to a fixed
+cap, so a step into an unstable model is rejected.
+
+Standard errors: the horizon-cluster sandwich ``(JᵀJ)⁻¹ (Σ_h J_hᵀ r_h r_hᵀ J_h) (JᵀJ)⁻¹``
+(White 1980; clusters = horizons, which do not overlap), because residuals within a
+horizon are strongly serially correlated and the plain ``σ² (JᵀJ)⁻¹`` would be far too
+small. With no more horizons than refined coefficients the sandwich is singular (its rank
+is at most the number of clusters) and the covariance is returned as NaN: not determined.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError, ShipidError
+from shipid.methods.mmg import manoeuvres as MM
+from shipid.methods.mmg.cv_fast import run_horizons
+from shipid.models import mmg
+
+#: Heading and position scales of the criterion (the CV score's 10° ~ 1 m).
+PSI_SCALE = np.deg2rad(10.0)
+POS_SCALE = 1.0
+#: Residual given to every sample of a diverged horizon (in scaled units).
+DIVERGED = 10.0
+
+
+@dataclass(frozen=True)
+class OEConfig:
+    """Settings of the output-error refinement.
+
+    ``horizon`` (s) and ``decimate`` (simulate every n-th sample) as the CV of the
+    study; ``max_iter`` Levenberg–Marquardt iterations; ``rtol`` stop when the cost
+    falls by less than this fraction; ``fd_step`` forward-difference step in the
+    scaled coordinates; ``exclude`` coefficients never refined (their regressors are
+    rarely excited, e.g. the astern side-force polynomials), which keep the
+    regression value and its standard error. ``run_weighting``: ``"pooled"`` every horizon
+    counts the same (the pooled RMS the CV scores); ``"per-run"`` each run's horizons share
+    a weight of one run (the mean over runs of the per-run mean square).
+    """
+
+    horizon: float = 60.0
+    decimate: int = 5
+    max_iter: int = 4
+    rtol: float = 1e-3
+    fd_step: float = 1e-3
+    mu0: float = 1e-2
+    jacobian: str = "every"
+    exclude_prefixes: tuple[str, ...] = ("YP_a", "NP_b", "XP_c")
+    run_weighting: str = "pooled"
+
+
+@dataclass(frozen=True)
+class Horizons:
+    """Restarted horizons of several runs stacked: ``x0`` (B, 6), ``U`` (B, L, 4), ``Z`` (B, L, 6),
+    ``valid`` (B, L), step ``h`` (B, L − 1), the index of each horizon's run ``run`` (B,)."""
+
+    x0: np.ndarray
+    U: np.ndarray
+    Z: np.ndarray
+    valid: np.ndarray
+    h: np.ndarray
+    run: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return int(self.x0.shape[0])
+
+
+def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int = 2) -> Horizons:
+    """The horizons of :func:`shipid.methods.mmg.cv_fast.run_horizons` of every run, padded to one length."""
+    hz, run = [], []
+    for i, tr in enumerate(trials):
+        try:
+            H = run_horizons(tr, horizon, decimate)
+        except ShipidError:
+            H = None
+        if H is not None:
+            hz.append(H)
+            run += [i] * H["count"]
+    if not hz:
+        raise ShipidError("output-error refinement: no horizon in the training runs")
+    L = max(H["U"].shape[1] for H in hz)
+
+    def pad(a, edge=True):
+        w = [(0, 0), (0, L - a.shape[1])] + [(0, 0)] * (a.ndim - 2)
+        return np.pad(a, w, mode="edge") if edge else np.pad(a, w, constant_values=False)
+
+    return Horizons(x0=np.concatenate([H["x0"] for H in hz]),
+                    U=np.concatenate([pad(H["U"]) for H in hz]),
+                    Z=np.concatenate([pad(H["Z"]) for H in hz]),
+                    valid=np.concatenate([pad(H["valid"], edge=False) for H in hz]),
+                    h=np.concatenate([pad(np.repeat(H["h"][None], H["count"], 0)) for H in hz]),
+                    run=np.asarray(run, int))
+
+
+def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons) -> np.ndarray:
+    """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p)."""
+    values = np.atleast_2d(values)
+    K, B, L = values.shape[0], H.count, H.U.shape[1]
+    Th = MM.theta_rows(model, names, values)
+    Th = {m: np.repeat(T, B, axis=0) for m, T in Th.items()}          # row = k * B + b
+    x = np.tile(H.x0, (K, 1))
+    U = np.tile(H.U, (K, 1, 1))
+    h = np.tile(H.h, (K, 1))
+    out = np.empty((K * B, L, 6))
+    out[:, 0] = x
+    with np.errstate(all="ignore"):
+        for k in range(L - 1):
+            u = U[:, k]
+            x = MM.rows_rk4(model, Th, x, u[:, 0], u[:, 1], h[:, k:k + 1], wind=(u[:, 2], u[:, 3]))
+            out[:, k + 1] = x
+    return out.reshape(K, B, L, 6)
+
+
+def residuals(P: np.ndarray, H: Horizons) -> np.ndarray:
+    """Scaled residuals (K, B, L, 3): heading / 10°, x and y / 1 m; zero on padding, capped on divergence."""
+    Z = H.Z[None]
+    dpsi = np.angle(np.exp(1j * (P[..., 2] - Z[..., 2]))) / PSI_SCALE
+    r = np.stack([dpsi, (P[..., 0] - Z[..., 0]) / POS_SCALE, (P[..., 1] - Z[..., 1]) / POS_SCALE], axis=-1)
+    bad = ~np.all(np.isfinite(P), axis=(-1, -2))                          # (K, B): a diverged horizon
+    r = np.where(bad[..., None, None], DIVERGED, r)
+    r = np.clip(np.nan_to_num(r, nan=DIVERGED), -DIVERGED, DIVERGED)
+    return r * H.valid[None, :, :, None]
+
+
+@dataclass(frozen=True)
+class OEFit:
+    """Result of :func:`refine`: the model, the refined names, values, sandwich covariance, costs."""
+
+    model: mmg.MmgModel
+    names: tuple[str, ...]
+    theta: np.ndarray
+    cov: np.ndarray
+    cost0: float
+    cost: float
+    iterations: int
+    converged: bool
+    horizons: int
+
+
+def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], se0: Mapping[str, float] | None = None,
+           config: OEConfig = OEConfig(), H: Horizons | None = None) -> OEFit:
+    """Levenberg–Marquardt on the restarted-horizon output error from ``model``'s values of ``names``.
+
+    Parameters
+    ----------
+    model : MmgModel
+        The starting (regression) model; coefficients outside ``names`` stay fixed.
+    names : sequence of str
+        Coefficients to refine (those matching ``config.exclude_prefixes`` are skipped).
+    trials : sequence of Trial
+        The TRAINING runs.
+    se0 : mapping, optional
+        Standard errors of the starting values, used in the scaling ``S``.
+    H : Horizons, optional
+        :func:`stack_horizons` of ``trials`` if the caller has it.
+    """
+    names = tuple(c for c in names if not c.startswith(config.exclude_prefixes))
+    H = stack_horizons(trials, config.horizon, config.decimate) if H is None else H
+    if config.run_weighting == "per-run":
+        _, inv, cnt = np.unique(H.run, return_inverse=True, return_counts=True)
+        wh = np.sqrt(H.count / (cnt.size * cnt[inv]))          # mean weight 1 per horizon
+    elif config.run_weighting == "pooled":
+        wh = np.ones(H.count)
+    else:
+        raise InputError(f"unknown run_weighting '{config.run_weighting}' (pooled, per-run)")
+    wh = wh[None, :, None, None]
+    th0 = np.array([model.coef[c] for c in names], float)
+    se = np.array([float((se0 or {}).get(c, 0.0)) for c in names])
+    S = np.maximum(np.abs(th0), np.nan_to_num(se))
+    S = np.where(S > 0, S, 1e-6)
+    p = len(names)
+
+    def cost_of(r):
+        return float(np.sum(r * r))
+
+    def res_of(values):
+        return residuals(simulate(model, names, values, H), H) * wh
+
+    def fd_jacobian(z):
+        R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
+        return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
+
+    if config.jacobian not in ("every", "broyden"):
+        raise InputError(f"unknown jacobian '{config.jacobian}' (every, broyden)")
+    z = np.zeros(p)
+    r, J = fd_jacobian(z)
+    exact = True                               # J is the finite-difference Jacobian at z
+    c0 = c = cost_of(r)
+    mu, it, converged = config.mu0, 0, False
+    for it in range(1, config.max_iter + 1):
+        if not exact and config.jacobian == "every":
+            r, J = fd_jacobian(z)
+            exact = True
+        g = J.T @ r.ravel()
+        A = J.T @ J
+        dA = np.diag(np.diag(A))
+        improved, rel = False, 0.0
+        for _ in range(6):
+            try:
+                dz = -np.linalg.solve(A + mu * dA, g)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            rn = res_of((th0 + (z + dz) * S)[None])[0]
+            cn = cost_of(rn)
+            if config.jacobian == "broyden":
+                J = J + np.outer(rn.ravel() - r.ravel() - J @ dz, dz) / float(dz @ dz)
+                exact = False
+            if cn < c:
+                improved = True
+                rel = (c - cn) / c
+                z, c, r = z + dz, cn, rn
+                exact = False
+                mu = max(mu / 3.0, 1e-6)
+                break
+            mu *= 4.0
+        if not improved or rel < config.rtol:
+            converged = True
+            break
+    if not exact:
+        r, J = fd_jacobian(z)
+    # sandwich covariance (clusters = horizons) with the finite-difference Jacobian at the final point
+    Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
+    rh = r.reshape(H.count, -1)
+    A = np.einsum("pbn,qbn->pq", Jh, Jh)
+    G = np.einsum("pbn,bn->bp", Jh, rh)
+    try:
+        Ai = np.linalg.inv(A)
+        cov_z = Ai @ (G.T @ G) @ Ai
+        cov_z = 0.5 * (cov_z + cov_z.T)
+    except np.linalg.LinAlgError:
+        cov_z = np.full((p, p), np.nan)
+    if H.count <= p:                 # the sandwich's rank is at most the number of clusters
+        cov_z = np.full((p, p), np.nan)
+    theta = th0 + z * S
+    cov = cov_z * np.outer(S, S)
+    out = model.with_coef(dict(zip(names, theta)))
+    return OEFit(model=out, names=names, theta=theta, cov=cov, cost0=c0, cost=c, iterations=it,
+                 converged=converged, horizons=H.count)
+
+
+def refinable(f, config: OEConfig = OEConfig()) -> tuple[str, ...]:
+    """The free coefficients of the fit ``f`` that :func:`refine` refines (``config.exclude_prefixes`` left out)."""
+    return tuple(c for m in mmg.MODES for c in f.free.get(m, ()) if not c.startswith(config.exclude_prefixes))
+
+
+def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None):
+    """An :class:`~shipid.methods.mmg.estimator.MmgFit` with its free coefficients refined by :func:`refine`.
+
+    The refined coefficients' ``theta``, ``se`` and covariance block in each mode's fit
+    are replaced by the output-error values (cross-mode covariances are not kept, as in
+    the regression's per-mode blocks); the rest keep the regression's.
+    """
+    names = [c for m in mmg.MODES for c in f.free.get(m, ())]
+    se0 = {c: float(f.fits[m].se[f.free[m].index(c)]) for m in mmg.MODES for c in f.free.get(m, ())}
+    oe = refine(f.model, names, trials, se0, config, H=H)
+    fits = dict(f.fits)
+    for m in mmg.MODES:
+        if m not in fits:
+            continue
+        ft = fits[m]
+        th, se, cv = ft.theta.copy(), ft.se.copy(), ft.cov_theta.copy()
+        idx = [(f.free[m].index(c), oe.names.index(c)) for c in f.free[m] if c in oe.names]
+        for i, j in idx:
+            th[i] = oe.theta[j]
+        ii = [i for i, _ in idx]
+        jj = [j for _, j in idx]
+        if ii:
+            cv[np.ix_(ii, range(len(th)))] = 0.0
+            cv[np.ix_(range(len(th)), ii)] = 0.0
+            cv[np.ix_(ii, ii)] = oe.cov[np.ix_(jj, jj)]
+            se = np.sqrt(np.where(np.diag(cv) >= 0, np.diag(cv), np.nan))
+        fits[m] = replace(ft, theta=th, se=se, cov_theta=cv)
+    return replace(f, model=oe.model.with_coef({}, name=f.model.name), fits=fits), oe
+
+
+__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "simulate", "residuals", "refine", "refinable",
+           "refined_fit"]

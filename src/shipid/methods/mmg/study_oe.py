@@ -1,0 +1,248 @@
+"""Esso Osaka held-out study on the 9-run split, with the output-error refinement chosen by training-run CV.
+
+Split (:func:`heldout9_split`): the test runs are the union of both papers' test runs
+(:data:`shipid.data.basins.SPLITS`, 8 runs) plus one random run — 9 runs; the other 32
+runs of the data set are the training runs. The ninth run (:data:`NINTH`): ``"issue"``
+(default) ``random_03-Aug-2020_11_04_37``, the split of issue 19, recognised by the
+published set's figure the issue quotes (12.20° / 0.842 m: only this ninth run gives it;
+the identified models were not evaluated to find it); ``"seeded"`` a draw with
+:data:`RANDOM_SEED` from the random runs not among the eight (``random_06-Aug-2020_16_24_25_6``),
+the split this study was first run on; ``"bench"`` the ninth run of
+``benchmarks/bench_mmg_cv.py`` (``random_31-Jul-2020_14_52_18``).
+
+Protocol, all on the 32 training runs before any test run is read:
+
+1. the structure is chosen among the frozen candidates by the regression CV of
+   :func:`shipid.methods.mmg.pipeline.select_structure` (``folds``-fold, 60-s restarted
+   horizons, score RMS ψ/10° + RMS position/1 m);
+2. :func:`cv_refinement` compares, on the same folds, the regression estimate with the
+   regression estimate refined by output error
+   (:mod:`shipid.methods.mmg.output_error`), each fitted without the fold's runs and
+   scored on them; pooled RMS and the mean over left-out runs of their per-run RMS;
+3. the final model is the chosen structure fitted on all 32 runs, refined when step 2
+   says so (lower pooled score).
+
+The held-out side (:func:`heldout9_evaluate`) then reads the 9 test runs once and
+reports, per run and as the mean over runs of the per-run RMS over 60-s horizons
+restarted every 60 s at 10 Hz, the identified and the published model.
+
+Settings of the refinement tried by the same 4-fold CV on the 32 training runs (before
+the held-out evaluation; score = pooled RMS ψ/10° + pooled RMS position/1 m; then pooled
+RMS ψ [deg] / position [m]; then the mean over the 32 left-out runs of their RMS)::
+
+    hull+rudder+thrust/nondimensional
+      regression                                          2.000   12.20 / 0.779    9.80 / 0.799
+      output error (OEConfig defaults)                    1.554    8.86 / 0.669    7.24 / 0.706
+      ... Jacobian by Broyden updates                     1.589    9.04 / 0.684    7.37 / 0.716
+      ... horizons weighted per run                       1.593    9.01 / 0.692    7.33 / 0.724
+    hull+rudder+4-quadrant-propeller/nondimensional
+      regression                                          1.988   12.01 / 0.787    9.64 / 0.807
+      output error (OEConfig defaults)                    1.589    9.13 / 0.675    7.41 / 0.714
+      ... astern-propeller polynomials refined too        1.614    9.20 / 0.694    7.65 / 0.735
+    hull-only/nondimensional
+      regression                                          2.276   13.88 / 0.888   11.34 / 0.879
+      output error (OEConfig defaults)                    2.187   13.30 / 0.856   11.11 / 0.872
+
+Up to 8 iterations instead of 4: on the first fold the relative-decrease test stops it
+after 5, at a cost 0.04 % lower; not pursued. Freeing more coefficients (the astern
+polynomials) lowers the training cost by 13–23 % and raises the CV error: over-fitting.
+
+Result on the ``"seeded"`` split, computed once after the configuration was frozen (commit
+14ab57f) with ``shipid study esso-osaka-heldout9`` (then the only split): the regression CV chose
+``hull+rudder+4-quadrant-propeller/nondimensional`` (1.988), the refinement CV
+``hull+rudder+thrust/nondimensional`` with output error (1.554); on the 9 test runs, mean
+over runs of the 60-s restarted-horizon RMS, identified **8.22° / 0.655 m** against the
+published set's 12.26° / 0.854 m. The target (≤ 6.5° / ≤ 0.55 m) is NOT met: the CV gain
+of the refinement (mean over left-out training runs 9.80° / 0.799 m → 7.24° / 0.706 m)
+did not carry over to the test runs in the same proportion. Per run (identified /
+published, deg and m)::
+
+    random_06-Aug-2020_16_24_25_3     8.20 / 0.417     8.93 / 0.450
+    turn_14-Sep-2020_14_50_41         4.55 / 0.384    13.40 / 1.003
+    zigzag_31-Jul-2020_14_10_05      13.01 / 0.614    12.22 / 0.573
+    berthing_12-Nov-2020_11_49_21     9.84 / 0.299    15.18 / 0.503
+    berthing_12-Nov-2020_13_21_03    12.64 / 1.091     8.31 / 1.078
+    turn_14-Oct-2020_15_06_53         4.93 / 0.922    22.52 / 1.889
+    zigzag_31-Jul-2020_13_42_53       4.75 / 0.835    14.40 / 1.055
+    berthing_12-Nov-2020_11_38_50     7.32 / 0.776     6.06 / 0.614
+    random_06-Aug-2020_16_24_25_6     8.77 / 0.557     9.29 / 0.519
+
+For comparison only (computed after the result above, changing nothing): the regression
+estimate of the same structure without the refinement gives 8.48° / 0.674 m on the
+same 9 runs; the refinement is better on the turning runs and zig-zag 13_42_53 and worse
+on zig-zag 14_10_05 (13.0 vs 4.2°) and berthing 11_38_50 (7.3 vs 1.0°) and 13_21_03.
+
+On the ``"issue"`` split (``shipid study esso-osaka-heldout9``, the default; run once, same
+frozen configuration; random_03-Aug-2020_11_04_37 was among the training runs of the CV
+that compared the refinement settings above, so this split is not as clean as
+``"seeded"``): the regression CV chose ``hull+rudder+thrust/nondimensional`` (2.010), the
+refinement CV the same with output error (1.561; mean over left-out runs 9.81° / 0.822 m
+→ 7.22° / 0.711 m); held-out mean over runs identified **8.18° / 0.637 m**, published
+12.20° / 0.842 m (the issue's 12.20 / 0.842: the same split). Target NOT met.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from shipid.data.basins import SPLITS, esso_dir, read_esso
+from shipid.data.trial import Trial
+from shipid.errors import InputError
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import output_error as OE
+from shipid.methods.mmg import pipeline as P
+from shipid.methods.mmg import validate as V
+from shipid.models import mmg
+
+#: Seed of the ``"seeded"`` draw of the ninth (random-manoeuvre) test run.
+RANDOM_SEED = 19
+#: The ninth test run of each named split (module docstring); ``"seeded"`` is drawn.
+NINTH = {"issue": "random/random_03-Aug-2020_11_04_37.csv", "seeded": None,
+         "bench": "random/random_31-Jul-2020_14_52_18.csv"}
+
+
+def heldout9_split(root: Path | None = None, ninth: str = "issue") -> dict[str, list[str]]:
+    """``{"train": 32 runs, "test": 9 runs}`` (module docstring), as paths relative to the data folder."""
+    if ninth not in NINTH:
+        raise InputError(f"unknown ninth-run choice '{ninth}' (choose from {', '.join(NINTH)})")
+    d = esso_dir(root)
+    allruns = sorted(str(p.relative_to(d)) for p in d.glob("*/*.csv"))
+    test: list[str] = []
+    for sp in ("miyauchi2022", "wakita2022"):
+        test += [f for f in SPLITS[sp]["test"] if f not in test]
+    rnd = [f for f in allruns if f.startswith("random/") and f not in test]
+    test.append(NINTH[ninth] or rnd[int(np.random.default_rng(RANDOM_SEED).integers(len(rnd)))])
+    return {"train": [f for f in allruns if f not in test], "test": test, "ninth": ninth}
+
+
+def _scores(model: mmg.MmgModel, trials: Sequence[Trial], decimate: int) -> list[dict[str, float]]:
+    """Per run: horizon count and squared-RMS of heading (deg) and position (m)."""
+    out = []
+    for tr in trials:
+        h = V.validate(model, R.subsample(tr, decimate), horizon=60.0, windows=(), whole=False).horizons
+        if h["count"]:
+            out.append({"count": h["count"], "psi": h["psi"]["rms"], "pos": h["pos"]["rms"]})
+    return out
+
+
+def _summarise(rows: Sequence[dict[str, float]]) -> dict[str, float]:
+    w = np.array([r["count"] for r in rows], float)
+    out = {}
+    for q in ("psi", "pos"):
+        v = np.array([r[q] for r in rows])
+        out[f"{q}_rms"] = float(np.sqrt(np.sum(w * v * v) / np.sum(w))) if np.all(np.isfinite(v)) else float("inf")
+        out[f"{q}_mean_of_runs"] = float(np.mean(v))
+    out["score"] = R.horizon_score({"psi": out["psi_rms"], "pos": out["pos_rms"]})
+    out["runs"] = len(rows)
+    return out
+
+
+def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel,
+                  candidates: Sequence[str], *, folds: int = 4, decimate: int = 2,
+                  oe_config: OE.OEConfig = OE.OEConfig(),
+                  progress: Callable[[str], None] | None = None) -> dict[str, dict[str, Any]]:
+    """``folds``-fold CV over the TRAINING runs of each candidate, regression vs regression + output error.
+
+    Returns ``{candidate + "/regression" | "/output-error": summary}`` with the pooled RMS
+    (``psi_rms`` deg, ``pos_rms`` m), the CV ``score`` and the mean over left-out runs of
+    their per-run RMS (``*_mean_of_runs``).
+    """
+    say = progress or (lambda s: None)
+    cands = R.CANDIDATES[prior.structure]
+    groups = R.fold_groups(len(runs), folds)
+    rows: dict[str, list] = {}
+    for cname in candidates:
+        cprior, free = R.apply_candidate(prior, cands[cname])
+        cfg = R.candidate_config(R.FitConfig(), cands[cname])
+        for gi, g in enumerate(groups):
+            tr_idx = [i for i in range(len(runs)) if i not in g]
+            f = R.fit([runs[i] for i in tr_idx], cprior, free, cfg)
+            test = [trials[i] for i in g]
+            rows.setdefault(cname + "/regression", []).extend(_scores(f.model, test, decimate))
+            f2, oe = OE.refined_fit(f, [trials[i] for i in tr_idx], oe_config)
+            rows.setdefault(cname + "/output-error", []).extend(_scores(f2.model, test, decimate))
+            say(f"cv {cname} fold {gi + 1}/{len(groups)}: output-error cost {oe.cost0:.4g} -> {oe.cost:.4g} "
+                f"in {oe.iterations} iterations")
+    return {k: _summarise(v) for k, v in rows.items()}
+
+
+def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int = 4, refine_candidates: int = 2,
+                   oe_config: OE.OEConfig = OE.OEConfig(),
+                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Training side (module docstring, steps 1–3). Reads no test run.
+
+    ``refine_candidates``: how many of the best regression candidates :func:`cv_refinement` compares.
+    """
+    say = progress or (lambda s: None)
+    sp = heldout9_split(root, ninth)
+    leak = set(sp["train"]) & set(sp["test"])
+    if leak:
+        raise ValueError(f"test runs in the training set: {sorted(leak)}")
+    say(f"heldout9: reading {len(sp['train'])} training runs")
+    trials = [read_esso(f, root) for f in sp["train"]]
+    prior = mmg.load_published("esso_osaka_3m", root)
+    runs = [R.smooth_run(tr) for tr in trials]
+    best, table = P.select_structure(trials, runs, prior, folds=folds)
+    ranked = sorted(table, key=lambda c: table[c]["score"])[:refine_candidates]
+    say(f"heldout9: regression CV chose '{best}'; output-error CV on {', '.join(ranked)}")
+    ref = cv_refinement(trials, runs, prior, ranked, folds=folds, oe_config=oe_config, progress=say)
+    choice = min(ref, key=lambda k: ref[k]["score"])
+    structure, criterion = choice.rsplit("/", 1)
+    res = P.identify(trials, prior, structure=structure, select=False,
+                     refine="output-error" if criterion == "output-error" else "none", oe_config=oe_config,
+                     name="esso-osaka-3m-heldout9",
+                     extra_provenance={"split": "heldout9", "test_runs_never_used": sp["test"]})
+    return {"split": sp, "regression_cv": table, "refinement_cv": ref, "chosen": choice,
+            "result": res.to_dict()}
+
+
+def heldout9_evaluate(trained: dict[str, Any], *, root: Path | None = None) -> dict[str, Any]:
+    """Held-out side: identified and published models on the 9 test runs (10 Hz, 60-s horizons every 60 s)."""
+    ident = V.model_from_result(trained["result"])
+    pub = mmg.load_published("esso_osaka_3m", root)
+    test = [read_esso(f, root) for f in trained["split"]["test"]]
+    out: dict[str, Any] = {"per_run": {}}
+    for name, m in (("identified", ident), ("published", pub)):
+        rows = _scores(m, test, 1)
+        out["per_run"][name] = dict(zip(trained["split"]["test"], rows))
+        out[name] = _summarise(rows)
+    return out
+
+
+def format_heldout9(st: dict[str, Any]) -> str:
+    """The two CV tables of :func:`heldout9_train` and the choice."""
+    lines = [f"Esso Osaka 9-run held-out split ('{st['split'].get('ninth', 'issue')}'): "
+             f"{len(st['split']['train'])} training runs, "
+             f"test runs {', '.join(st['split']['test'])}",
+             "  regression CV (training runs): candidate, score, pooled RMS psi [deg] / pos [m]"]
+    for c, r in st["regression_cv"].items():
+        lines.append(f"    {c:<56} {r['score']:7.3f} {r['psi_rms']:7.2f} {r['pos_rms']:7.3f}")
+    lines.append("  refinement CV (training runs): pooled score, pooled RMS psi / pos, mean over left-out runs psi / pos")
+    for c, r in st["refinement_cv"].items():
+        mark = " <- chosen" if c == st["chosen"] else ""
+        lines.append(f"    {c:<56} {r['score']:7.3f} {r['psi_rms']:7.2f} {r['pos_rms']:7.3f} "
+                     f"{r['psi_mean_of_runs']:7.2f} {r['pos_mean_of_runs']:7.3f}{mark}")
+    return "\n".join(lines)
+
+
+def format_heldout9_test(st: dict[str, Any]) -> str:
+    """The held-out table of :func:`heldout9_evaluate` (``st["heldout"]``)."""
+    lines = []
+    if "heldout" in st:
+        ev = st["heldout"]
+        lines.append("  held-out (read once, after the choice): run, identified psi [deg] / pos [m], published")
+        for run in st["split"]["test"]:
+            a, b = ev["per_run"]["identified"].get(run), ev["per_run"]["published"].get(run)
+            if a and b:
+                lines.append(f"    {run:<50} {a['psi']:7.2f} {a['pos']:7.3f}   {b['psi']:7.2f} {b['pos']:7.3f}")
+        i, p = ev["identified"], ev["published"]
+        lines.append(f"  mean over runs: identified {i['psi_mean_of_runs']:.2f} deg / {i['pos_mean_of_runs']:.3f} m, "
+                     f"published {p['psi_mean_of_runs']:.2f} deg / {p['pos_mean_of_runs']:.3f} m")
+    return "\n".join(lines)
+
+
+__all__ = ["RANDOM_SEED", "NINTH", "heldout9_split", "cv_refinement", "heldout9_train", "heldout9_evaluate",
+           "format_heldout9", "format_heldout9_test"]
