@@ -1,0 +1,136 @@
+"""Port/starboard asymmetry of the rudder inflow, calibrated on what the training zig-zags measure.
+
+The force regression of :mod:`shipid.methods.mmg.estimator` fits the sway force and yaw
+moment sample by sample; the port/starboard difference of a single-screw ship is a few
+per cent of those forces and, at the 10°/15° rudder of the training zig-zags, it is
+confounded with the hull terms: fitted as a free coefficient (``yasukawa2015-asym``:
+propeller side force ∝ thrust, rudder force per side) it makes the large-angle prediction
+worse (:mod:`shipid.methods.mmg.extrapolation`). What the training runs do measure well is
+the yaw rate each side reaches. So the one asymmetry parameter — the flow-straightening
+coefficient per side, ``γ_R± = γ̄ ± a·Δ`` with ``γ̄``, ``Δ`` the mean and half-difference
+of the prior's values (``a = 1``: the KVLCC2 L7 asymmetry, ``a = 0``: symmetric, ``a < 0``:
+the other side; Yasukawa & Yoshimura 2015 eq. 26: the effective rudder inflow angle
+``α_R = δ − atan(v_R/u_R)``, ``v_R = U γ_R β_R``) — is chosen on a grid by an
+output-error criterion on the TRAINING runs: each grid value's model is fitted by the
+regression as usual and the measured rudder and propeller of every training zig-zag
+with a switch heading of 5° or more are replayed open loop from execute
+(:func:`shipid.methods.mmg.extrapolation.replay`); the score is the RMS over runs and
+sides of the relative error of the peak yaw rate (%), the quantity a turning circle's
+diameter depends on. (The 1°-switch runs are excluded a priori: their yaw-rate peaks
+are a few tenths of a degree per second and set by the switching, not by the turn.)
+The rest of the model (free coefficients, weighting) is the candidate's.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.basins import read_kvlcc2
+from shipid.data.trial import Trial
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg.candidates import apply_candidate, candidate_config
+from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, replay
+from shipid.methods.mmg.study import zigzag_overshoots
+from shipid.methods.mmg.zigzag import kvlcc2_autopilot, zigzag_angles
+from shipid.models import mmg
+
+#: γ_R asymmetry fractions tried (module docstring).
+GRID = (-0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0)
+#: Smallest switch heading (deg) of a zig-zag whose peak yaw rates enter the criterion.
+MIN_SWITCH_DEG = 5.0
+
+
+def _with_asymmetry(cand: Mapping, a: float) -> dict:
+    c = dict(cand)
+    part = {k: v for k, v in (cand.get("particulars") or {}).items() if k not in ("gamma_R", "gamma_R_asymmetry")}
+    part["gamma_R_asymmetry"] = float(a)
+    c["particulars"] = part
+    return c
+
+
+def fit_candidate(runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping) -> mmg.MmgModel:
+    """The regression fit of ``cand`` on ``runs``."""
+    cprior, free = apply_candidate(prior, cand)
+    return R.fit(runs, cprior, free, candidate_config(R.FitConfig(), cand)).model
+
+
+def peak_score(model: mmg.MmgModel, trials: Sequence[Trial], names: Sequence[str]) -> float:
+    """RMS over the zig-zags with switch ≥ :data:`MIN_SWITCH_DEG` and both sides of the peak-yaw-rate error (%)."""
+    errs = []
+    for tr, nm in zip(trials, names):
+        if np.degrees(zigzag_angles(nm)[1]) < MIN_SWITCH_DEG - 1e-9:
+            continue
+        r = replay(model, tr)
+        errs += [r["r_peak_stbd_err_pct"], r["r_peak_port_err_pct"]]
+    e = np.asarray(errs, float)
+    return float(np.sqrt(np.mean(e ** 2))) if e.size and np.all(np.isfinite(e)) else float("inf")
+
+
+def calibrate(runs: Sequence[R.SmoothedRun], trials: Sequence[Trial], names: Sequence[str], prior: mmg.MmgModel,
+              cand: Mapping, grid: Sequence[float] = GRID) -> tuple[float, dict[float, float]]:
+    """The grid value of the γ_R asymmetry with the lowest :func:`peak_score` on the training runs
+    (the first on a tie), and the score of every grid value."""
+    table = {}
+    for a in grid:
+        try:
+            table[float(a)] = peak_score(fit_candidate(runs, prior, _with_asymmetry(cand, a)), trials, names)
+        except (ValueError, np.linalg.LinAlgError):
+            table[float(a)] = float("inf")
+    best = min(table, key=lambda a: table[a])
+    return best, table
+
+
+def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[str], ap: dict) -> dict:
+    """The :func:`shipid.methods.mmg.extrapolation.cross_validate` row of one model."""
+    per = {}
+    for f, tr in zip(names, val):
+        row = replay(model, tr)
+        row["overshoot_err_deg"] = zigzag_overshoots(model, tr, f, ap)["error"]
+        per[f] = row
+    rp = np.array([[r[f"r_peak_{s}_err_pct"] for s in ("stbd", "port")] for r in per.values()])
+    psi = np.array([r["psi_rms"] for r in per.values()])
+    ov = np.array([e for r in per.values() for e in r["overshoot_err_deg"]])
+    row = {"r_peak_rms_pct": float(np.sqrt(np.mean(rp ** 2))), "r_peak_stbd_mean_pct": float(rp[:, 0].mean()),
+           "r_peak_port_mean_pct": float(rp[:, 1].mean()), "psi_rms_deg": float(np.sqrt(np.mean(psi ** 2))),
+           "overshoot_rms_deg": float(np.sqrt(np.mean(ov ** 2))) if ov.size else float("nan"), "runs": per}
+    row["score"] = row["r_peak_rms_pct"] + row["psi_rms_deg"]
+    if not np.isfinite(row["score"]):
+        row["score"] = float("inf")
+    return row
+
+
+def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, root: Path | None = None,
+                   grid: Sequence[float] = GRID, every_grid_value: bool = False, progress=None) -> dict[str, dict]:
+    """Fit on :data:`~shipid.methods.mmg.extrapolation.TRAIN` with the γ_R asymmetry calibrated on
+    those runs, score on :data:`~shipid.methods.mmg.extrapolation.VALIDATE` (as the extrapolation
+    study scores). ``every_grid_value``: also score each grid value's model (a diagnostic of how well
+    the training criterion chose; not a selection)."""
+    cands = candidates()
+    prior = mmg.load_published("kvlcc2_hsva", root)
+    train = [read_kvlcc2(f, root) for f in TRAIN]
+    runs = [R.smooth_run(tr) for tr in train]
+    ap = kvlcc2_autopilot(train, TRAIN)
+    val = [read_kvlcc2(f, root) for f in VALIDATE]
+    out: dict[str, dict] = {}
+    for base in bases:
+        a, table = calibrate(runs, train, TRAIN, prior, cands[base], grid)
+        model = fit_candidate(runs, prior, _with_asymmetry(cands[base], a))
+        row = score_validation(model, val, VALIDATE, ap)
+        row.update(calibrated_asymmetry=a, training_peak_score=table)
+        out[f"{base}/gamma_R-asymmetry-calibrated"] = row
+        if progress is not None:
+            progress(base)
+        if every_grid_value:
+            for g in grid:
+                m = fit_candidate(runs, prior, _with_asymmetry(cands[base], g))
+                r = score_validation(m, val, VALIDATE, ap)
+                r["training_peak_score"] = table[float(g)]
+                out[f"{base}/gamma_R-asymmetry-{g:g}"] = r
+    return out
+
+
+__all__ = ["GRID", "MIN_SWITCH_DEG", "fit_candidate", "peak_score", "calibrate", "score_validation",
+           "cross_validate"]
