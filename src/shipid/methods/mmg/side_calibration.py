@@ -43,7 +43,8 @@ GRID = (-0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0)
 MIN_SWITCH_DEG = 5.0
 
 
-def _with_asymmetry(cand: Mapping, a: float) -> dict:
+def with_asymmetry(cand: Mapping, a: float) -> dict:
+    """``cand`` with the γ_R asymmetry fraction ``a`` in place of any γ_R override of its own."""
     c = dict(cand)
     part = {k: v for k, v in (cand.get("particulars") or {}).items() if k not in ("gamma_R", "gamma_R_asymmetry")}
     part["gamma_R_asymmetry"] = float(a)
@@ -70,17 +71,40 @@ def peak_score(model: mmg.MmgModel, trials: Sequence[Trial], names: Sequence[str
 
 
 def calibrate(runs: Sequence[R.SmoothedRun], trials: Sequence[Trial], names: Sequence[str], prior: mmg.MmgModel,
-              cand: Mapping, grid: Sequence[float] = GRID) -> tuple[float, dict[float, float]]:
-    """The grid value of the γ_R asymmetry with the lowest :func:`peak_score` on the training runs
-    (the first on a tie), and the score of every grid value."""
-    table = {}
-    for a in grid:
+              cand: Mapping, grid: Sequence[float] = GRID, *, refine: bool = True) -> tuple[float, dict[float, float]]:
+    """The γ_R asymmetry with the lowest :func:`peak_score` on the training runs, and the score of
+    every value tried: the grid's best (the first on a tie), then, with ``refine`` and an interior
+    best, the vertex of the parabola through it and its neighbours' mean-square scores
+    (:func:`refine_minimum`), kept if it scores lower."""
+    def score(a):
         try:
-            table[float(a)] = peak_score(fit_candidate(runs, prior, _with_asymmetry(cand, a)), trials, names)
+            return peak_score(fit_candidate(runs, prior, with_asymmetry(cand, a)), trials, names)
         except (ValueError, np.linalg.LinAlgError):
-            table[float(a)] = float("inf")
+            return float("inf")
+
+    table = {float(a): score(a) for a in grid}
     best = min(table, key=lambda a: table[a])
+    if refine:
+        g = sorted(table)
+        i = g.index(best)
+        if 0 < i < len(g) - 1 and all(np.isfinite(table[g[j]]) for j in (i - 1, i, i + 1)):
+            a = refine_minimum(g[i - 1:i + 2], [table[g[j]] ** 2 for j in (i - 1, i, i + 1)])
+            sa = score(a)
+            table[a] = sa
+            if sa < table[best]:
+                best = a
     return best, table
+
+
+def refine_minimum(x: Sequence[float], y: Sequence[float]) -> float:
+    """Vertex of the parabola through three points whose middle one is lowest (clipped to their span)."""
+    (x0, x1, x2), (y0, y1, y2) = x, y
+    den = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den
+    B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den
+    if not A > 0:
+        return float(x1)
+    return float(np.clip(-B / (2 * A), x0, x2))
 
 
 def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[str], ap: dict) -> dict:
@@ -103,12 +127,17 @@ def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[
 
 
 def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, root: Path | None = None,
-                   grid: Sequence[float] = GRID, every_grid_value: bool = False, progress=None) -> dict[str, dict]:
+                   grid: Sequence[float] = GRID, every_grid_value: bool = False,
+                   particulars: Mapping[str, float] | None = None, progress=None) -> dict[str, dict]:
     """Fit on :data:`~shipid.methods.mmg.extrapolation.TRAIN` with the γ_R asymmetry calibrated on
     those runs, score on :data:`~shipid.methods.mmg.extrapolation.VALIDATE` (as the extrapolation
     study scores). ``every_grid_value``: also score each grid value's model (a diagnostic of how well
-    the training criterion chose; not a selection)."""
+    the training criterion chose; not a selection). ``particulars``: further overrides of every
+    base candidate (e.g. ``{"rudder_crossflow": 1.0}``)."""
     cands = candidates()
+    if particulars:
+        cands = {k: dict(c, particulars=dict(c.get("particulars") or {}, **particulars)) for k, c in cands.items()}
+    suffix = "".join(f"/{k}-{v:g}" for k, v in (particulars or {}).items())
     prior = mmg.load_published("kvlcc2_hsva", root)
     train = [read_kvlcc2(f, root) for f in TRAIN]
     runs = [R.smooth_run(tr) for tr in train]
@@ -117,20 +146,20 @@ def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, roo
     out: dict[str, dict] = {}
     for base in bases:
         a, table = calibrate(runs, train, TRAIN, prior, cands[base], grid)
-        model = fit_candidate(runs, prior, _with_asymmetry(cands[base], a))
+        model = fit_candidate(runs, prior, with_asymmetry(cands[base], a))
         row = score_validation(model, val, VALIDATE, ap)
         row.update(calibrated_asymmetry=a, training_peak_score=table)
-        out[f"{base}/gamma_R-asymmetry-calibrated"] = row
+        out[f"{base}/gamma_R-asymmetry-calibrated{suffix}"] = row
         if progress is not None:
             progress(base)
         if every_grid_value:
             for g in grid:
-                m = fit_candidate(runs, prior, _with_asymmetry(cands[base], g))
+                m = fit_candidate(runs, prior, with_asymmetry(cands[base], g))
                 r = score_validation(m, val, VALIDATE, ap)
                 r["training_peak_score"] = table[float(g)]
-                out[f"{base}/gamma_R-asymmetry-{g:g}"] = r
+                out[f"{base}/gamma_R-asymmetry-{g:g}{suffix}"] = r
     return out
 
 
-__all__ = ["GRID", "MIN_SWITCH_DEG", "fit_candidate", "peak_score", "calibrate", "score_validation",
+__all__ = ["GRID", "MIN_SWITCH_DEG", "with_asymmetry", "fit_candidate", "peak_score", "calibrate", "refine_minimum", "score_validation",
            "cross_validate"]
