@@ -63,3 +63,16 @@ def test_rudder_crossflow_adds_the_sin_abs_sin_part_of_the_normal_force():
     np.testing.assert_allclose(a1["F_N"], a0["F_N"] * (1 + s * np.abs(s) / (m.particulars["f_alpha"] * s)),
                                rtol=1e-12)
     assert np.all(np.abs(a1["F_N"]) > np.abs(a0["F_N"]))
+
+
+def test_rudder_side_gain_scales_the_normal_force_per_side():
+    """particulars["rudder_side_gain"] = s: F_N (1 + s sign(delta))."""
+    if ROOT is None or not (ROOT / "params").exists():
+        pytest.skip("shared data not found (set SHIPID_DATA)")
+    m = mmg.load_published("kvlcc2_hsva")
+    m1, _ = apply_candidate(m, {k: () for k in mmg.MODES} | {"particulars": {"rudder_side_gain": -0.1}})
+    u, v, r = np.full(3, 1.1), np.array([0.0, 0.05, -0.05]), np.array([0.0, 0.02, -0.03])
+    delta, n = np.deg2rad([35.0, -20.0, 0.0]), np.full(3, 10.23)
+    f0 = mmg.basis(m, u, v, r, delta, n, 0.0, 0.0)["aux"]["F_N"]
+    f1 = mmg.basis(m1, u, v, r, delta, n, 0.0, 0.0)["aux"]["F_N"]
+    np.testing.assert_allclose(f1, f0 * np.array([0.9, 1.1, 1.0]), rtol=1e-12)

@@ -33,6 +33,12 @@ RMS overshoot error), base candidate ``linear-hull+rudder``::
     γ_R asymmetry calibrated                   0.126  14.11  5.50   -0.47   -7.51  8.61   1.33
     C_Dc = 1, symmetric γ_R                    0      14.07  5.22   +4.29   -5.83  8.85   0.73
     C_Dc = 1, γ_R asymmetry calibrated         0.116  11.79  4.15   +2.82   -4.89  7.63   0.85
+    C_Dc = 1, symmetric γ_R, side gain s       -0.014 11.58  3.74   +2.09   -4.57  7.84   0.87
+
+(the last: the rudder effectiveness per side ``F_N (1 + s sign δ)`` calibrated the same way
+instead of γ_R, ``parameter="rudder_side_gain"``, grid :data:`SIDE_GAIN_GRID`; the training
+criterion pins it sharply, 3.20 % at s = 0 and 5.3 % at s = −0.05, yet the port peaks of the
+larger zig-zags stay low: the asymmetry grows with the rudder angle beyond what 10°/15° show.)
 
 (``C_Dc``: the cross-flow drag part of the rudder normal force, ``rudder_crossflow`` of
 :func:`shipid.models.mmg_forces.basis_yasukawa`.) The heading RMS is dominated by the 30°
@@ -58,15 +64,20 @@ from shipid.models import mmg
 
 #: γ_R asymmetry fractions tried (module docstring).
 GRID = (-0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0)
+#: Port/starboard rudder-effectiveness values tried (``rudder_side_gain``).
+SIDE_GAIN_GRID = (-0.15, -0.1, -0.05, 0.0, 0.05, 0.1, 0.15)
 #: Smallest switch heading (deg) of a zig-zag whose peak yaw rates enter the criterion.
 MIN_SWITCH_DEG = 5.0
 
 
-def with_asymmetry(cand: Mapping, a: float) -> dict:
-    """``cand`` with the γ_R asymmetry fraction ``a`` in place of any γ_R override of its own."""
+def with_asymmetry(cand: Mapping, a: float, parameter: str = "gamma_R_asymmetry") -> dict:
+    """``cand`` with the particular ``parameter`` set to ``a`` (for the γ_R asymmetry fraction, in place
+    of any γ_R override of its own; ``"rudder_side_gain"``: the port/starboard rudder effectiveness
+    ``F_N (1 + s sign δ)`` of :func:`shipid.models.mmg_forces.basis_yasukawa`)."""
     c = dict(cand)
-    part = {k: v for k, v in (cand.get("particulars") or {}).items() if k not in ("gamma_R", "gamma_R_asymmetry")}
-    part["gamma_R_asymmetry"] = float(a)
+    drop = ("gamma_R", "gamma_R_asymmetry") if parameter == "gamma_R_asymmetry" else (parameter,)
+    part = {k: v for k, v in (cand.get("particulars") or {}).items() if k not in drop}
+    part[parameter] = float(a)
     c["particulars"] = part
     return c
 
@@ -90,14 +101,15 @@ def peak_score(model: mmg.MmgModel, trials: Sequence[Trial], names: Sequence[str
 
 
 def calibrate(runs: Sequence[R.SmoothedRun], trials: Sequence[Trial], names: Sequence[str], prior: mmg.MmgModel,
-              cand: Mapping, grid: Sequence[float] = GRID, *, refine: bool = True) -> tuple[float, dict[float, float]]:
+              cand: Mapping, grid: Sequence[float] = GRID, *, refine: bool = True,
+              parameter: str = "gamma_R_asymmetry") -> tuple[float, dict[float, float]]:
     """The γ_R asymmetry with the lowest :func:`peak_score` on the training runs, and the score of
     every value tried: the grid's best (the first on a tie), then, with ``refine`` and an interior
     best, the vertex of the parabola through it and its neighbours' mean-square scores
     (:func:`refine_minimum`), kept if it scores lower."""
     def score(a):
         try:
-            return peak_score(fit_candidate(runs, prior, with_asymmetry(cand, a)), trials, names)
+            return peak_score(fit_candidate(runs, prior, with_asymmetry(cand, a, parameter)), trials, names)
         except (ValueError, np.linalg.LinAlgError):
             return float("inf")
 
@@ -147,7 +159,8 @@ def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[
 
 def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, root: Path | None = None,
                    grid: Sequence[float] = GRID, every_grid_value: bool = False,
-                   particulars: Mapping[str, float] | None = None, progress=None) -> dict[str, dict]:
+                   particulars: Mapping[str, float] | None = None, parameter: str = "gamma_R_asymmetry",
+                   progress=None) -> dict[str, dict]:
     """Fit on :data:`~shipid.methods.mmg.extrapolation.TRAIN` with the γ_R asymmetry calibrated on
     those runs, score on :data:`~shipid.methods.mmg.extrapolation.VALIDATE` (as the extrapolation
     study scores). ``every_grid_value``: also score each grid value's model (a diagnostic of how well
@@ -164,21 +177,21 @@ def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, roo
     val = [read_kvlcc2(f, root) for f in VALIDATE]
     out: dict[str, dict] = {}
     for base in bases:
-        a, table = calibrate(runs, train, TRAIN, prior, cands[base], grid)
-        model = fit_candidate(runs, prior, with_asymmetry(cands[base], a))
+        a, table = calibrate(runs, train, TRAIN, prior, cands[base], grid, parameter=parameter)
+        model = fit_candidate(runs, prior, with_asymmetry(cands[base], a, parameter))
         row = score_validation(model, val, VALIDATE, ap)
         row.update(calibrated_asymmetry=a, training_peak_score=table)
-        out[f"{base}/gamma_R-asymmetry-calibrated{suffix}"] = row
+        out[f"{base}/{parameter}-calibrated{suffix}"] = row
         if progress is not None:
             progress(base)
         if every_grid_value:
             for g in grid:
-                m = fit_candidate(runs, prior, with_asymmetry(cands[base], g))
+                m = fit_candidate(runs, prior, with_asymmetry(cands[base], g, parameter))
                 r = score_validation(m, val, VALIDATE, ap)
                 r["training_peak_score"] = table[float(g)]
-                out[f"{base}/gamma_R-asymmetry-{g:g}{suffix}"] = r
+                out[f"{base}/{parameter}-{g:g}{suffix}"] = r
     return out
 
 
-__all__ = ["GRID", "MIN_SWITCH_DEG", "with_asymmetry", "fit_candidate", "peak_score", "calibrate", "refine_minimum", "score_validation",
+__all__ = ["GRID", "SIDE_GAIN_GRID", "MIN_SWITCH_DEG", "with_asymmetry", "fit_candidate", "peak_score", "calibrate", "refine_minimum", "score_validation",
            "cross_validate"]
