@@ -25,8 +25,11 @@ _CASES = {"kvlcc2": ("yasukawa2015", "full/symmetric-gamma_R"),
 @out_options(json_help="Print the table as JSON.")
 @strict_option
 def mmg_covariance_cmd(case, splits, seed, draws, as_json, out, force):
-    """Split the training runs at random into halves, fit each, and divide every coefficient's difference
-    by the std each covariance (ridge, HAC, run bootstrap) states: RMS z near 1 is honest."""
+    """Which MMG parameter covariance is honest: split-half check on real training runs.
+
+    The runs are split at random into halves, each fitted, and every coefficient's
+    difference divided by the std each covariance (ridge, HAC, run bootstrap) states:
+    RMS z near 1 is honest."""
     from shipid.data.basins import SPLITS, read_esso, read_kvlcc2
     from shipid.methods.mmg import covariance as C
     from shipid.methods.mmg import estimator as R

@@ -1,4 +1,4 @@
-"""``shipid study kvlcc2-side-calibration``: the large-angle CV of :mod:`shipid.methods.mmg.side_calibration`."""
+"""``shipid study kvlcc2-sides``: the large-angle CV of :mod:`shipid.methods.mmg.side_calibration`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from shipid.cli import CONTEXT, study
 from shipid.cli._common import emit, out_options, strict_option
 
 
-@study.command("kvlcc2-side-calibration", context_settings=CONTEXT)
+@study.command("kvlcc2-sides", context_settings=CONTEXT)
 @click.option("--base", "bases", multiple=True, default=("linear-hull+rudder",), show_default=True,
               help="Base candidate(s) of the extrapolation study (repeat for several).")
 @click.option("--crossflow", "crossflow", multiple=True, type=float, default=(1.0, 0.0), show_default=True,
@@ -19,8 +19,11 @@ from shipid.cli._common import emit, out_options, strict_option
 @out_options(json_help="Print the table as JSON.")
 @strict_option
 def kvlcc2_side_calibration_cmd(bases, crossflow, parameter, every_grid_value, as_json, out, force):
-    """KVLCC2 HSVA: gamma_R port/starboard asymmetry calibrated on the 10 and 15 deg zig-zags' peak yaw
-    rates, then scored on the 20-30 deg ones as 'study kvlcc2-large-angle' scores."""
+    """KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.
+
+    The asymmetry parameter is calibrated on the training zig-zags' open-loop peak yaw
+    rates, then the model is scored on the 20-30 deg ones as 'study kvlcc2-large-angle'
+    scores."""
     from shipid.methods.mmg import extrapolation as E
     from shipid.methods.mmg import side_calibration as S
 

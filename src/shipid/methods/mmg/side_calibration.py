@@ -23,7 +23,7 @@ is refined by the vertex of a parabola through it and its neighbours (the grid a
 could not resolve the minimum, which lies between 0 and 0.25 in both cases below; this
 refinement was added after the grid-only numbers were seen).
 
-Large-angle CV (``shipid study kvlcc2-side-calibration``; trained on the 10°/15°
+Large-angle CV (``shipid study kvlcc2-sides``; trained on the 10°/15°
 zig-zags, scored on the 20°, 25°, 30° ones as :mod:`shipid.methods.mmg.extrapolation`
 scores: RMS peak-yaw-rate error % + RMS heading error deg; mean peak error per side;
 RMS overshoot error), base candidate ``linear-hull+rudder``::
