@@ -231,7 +231,13 @@ def basis_yasukawa(p, u, v, r, delta, n):
     vR = U * gam * beta_R
     UR2 = uR * uR + vR * vR
     aR = delta - np.arctan2(vR, uR)
-    FN = 0.5 * rho * p["A_R"] * UR2 * p["f_alpha"] * np.sin(aR)
+    sa = np.sin(aR)
+    # optional cross-flow drag part of the normal force (Hoerner 1965: C_N = f_a sin a + C_Dc sin a |sin a|);
+    # "rudder_crossflow" = C_Dc, absent or 0 for the standard method
+    FN = 0.5 * rho * p["A_R"] * UR2 * (p["f_alpha"] * sa + p.get("rudder_crossflow", 0.0) * sa * np.abs(sa))
+    # optional port/starboard rudder effectiveness (propeller swirl): F_N (1 + s sign(delta)), "rudder_side_gain" = s
+    if p.get("rudder_side_gain", 0.0):
+        FN = FN * (1.0 + p["rudder_side_gain"] * np.sign(delta))
     HX = np.stack([-qX, qX * vp * vp, qX * vp * rp, qX * rp * rp, qX * vp ** 4, T, -FN * np.sin(delta)], axis=-1)
     hull = [vp, rp, vp ** 3, vp * vp * rp, vp * rp * rp, rp ** 3]
     HY = np.stack([qX * h for h in hull] + [-FN * np.cos(delta)], axis=-1)

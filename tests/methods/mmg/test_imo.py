@@ -122,11 +122,14 @@ def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_pa
 @pytest.mark.realdata
 @pytest.mark.slow
 def test_bands_shrink_with_more_runs(tmp_path):
-    """Identified from 3 vs all 13 HSVA zig-zags: bands contain the nominal and every one is narrower with 13."""
+    """Identified from 5 vs all 13 HSVA zig-zags (both with the run-bootstrap covariance): bands contain
+    the nominal and every one is narrower with 13."""
     need("kvlcc2_hsva")
-    few = _identify(["HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat",
-                     "HSVA_CPMC_KVLCC2_Z_35_05.dat"], tmp_path, "m3.json")
+    few = _identify(["HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat",
+                     "HSVA_CPMC_KVLCC2_Z_25_05.dat", "HSVA_CPMC_KVLCC2_Z_35_05.dat"], tmp_path, "m5.json")
     many = _identify(sorted(p.name for p in KV.glob("*.dat")), tmp_path, "m13.json")
+    for r in (few, many):
+        assert r["diagnostics"]["covariance"]["kind"].startswith("run-bootstrap")
     r3, r13 = I.assess(few, samples=60, seed=2), I.assess(many, samples=60, seed=2)
     _check_contains_nominal(r3)
     _check_contains_nominal(r13)

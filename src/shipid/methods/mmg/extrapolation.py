@@ -27,7 +27,13 @@ non-dimensional regression weighting (:func:`shipid.methods.mmg.estimator.row_we
 each sample counts by its non-dimensional force, so the slower, larger-drift parts of
 the bigger zig-zags weigh as much as the fast straight runs), and each of these with the port/starboard asymmetry terms of the ``yasukawa2015-asym``
 structure (:data:`shipid.models.mmg.COEFS`: propeller side force and moment ∝ thrust,
-rudder force per side).
+rudder force per side), and four with the rudder normal force of a low-aspect-ratio
+foil, ``f_α sin α_R + C_Dc sin α_R |sin α_R|`` with the cross-flow drag coefficient
+``C_Dc = 1`` fixed a priori (Hoerner, Fluid-Dynamic Lift, 1985, ch. 3: 0.8–1.2 for
+square tips; ``rudder_crossflow`` of :func:`shipid.models.mmg_forces.basis_yasukawa`),
+which the 10°/15° zig-zags cannot separate from ``f_α`` but which grows with the angle.
+The γ_R asymmetry calibrated on the training zig-zags' peak yaw rates is
+:mod:`shipid.methods.mmg.side_calibration`.
 """
 
 from __future__ import annotations
@@ -68,6 +74,10 @@ def candidates() -> dict[str, dict]:
         for m, extra in ASYM.items():
             a[m] = tuple(c[m]) + extra
         out[name + "+asym"] = a
+    for name in ("full/symmetric-gamma_R", "linear-hull+rudder/symmetric-gamma_R", "hull-only/symmetric-gamma_R",
+                 "linear-hull+rudder/gamma_R-asymmetry-0.25"):   # rudder normal force with cross-flow drag
+        out[name + "/rudder-crossflow-1"] = dict(base[name], particulars=dict(base[name].get("particulars") or {},
+                                                                              rudder_crossflow=1.0))
     return out
 
 

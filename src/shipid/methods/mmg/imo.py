@@ -35,9 +35,12 @@ MODEL.json; fixed coefficients stay fixed) and every manoeuvre is simulated for 
 nominal value (the point estimate), the Monte Carlo standard deviation and the
 2.275 %–97.725 % quantile band (the ±2-std band of a normal; quantiles rather than
 nominal ± 2 std so that a skewed response shows), and P(pass) over the draws (against
-the strictest limit where the limit is a range). The
-ridge standard errors of ``identify mmg`` assume independent residuals, so the
-bands are optimistic in the same measure.
+the strictest limit where the limit is a range). The covariance is the one MODEL.json
+carries: ``identify mmg`` stores a run-bootstrap covariance (five or more training
+runs) or a HAC sandwich (:mod:`shipid.methods.mmg.covariance`, where the split-half
+check shows why the ridge standard errors, which assume independent residuals, are
+5–9 times too small); its description is ``diagnostics["covariance"]["kind"]``
+and is printed with the bands. A MODEL.json without it is taken to carry ridge errors.
 """
 
 from __future__ import annotations
@@ -273,13 +276,16 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     if diverged.any():
         warnings.append(f"{int(diverged.sum())} of {diverged.size} simulated manoeuvres diverged "
                         "(left out of the bands)")
+    cov_kind = ((result.get("diagnostics") or {}).get("covariance") or {}).get(
+        "kind", "ridge SE (independent residuals assumed: optimistic)")
     return {"model": model.name, "structure": model.structure, "L": L, "L_over_U_model_s": lu,
             "ship_length": ship_length, "L_over_V_full_scale_s": lv, "conditions": cond.to_dict(),
             "samples": int(samples), "seed": int(seed), "dt": dt,
-            "covariance_names": names, "criteria": [c.to_dict() for c in crit], "warnings": warnings,
+            "covariance_names": names, "covariance_kind": cov_kind,
+            "criteria": [c.to_dict() for c in crit], "warnings": warnings,
             "notes": ["criteria of IMO MSC.137(76) 5.3-5.4 in ship lengths (model scale); overshoot limits "
                       "from the full-scale L/V", "band: 2.275-97.725 % quantiles of the Monte Carlo over the "
-                      "parameter covariance (ridge SEs: optimistic)"]}
+                      f"parameter covariance ({cov_kind})"]}
 
 
 def format_report(rep: Mapping[str, Any]) -> str:
@@ -290,8 +296,8 @@ def format_report(rep: Mapping[str, Any]) -> str:
              f"approach {c['speed']:.4g} m/s, {c['rps']:.4g} rev/s, rudder {c['rudder_rate_deg_s']:.3g} deg/s; "
              f"L/U = {rep['L_over_U_model_s']:.3g} s (model); full-scale L/V = "
              + (f"{lv:.3g} s" if lv is not None else "unknown (give --ship-length)"),
-             f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']} "
-             "(ridge standard errors assume independent residuals: the bands are optimistic)",
+             f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']}; covariance: "
+             + rep.get("covariance_kind", "ridge SE (independent residuals assumed: optimistic)"),
              f"{'criterion':<52} {'value':>8} {'std':>7} {'band (+-2 std)':>19} {'limit':>11} {'P(pass)':>8}  verdict"]
     for k in rep["criteria"]:
         lim = k["limit"]

@@ -17,6 +17,7 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
+from shipid.methods.mmg.covariance import honest_covariance, ridge_covariance
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
                                           horizon_score, horizon_sse, smooth_run)
@@ -69,29 +70,30 @@ def _file_id(path: str) -> str:
 def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *, structure_name: str,
                  selection: Mapping | None = None, smooth_config: SmoothConfig = SmoothConfig(),
                  fit_config: FitConfig = FitConfig(), extra_provenance: Mapping | None = None,
-                 overrides: Mapping | None = None) -> Result:
-    """A self-describing :class:`Result` (MODEL.json): structure, particulars, coefficients, covariance."""
+                 overrides: Mapping | None = None, covariance: tuple[np.ndarray, str] | None = None) -> Result:
+    """A self-describing :class:`Result` (MODEL.json): structure, particulars, coefficients, covariance.
+
+    ``covariance``: ``(Σ, description)`` over the free coefficients in MODEL.json order
+    (:func:`shipid.methods.mmg.covariance.parameter_covariance`); default the ridge covariance.
+    """
+    names = [c for m in mmg.MODES for c in f.free.get(m, ())]
+    if covariance is None:
+        cov, cov_note = ridge_covariance(f), "ridge SE; optimistic (serially correlated residuals)"
+    else:
+        cov, cov_note = np.asarray(covariance[0], float), covariance[1]
+    se_of = dict(zip(names, np.sqrt(np.maximum(np.diag(cov), 0.0))))
     est: dict[str, Estimate] = {}
     for mode in mmg.MODES:
         for c in mmg.COEFS[prior.structure][mode]:
             unit = mmg.COEF_UNITS.get(c, "-")
             if c in f.free.get(mode, ()):
                 i = f.free[mode].index(c)
-                est[c] = Estimate(float(f.fits[mode].theta[i]), float(f.fits[mode].se[i]), unit, "estimated",
-                                  "ridge SE; optimistic (serially correlated residuals)")
+                est[c] = Estimate(float(f.fits[mode].theta[i]), float(se_of[c]), unit, "estimated", cov_note)
             else:
                 why = "regime not visited in the training runs" if c in f.dropped.get(mode, ()) else \
                     "not free in the chosen structure"
                 est[c] = Estimate(float(f.model.coef[c]), float("nan"), unit, "fixed",
                                   f"prior value ({prior.name}); {why}")
-    names = [c for m in mmg.MODES for c in f.free.get(m, ())]
-    cov = np.zeros((len(names), len(names)))
-    i = 0
-    for m in mmg.MODES:
-        if m in f.fits:
-            p = len(f.free[m])
-            cov[i:i + p, i:i + p] = f.fits[m].cov_theta
-            i += p
     model = f.model.to_dict()
     model["free"] = {m: list(v) for m, v in f.free.items()}
     model["structure_candidate"] = structure_name
@@ -107,7 +109,10 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
             "notes": ["Masses, added masses and sub-model shape constants are fixed at the prior model "
                       f"({prior.name}); for the Esso Osaka that set was identified by its authors from runs "
                       "of the same data set.",
-                      "Standard errors assume independent residuals (optimistic)."]}
+                      f"Standard errors and covariance: {cov_note}."],
+            "covariance": {"kind": cov_note,
+                           "se_ridge": dict(zip(names, np.sqrt(np.maximum(np.diag(ridge_covariance(f)), 0.0))
+                                                .tolist()))}}
     if selection is not None:
         diag["structure_selection"] = dict(selection)
     prov = {"training_runs": [{"file": r.source, "sha256_16": _file_id(r.source)} for r in runs],
@@ -212,7 +217,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         extra_provenance["rudder_sign"] = -1
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
-                       overrides=cands[structure].get("particulars"))
+                       overrides=cands[structure].get("particulars"),
+                       covariance=honest_covariance(f, runs, cprior, fit_config))
     res.model["training_conditions"] = training_conditions(trials)
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
