@@ -141,6 +141,24 @@ def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
     return "output-error" if prior.structure in REFINE_BY_DEFAULT else "none"
 
 
+def _covariance(f: MmgFit, runs, prior: mmg.MmgModel, config: FitConfig, oe) -> tuple[np.ndarray, str]:
+    """The covariance MODEL.json carries: the run bootstrap / HAC of the regression
+    (:func:`~shipid.methods.mmg.covariance.honest_covariance`); with an output-error refinement the rows
+    and columns of the refined coefficients are the refinement's horizon-cluster sandwich (per mode, as
+    :func:`~shipid.methods.mmg.output_error.refined_fit` keeps them), with no cross terms to the others."""
+    S, note = honest_covariance(f, runs, prior, config)
+    if oe is None:
+        return S, note
+    names = [c for m in mmg.MODES for c in f.free.get(m, ())]
+    ii = [names.index(c) for c in oe.names if c in names]
+    R = ridge_covariance(f)                        # the refined fit's per-mode blocks hold the sandwich
+    S = np.array(S, float)
+    S[ii, :] = 0.0
+    S[:, ii] = 0.0
+    S[np.ix_(ii, ii)] = R[np.ix_(ii, ii)]
+    return S, (f"refined coefficients: output-error horizon-cluster sandwich SE; the others: {note}")
+
+
 def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | None = None,
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
@@ -218,7 +236,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"),
-                       covariance=honest_covariance(f, runs, cprior, fit_config))
+                       covariance=_covariance(f, runs, cprior, fit_config, oe))
     res.model["training_conditions"] = training_conditions(trials)
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
