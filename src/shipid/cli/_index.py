@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'b794bcf2bea103b1'
+SOURCES = '9a6d06348685c840'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -57,6 +57,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.cli.campaign_cmds', 'Export a campaign store to Parquet or CSV, one row per run.', False),
     ('study', 'kvlcc2-large-angle'):
         ('shipid.methods.mmg.cli', "KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the kvlcc2-zigzag study's held-out runs.", False),
+    ('study', 'kvlcc2-sides'):
+        ('shipid.methods.mmg.cli_side_calibration', 'KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.', False),
     ('study', 'kvlcc2-zigzag'):
         ('shipid.methods.mmg.cli', 'KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots.', False),
     ('study', 'mass-cm-contour'):
@@ -65,6 +67,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.masscm.cli', 'Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.', False),
     ('study', 'mass-cm-sensitivity'):
         ('shipid.methods.masscm.cli', 'Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).', False),
+    ('study', 'mmg-covariance'):
+        ('shipid.methods.mmg.cli_covariance', 'Which MMG parameter covariance is honest: split-half check on real training runs.', False),
     ('study', 'store-info'):
         ('shipid.cli.campaign_cmds', 'List the campaigns in a store with their definition and progress.', False),
     ('study', 'toy'):
