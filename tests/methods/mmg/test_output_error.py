@@ -90,6 +90,15 @@ def test_identify_with_refinement_reports_sandwich_errors(truth, runs_of_truth):
     assert len(ref.covariance_names) == len(base.covariance_names)
     cov = np.asarray(ref.covariance)
     np.testing.assert_allclose(cov, cov.T, atol=0)
+    # the refined block is the sandwich, with no cross terms to the coefficients that were not refined
+    names = list(ref.covariance_names)
+    ii = [names.index(c) for c in d["refined"]]
+    jj = [k for k in range(len(names)) if k not in ii]
+    assert np.all(cov[np.ix_(ii, jj)] == 0.0)
+    for c in d["refined"]:
+        k = names.index(c)
+        assert ref.estimates[c].std == np.sqrt(cov[k, k]) or not np.isfinite(cov[k, k])
+    assert "sandwich" in ref.diagnostics["covariance"]["kind"]
 
 
 def test_default_refine_per_structure(truth):

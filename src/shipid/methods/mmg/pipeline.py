@@ -141,12 +141,14 @@ def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
     return "output-error" if prior.structure in REFINE_BY_DEFAULT else "none"
 
 
-def _covariance(f: MmgFit, runs, prior: mmg.MmgModel, config: FitConfig, oe) -> tuple[np.ndarray, str]:
+def _covariance(f_reg: MmgFit, f: MmgFit, runs, prior: mmg.MmgModel, config: FitConfig,
+                oe) -> tuple[np.ndarray, str]:
     """The covariance MODEL.json carries: the run bootstrap / HAC of the regression
-    (:func:`~shipid.methods.mmg.covariance.honest_covariance`); with an output-error refinement the rows
+    (:func:`~shipid.methods.mmg.covariance.honest_covariance` of the regression fit ``f_reg``); with an
+    output-error refinement (``f``, ``oe``) the rows
     and columns of the refined coefficients are the refinement's horizon-cluster sandwich (per mode, as
     :func:`~shipid.methods.mmg.output_error.refined_fit` keeps them), with no cross terms to the others."""
-    S, note = honest_covariance(f, runs, prior, config)
+    S, note = honest_covariance(f_reg, runs, prior, config)
     if oe is None:
         return S, note
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
@@ -208,7 +210,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         raise InputError(f"unknown structure '{structure}' (choose from {', '.join(cands)})")
     cprior, free = apply_candidate(prior, cands[structure])
     fit_config = candidate_config(fit_config, cands[structure])
-    f = fit(runs, cprior, free, fit_config, name=name)
+    f = f_reg = fit(runs, cprior, free, fit_config, name=name)
     oe, skipped = None, None
     auto = refine == "auto"
     if auto:
@@ -236,7 +238,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cands[structure].get("particulars"),
-                       covariance=_covariance(f, runs, cprior, fit_config, oe))
+                       covariance=_covariance(f_reg, f, runs, cprior, fit_config, oe))
     res.model["training_conditions"] = training_conditions(trials)
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
