@@ -12,6 +12,13 @@ JSON), the peer (default ``/tmp/peer17/src``, a checkout of 83c235a, before issu
 writing), its peak resident set (``os.wait4``), the size of what it wrote; rounds alternate the order. What a
 user of the command sees, where ``bench_masscm_long.py`` isolates the estimate.
 
+Measured 2026-12-02 (load 8-10, times inflated several-fold; 2 rounds): this tree 30.97 / 63.86 s, max RSS
+468 MiB (491 MB), result JSON 1.02 MB; peer (83c235a) 33.14 / 99.27 s, max RSS 763 MiB, ``--json`` output 91.3 MB
+(the issue's "0.79 GB and 92 MB" are these whole-process figures); time ratio median 0.79. Of this tree's 468
+MiB: 196 MiB after the imports (numpy 25, scipy +73, numba +53, the package +45), the estimate's own allocation
+peak 185 MiB (``bench_masscm_long.py``), and what reading the 55 MB of CSV leaves behind (reading alone takes the
+process to 410 MiB: ``data.io._read_csv`` holds every row's cell strings at once).
+
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2]
 """
 
