@@ -13,6 +13,14 @@ ratio, the flagged count of each tree, and whether the per-run estimates of the 
 iteration counts and the flags are bit-identical between the trees (the noise-free Table-3 path must not
 have changed).
 
+Measured 2026-12-02, 10 000 runs, 2 workers, against 83c235a: at load 2-4, this/peer 0.512, 0.885, 0.653 (median
+0.653; this 44.3 s, peer 86.6 s median); at load 5-9 an earlier run gave 0.692, 0.787, 1.724. Both trees flag 0
+of 10 000. Not bit-identical: 2279 runs differ in their iteration count and the per-run estimates by up to 3-4 x
+the (tiny) spread across runs (m 2.9e-7, K_vdot 2.7e-6), the convergence tolerance's scale; the Table-3 means
+agree to 7 significant digits (m 0.3997776, zm_bar -0.1820948, K_vdot 0.09987015 vs 0.09987016). The per-run
+differences start at 55cd5d5 (IV moments of the IIR initial prefilter from the lag structure; 200 runs of
+55cd5d5 against 83c235a already differ); 7624e4c (main just before issue 17's merge) equals 83c235a.
+
 Usage:  python benchmarks/bench_masscm_table3_peer.py [RUNS=10000] [WORKERS=2] [ROUNDS=3] [PEER_SRC=/tmp/peer17/src]
 """
 
