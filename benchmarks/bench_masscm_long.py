@@ -19,8 +19,9 @@ compare the ratio): this tree 8.48 s, allocation peak 185 MiB, JSON 0.66 MB; pee
 227 MiB, 58.85 MB; time ratio 0.49. An earlier run at lower load, before the default noise model became
 "auto": 2.95 s vs 5.71 s.
 
-Measured 2026-12-02 against the commit before issue 17's first change (83c235a, ``/tmp/peer17/src``; 2 rounds,
-load 9-10, so the times are inflated several-fold and only the ratio means something): this tree 20.49 / 6.49 s,
+Measured 2026-12-02 at load 2 against the commit before issue 17's first change (83c235a, ``/tmp/peer17/src``;
+2 rounds): this tree 1.82 / 1.65 s, peer 3.59 / 3.73 s, time ratio 0.51 / 0.44 (median 0.47); memory and JSON as
+below. Earlier at load 9-10 (times inflated several-fold): this tree 20.49 / 6.49 s,
 peer 34.00 / 18.71 s, time ratio 0.60 / 0.35; allocation peak 185 vs 227 MiB (0.82); whole-process max RSS 479
 vs 837 MiB, of which 282 vs 190 MiB before the estimate (imports and the simulation of the data); JSON 0.01 vs
 58.85 MB. ``bench_masscm_long_cli.py`` measures the whole command instead.

@@ -12,7 +12,10 @@ JSON), the peer (default ``/tmp/peer17/src``, a checkout of 83c235a, before issu
 writing), its peak resident set (``os.wait4``), the size of what it wrote; rounds alternate the order. What a
 user of the command sees, where ``bench_masscm_long.py`` isolates the estimate.
 
-Measured 2026-12-02 (load 8-10, times inflated several-fold; 2 rounds): this tree 30.97 / 63.86 s, max RSS
+Measured 2026-12-02 at load 2 (2 rounds): this tree 7.76 / 8.80 s, max RSS 468 MiB, result JSON 1.02 MB; peer
+15.58 / 16.95 s, 763 MiB; time ratio median 0.51. Of this tree's ~8 s, reading the three CSV files takes ~3-4.5 s
+(a Python float() per cell in ``data.io._read_csv``), the imports ~1.5-3 s, the estimate ~1.8 s
+(``bench_masscm_long.py``). Earlier at load 8-10: this tree 30.97 / 63.86 s, max RSS
 468 MiB (491 MB), result JSON 1.02 MB; peer (83c235a) 33.14 / 99.27 s, max RSS 763 MiB, ``--json`` output 91.3 MB
 (the issue's "0.79 GB and 92 MB" are these whole-process figures); time ratio median 0.79. Of this tree's 468
 MiB: 196 MiB after the imports (numpy 25, scipy +73, numba +53, the package +45), the estimate's own allocation
