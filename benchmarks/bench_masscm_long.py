@@ -8,20 +8,30 @@ Each code tree is measured in a fresh process, one after the other (one core: BL
 * ``this tree``: the ``shipid`` this script imports (``PYTHONPATH``);
 * ``peer``: another checkout's ``src`` (default ``/work/main/src``, the code before this change), if present.
 
-Printed per tree: wall time of :func:`shipid.methods.masscm.estimator.estimate_mass_cm`, the peak of memory allocated
-during it (``tracemalloc``, numpy included), the process's peak resident set, the size of the result JSON, and
-the estimate of m; then the ratios this/peer. Targets of issue 17 for 1 h: <= 5 s, <= 400 MB, JSON <= 2 MB.
+Printed per tree: wall time of :func:`shipid.methods.masscm.estimator.estimate_mass_cm` (without ``tracemalloc``,
+whose bookkeeping slows it), the peak of memory allocated during a second, identical estimate (``tracemalloc``,
+numpy included), the process's peak resident set (after the simulation and after the timed estimate), the size
+of the result JSON, and the estimate of m; then the ratios this/peer. ROUNDS > 1 repeats the pair in
+alternating order and prints the median time ratio. Targets of issue 17 for 1 h: <= 5 s, <= 400 MB, JSON <= 2 MB.
 
 Measured 2026-12-01 on the shared 2-core VM (load 8-9 from other jobs, so absolute times are inflated;
 compare the ratio): this tree 8.48 s, allocation peak 185 MiB, JSON 0.66 MB; peer (/work/main) 17.19 s,
 227 MiB, 58.85 MB; time ratio 0.49. An earlier run at lower load, before the default noise model became
 "auto": 2.95 s vs 5.71 s.
 
-Usage:  python benchmarks/bench_masscm_long.py [DURATION_S=3600] [PEER_SRC=/work/main/src]
+Measured 2026-12-02 at load 2 against the commit before issue 17's first change (83c235a, ``/tmp/peer17/src``;
+2 rounds): this tree 1.82 / 1.65 s, peer 3.59 / 3.73 s, time ratio 0.51 / 0.44 (median 0.47); memory and JSON as
+below. Earlier at load 9-10 (times inflated several-fold): this tree 20.49 / 6.49 s,
+peer 34.00 / 18.71 s, time ratio 0.60 / 0.35; allocation peak 185 vs 227 MiB (0.82); whole-process max RSS 479
+vs 837 MiB, of which 282 vs 190 MiB before the estimate (imports and the simulation of the data); JSON 0.01 vs
+58.85 MB. ``bench_masscm_long_cli.py`` measures the whole command instead.
+
+Usage:  python benchmarks/bench_masscm_long.py [DURATION_S=3600] [PEER_SRC=/work/main/src] [ROUNDS=1]
 """
 
 import json
 import os
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -33,7 +43,10 @@ import numpy as np
 import shipid
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.models.roll_reduced import KnownParams
-from shipid.methods.masscm.estimator import estimate_mass_cm
+try:
+    from shipid.methods.masscm.estimator import estimate_mass_cm
+except ImportError:                       # a peer from before the masscm package split
+    from shipid.methods.masscm import estimate_mass_cm
 warnings.simplefilter("ignore")
 T = float(sys.argv[1])
 d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=T, noise=NoiseSpec.issue3())
@@ -41,10 +54,12 @@ known = KnownParams.from_vessel("fishing-vessel")
 rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 with threadpool_limits(1):
     estimate_mass_cm(list(simulate_datasets("fishing-vessel", seed=1, duration=60.0).items()), known, z_f=-0.028)
-    tracemalloc.start()
     t0 = time.perf_counter()
-    r = estimate_mass_cm(list(d.items()), known, z_f=-0.028)
-    wall = time.perf_counter() - t0
+    r = estimate_mass_cm(list(d.items()), known, z_f=-0.028)       # timed without tracemalloc (it slows numpy
+    wall = time.perf_counter() - t0                                  # allocation-heavy code)
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    tracemalloc.start()
+    estimate_mass_cm(list(d.items()), known, z_f=-0.028)              # the same estimate again, for its peak
     peak = tracemalloc.get_traced_memory()[1] / 2**20
     tracemalloc.stop()
 t1 = time.perf_counter()
@@ -52,7 +67,7 @@ n_json = len(r.to_json(indent=None))
 json_s = time.perf_counter() - t1
 print(json.dumps({"src": shipid.__file__, "wall_s": wall, "alloc_peak_mib": peak, "json_mb": n_json / 1e6,
                   "json_s": json_s, "maxrss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "maxrss_before_mib": rss0, "m": r.value("m"), "m_std": r.std("m"),
+                  "maxrss_before_mib": rss0, "maxrss_after_first_mib": rss1, "m": r.value("m"), "m_std": r.std("m"),
                   "implausible": r.diagnostics["implausible"]}))
 """
 
@@ -68,20 +83,29 @@ def main():
     duration = float(sys.argv[1]) if len(sys.argv) > 1 else 3600.0
     peer = sys.argv[2] if len(sys.argv) > 2 else "/work/main/src"
     here = str(Path(__file__).resolve().parents[1] / "src")
+    rounds = int(sys.argv[3]) if len(sys.argv) > 3 else 1
     trees = [("this tree", here)] + ([("peer", peer)] if Path(peer).is_dir() else [])
-    rows = {label: measure(src, duration) for label, src in trees}
     print(f"identify mass-cm, 3 datasets x {duration:g} s at 50 Hz, issue-3 noise, z_f known, one core")
-    print(f"{'':10s} {'wall s':>8s} {'alloc peak MiB':>15s} {'max RSS MiB':>12s} {'(before)':>9s} {'JSON MB':>8s} "
-          f"{'m':>9s}  src")
-    for label, r in rows.items():
-        print(f"{label:10s} {r['wall_s']:8.2f} {r['alloc_peak_mib']:15.1f} {r['maxrss_mib']:12.1f} "
-              f"{r['maxrss_before_mib']:9.1f} {r['json_mb']:8.2f} {r['m']:9.5f}  {r['src']}")
-    print("(alloc peak: memory allocated during estimate_mass_cm; max RSS: the whole process, (before) = after "
-          "imports and the simulation of the data, before the estimate)")
-    if "peer" in rows:
-        a, b = rows["this tree"], rows["peer"]
-        print(f"ratio this/peer: time {a['wall_s'] / b['wall_s']:.2f}, allocation peak "
-              f"{a['alloc_peak_mib'] / b['alloc_peak_mib']:.2f}, JSON {a['json_mb'] / b['json_mb']:.3f}")
+    print(f"{'':10s} {'wall s':>8s} {'alloc peak MiB':>15s} {'max RSS MiB':>12s} {'(before)':>9s} {'(1st)':>7s} "
+          f"{'JSON MB':>8s} {'m':>9s}  load  src")
+    ratios = []
+    for k in range(rounds):                   # alternate the order so that a drifting load favours neither tree
+        rows = {}
+        for label, src in (trees if k % 2 == 0 else trees[::-1]):
+            rows[label] = r = measure(src, duration)
+            print(f"{label:10s} {r['wall_s']:8.2f} {r['alloc_peak_mib']:15.1f} {r['maxrss_mib']:12.1f} "
+                  f"{r['maxrss_before_mib']:9.1f} {r['maxrss_after_first_mib']:7.1f} {r['json_mb']:8.2f} "
+                  f"{r['m']:9.5f}  {os.getloadavg()[0]:4.1f}  {r['src']}", flush=True)
+        if "peer" in rows:
+            a, b = rows["this tree"], rows["peer"]
+            ratios.append(a["wall_s"] / b["wall_s"])
+            print(f"ratio this/peer: time {ratios[-1]:.2f}, allocation peak "
+                  f"{a['alloc_peak_mib'] / b['alloc_peak_mib']:.2f}, JSON {a['json_mb'] / b['json_mb']:.3f}", flush=True)
+    print("(wall: estimate_mass_cm without tracemalloc; alloc peak: memory allocated during the same estimate, run "
+          "again under tracemalloc; max RSS: the whole process, (before) = after imports and the simulation of the "
+          "data, (1st) = after the timed estimate)")
+    if ratios:
+        print(f"median time ratio this/peer over {len(ratios)} round(s): {statistics.median(ratios):.2f} (each {', '.join(f'{x:.2f}' for x in ratios)})")
     else:
         print(f"(no peer tree at {peer}: nothing to compare with)")
 

@@ -244,6 +244,10 @@ def _coverage_table(s: dict, regime: str, duration: float, seed: int) -> None:
                    f"{q['mean_std']:9.3g} {q['bound'] or float('nan'):9.3g} "
                    f"{ratio if ratio is not None else float('nan'):8.3g} {ci_s:>13s} {q['coverage_2std']:8.2f}")
     click.echo(f"  (* over the {s['used_unflagged']} converged, unflagged runs)")
+    fr = s["flag_rate"]
+    click.echo(f"  flagged implausible: {fr['flagged']} of {fr['of']} = {100 * fr['rate']:.1f} % (one-sided 95 % "
+               f"upper limit {100 * fr['upper95']:.1f} %); nuisance K_vdot/K_r/K_delta outside their physical "
+               f"range (reported, not flagged): {s['nuisance_outside_physical']}")
 
 
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")

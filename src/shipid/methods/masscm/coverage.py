@@ -110,6 +110,7 @@ REGIMES = {
     "both": NoiseSpec.issue3(),
 }
 QUANTITIES = ("m", "zm_bar", "rho")
+NUISANCE = ("K_vdot", "K_r", "K_delta")
 
 
 @functools.lru_cache(maxsize=4)
@@ -125,7 +126,8 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
             noise_model: str = "ar", compute: str = "fast") -> dict:
     """One realisation: datasets from ``SeedSequence([seed, i])`` in ``regime``, then Algorithm 1 (z_f known).
 
-    Returns ``m, zm_bar, rho`` and their standard errors, ``converged``, ``implausible``, ``iterations``.
+    Returns ``m, zm_bar, rho`` and their standard errors, ``K_vdot, K_r, K_delta``, ``converged``,
+    ``implausible`` (with ``implausible_reasons``), ``nuisance_outside_physical``, ``iterations``.
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
     """
     if regime not in REGIMES:
@@ -141,8 +143,12 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
     out = {}
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = float(r.value(k)), float(r.std(k))
+    for k in NUISANCE:                   # weakly determined (finite-sample IV bias): reported, not judged
+        out[k] = float(r.value(k))
     out.update({"converged": bool(r.diagnostics["converged"]), "iterations": int(r.diagnostics["iterations"]),
                 "implausible": bool(r.diagnostics["implausible"]),
+                "implausible_reasons": list(r.diagnostics.get("implausible_reasons", [])),
+                "nuisance_outside_physical": bool(r.diagnostics.get("nuisance_outside_physical")),
                 "noise_model": r.diagnostics.get("noise_model_selected", noise_model)})
     return out
 
@@ -163,6 +169,8 @@ def summarise(outputs: list, *, regime: str, duration: float, vessel: str = "fis
     return {"study": "mass-cm-coverage", "regime": regime, "noise": REGIMES[regime].__dict__,
             "duration_s": duration, "runs": len(outputs), "failed": len(outputs) - len(ok), "used": len(fin),
             "flagged_implausible": sum(1 for o in ok if o["implausible"]),
+            "flag_rate": _rate(sum(1 for o in ok if o["implausible"]), len(ok)),
+            "nuisance_outside_physical": sum(1 for o in ok if o.get("nuisance_outside_physical")),
             "not_converged": sum(1 for o in ok if not o["converged"]),
             "quantities": _stats(fin, vessel, bound),
             # the same over the runs the estimator itself reports as usable (converged, not flagged): what a
@@ -196,6 +204,13 @@ def _stats(fin: list, vessel: str, bound: dict | None) -> dict:
                 "spread_mad": mad, "spread_mad_over_bound": mad / b if b and n > 1 else None,
                 "mean_within_one_spread": bool(abs(v.mean() - truth[k]) <= spread) if n > 1 else None}
     return q
+
+
+def _rate(k: int, n: int) -> dict:
+    """Share ``k/n`` of flagged runs with its one-sided 95 % Clopper-Pearson upper limit."""
+    from scipy.stats import beta
+    upper = 1.0 if k >= n else float(beta.ppf(0.95, k + 1, n - k))
+    return {"flagged": k, "of": n, "rate": k / n if n else float("nan"), "upper95": upper if n else float("nan")}
 
 
 def _ratio_ci(ratio: float, n: int) -> list:
