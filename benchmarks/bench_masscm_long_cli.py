@@ -22,6 +22,10 @@ MiB: 196 MiB after the imports (numpy 25, scipy +73, numba +53, the package +45)
 peak 185 MiB (``bench_masscm_long.py``), and what reading the 55 MB of CSV leaves behind (reading alone takes the
 process to 410 MiB: ``data.io._read_csv`` holds every row's cell strings at once).
 
+With numpy's compiled reader for rows of the header's field count (``data.io._read_csv``), against the tree just
+before it (2026-12-02, load 3-5, 2 rounds): 16.65 / 26.77 s vs 36.66 / 34.07 s, time ratio median 0.62; max RSS
+437 MiB in both, so the peak is the estimate's, not the reading's.
+
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2]
 """
 

@@ -191,3 +191,27 @@ def test_cli_check_and_convert(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "output file exists (use --force to overwrite)" in err[0]
     assert main(["convert", str(GOOD / "simple.csv"), str(dest), "--force"]) == 0
+
+
+def test_compiled_csv_path_gives_the_doubles_float_gives(tmp_path):
+    """Rows with the header's field count go through numpy's reader: the same doubles as ``float()`` of
+    each cell (decimal strings of 17 and of 6 significant digits, signs, exponents)."""
+    rng = np.random.default_rng(7)
+    X = rng.standard_normal((2000, 3)) * np.array([1e-9, 1.0, 1e7])
+    X[:, 0] = np.arange(2000) * 0.02
+    rows = [[repr(float(v)) for v in r] for r in X[:1000]] + [[f"{v:+.6g}" for v in r] for r in X[1000:]]
+    p = tmp_path / "a.csv"
+    p.write_text("t [s],x [m],y [m]\n" + "\n".join(",".join(r) for r in rows) + "\n")
+    tr = read_trial(p)
+    want = np.array([[float(c) for c in r] for r in rows])
+    assert np.array_equal(tr.t, want[:, 0])
+    for j, ch in ((1, "x"), (2, "y")):
+        assert np.array_equal(tr[ch], want[:, j])
+
+
+def test_a_bad_cell_still_names_channel_and_row(tmp_path):
+    p = tmp_path / "b.csv"
+    p.write_text("t [s],x [m]\n0,1\n0.1,2\n0.2,x7\n")
+    with pytest.raises(InputError, match="row 3") as e:
+        read_trial(p)
+    assert "x" in str(e.value) and "x7" in str(e.value)

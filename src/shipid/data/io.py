@@ -385,6 +385,17 @@ def _read_csv(p: Path, label: str) -> RawTable:
     if dialect.decimal == ",":
         data_lines = [line.replace(",", ".") for line in data_lines]
     ncol = len(names)
+    meta = {"encoding": enc, "csv_dialect": dialect.as_meta()}
+    if not quoted and ncol > 1 and all(line.count(sep) == ncol - 1 for line in data_lines):
+        # every row has the header's field count: numpy's compiled reader, whose float parsing is
+        # correctly rounded as float() is (the same doubles); any cell it refuses (empty, '1_0', text)
+        # falls through to the cell-by-cell path below, which names the file, channel and row
+        try:
+            data = np.loadtxt(data_lines, delimiter=sep, dtype=np.float64, ndmin=2, comments=None)
+        except ValueError:
+            pass
+        else:
+            return RawTable(names, units, data, np.arange(1, len(data_lines) + 1), meta)
     if quoted:
         cells = list(csv.reader(data_lines, delimiter=sep))
     else:
@@ -400,8 +411,7 @@ def _read_csv(p: Path, label: str) -> RawTable:
             data[i] = [float(c) for c in row]
         except ValueError:
             data[i] = [_cell(c, label, names[j], i + 1) for j, c in enumerate(row)]
-    return RawTable(names, units, data, np.arange(1, len(cells) + 1),
-                  {"encoding": enc, "csv_dialect": dialect.as_meta()})
+    return RawTable(names, units, data, np.arange(1, len(cells) + 1), meta)
 
 
 def _cell(c: str, label: str, channel: str, row: int) -> float:
