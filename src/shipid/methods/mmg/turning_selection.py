@@ -1,0 +1,279 @@
+"""Structure selection for the KVLCC2 (Yasukawa 2015 structure) on what a turning circle measures.
+
+``shipid identify mmg --prior kvlcc2_hsva`` chooses among :data:`TURNING_CANDIDATES` by
+:func:`select_for_turning`, a leave-one-run-out (or ``folds``-fold) cross-validation over
+the TRAINING runs whose fold errors are those of an open-loop replay of each left-out run
+(:func:`shipid.methods.mmg.extrapolation.replay`: the measured rudder and propeller replayed
+from the measured state at execute over the whole run, the way a turning circle of another
+basin is predicted):
+
+* the relative error of the peak yaw rate reached on each side (%), the quantity that sets
+  a turning circle's diameter (``D ≈ 2 U / r`` in the steady turn), and
+* the RMS heading error over the whole replay (deg),
+
+pooled over all folds' left-out zig-zags with a switch heading of
+:data:`~shipid.methods.mmg.side_calibration.MIN_SWITCH_DEG` or more (the 1°-switch runs
+are excluded a priori, as in :mod:`shipid.methods.mmg.side_calibration`; a run whose
+file name does not give its angles is kept). Score = RMS over runs and sides of the
+peak-yaw-rate errors (%) + RMS over runs of the heading RMS (deg), the score of
+:mod:`shipid.methods.mmg.extrapolation` (lower is better; the first listed on a tie).
+
+Candidates (fixed a priori; a full factorial over the first three axes):
+free set (``full``, ``linear-hull+rudder``, ``hull-only``) × flow straightening γ_R (the
+prior's per-side values | their symmetric mean) × rudder normal force (standard ``f_α sin α_R``
+| with the cross-flow drag part ``C_Dc sin α_R |sin α_R|``, ``C_Dc = 1`` fixed after Hoerner,
+Fluid-Dynamic Lift 1985 ch. 3, not tuned; ``rudder_crossflow`` of
+:func:`shipid.models.mmg_forces.basis_yasukawa`), plus, for the three free sets with symmetric
+γ_R and ``C_Dc = 1``, the port/starboard rudder effectiveness ``F_N (1 + s sign δ)``
+(``rudder_side_gain``) calibrated on the training runs' peak yaw rates
+(:func:`shipid.methods.mmg.side_calibration.calibrate`: grid
+:data:`~shipid.methods.mmg.side_calibration.SIDE_GAIN_GRID` refined by a parabola). The
+first six are the frozen list :data:`shipid.methods.mmg.candidates.CANDIDATES` of the
+``yasukawa2015`` structure, which stays unchanged (the frozen ``kvlcc2-zigzag`` study and
+its fingerprint use it).
+
+A calibrated candidate is calibrated INSIDE each fold on that fold's training runs only
+(and, for the identified model, on all training runs): the left-out runs never enter its
+side gain. The replays of all candidates, folds and grid values are integrated together,
+one RK4 batch per structure and particulars (the side gain varies per row;
+:func:`shipid.methods.mmg.manoeuvres.rows_rk4`).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace as _replace
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.errors import InputError, ShipidError
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import manoeuvres as MM
+from shipid.methods.mmg import validate as V
+from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
+from shipid.methods.mmg.side_calibration import MIN_SWITCH_DEG, SIDE_GAIN_GRID, refine_minimum, with_asymmetry
+from shipid.methods.mmg.zigzag import execute_index, zigzag_angles
+from shipid.models import mmg
+
+#: Key of a candidate whose particular of that name is calibrated on the training runs.
+CALIBRATE = "calibrate"
+#: The calibrated particular (port/starboard rudder effectiveness).
+PARAMETER = "rudder_side_gain"
+
+
+def turning_candidates() -> dict[str, dict]:
+    """The frozen six, each with ``C_Dc = 1``, and three side-gain-calibrated ones: 15 (module docstring)."""
+    base = CANDIDATES["yasukawa2015"]
+    out = dict(base)
+    for name, c in base.items():
+        out[name + "/rudder-crossflow-1"] = dict(c, particulars=dict(c.get("particulars") or {},
+                                                                     rudder_crossflow=1.0))
+    for free in ("full", "linear-hull+rudder", "hull-only"):
+        out[free + "/symmetric-gamma_R/rudder-crossflow-1/side-gain-calibrated"] = dict(
+            out[free + "/symmetric-gamma_R/rudder-crossflow-1"], **{CALIBRATE: PARAMETER})
+    return out
+
+
+#: Candidates of the turning selection per prior structure.
+TURNING_CANDIDATES: dict[str, dict[str, dict]] = {"yasukawa2015": turning_candidates()}
+
+
+# ----------------------------------------------------------------------------- batched replays
+def replay_data(tr: Trial) -> dict[str, Any]:
+    """What :func:`shipid.methods.mmg.extrapolation.replay` integrates: state at execute, inputs, steps."""
+    Z = V.measured_states(tr)
+    U = V.trial_inputs(tr)
+    k0 = execute_index(tr["delta"])
+    t = np.asarray(tr.t[k0:], float)
+    return {"x0": Z[k0], "U": U[k0:], "h": np.diff(t), "psi": Z[k0:, 2], "r": Z[k0:, 5], "n": int(t.size)}
+
+
+def _group_key(m: mmg.MmgModel) -> str:
+    return m.structure + json.dumps({k: float(v) for k, v in sorted(m.particulars.items()) if k != PARAMETER})
+
+
+def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mapping]) -> list[dict[str, float]]:
+    """The :func:`~shipid.methods.mmg.extrapolation.replay` numbers (``psi_rms``, ``r_peak_{stbd,port}_err_pct``)
+    of every row ``(model, run index into data)``, integrated as one batch per structure and particulars."""
+    out: list[dict[str, float] | None] = [None] * len(rows)
+    groups: dict[str, list[int]] = {}
+    for j, (m, _) in enumerate(rows):
+        groups.setdefault(_group_key(m), []).append(j)
+    for js in groups.values():
+        D = [data[rows[j][1]] for j in js]
+        L = max(d["n"] for d in D)
+        m0 = rows[js[0]][0]
+        sg = np.array([float(rows[j][0].particulars.get(PARAMETER, 0.0)) for j in js])
+        m0 = _replace(m0, particulars=dict(m0.particulars, **{PARAMETER: sg}))
+        Th = {md: np.stack([np.asarray(rows[j][0].theta(md), float) for j in js]) for md in mmg.MODES}
+        U = np.stack([np.pad(d["U"], [(0, L - d["n"]), (0, 0)], mode="edge") for d in D])
+        h = np.stack([np.pad(d["h"], (0, L - d["n"]), mode="edge") for d in D])
+        x = np.stack([d["x0"] for d in D]).astype(float)
+        psi, r = np.empty((len(js), L)), np.empty((len(js), L))
+        psi[:, 0], r[:, 0] = x[:, 2], x[:, 5]
+        with np.errstate(all="ignore"):
+            for k in range(L - 1):
+                u = U[:, k]
+                x = MM.rows_rk4(m0, Th, x, u[:, 0], u[:, 1], h[:, k:k + 1], wind=(u[:, 2], u[:, 3]))
+                psi[:, k + 1], r[:, k + 1] = x[:, 2], x[:, 5]
+        for b, (j, d) in enumerate(zip(js, D)):
+            n = d["n"]
+            e = np.degrees(np.unwrap(psi[b, :n]) - np.unwrap(d["psi"]))
+            row = {"psi_rms": float(np.sqrt(np.mean(e ** 2))) if np.all(np.isfinite(e)) else float("inf")}
+            xr, zr = r[b, :n], d["r"]
+            for side, s in (("stbd", 1.0), ("port", -1.0)):
+                m_pk = float(np.max(s * zr))
+                p_pk = float(np.max(s * xr)) if np.all(np.isfinite(xr)) else float("nan")
+                row[f"r_peak_{side}_err_pct"] = 100.0 * (p_pk - m_pk) / m_pk if np.isfinite(p_pk) else float("inf")
+            out[j] = row
+    return out  # type: ignore[return-value]
+
+
+def peak_runs(trials: Sequence[Trial]) -> list[bool]:
+    """Per run: does its peak yaw rate enter the criteria (switch ≥ MIN_SWITCH_DEG, or angles unknown)."""
+    ok = []
+    for tr in trials:
+        try:
+            ok.append(bool(np.degrees(zigzag_angles(Path(str(tr.meta.get("source", ""))).name)[1])
+                           >= MIN_SWITCH_DEG - 1e-9))
+        except InputError:
+            ok.append(True)
+    return ok
+
+
+def _fit(runs, prior, cand, config):
+    cprior, free = apply_candidate(prior, cand)
+    try:
+        return R.fit(runs, cprior, free, candidate_config(config, cand)).model
+    except (ShipidError, ValueError, np.linalg.LinAlgError):
+        return None
+
+
+def _peak_rms(results: Sequence[Mapping]) -> float:
+    e = np.array([r[f"r_peak_{s}_err_pct"] for r in results for s in ("stbd", "port")], float)
+    return float(np.sqrt(np.mean(e ** 2))) if e.size and np.all(np.isfinite(e)) else float("inf")
+
+
+# ----------------------------------------------------------------------------- calibration per fold
+def calibrate_folds(runs: Sequence[R.SmoothedRun], data: Sequence[Mapping], use: Sequence[bool],
+                    prior: mmg.MmgModel, cand: Mapping, train_sets: Sequence[Sequence[int]], *,
+                    config: R.FitConfig = R.FitConfig(), grid: Sequence[float] = SIDE_GAIN_GRID,
+                    parameter: str = PARAMETER) -> list[tuple[float, dict[float, float]]]:
+    """:func:`shipid.methods.mmg.side_calibration.calibrate` (grid, then the parabola's vertex kept if it
+    scores lower) once per training set, each on ITS runs only (indices into ``runs``/``data``), with the
+    replays of all training sets batched. Returns ``(value, {value tried: peak score})`` per set."""
+    def scores(todo):           # todo: list of (set index, value) -> peak score of each
+        rows, owner, res = [], [], {}
+        for key in todo:
+            s, a = key
+            m = _fit([runs[i] for i in train_sets[s]], prior, with_asymmetry(cand, a, parameter), config)
+            idx = [i for i in train_sets[s] if use[i]]
+            if m is None or not idx:
+                res[key] = float("inf")
+                continue
+            for i in idx:
+                rows.append((m, i))
+                owner.append(key)
+        rep = batch_replay(rows, data)
+        per: dict = {}
+        for key, r in zip(owner, rep):
+            per.setdefault(key, []).append(r)
+        res.update({k: _peak_rms(v) for k, v in per.items()})
+        return res
+
+    first = scores([(s, float(a)) for s in range(len(train_sets)) for a in grid])
+    tables = [{float(a): first[(s, float(a))] for a in grid} for s in range(len(train_sets))]
+    best = [min(t, key=lambda a: t[a]) for t in tables]
+    todo = []
+    for s, t in enumerate(tables):
+        g = sorted(t)
+        i = g.index(best[s])
+        if 0 < i < len(g) - 1 and all(np.isfinite(t[g[j]]) for j in (i - 1, i, i + 1)):
+            todo.append((s, refine_minimum(g[i - 1:i + 2], [t[g[j]] ** 2 for j in (i - 1, i, i + 1)])))
+    second = scores(todo)
+    for (s, a), sa in second.items():
+        tables[s][a] = sa
+        if sa < tables[s][best[s]]:
+            best[s] = a
+    return [(best[s], tables[s]) for s in range(len(train_sets))]
+
+
+def resolve(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping,
+            config: R.FitConfig = R.FitConfig()) -> tuple[dict, dict | None]:
+    """The candidate to fit on all training runs: a calibrated one with its particular calibrated on them
+    (and the calibration's table), any other unchanged (and None)."""
+    par = cand.get(CALIBRATE)
+    if not par:
+        return dict(cand), None
+    data = [replay_data(tr) for tr in trials]
+    (a, table), = calibrate_folds(runs, data, peak_runs(trials), prior, cand, [list(range(len(runs)))],
+                                  config=config, parameter=par)
+    c = with_asymmetry(cand, a, par)
+    c.pop(CALIBRATE, None)
+    return c, {"parameter": par, "value": a, "training_peak_score": {f"{k:g}": v for k, v in sorted(table.items())},
+               "criterion": "RMS over the training zig-zags with switch >= 5 deg and both sides of the open-loop "
+                            "peak-yaw-rate error (%)"}
+
+
+# ----------------------------------------------------------------------------- selection
+METHOD = ("CV on the training runs ({folds}); each left-out zig-zag replayed open loop (measured rudder and "
+          "propeller from the measured state at execute); a side-gain-calibrated candidate is calibrated in each "
+          "fold on that fold's training runs only; score = RMS over left-out runs (switch >= 5 deg) and sides of "
+          "the peak-yaw-rate error (%) + RMS of their heading RMS (deg)")
+
+
+def select_for_turning(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel,
+                       candidates: Mapping[str, Mapping], config: R.FitConfig = R.FitConfig(),
+                       folds: int | None = None) -> tuple[str, dict[str, dict], str]:
+    """The ``selector`` of :func:`shipid.methods.mmg.pipeline.identify` for turning (module docstring).
+
+    Returns the chosen name, the table (per candidate: ``score``, ``r_peak_rms`` %, ``psi_rms`` deg,
+    the mean peak error per side %, the side gains calibrated per fold, ``folds``, ``count``) and the
+    method line."""
+    groups = R.fold_groups(len(runs), folds)
+    data = [replay_data(tr) for tr in trials]
+    use = peak_runs(trials)
+    sets = [[i for i in range(len(runs)) if i not in g] for g in groups]
+    rows, owner, table = [], [], {}
+    for cname, cand in candidates.items():
+        cal = None
+        if cand.get(CALIBRATE):
+            cal = calibrate_folds(runs, data, use, prior, cand, sets, config=config, parameter=cand[CALIBRATE])
+        failed = False
+        for f, (g, tr_idx) in enumerate(zip(groups, sets)):
+            c = with_asymmetry(cand, cal[f][0], cand[CALIBRATE]) if cal else cand
+            m = _fit([runs[i] for i in tr_idx], prior, c, config) if tr_idx else None
+            if m is None:
+                failed = True
+                continue
+            for i in g:
+                if use[i]:
+                    rows.append((m, i))
+                    owner.append(cname)
+        table[cname] = {"failed": failed, "calibrated": [c[0] for c in cal] if cal else None}
+    per: dict[str, list] = {}
+    for cname, r in zip(owner, batch_replay(rows, data)):
+        per.setdefault(cname, []).append(r)
+    out: dict[str, dict] = {}
+    for cname in candidates:
+        res = per.get(cname, [])
+        pk = _peak_rms(res)
+        psi = np.array([r["psi_rms"] for r in res], float)
+        psi_rms = float(np.sqrt(np.mean(psi ** 2))) if psi.size and np.all(np.isfinite(psi)) else float("inf")
+        score = pk + psi_rms if res and not table[cname]["failed"] else float("inf")
+        row = {"score": float(score) if np.isfinite(score) else float("inf"), "r_peak_rms": pk, "psi_rms": psi_rms,
+               "r_peak_stbd_mean_pct": float(np.mean([r["r_peak_stbd_err_pct"] for r in res])) if res else float("nan"),
+               "r_peak_port_mean_pct": float(np.mean([r["r_peak_port_err_pct"] for r in res])) if res else float("nan"),
+               "folds": len(groups), "count": len(res)}
+        if table[cname]["calibrated"] is not None:
+            row["calibrated_per_fold"] = {PARAMETER: table[cname]["calibrated"]}
+        out[cname] = row
+    best = min(out, key=lambda c: out[c]["score"])
+    return best, out, METHOD.format(folds="leave-one-run-out" if folds is None else f"{folds}-fold")
+
+
+__all__ = ["CALIBRATE", "PARAMETER", "TURNING_CANDIDATES", "turning_candidates", "replay_data", "batch_replay",
+           "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD"]
