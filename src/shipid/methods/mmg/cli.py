@@ -266,9 +266,9 @@ def _print_result(res) -> None:
         for c, row in sel["table"].items():
             mark = "  <-" if c == res.model.get("structure_candidate") else ""
             click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs) + mark)
-        cal = sel.get("calibration")
-        if cal:
-            click.echo(f"  {cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")
+    cal = res.diagnostics.get("calibration")
+    if cal:
+        click.echo(f"{cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")
     click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10} {'unit':>5}  status")
     for k, e in res.estimates.items():
         click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g} {e.unit:>5}  {e.status}")

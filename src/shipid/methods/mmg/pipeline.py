@@ -187,7 +187,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``resolve(trials, runs, prior, candidate, config) -> (candidate, info)``: the candidate to fit
         on all training runs (e.g. with a particular calibrated on them,
         :func:`shipid.methods.mmg.turning_selection.resolve`); ``info`` (or None) is kept in
-        ``diagnostics["structure_selection"]["calibration"]``. It receives the training runs only.
+        ``diagnostics["calibration"]``. It receives the training runs only.
     refine : {"none", "output-error", "auto"}
         ``"output-error"``: refine the chosen structure's regression estimate on the
         training runs' restarted 60-s horizons (:func:`shipid.methods.mmg.output_error.refined_fit`);
@@ -216,11 +216,9 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         structure = next(iter(cands))
     if structure not in cands:
         raise InputError(f"unknown structure '{structure}' (choose from {', '.join(cands)})")
-    cand = cands[structure]
+    cand, cal = cands[structure], None
     if resolve is not None:
         cand, cal = resolve(trials, runs, prior, cand, fit_config)
-        if cal is not None:
-            selection = dict(selection or {}, calibration=cal)
     cprior, free = apply_candidate(prior, cand)
     fit_config = candidate_config(fit_config, cand)
     f = f_reg = fit(runs, cprior, free, fit_config, name=name)
@@ -253,6 +251,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
                        overrides=cand.get("particulars"),
                        covariance=_covariance(f_reg, f, runs, cprior, fit_config, oe))
     res.model["training_conditions"] = training_conditions(trials)
+    if cal is not None:
+        res.diagnostics["calibration"] = cal
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
     if oe is not None:
