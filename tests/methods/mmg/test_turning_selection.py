@@ -112,3 +112,17 @@ def test_selection_and_calibration_read_only_training_runs(setup, monkeypatch):
     assert tests == 2 * sum(T.peak_runs(trials))
     assert best in cands and np.isfinite(table[best]["score"])
     assert len(table["calibrated"]["calibrated_per_fold"]["rudder_side_gain"]) == n
+
+
+def test_identify_fits_a_calibrated_candidate_with_the_gain_calibrated_on_its_runs(setup):
+    from shipid.methods.mmg import pipeline as P
+
+    prior, trials, runs = setup
+    res = P.identify(trials[:3], prior, structure="cal", candidates={"cal": CAL}, resolve=T.resolve, refine="none")
+    cal = res.diagnostics["calibration"]
+    (a, _), = T.calibrate_folds(runs[:3], [T.replay_data(t) for t in trials[:3]], T.peak_runs(trials[:3]), prior,
+                                CAL, [[0, 1, 2]])
+    assert cal["parameter"] == "rudder_side_gain" and cal["value"] == a
+    assert res.model["particulars"]["rudder_side_gain"] == a
+    assert res.model["particular_overrides"]["rudder_side_gain"] == a
+    assert res.model["particulars"]["rudder_crossflow"] == 1.0
