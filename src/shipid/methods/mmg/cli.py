@@ -3,7 +3,10 @@
 * ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
-  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
+  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline); ``--selection``: the
+  structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`) or, for the
+  Yasukawa-2015 structure (KVLCC2) by default, by what a turning circle measures
+  (:mod:`shipid.methods.mmg.turning_selection`)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
 * ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
