@@ -139,3 +139,17 @@ def test_cli_turning_selection_refuses_a_structure_without_turning_candidates(ca
                "--selection", "turning", "--json"])
     err = capsys.readouterr().err
     assert rc == 2 and "no turning candidates for the structure 'esso-lowspeed'" in err and "Traceback" not in err
+
+
+def test_criteria_scores(setup):
+    """'peak': the pooled peak-yaw-rate RMS; 'peak+heading': that plus the pooled heading RMS; same table else."""
+    prior, trials, runs = setup
+    cands = {"plain": dict(FREE), "sym": dict(FREE, particulars={"gamma_R": "symmetric"})}
+    _, a, m1 = T.select_for_turning(trials, runs, prior, cands)
+    _, b, m2 = T.select_for_turning(trials, runs, prior, cands, criterion="peak+heading")
+    for c in cands:
+        assert a[c]["score"] == a[c]["r_peak_rms"] and b[c]["score"] == b[c]["r_peak_rms"] + b[c]["psi_rms"]
+        assert a[c]["psi_rms"] == b[c]["psi_rms"] > 0
+    assert "heading" not in m1 and "heading RMS" in m2
+    with pytest.raises(Exception, match="unknown selection criterion"):
+        T.select_for_turning(trials, runs, prior, cands, criterion="psi")
