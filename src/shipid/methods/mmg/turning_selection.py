@@ -259,7 +259,9 @@ def resolve(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.M
     c.pop(CALIBRATE, None)
     return c, {"parameter": par, "value": a, "training_peak_score": {f"{k:g}": v for k, v in sorted(table.items())},
                "criterion": "RMS over the training zig-zags with switch >= 5 deg and both sides of the open-loop "
-                            "peak-yaw-rate error (%)"}
+                            "peak-yaw-rate error (%)",
+               "note": "held fixed at this value in the regression: its uncertainty is not in the covariance "
+                       "(nor in bands drawn from it)"}
 
 
 # ----------------------------------------------------------------------------- selection
