@@ -236,8 +236,10 @@ def basis_yasukawa(p, u, v, r, delta, n):
     # "rudder_crossflow" = C_Dc, absent or 0 for the standard method
     FN = 0.5 * rho * p["A_R"] * UR2 * (p["f_alpha"] * sa + p.get("rudder_crossflow", 0.0) * sa * np.abs(sa))
     # optional port/starboard rudder effectiveness (propeller swirl): F_N (1 + s sign(delta)), "rudder_side_gain" = s
-    if p.get("rudder_side_gain", 0.0):
-        FN = FN * (1.0 + p["rudder_side_gain"] * np.sign(delta))
+    # (a scalar, or one value per row of a batch)
+    sg = p.get("rudder_side_gain", 0.0)
+    if np.any(sg):
+        FN = FN * (1.0 + sg * np.sign(delta))
     HX = np.stack([-qX, qX * vp * vp, qX * vp * rp, qX * rp * rp, qX * vp ** 4, T, -FN * np.sin(delta)], axis=-1)
     hull = [vp, rp, vp ** 3, vp * vp * rp, vp * rp * rp, rp ** 3]
     HY = np.stack([qX * h for h in hull] + [-FN * np.cos(delta)], axis=-1)

@@ -3,7 +3,10 @@
 * ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
-  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline)
+  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline); ``--selection``: the
+  structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`) or, for the
+  Yasukawa-2015 structure (KVLCC2) by default, by what a turning circle measures
+  (:mod:`shipid.methods.mmg.turning_selection`)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
 * ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
@@ -262,8 +265,13 @@ def _print_result(res) -> None:
     sel = res.diagnostics.get("structure_selection")
     if sel:
         click.echo(f"chosen by {sel['method']}:")
+        qs = [q for q in next(iter(sel["table"].values())) if q.endswith("_rms") or q.endswith("_mean_pct")]
         for c, row in sel["table"].items():
-            click.echo(f"  {c:<40} score {row['score']:.3f}")
+            mark = "  <-" if c == res.model.get("structure_candidate") else ""
+            click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs) + mark)
+    cal = res.diagnostics.get("calibration")
+    if cal:
+        click.echo(f"{cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")
     click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10} {'unit':>5}  status")
     for k, e in res.estimates.items():
         click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g} {e.unit:>5}  {e.status}")
@@ -271,9 +279,11 @@ def _print_result(res) -> None:
         click.echo(f"mode {m}: R2 {d['R2']:.3f}, k {d['k']:.3g}, kappa {d['kappa']:.3g}, n {d['n']}")
 
 
-def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto"):
+def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
+              selection="auto"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg import turning_selection as TS
 
     if not paths:
         raise ShipidError("no training runs given")
@@ -299,8 +309,19 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         trials.append(tr)
     pm, prior_info = _prior(prior, profiles, notes)
     st = None if structure in (None, "auto") else structure
+    if selection == "auto":
+        selection = "turning" if pm.structure in TS.TURNING_CANDIDATES else "horizons"
+    if selection == "turning":
+        if pm.structure not in TS.TURNING_CANDIDATES:
+            raise ShipidError(f"--selection turning: no turning candidates for the structure '{pm.structure}' "
+                              f"(only {', '.join(TS.TURNING_CANDIDATES)})")
+        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": TS.select_for_turning,
+                  "resolve": TS.resolve}
+    else:
+        sel_kw = {}
     res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine,
-                     extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign})
+                     extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign,
+                                       "selection": selection}, **sel_kw)
     res.model["prior"] = prior_info
     res.model["conventions"] = {
         "rudder_sign": rudder_sign, "rudder_sign_from": sign_from,
@@ -331,6 +352,11 @@ _ID_OPTS = [
     click.option("--structure", default="auto", show_default=True,
                  help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
     click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
+    click.option("--selection", default="auto", show_default=True, type=click.Choice(["auto", "horizons", "turning"]),
+                 help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors, "
+                      "shipid.methods.mmg.candidates.CANDIDATES), 'turning' (open-loop peak yaw rate per side and "
+                      "heading of the left-out zig-zags, shipid.methods.mmg.turning_selection; Yasukawa-2015 "
+                      "structure only); 'auto': turning where it exists (KVLCC2), else horizons."),
     click.option("--refine", default="auto", show_default=True,
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "
@@ -357,14 +383,14 @@ def _with_id_opts(f):
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="A training run (repeat for several).")
 @_with_id_opts
-def identify_mmg(trials, fmt, channels, prior, structure, folds, refine, rudder_sign, as_json, out, force):
+def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
     given runs unless --structure names one. The result is a self-describing MODEL.json
     for 'shipid validate'.
     """
-    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine)
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection)
 
 
 
@@ -373,9 +399,10 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, refine, rudder_
 @click.option("--train", "train", cls=ManyValues, required=True, type=click.Path(dir_okay=False),
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
-def identify_realdata(train, fmt, channels, prior, structure, folds, refine, rudder_sign, as_json, out, force):
+def identify_realdata(train, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, as_json, out,
+                      force):
     """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
-    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine)
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection)
 
 
 # ----------------------------------------------------------------------------- studies

@@ -165,7 +165,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
              extra_provenance: Mapping | None = None, selector=None, refine: str = "none",
-             oe_config: OEConfig = OEConfig()) -> Result:
+             oe_config: OEConfig = OEConfig(), candidates: Mapping[str, Mapping] | None = None,
+             resolve=None) -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -180,6 +181,13 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
         runs only.
+    candidates : mapping, optional
+        The candidate structures to choose among (default :data:`CANDIDATES` of the prior's structure).
+    resolve : callable, optional
+        ``resolve(trials, runs, prior, candidate, config) -> (candidate, info)``: the candidate to fit
+        on all training runs (e.g. with a particular calibrated on them,
+        :func:`shipid.methods.mmg.turning_selection.resolve`); ``info`` (or None) is kept in
+        ``diagnostics["calibration"]``. It receives the training runs only.
     refine : {"none", "output-error", "auto"}
         ``"output-error"``: refine the chosen structure's regression estimate on the
         training runs' restarted 60-s horizons (:func:`shipid.methods.mmg.output_error.refined_fit`);
@@ -193,7 +201,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     runs = [smooth_run(tr, smooth_config) for tr in trials]
     if progress is not None:
         progress()
-    cands = CANDIDATES[prior.structure]
+    cands = CANDIDATES[prior.structure] if candidates is None else candidates
     selection = None
     if structure is None and select and len(trials) >= 2:
         if selector is None:
@@ -208,8 +216,11 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         structure = next(iter(cands))
     if structure not in cands:
         raise InputError(f"unknown structure '{structure}' (choose from {', '.join(cands)})")
-    cprior, free = apply_candidate(prior, cands[structure])
-    fit_config = candidate_config(fit_config, cands[structure])
+    cand, cal = cands[structure], None
+    if resolve is not None:
+        cand, cal = resolve(trials, runs, prior, cand, fit_config)
+    cprior, free = apply_candidate(prior, cand)
+    fit_config = candidate_config(fit_config, cand)
     f = f_reg = fit(runs, cprior, free, fit_config, name=name)
     oe, skipped = None, None
     auto = refine == "auto"
@@ -237,9 +248,11 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         extra_provenance["rudder_sign"] = -1
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
-                       overrides=cands[structure].get("particulars"),
+                       overrides=cand.get("particulars"),
                        covariance=_covariance(f_reg, f, runs, cprior, fit_config, oe))
     res.model["training_conditions"] = training_conditions(trials)
+    if cal is not None:
+        res.diagnostics["calibration"] = cal
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
     if oe is not None:
