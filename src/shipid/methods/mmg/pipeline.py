@@ -88,7 +88,14 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
             unit = mmg.COEF_UNITS.get(c, "-")
             if c in f.free.get(mode, ()):
                 i = f.free[mode].index(c)
-                est[c] = Estimate(float(f.fits[mode].theta[i]), float(se_of[c]), unit, "estimated", cov_note)
+                v, se = float(f.fits[mode].theta[i]), float(se_of[c])
+                # the data do not determine a coefficient whose SE is not finite or not below its magnitude
+                if np.isfinite(se) and se < abs(v):
+                    est[c] = Estimate(v, se, unit, "estimated", cov_note)
+                else:
+                    est[c] = Estimate(v, se, unit, "not determined",
+                                      f"{cov_note}; SE {'not finite' if not np.isfinite(se) else 'not below |value|'}"
+                                      ": not determined by the data (the value is kept in the model)")
             else:
                 why = "regime not visited in the training runs" if c in f.dropped.get(mode, ()) else \
                     "not free in the chosen structure"
