@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,21 +25,27 @@ from shipid.vessels import load_vessel
 
 def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: float = 1800.0,
                 m1: float = 0.7, zm1: float = -0.14, settle: float = 300.0, window: float = 300.0,
-                threshold: float | None = None, vessel: str = "fishing-vessel", noise: str = "issue3") -> dict:
+                threshold: float | None = None, vessel: str = "fishing-vessel", noise: str = "issue3",
+                noise_model: str | None = None, bj_reselect: int = 0) -> dict:
     """One stream through the monitor; see the module docstring.
 
     ``noise``: ``"issue3"`` (0.5 deg wave roll, gyro / accelerometer noise and biases) or ``"waves-only"``
     (the same wave roll, noise-free sensors: the case where the AR(40) prefilter of the offline
     estimator is known to fail, :mod:`shipid.methods.masscm.estimator` "Known limitations").
+    ``noise_model``: the monitor's ``masscm.noise_model`` ("ar", or "auto" for the Box-Jenkins prefilter;
+    None: the monitor's default); ``bj_reselect``: :class:`MonitorOptions` ``bj_reselect``.
     """
 
     spec_noise = {"issue3": NoiseSpec.issue3(), "waves-only": NoiseSpec(wave_roll_deg=0.5)}[noise]
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     sim = simulate_stream(StreamSpec(duration=duration, change_at=change_at, m1=m1, zm1=zm1, noise=spec_noise),
                           vessel=vessel, seed=ss)
-    opts = MonitorOptions(window=window)
+    kw = {"window": window, "bj_reselect": bj_reselect}
     if threshold is not None:
-        opts = MonitorOptions(window=window, threshold=threshold)
+        kw["threshold"] = threshold
+    if noise_model is not None:
+        kw["masscm"] = replace(MonitorOptions().masscm, noise_model=noise_model)
+    opts = MonitorOptions(**kw)
     z_f = float(load_vessel(vessel).value("general", "z_f"))
     c0, w0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
