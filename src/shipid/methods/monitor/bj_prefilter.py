@@ -19,8 +19,10 @@ import math
 import numpy as np
 from scipy.signal import lfilter
 
+from shipid.methods.masscm.iteration import left_physical_region
 from shipid.methods.masscm.noise_bj import ma_structure, noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
+from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, KnownParams
 
 
 def bj_mode(options: MassCMOptions) -> bool:
@@ -69,9 +71,18 @@ def inverse_c(S: np.ndarray, sm, C: np.ndarray, hist: int) -> np.ndarray:
     return G
 
 
+def degenerate(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, zm_bound: float) -> bool:
+    """Whether a window search went to the degenerate minimum of (40): it left the physical region
+    (:func:`shipid.methods.masscm.iteration.left_physical_region`, the offline guard) or put ``zm_bar`` on its
+    bound ``zm_bound`` (seen after a reset on a short window in wave roll without sensor noise)."""
+    if left_physical_region(theta_q, theta_prev_q, known, [NOMINAL, CALIBRATION, LOADED]):
+        return True
+    return bool(abs(theta_q[8]) >= 0.999 * zm_bound)
+
+
 def structure_of(C: np.ndarray) -> tuple[float, int]:
     """``(c, k)`` of the MA polynomial ``C``."""
     return ma_structure(_Arma(np.asarray(C, dtype=float)))
 
 
-__all__ = ["bj_mode", "transient_samples", "fit_bj", "inverse_c", "structure_of"]
+__all__ = ["bj_mode", "transient_samples", "fit_bj", "inverse_c", "degenerate", "structure_of"]

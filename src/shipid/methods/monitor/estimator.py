@@ -94,8 +94,7 @@ from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm.estimator import DEFAULT_THETA0, MassCMOptions, iterate, prepare
-from shipid.methods.masscm.iteration import left_physical_region
-from shipid.methods.monitor.bj_prefilter import bj_mode, fit_bj, inverse_c, transient_samples
+from shipid.methods.monitor.bj_prefilter import bj_mode, degenerate, fit_bj, inverse_c, transient_samples
 from shipid.methods.monitor.fit import fit_load, search
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, KnownParams, bilinear_tf, discrete_coeffs,
                                         roll_terms)
@@ -496,9 +495,12 @@ class MassCMMonitor:
         if not (ok and np.all(np.isfinite(th))):
             warn.append(f"t = {t1:g} s: window search not converged; estimate kept from the last update")
             th = self.theta_q
-        elif self.bj and left_physical_region(th, self.theta_q, self.known, [NOMINAL, CALIBRATION, LOADED]):
+        elif self.bj and degenerate(th, self.theta_q, self.known, self.opt.masscm.zm_bound):
             ok, th = False, self.theta_q   # the degenerate minimum of (40) (masscm.iteration): last physical kept
             warn.append(f"t = {t1:g} s: window search left the physical region; estimate kept from the last update")
+        if self.bj and th is self.theta_q:     # the kept estimate's covariance: the Jacobian at that point
+            J = search(self.ref_moments + [mom], [*self.ref_lam, self.lam_loaded], self.known,
+                       [NOMINAL, CALIBRATION, LOADED], self.T, th, free, self.opt.masscm.zm_bound, max_iter=0)[2]
         self.theta_q = th
         try:
             cov = np.linalg.inv(J.T @ J)
@@ -509,8 +511,7 @@ class MassCMMonitor:
         # steps (b)-(c) for the next blocks: noise model refitted to the recent equation error
         k = max(1, int(round(self.opt.ar_fit / self.opt.every)))
         raw = np.hstack([b.raw for b in blocks[-k:]])
-        new_c = None
-        self._n_upd += 1
+        new_c, self._n_upd = None, self._n_upd + 1
         if raw.shape[1] > 4 * self.opt.masscm.ar_order:
             if self.bj:
                 resel = self.opt.bj_reselect > 0 and self._n_upd % self.opt.bj_reselect == 0

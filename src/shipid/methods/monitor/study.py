@@ -58,8 +58,12 @@ def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: fl
     t_from = (change_at if change_at is not None else 0.0) + settle
     ok = [u for u in ups if u.m is not None and u.t >= t_from]
     mt, zt = truth_at(sim["truth"], [u.t for u in ok])
-    in_m = [abs(u.m - a) <= 2 * u.m_std for u, a in zip(ok, mt)]
-    in_z = [abs(u.zm_bar - a) <= 2 * u.zm_bar_std for u, a in zip(ok, zt)]
+    # an update with a non-finite std does not cover (it gives no interval)
+    in_m = [bool(np.isfinite(u.m_std)) and abs(u.m - a) <= 2 * u.m_std for u, a in zip(ok, mt)]
+    in_z = [bool(np.isfinite(u.zm_bar_std)) and abs(u.zm_bar - a) <= 2 * u.zm_bar_std for u, a in zip(ok, zt)]
+    kn = KnownParams.from_vessel(vessel)
+    rt = np.asarray(mt) * (np.asarray(zt) + z_f) / (kn.m_c * (kn.zc_bar + z_f))
+    in_r = [bool(np.isfinite(u.rho_std)) and abs(u.rho - a) <= 2 * u.rho_std for u, a in zip(ok, rt)]
     pre = [u.statistic for u in ups if u.statistic is not None and (change_at is None or u.t <= change_at)]
     after = [a for a in alarms if change_at is not None and a > change_at]
     return {"alarms": alarms, "located": located,
@@ -67,12 +71,17 @@ def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: fl
             "delay": (after[0] - change_at) if after else None,
             "located_first": (located[alarms.index(after[0])] if after else None),
             "coverage_m": float(np.mean(in_m)) if ok else None, "coverage_zm": float(np.mean(in_z)) if ok else None,
+            "coverage_rho": float(np.mean(in_r)) if ok else None,
             "n_cov": len(ok),
             "m_std_mean": float(np.mean([u.m_std for u in ok])) if ok else None,
             "zm_std_mean": float(np.mean([u.zm_bar_std for u in ok])) if ok else None,
             "m_err_rms": float(np.sqrt(np.mean([(u.m - a) ** 2 for u, a in zip(ok, mt)]))) if ok else None,
             "zm_err_rms": float(np.sqrt(np.mean([(u.zm_bar - a) ** 2 for u, a in zip(ok, zt)]))) if ok else None, "max_T_before": float(max(pre)) if pre else None,
             "converged_frac": float(np.mean([u.converged for u in ok])) if ok else None,
+            "m_last": ok[-1].m if ok else None, "m_last_std": ok[-1].m_std if ok else None,
+            "zm_last": ok[-1].zm_bar if ok else None, "zm_last_std": ok[-1].zm_bar_std if ok else None,
+            "rho_last": ok[-1].rho if ok else None, "rho_last_std": ok[-1].rho_std if ok else None,
+            "rho_true_last": float(rt[-1]) if ok else None, "m_true_last": float(mt[-1]) if ok else None, "zm_true_last": float(zt[-1]) if ok else None,
             "cpu_s": cpu, "wall_s": wall, "stream_s": duration}
 
 
