@@ -132,7 +132,8 @@ class MonitorOptions:
         Box-Jenkins noise model (``masscm.noise_model`` "auto"/"bj"): every ``bj_reselect`` updates ``(c, k)``
         is chosen again on the last ``ar_fit`` s (window rebuilt if it changes); 0: the start-up's is held.
     masscm : MassCMOptions
-        Options of Algorithm 1 (prefilter order, lags, start-up run).
+        Options of Algorithm 1 (prefilter order, lags, start-up run); ``noise_model`` "auto" (default) or "bj"
+        the Box-Jenkins prefilter of :mod:`shipid.methods.monitor.bj_prefilter`, "ar" the AR(40) one.
     """
 
     window: float = 300.0
@@ -145,7 +146,7 @@ class MonitorOptions:
     threshold: float = 40.0
     ar_fit: float = 120.0
     bj_reselect: int = 0
-    masscm: MassCMOptions = MassCMOptions(noise_model="ar")
+    masscm: MassCMOptions = MassCMOptions()      # noise_model "auto": the Box-Jenkins prefilter (bj_prefilter)
 
 
 @dataclass(frozen=True)
