@@ -12,8 +12,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
 2. **Block moments of the loaded stream.** Each block of ``every`` seconds is turned into its IV moment
    matrices ``Z_b^T Z_b`` and ``Z_b^T [Phi_b, y_b]``: regressors (37); instruments (45) (``n_y = n_as = n_r
    = 16``, ``n_delta = 2`` lags of the closed-loop simulation (46)–(47) of the current model, driven by the
-   black-box yaw-rate model (44) fitted at start-up), both filtered by the current AR(40) prefilter
-   ``L = A(q)`` (43); the instruments are mean-removed per block (a gyro bias leaves a constant in the
+   black-box yaw-rate model (44) fitted at start-up), both filtered by the current prefilter (43): default the
+   Box-Jenkins ``D(q)/(1 - c q^-2)^k`` (:mod:`.bj_prefilter`), or AR(40) ``A(q)``; instruments mean-removed per block (a gyro bias leaves a constant in the
    equation error). Filters and simulations carry their state over block boundaries, so a block costs the
    same whatever the elapsed time. Blocks are kept for ``window`` seconds (raw samples included, for a
    rebuild after a change): the memory is bounded by the window, not by the stream length.
@@ -21,8 +21,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    (:func:`shipid.estimate.iv.iv_compress_products`), the criterion (40) over the three datasets is
    minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known), and
    the covariance ``(J^T J)^-1`` (weighted residuals, as in Algorithm 1) gives the standard errors of
-   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the AR(40)
-   noise model is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
+   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the noise model
+   (AR part; (c, k) held) is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
    least squares) and the instrument model is the new estimate. Blocks already in the window keep the
    prefilter and instruments they were built with: each block's instruments are a function of the rudder
    only, so the summed moments remain a valid IV criterion (only its efficiency depends on the model).
@@ -41,7 +41,7 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    growing window (``converged`` is False until it spans ``min_window`` seconds again). The detector
    waits until the new reference is ``ref_min`` long.
 
-Measured (fishing vessel; streams of :mod:`shipid.simulate.masscm_stream`: 1800 s at 50 Hz, 0.5 deg wave
+Measured with the AR(40) prefilter (BJ default vs AR: README; fishing vessel; :mod:`shipid.simulate.masscm_stream`: 1800 s at 50 Hz, 0.5 deg wave
 roll, gyro 0.002 rad/s and accelerometer 0.02 m/s^2 noise, biases 0.001 rad/s / 0.01 m/s^2, 300-s nominal and
 calibration datasets, z_f known, load change at 900 s from 0.4 kg at -0.182 m to 0.7 kg at -0.14 m;
 ``benchmarks/bench_masscm_monitor.py``; the threshold was chosen on other seeds, see below):
