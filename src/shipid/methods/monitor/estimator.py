@@ -575,7 +575,7 @@ class MassCMMonitor:
         kept = [b for b in self.blocks if b.t0 >= tau - 0.5 * self.T]
         th = self.theta_q.copy()
         th[[I_Q, I_ZM]] = th_tail[[I_Q, I_ZM]]
-        self.theta_q = th
+        self.theta_q = th if self._model_coef(th) is not None else self.theta_q   # an unstable tail load: kept
         raw = np.hstack([b.raw for b in kept])
         warm = ()
         if self.bj:
