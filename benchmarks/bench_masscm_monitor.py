@@ -13,7 +13,7 @@ every update, timed on 5 updates and scaled to the 168 updates of the stream; re
 ``memory``: tracemalloc peak while monitoring 600-, 1800- and 3600-s streams (flat = independent of length).
 ``tradeoff``: window 150 / 300 / 600 s on the same streams (std of the updates, coverage, delay).
 
-Usage:  python benchmarks/bench_masscm_monitor.py study RUNS [SEED [issue3|waves-only]]
+Usage:  python benchmarks/bench_masscm_monitor.py study RUNS [SEED [issue3|waves-only [ar|auto [RESELECT]]]]
         python benchmarks/bench_masscm_monitor.py speed | memory | tradeoff [RUNS]
 """
 
@@ -30,15 +30,20 @@ from shipid.studies.engine import run_campaign
 TASK = "shipid.methods.monitor.study:monitor_run"
 
 
-def study(runs: int, seed: int, noise: str = "issue3") -> None:
-    for label, kw, sd in (("change at 900 s", {"change_at": 900.0, "noise": noise}, seed),
-                          ("no change", {"change_at": None, "noise": noise}, seed + 1)):
+def study(runs: int, seed: int, noise: str = "issue3", noise_model: str | None = None, reselect: int = 0) -> None:
+    extra = {"noise_model": noise_model, "bj_reselect": reselect}
+    for label, kw, sd in (("change at 900 s", {"change_at": 900.0, "noise": noise, **extra}, seed),
+                          ("no change", {"change_at": None, "noise": noise, **extra}, seed + 1)):
         from shipid.methods.monitor.study import summarise
         res = run_campaign(TASK, runs, seed=sd, kwargs=kw, workers=1, progress=False)
         recs = [r.outputs for r in res.records if r.status == "ok"]
         failed = runs - len(recs)
         s = summarise(recs, kw["change_at"] is not None)
-        print(f"{label}, noise {noise} (campaign seed {sd}, {runs} runs, {failed} failed):")
+        print(f"{label}, noise {noise}, noise model {noise_model or 'default'} (reselect {reselect}) "
+              f"(campaign seed {sd}, {runs} runs, {failed} failed):")
+        for r in res.records:
+            if r.status != "ok":
+                print(f"    failed: {str(getattr(r, 'error', r.status))[:160]}")
         print("  " + json.dumps(s))
         for i, r in enumerate(recs):
             print(f"    run {i}: alarms {r['alarms']} located {r['located']} cov m {r['coverage_m']:.2f} "
@@ -118,7 +123,8 @@ if __name__ == "__main__":
     mode = sys.argv[1] if len(sys.argv) > 1 else "speed"
     if mode == "study":
         study(int(sys.argv[2]) if len(sys.argv) > 2 else 10, int(sys.argv[3]) if len(sys.argv) > 3 else 100,
-              sys.argv[4] if len(sys.argv) > 4 else "issue3")
+              sys.argv[4] if len(sys.argv) > 4 else "issue3", sys.argv[5] if len(sys.argv) > 5 else None,
+              int(sys.argv[6]) if len(sys.argv) > 6 else 0)
     elif mode == "speed":
         speed()
     elif mode == "memory":

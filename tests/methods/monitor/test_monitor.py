@@ -64,18 +64,23 @@ def test_no_change_no_alarm_and_chunking_invariant():
     assert ua[-1].window_s == pytest.approx(MonitorOptions().window)
 
 
-def test_first_estimate_matches_offline_algorithm1():
-    """The monitor's first update (start-up window) agrees with the offline Algorithm 1 on the same data."""
+@pytest.mark.parametrize("noise_model", ["ar", "auto"])
+def test_first_estimate_matches_offline_algorithm1(noise_model):
+    """The monitor's first update (start-up window) agrees with the offline Algorithm 1 on the same data, with
+    the same noise model (AR(40), or the Box-Jenkins default)."""
+    from dataclasses import replace
+
     from shipid.data.trial import Trial
     from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 
     sim = simulate_stream(StreamSpec(duration=120.0, change_at=None), seed=7)
-    ups = run_monitor(sim["nominal"], sim["calibration"], sim["stream"], KN, Z_F)
+    opts = MonitorOptions(masscm=replace(MonitorOptions().masscm, noise_model=noise_model))
+    ups = run_monitor(sim["nominal"], sim["calibration"], sim["stream"], KN, Z_F, opts)
     st = sim["stream"]
     off = estimate_mass_cm([("nominal", sim["nominal"]), ("calibration", sim["calibration"]),
                             ("loaded", Trial(st.t, {k: st[k] for k in ("p", "a_s", "r", "delta")}))],
-                           KN, z_f=Z_F, noise_check=False, options=MassCMOptions(noise_model="ar"))
-    u = ups[-1]     # the monitor's prefilter is AR(40): compared with the offline AR(40), not its "auto" default
+                           KN, z_f=Z_F, noise_check=False, options=MassCMOptions(noise_model=noise_model))
+    u = ups[-1]
     # same data, same prefilters; the block instruments differ slightly (per-block mean removal, the
     # first 64 samples dropped), so agreement to a fraction of the standard error, not to rounding
     assert abs(u.m - off.value("m")) < 0.3 * off.std("m")

@@ -90,3 +90,17 @@ def test_live_panel_renders():
     con.print(live_panel(u, "s.nominal.csv"))
     text = con.file.getvalue()
     assert "0.71" in text and "ALARM" in text and "900" in text and "m [kg]" in text and "zm_bar [m]" in text
+
+
+def test_monitor_noise_model_option(stream, capsys):
+    """``--noise-model ar`` runs the AR(40) prefilter: a different run from the Box-Jenkins default, same stream."""
+    outs = {}
+    for nm in ("ar", "auto"):
+        rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl", "--noise-model", nm))
+        assert rc == 0
+        outs[nm] = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+        assert len(outs[nm]) == 40 and any(x["alarm"] for x in outs[nm])
+    default = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl"))
+    assert default == 0
+    assert [json.loads(x) for x in capsys.readouterr().out.splitlines()] == outs["auto"]
+    assert [x["m"] for x in outs["ar"]] != [x["m"] for x in outs["auto"]]

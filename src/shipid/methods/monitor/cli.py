@@ -134,6 +134,9 @@ def live_panel(u, nominal_label: str):
               help="Stream seconds used by the start-up run of Algorithm 1 before the first estimate.")
 @click.option("--threshold", type=click.FloatRange(min=0), default=None,
               help="Alarm threshold of the detector's Wald statistic [default: MonitorOptions.threshold].")
+@click.option("--noise-model", type=click.Choice(["ar", "auto"]), default=None,
+              help="Noise model of the prefilter: 'ar' AR(40), 'auto' the Box-Jenkins model (1 - c q^-2)^k/D(q) "
+                   "(shipid.methods.monitor.bj_prefilter) [default: MonitorOptions().masscm.noise_model].")
 @click.option("--json", "--jsonl", "as_json", is_flag=True,
               help="One JSON line per update on stdout (the default when stdout is not a terminal).")
 @out_options(json_flag=False, out_help="Also write the JSON lines of the run to FILE (atomically, when the stream "
@@ -142,8 +145,8 @@ def live_panel(u, nominal_label: str):
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
               help="With --follow: stop after this many seconds without new data [default: never].")
 @click.option("--strict", is_flag=True, help="Exit with status 3 if any warning was raised.")
-def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, as_json, out, force,
-                    follow, idle_timeout, strict):
+def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, noise_model, as_json,
+                    out, force, follow, idle_timeout, strict):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
 
     Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
@@ -166,6 +169,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
     opts = MonitorOptions(window=window, every=every, init=init_s)
     if threshold is not None:
         opts = replace(opts, threshold=threshold)
+    if noise_model is not None:
+        opts = replace(opts, masscm=replace(opts.masscm, noise_model=noise_model))
     nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm")
     cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm")
     mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)

@@ -12,8 +12,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
 2. **Block moments of the loaded stream.** Each block of ``every`` seconds is turned into its IV moment
    matrices ``Z_b^T Z_b`` and ``Z_b^T [Phi_b, y_b]``: regressors (37); instruments (45) (``n_y = n_as = n_r
    = 16``, ``n_delta = 2`` lags of the closed-loop simulation (46)–(47) of the current model, driven by the
-   black-box yaw-rate model (44) fitted at start-up), both filtered by the current AR(40) prefilter
-   ``L = A(q)`` (43); the instruments are mean-removed per block (a gyro bias leaves a constant in the
+   black-box yaw-rate model (44) fitted at start-up), both filtered by the current prefilter (43): default the
+   Box-Jenkins ``D(q)/(1 - c q^-2)^k`` (:mod:`.bj_prefilter`), or AR(40) ``A(q)``; instruments mean-removed per block (a gyro bias leaves a constant in the
    equation error). Filters and simulations carry their state over block boundaries, so a block costs the
    same whatever the elapsed time. Blocks are kept for ``window`` seconds (raw samples included, for a
    rebuild after a change): the memory is bounded by the window, not by the stream length.
@@ -21,8 +21,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    (:func:`shipid.estimate.iv.iv_compress_products`), the criterion (40) over the three datasets is
    minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known), and
    the covariance ``(J^T J)^-1`` (weighted residuals, as in Algorithm 1) gives the standard errors of
-   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the AR(40)
-   noise model is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
+   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the noise model
+   (AR part; (c, k) held) is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
    least squares) and the instrument model is the new estimate. Blocks already in the window keep the
    prefilter and instruments they were built with: each block's instruments are a function of the rudder
    only, so the summed moments remain a valid IV criterion (only its efficiency depends on the model).
@@ -41,7 +41,7 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    growing window (``converged`` is False until it spans ``min_window`` seconds again). The detector
    waits until the new reference is ``ref_min`` long.
 
-Measured (fishing vessel; streams of :mod:`shipid.simulate.masscm_stream`: 1800 s at 50 Hz, 0.5 deg wave
+Measured with the AR(40) prefilter (BJ default vs AR: README; fishing vessel; :mod:`shipid.simulate.masscm_stream`: 1800 s at 50 Hz, 0.5 deg wave
 roll, gyro 0.002 rad/s and accelerometer 0.02 m/s^2 noise, biases 0.001 rad/s / 0.01 m/s^2, 300-s nominal and
 calibration datasets, z_f known, load change at 900 s from 0.4 kg at -0.182 m to 0.7 kg at -0.14 m;
 ``benchmarks/bench_masscm_monitor.py``; the threshold was chosen on other seeds, see below):
@@ -73,11 +73,9 @@ calibration datasets, z_f known, load change at 900 s from 0.4 kg at -0.182 m to
   (after 30 s): the detector is tuned against false alarms, not for changes this small.
 * **Memory**: traced memory after 600 / 1800 / 3600 s of stream 1.20 / 1.19 / 1.24 MiB, peak
   15.6 MiB (the start-up run): flat in the stream length.
-* **Wave roll with noise-free sensors** (the offline estimator's known weakness with the AR(40) prefilter):
-  of 10 such streams the start-up run failed in 6 (unstable model; the monitor stops with a
-  :class:`~shipid.errors.ShipidError`), and of the 4 that ran, 2 raised repeated false alarms and 1 had a
-  biased zm_bar (coverage 0). The structured prefilter (``noise_model="ar-structured"``, an IIR filter) is not
-  implemented in the block moments.
+* **Wave roll with noise-free sensors** (AR(40) prefilter): of 10 streams the start-up run failed in 6 (unstable
+  model; :class:`~shipid.errors.ShipidError`); of the 4 that ran, 2 raised repeated false alarms, 1 had a biased
+  zm_bar. ``masscm.noise_model="auto"``: the Box-Jenkins prefilter (:mod:`shipid.methods.monitor.bj_prefilter`).
 """
 
 from __future__ import annotations
@@ -96,6 +94,7 @@ from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm.estimator import DEFAULT_THETA0, MassCMOptions, iterate, prepare
+from shipid.methods.monitor.bj_prefilter import bj_mode, degenerate, fit_bj, inverse_c, transient_samples
 from shipid.methods.monitor.fit import fit_load, search
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, KnownParams, bilinear_tf, discrete_coeffs,
                                         roll_terms)
@@ -129,8 +128,12 @@ class MonitorOptions:
         measured false-alarm rate and detection delays on fresh seeds are in the module docstring.
     ar_fit : float
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
+    bj_reselect : int
+        Box-Jenkins noise model (``masscm.noise_model`` "auto"/"bj"): every ``bj_reselect`` updates ``(c, k)``
+        is chosen again on the last ``ar_fit`` s (window rebuilt if it changes); 0: the start-up's is held.
     masscm : MassCMOptions
-        Options of Algorithm 1 (prefilter order, lags, start-up run).
+        Options of Algorithm 1 (prefilter order, lags, start-up run); ``noise_model`` "auto" (default) or "bj"
+        the Box-Jenkins prefilter of :mod:`shipid.methods.monitor.bj_prefilter`, "ar" the AR(40) one.
     """
 
     window: float = 300.0
@@ -142,8 +145,8 @@ class MonitorOptions:
     ref_min: float = 60.0
     threshold: float = 40.0
     ar_fit: float = 120.0
-    # the block moments implement the AR(40) prefilter only (the offline default "auto" may pick an IIR one)
-    masscm: MassCMOptions = MassCMOptions(noise_model="ar")
+    bj_reselect: int = 0
+    masscm: MassCMOptions = MassCMOptions()      # noise_model "auto": the Box-Jenkins prefilter (bj_prefilter)
 
 
 @dataclass(frozen=True)
@@ -194,6 +197,9 @@ class _Sim:
     coef: tuple | None = None
     hist: np.ndarray = None         # (3, _HIST): y_hat, a_hat, r_hat0
     raw_hist: np.ndarray = None     # (4, _HIST)
+    skip_left: int = 0              # samples still to drop (start-up transient of the filters)
+    zc: np.ndarray | None = None    # state of the prefilter's 1/C(q) (Box-Jenkins prefilter only)
+    ghist: np.ndarray | None = None  # (10, _HIST): the 1/C-filtered signals' history
 
 
 def _d2(x: np.ndarray) -> np.ndarray:
@@ -239,6 +245,9 @@ class MassCMMonitor:
         self._since: float | None = None           # start of the current condition's window
         self.updates: list[MonitorUpdate] = []
         self.keep_updates = True
+        self.bj = bj_mode(options.masscm)
+        self.prefilter_c = np.ones(1)              # C(q) of the Box-Jenkins prefilter D/C (1 for the AR one)
+        self._n_upd = 0
 
     # ------------------------------------------------------------------ input
     def feed(self, t, p, a_s, r, delta) -> list[MonitorUpdate]:
@@ -338,8 +347,13 @@ class MassCMMonitor:
         self.delta0 = float(np.mean(raw[3]))
         self.arx_r = arx_fit(raw[2] - raw[2].mean(), raw[3] - self.delta0, opts.arx_na, opts.arx_nb)
         L = st.L[2]
-        self.prefilter = np.asarray(L.a, dtype=float) if L is not None and L.c.size == 1 else \
-            self._fit_prefilter(raw)[0]
+        if self.bj and L is not None:
+            self.prefilter, self.prefilter_c = np.asarray(L.a, dtype=float), np.asarray(L.c, dtype=float)
+        elif self.bj:
+            self.prefilter, _, self.prefilter_c = self._fit_prefilter(raw, reselect=True)
+        else:
+            self.prefilter = np.asarray(L.a, dtype=float) if L is not None and L.c.size == 1 else \
+                self._fit_prefilter(raw)[0]
         self.lam_loaded = float(st.lam[2])
         self.started = True
         self._since = float(self._t_first)
@@ -360,10 +374,13 @@ class MassCMMonitor:
         b2, a2 = bilinear_tf([float(tm["z_s"][0]), 0.0, self.known.g], [A1, d, k1], self.T)
         return (b1, a1, b2, a2, float(tm["Kyaw"][0]), float(tm["K_delta"][0]))
 
-    def _rebuild(self, blocks) -> None:
-        """Moments of ``blocks`` (consecutive) from their raw samples with the current model, from rest."""
+    def _rebuild(self, blocks, warm=()) -> None:
+        """Moments of ``blocks`` (consecutive) from their raw samples with the current model, from rest.
+
+        ``warm``: blocks just before ``blocks`` run through the filters first (their moments are discarded),
+        so that the start-up transient of the filters falls on them."""
         self._sim = None
-        for b in blocks:
+        for b in list(warm) + list(blocks):
             self._moments(b)
 
     def _moments(self, b: _Block) -> None:
@@ -377,8 +394,14 @@ class MassCMMonitor:
             # from rest; the first _HIST rows depend on the (repeated first sample) history and are dropped
             self._sim = _Sim(zr=np.zeros(max(len(ar), len(br)) - 1), hist=np.zeros((3, _HIST)),
                              raw_hist=np.repeat(b.raw[:, :1], _HIST, axis=1))
-            skip = min(_HIST, n - 1)
+            if self.prefilter_c.size > 1:
+                self._sim.skip_left = _HIST + transient_samples(self.prefilter_c, o, int(self.opt.window / self.T))
+            else:
+                skip = min(_HIST, n - 1)
         sm = self._sim
+        if sm.skip_left:
+            skip = min(sm.skip_left, n)
+            sm.skip_left -= skip
         if coef is not None:
             sm.coef = coef
         if sm.coef is None:
@@ -411,6 +434,12 @@ class MassCMMonitor:
         S[7] = _d2(raw[2])
         S[8] = _d2(raw[3])
         S[9] = y
+        if self.prefilter_c.size > 1:    # Box-Jenkins prefilter D/C: 1/C with its state carried over blocks
+            S = inverse_c(S, sm, self.prefilter_c, _HIST)
+        if skip >= n:                    # the whole block falls in the filters' start-up transient
+            nz = o.n_y + o.n_as + o.n_r + o.n_delta
+            b.ZtZ, b.ZtP, b.n = np.zeros((nz, nz)), np.zeros((nz, 6)), 0
+            return
         F = lfilter(self.prefilter, [1.0], S, axis=1)[:, _HIST:]        # rows of this block only are valid
         full = lfilter(self.prefilter, [1.0], S[:4], axis=1)
         cols = []
@@ -422,13 +451,16 @@ class MassCMMonitor:
         P = F[4:, skip:].T                                               # (n, 6): Phi then y
         b.ZtZ, b.ZtP, b.n = Z.T @ Z, Z.T @ P, n - skip
 
-    def _fit_prefilter(self, raw: np.ndarray, theta_q: np.ndarray | None = None):
-        """AR(ar_order) noise model (42)-(43) of the loaded equation error of ``raw`` at ``theta_q``."""
+    def _fit_prefilter(self, raw: np.ndarray, theta_q: np.ndarray | None = None, reselect: bool = False):
+        """AR(ar_order) noise model (42)-(43) of the loaded equation error of ``raw`` at ``theta_q``: ``(A, lam)``;
+        with the Box-Jenkins prefilter ``(D, lam, C)`` (``C`` held unless ``reselect``)."""
         th = self.theta_q if theta_q is None else theta_q
         g = discrete_coeffs(th, self.known, [LOADED], self.T, moment=True)[0]
         y = raw[0]
         Phi = np.column_stack([-np.r_[y[0], y[:-1]], -np.r_[y[:2], y[:-2]], _d2(raw[1]), _d2(raw[2]), _d2(raw[3])])
         eps = (y - Phi @ g)[3:]
+        if self.bj:
+            return fit_bj(eps, self.opt.masscm, None if reselect else self.prefilter_c)
         L = hannan_rissanen(eps, self.opt.masscm.ar_order, 0, n_long=self.opt.masscm.ar_order)
         return np.asarray(L.a, dtype=float), float(L.lam)
 
@@ -464,6 +496,12 @@ class MassCMMonitor:
         if not (ok and np.all(np.isfinite(th))):
             warn.append(f"t = {t1:g} s: window search not converged; estimate kept from the last update")
             th = self.theta_q
+        elif self.bj and degenerate(th, self.theta_q, self.known, self.opt.masscm.zm_bound):
+            ok, th = False, self.theta_q   # the degenerate minimum of (40) (masscm.iteration): last physical kept
+            warn.append(f"t = {t1:g} s: window search left the physical region; estimate kept from the last update")
+        if self.bj and th is self.theta_q:     # the kept estimate's covariance: the Jacobian at that point
+            J = search(self.ref_moments + [mom], [*self.ref_lam, self.lam_loaded], self.known,
+                       [NOMINAL, CALIBRATION, LOADED], self.T, th, free, self.opt.masscm.zm_bound, max_iter=0)[2]
         self.theta_q = th
         try:
             cov = np.linalg.inv(J.T @ J)
@@ -474,13 +512,23 @@ class MassCMMonitor:
         # steps (b)-(c) for the next blocks: noise model refitted to the recent equation error
         k = max(1, int(round(self.opt.ar_fit / self.opt.every)))
         raw = np.hstack([b.raw for b in blocks[-k:]])
+        new_c, self._n_upd = None, self._n_upd + 1
         if raw.shape[1] > 4 * self.opt.masscm.ar_order:
-            self.prefilter, self.lam_loaded = self._fit_prefilter(raw)
+            if self.bj:
+                resel = self.opt.bj_reselect > 0 and self._n_upd % self.opt.bj_reselect == 0
+                self.prefilter, self.lam_loaded, c_fit = self._fit_prefilter(raw, reselect=resel)
+                if not np.array_equal(c_fit, self.prefilter_c):
+                    new_c = c_fit
+            else:
+                self.prefilter, self.lam_loaded = self._fit_prefilter(raw)
         stat, tau, th_tail = self._detect()
         alarm = stat is not None and stat > self.opt.threshold
         if alarm:
             _, tau2, th2 = self._detect(locate=True)
             self._reset(tau2 if tau2 is not None else tau, th2 if th2 is not None else th_tail)
+        elif new_c is not None:          # a new MA structure: 1/C's state is invalid, the window is rebuilt
+            self.prefilter_c = new_c
+            self._rebuild(self.blocks)
         converged = bool(ok and not alarm and t1 - self._since >= self.opt.min_window - 0.5 * self.T)
         return MonitorUpdate(t1, summ["m"], summ["m_std"], summ["zm_bar"], summ["zm_bar_std"], summ["rho"],
                              summ["rho_std"], converged, bool(alarm), self.change_at,
@@ -527,11 +575,18 @@ class MassCMMonitor:
         kept = [b for b in self.blocks if b.t0 >= tau - 0.5 * self.T]
         th = self.theta_q.copy()
         th[[I_Q, I_ZM]] = th_tail[[I_Q, I_ZM]]
-        self.theta_q = th
+        self.theta_q = th if self._model_coef(th) is not None else self.theta_q   # an unstable tail load: kept
         raw = np.hstack([b.raw for b in kept])
-        if raw.shape[1] > 4 * self.opt.masscm.ar_order:
+        warm = ()
+        if self.bj:
+            if raw.shape[1] > 4 * self.opt.masscm.ar_order:
+                self.prefilter, self.lam_loaded, self.prefilter_c = self._fit_prefilter(raw)
+            before = [b for b in self.blocks if b.t0 < tau - 0.5 * self.T]
+            need = _HIST + transient_samples(self.prefilter_c, self.opt.masscm, int(self.opt.window / self.T))
+            warm = before[-int(math.ceil(need / self.nb)):] if before else ()
+        elif raw.shape[1] > 4 * self.opt.masscm.ar_order:
             self.prefilter, self.lam_loaded = self._fit_prefilter(raw)
-        self._rebuild(kept)
+        self._rebuild(kept, warm)
         self.blocks = deque(kept)
 
 
