@@ -27,6 +27,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from shipid.methods._series import first_unreproduced, noted
 from shipid.methods._trials import as_trial, grouped
 from shipid.methods.dp.entry import REQUIRED
 from shipid.methods.dp.estimator import DPFit, DPOptions, fit_dp
@@ -164,11 +165,6 @@ def with_series(fit, *, trials: Mapping | None = None) -> Result:
     return _from_trials(fit, trials)
 
 
-def _noted(result, text: str):
-    out = copy.deepcopy(result)
-    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
-    return out
-
 
 def _from_trials(result, trials):
     """:func:`with_series` of a stored result (see there)."""
@@ -184,7 +180,7 @@ def _from_trials(result, trials):
             return result
         missing = [p for p in paths if not os.path.isfile(p)]
         if missing:
-            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
+            return noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
         trials = files
     try:
         groups = grouped(trials, ("surge", "sway-yaw", "azimuth"), "dp")
@@ -199,12 +195,10 @@ def _from_trials(result, trials):
             fit = fit_dp(t["surge"], t["sway-yaw"], t["azimuth"], vessel, DPOptions(**opts),
                          theta_true=None if tt is None else np.asarray(tt, dtype=float))
     except Exception as err:  # noqa: BLE001 - the report must still be written
-        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
-    diff = [n for n, e in result.estimates.items()
-            if n in fit.result.estimates and fit.result.value(n) != e.value]
-    if diff:
-        n = diff[0]
-        return _noted(result, f"SI1 -> SI3 on these trials gives {n} = {fit.result.value(n):.6g}, not the stored "
+        return noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    n = first_unreproduced(result, fit.result)
+    if n is not None:
+        return noted(result, f"SI1 -> SI3 on these trials gives {n} = {fit.result.value(n):.6g}, not the stored "
                               f"{result.value(n):.6g} (other trials or files changed?)")
     out = copy.deepcopy(result)
     attach(out, fit.stages, fit.vessel, fit.trials, fit.theta_true)

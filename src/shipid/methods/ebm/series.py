@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from shipid.methods._series import first_unreproduced, noted
 from shipid.methods._trials import as_list, as_trial
 from shipid.methods.ebm.design import paper_comparison, prbs_grid
 from shipid.methods.ebm.estimator import EbmConfig, EbmRun, identify_run
@@ -221,11 +222,6 @@ def with_series(fit, *, trials: Sequence | None = None):
     return _from_trials(fit, trials)
 
 
-def _noted(result, text: str):
-    out = copy.deepcopy(result)
-    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
-    return out
-
 
 def _config(d: Mapping | None) -> EbmConfig:
     """The :class:`EbmConfig` recorded in ``provenance["ebm_call"]["config"]`` (lists back to tuples)."""
@@ -247,7 +243,7 @@ def _from_trials(result, trials):
             return result
         missing = [p for p in files if not os.path.isfile(p)]
         if missing:
-            return _noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
+            return noted(result, f"trial file not found: {missing[0]} (give the trials: with_series(trials=...))")
         trials = files
     try:
         data = [as_trial(x, required=list(REQUIRED), method="ebm", vessel=vessel) for x in as_list(trials)]
@@ -255,12 +251,10 @@ def _from_trials(result, trials):
             warnings.simplefilter("ignore")
             run = identify_run(data, vessel, config=_config(call.get("config")))
     except Exception as err:  # noqa: BLE001 - the report must still be written
-        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
-    diff = [n for n, e in result.estimates.items()
-            if n in run.result.estimates and run.result.value(n) != e.value]
-    if diff:
-        n = diff[0]
-        return _noted(result, f"EBM on these trials gives {n} = {run.result.value(n):.6g}, not the stored "
+        return noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+    n = first_unreproduced(result, run.result)
+    if n is not None:
+        return noted(result, f"EBM on these trials gives {n} = {run.result.value(n):.6g}, not the stored "
                               f"{result.value(n):.6g} (other trials or files changed?)")
     out = copy.deepcopy(result)
     attach(out, run.states, run.fit)

@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from shipid.methods._series import noted
 from shipid.data.io import read_trial
 from shipid.methods._trials import as_trial, grouped
 from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
@@ -212,11 +213,6 @@ def with_series(fit, *, cost_map: bool = False, trials: Mapping | None = None) -
     return _from_files(fit, cost_map, trials)
 
 
-def _noted(result, text: str):
-    out = copy.deepcopy(result)
-    out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
-    return out
-
 
 def _from_files(result, cost_map: bool, trials: Mapping | None = None):
     """:func:`with_series` of a stored result (see there)."""
@@ -231,7 +227,7 @@ def _from_files(result, cost_map: bool, trials: Mapping | None = None):
             return result
         missing = [p for _, p in files if not os.path.isfile(p)]
         if missing:
-            return _noted(result, f"dataset file not found: {missing[0]}")
+            return noted(result, f"dataset file not found: {missing[0]}")
     try:
         if trials is None:
             datasets = [(c, read_trial(p, required=["t", *REQUIRED], method="mass-cm")) for c, p in files]
@@ -248,9 +244,9 @@ def _from_files(result, cost_map: bool, trials: Mapping | None = None):
                               z_f_prior=None if prior is None else tuple(prior), init=call.get("init"),
                               options=MassCMOptions(**opts), noise_check=False)
     except Exception as err:  # noqa: BLE001 - the report must still be written
-        return _noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
+        return noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
     if fit.result.value("m") != result.value("m"):
-        return _noted(result, f"Algorithm 1 on the recorded files gives m = {fit.result.value('m'):.6g} kg, "
+        return noted(result, f"Algorithm 1 on the recorded files gives m = {fit.result.value('m'):.6g} kg, "
                               f"not the stored {result.value('m'):.6g} kg (files changed?)")
     made = with_series(fit, cost_map=cost_map)
     out = copy.deepcopy(result)

@@ -60,7 +60,7 @@ def run_horizons(trial: Trial, horizon: float, decimate: int) -> dict[str, Any] 
             "count": int(starts.size)}
 
 
-def _simulate_rows(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x0: np.ndarray, U: np.ndarray,
+def simulate_rows(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x0: np.ndarray, U: np.ndarray,
                    h: np.ndarray) -> np.ndarray:
     """(B, L, 6) predictions of rows with inputs ``U`` (B, L, 4) and steps ``h`` (B, L - 1)."""
     B, L = U.shape[:2]
@@ -155,7 +155,7 @@ def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRu
         h = np.concatenate([pad(np.repeat(hz[i]["h"][None], hz[i]["count"], 0), None) for _, _, i in blocks])
         Th = {md: np.concatenate([np.repeat(m.theta(md)[None], hz[i]["count"], 0) for _, m, i in blocks])
               for md in mmg.MODES}
-        P = _simulate_rows(model0, Th, x0, U, h)
+        P = simulate_rows(model0, Th, x0, U, h)
         r0 = 0
         for cname, _, i in blocks:
             H = hz[i]
@@ -181,4 +181,4 @@ def cross_validate_horizons(trials: Sequence[Trial], runs: Sequence[R.SmoothedRu
     return table
 
 
-__all__ = ["cross_validate_horizons", "run_horizons"]
+__all__ = ["cross_validate_horizons", "run_horizons", "simulate_rows"]

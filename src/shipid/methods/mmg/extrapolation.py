@@ -39,11 +39,12 @@ The γ_R asymmetry calibrated on the training zig-zags' peak yaw rates is
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from shipid.data.basins import read_kvlcc2
+from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates import CANDIDATES
@@ -97,6 +98,26 @@ def replay(model: mmg.MmgModel, tr) -> dict[str, Any]:
     return out
 
 
+def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[str], ap: dict) -> dict:
+    """The :func:`cross_validate` row of one model on the validation runs ``val`` (file names ``names``):
+    peak-yaw-rate errors per side (%), heading RMS (deg), overshoot errors (deg), score = peak RMS + heading."""
+    per = {}
+    for f, tr in zip(names, val):
+        row = replay(model, tr)
+        row["overshoot_err_deg"] = zigzag_overshoots(model, tr, f, ap)["error"]
+        per[f] = row
+    rp = np.array([[r[f"r_peak_{s}_err_pct"] for s in ("stbd", "port")] for r in per.values()])
+    psi = np.array([r["psi_rms"] for r in per.values()])
+    ov = np.array([e for r in per.values() for e in r["overshoot_err_deg"]])
+    row = {"r_peak_rms_pct": float(np.sqrt(np.mean(rp ** 2))), "r_peak_stbd_mean_pct": float(rp[:, 0].mean()),
+           "r_peak_port_mean_pct": float(rp[:, 1].mean()), "psi_rms_deg": float(np.sqrt(np.mean(psi ** 2))),
+           "overshoot_rms_deg": float(np.sqrt(np.mean(ov ** 2))) if ov.size else float("nan"), "runs": per}
+    row["score"] = row["r_peak_rms_pct"] + row["psi_rms_deg"]
+    if not np.isfinite(row["score"]):
+        row["score"] = float("inf")
+    return row
+
+
 def cross_validate(cands: Mapping[str, Mapping] | None = None, *, root: Path | None = None,
                    progress=None) -> dict[str, dict]:
     """Fit every candidate on :data:`TRAIN`, score it on :data:`VALIDATE` (module docstring)."""
@@ -116,22 +137,7 @@ def cross_validate(cands: Mapping[str, Mapping] | None = None, *, root: Path | N
         except Exception as err:  # noqa: BLE001  (a candidate that cannot be fitted scores infinity)
             table[cname] = {"score": float("inf"), "error": str(err)}
             continue
-        per = {}
-        for f, tr in zip(VALIDATE, val):
-            row = replay(model, tr)
-            z = zigzag_overshoots(model, tr, f, ap)
-            row["overshoot_err_deg"] = z["error"]
-            per[f] = row
-        rp = np.array([[r[f"r_peak_{s}_err_pct"] for s in ("stbd", "port")] for r in per.values()])
-        psi = np.array([r["psi_rms"] for r in per.values()])
-        ov = np.array([e for r in per.values() for e in r["overshoot_err_deg"]])
-        row = {"r_peak_rms_pct": float(np.sqrt(np.mean(rp ** 2))), "r_peak_stbd_mean_pct": float(rp[:, 0].mean()),
-               "r_peak_port_mean_pct": float(rp[:, 1].mean()), "psi_rms_deg": float(np.sqrt(np.mean(psi ** 2))),
-               "overshoot_rms_deg": float(np.sqrt(np.mean(ov ** 2))) if ov.size else float("nan"), "runs": per}
-        row["score"] = row["r_peak_rms_pct"] + row["psi_rms_deg"]
-        if not np.isfinite(row["score"]):
-            row["score"] = float("inf")
-        table[cname] = row
+        table[cname] = score_validation(model, val, VALIDATE, ap)
         if progress is not None:
             progress(cname)
     return table
@@ -152,4 +158,4 @@ def format_table(table: Mapping[str, dict]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["TRAIN", "VALIDATE", "candidates", "replay", "cross_validate", "format_table"]
+__all__ = ["score_validation", "TRAIN", "VALIDATE", "candidates", "replay", "cross_validate", "format_table"]

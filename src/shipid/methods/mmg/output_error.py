@@ -39,7 +39,7 @@ import numpy as np
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import manoeuvres as MM
-from shipid.methods.mmg.cv_fast import run_horizons
+from shipid.methods.mmg.cv_fast import run_horizons, simulate_rows
 from shipid.models import mmg
 
 #: Heading and position scales of the criterion (the CV score's 10° ~ 1 m).
@@ -124,16 +124,7 @@ def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: H
     K, B, L = values.shape[0], H.count, H.U.shape[1]
     Th = MM.theta_rows(model, names, values)
     Th = {m: np.repeat(T, B, axis=0) for m, T in Th.items()}          # row = k * B + b
-    x = np.tile(H.x0, (K, 1))
-    U = np.tile(H.U, (K, 1, 1))
-    h = np.tile(H.h, (K, 1))
-    out = np.empty((K * B, L, 6))
-    out[:, 0] = x
-    with np.errstate(all="ignore"):
-        for k in range(L - 1):
-            u = U[:, k]
-            x = MM.rows_rk4(model, Th, x, u[:, 0], u[:, 1], h[:, k:k + 1], wind=(u[:, 2], u[:, 3]))
-            out[:, k + 1] = x
+    out = simulate_rows(model, Th, np.tile(H.x0, (K, 1)), np.tile(H.U, (K, 1, 1)), np.tile(H.h, (K, 1)))
     return out.reshape(K, B, L, 6)
 
 

@@ -57,7 +57,7 @@ from shipid.data.basins import read_kvlcc2
 from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg.candidates import apply_candidate, candidate_config
-from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, replay
+from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, replay, score_validation
 from shipid.methods.mmg.study import zigzag_overshoots
 from shipid.methods.mmg.zigzag import kvlcc2_autopilot, zigzag_angles
 from shipid.models import mmg
@@ -138,23 +138,6 @@ def refine_minimum(x: Sequence[float], y: Sequence[float]) -> float:
     return float(np.clip(-B / (2 * A), x0, x2))
 
 
-def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[str], ap: dict) -> dict:
-    """The :func:`shipid.methods.mmg.extrapolation.cross_validate` row of one model."""
-    per = {}
-    for f, tr in zip(names, val):
-        row = replay(model, tr)
-        row["overshoot_err_deg"] = zigzag_overshoots(model, tr, f, ap)["error"]
-        per[f] = row
-    rp = np.array([[r[f"r_peak_{s}_err_pct"] for s in ("stbd", "port")] for r in per.values()])
-    psi = np.array([r["psi_rms"] for r in per.values()])
-    ov = np.array([e for r in per.values() for e in r["overshoot_err_deg"]])
-    row = {"r_peak_rms_pct": float(np.sqrt(np.mean(rp ** 2))), "r_peak_stbd_mean_pct": float(rp[:, 0].mean()),
-           "r_peak_port_mean_pct": float(rp[:, 1].mean()), "psi_rms_deg": float(np.sqrt(np.mean(psi ** 2))),
-           "overshoot_rms_deg": float(np.sqrt(np.mean(ov ** 2))) if ov.size else float("nan"), "runs": per}
-    row["score"] = row["r_peak_rms_pct"] + row["psi_rms_deg"]
-    if not np.isfinite(row["score"]):
-        row["score"] = float("inf")
-    return row
 
 
 def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, root: Path | None = None,
