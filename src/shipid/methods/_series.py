@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+from typing import Mapping
 
 
 def noted(result, text: str):
@@ -10,6 +11,19 @@ def noted(result, text: str):
     out = copy.deepcopy(result)
     out.diagnostics["warnings"] = [*(out.diagnostics.get("warnings") or []), f"report series not made: {text}"]
     return out
+
+
+def recorded_call(result, method: str, call_key: str, made_key: str) -> Mapping | None:
+    """The call recorded in ``result.provenance[call_key]`` when the series are still to be made, else None.
+
+    None when ``result`` is not a ``method`` result, already holds ``series[made_key]``, or records no call.
+    """
+    series = result.series if isinstance(result.series, Mapping) else {}
+    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
+    call = prov.get(call_key)
+    if result.method != method or series.get(made_key) or not isinstance(call, Mapping):
+        return None
+    return call
 
 
 def first_unreproduced(stored, refit) -> str | None:
@@ -23,4 +37,4 @@ def first_unreproduced(stored, refit) -> str | None:
     return None
 
 
-__all__ = ["noted", "first_unreproduced"]
+__all__ = ["noted", "recorded_call", "first_unreproduced"]

@@ -27,7 +27,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.methods._series import first_unreproduced, noted
+from shipid.methods._series import first_unreproduced, noted, recorded_call
 from shipid.methods._trials import as_trial, grouped
 from shipid.methods.dp.entry import REQUIRED
 from shipid.methods.dp.estimator import DPFit, DPOptions, fit_dp
@@ -168,10 +168,8 @@ def with_series(fit, *, trials: Mapping | None = None) -> Result:
 
 def _from_trials(result, trials):
     """:func:`with_series` of a stored result (see there)."""
-    series = result.series if isinstance(result.series, Mapping) else {}
-    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
-    call = prov.get("dp_call")
-    if result.method != "dp" or series.get("histories") or not isinstance(call, Mapping):
+    call = recorded_call(result, "dp", "dp_call", "histories")
+    if call is None:
         return result
     if trials is None:
         files = call.get("files") or {}
@@ -187,7 +185,7 @@ def _from_trials(result, trials):
         t = {g: [as_trial(x, required=list(REQUIRED), manoeuvre=f"dp-{g}") for x in ts] for g, ts in groups.items()}
         vessel = dp.dp_vessel(load_vessel(str(call.get("vessel") or "supply")))
         known = DPOptions.__dataclass_fields__
-        opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in (prov.get("options") or {}).items()
+        opts = {k: (tuple(v) if isinstance(v, list) else v) for k, v in (result.provenance.get("options") or {}).items()
                 if k in known}
         tt = result.diagnostics.get("theta_true")
         with warnings.catch_warnings():

@@ -34,7 +34,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.methods._series import first_unreproduced, noted
+from shipid.methods._series import first_unreproduced, noted, recorded_call
 from shipid.methods._trials import as_list, as_trial
 from shipid.methods.ebm.design import paper_comparison, prbs_grid
 from shipid.methods.ebm.estimator import EbmConfig, EbmRun, identify_run
@@ -231,10 +231,8 @@ def _config(d: Mapping | None) -> EbmConfig:
 
 def _from_trials(result, trials):
     """:func:`with_series` of a stored result (see there)."""
-    series = result.series if isinstance(result.series, Mapping) else {}
-    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
-    call = prov.get("ebm_call")
-    if result.method != "ebm" or series.get("signals") or not isinstance(call, Mapping):
+    call = recorded_call(result, "ebm", "ebm_call", "signals")
+    if call is None:
         return result
     vessel = str(call.get("vessel") or "esso-osaka")
     if trials is None:

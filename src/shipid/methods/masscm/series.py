@@ -34,7 +34,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.methods._series import noted
+from shipid.methods._series import noted, recorded_call
 from shipid.data.io import read_trial
 from shipid.methods._trials import as_trial, grouped
 from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
@@ -216,10 +216,8 @@ def with_series(fit, *, cost_map: bool = False, trials: Mapping | None = None) -
 
 def _from_files(result, cost_map: bool, trials: Mapping | None = None):
     """:func:`with_series` of a stored result (see there)."""
-    series = result.series if isinstance(result.series, Mapping) else {}
-    prov = result.provenance if isinstance(result.provenance, Mapping) else {}
-    call = prov.get("mass_cm_call")
-    if result.method != "mass-cm" or series.get("overlays") or not isinstance(call, Mapping):
+    call = recorded_call(result, "mass-cm", "mass_cm_call", "overlays")
+    if call is None:
         return result
     files = call.get("files") or []
     if trials is None:
@@ -250,9 +248,9 @@ def _from_files(result, cost_map: bool, trials: Mapping | None = None):
                               f"not the stored {result.value('m'):.6g} kg (files changed?)")
     made = with_series(fit, cost_map=cost_map)
     out = copy.deepcopy(result)
-    out.series = {**dict(series), **{k: v for k, v in made.series.items()
-                                     if k in ("overlays", "residuals", "contours")}}
-    out.provenance = {**dict(prov), "inputs": made.provenance.get("inputs", [])}
+    kept = result.series if isinstance(result.series, Mapping) else {}
+    out.series = {**dict(kept), **{k: v for k, v in made.series.items() if k in ("overlays", "residuals", "contours")}}
+    out.provenance = {**dict(result.provenance), "inputs": made.provenance.get("inputs", [])}
     return out
 
 
