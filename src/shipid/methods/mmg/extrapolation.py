@@ -98,6 +98,21 @@ def replay(model: mmg.MmgModel, tr) -> dict[str, Any]:
     return out
 
 
+def large_angle_split(root: Path | None = None):
+    """The large-angle cross-validation's data: ``(prior, train, runs, autopilot, validate)``.
+
+    The kvlcc2_hsva prior, the :data:`TRAIN` zig-zags read and smoothed, the autopilot identified from
+    them (:func:`~shipid.methods.mmg.zigzag.kvlcc2_autopilot`) and the :data:`VALIDATE` zig-zags read; no
+    other run is read.
+    """
+    prior = mmg.load_published("kvlcc2_hsva", root)
+    train = [read_kvlcc2(f, root) for f in TRAIN]
+    runs = [R.smooth_run(tr) for tr in train]
+    ap = kvlcc2_autopilot(train, TRAIN)
+    val = [read_kvlcc2(f, root) for f in VALIDATE]
+    return prior, train, runs, ap, val
+
+
 def score_validation(model: mmg.MmgModel, val: Sequence[Trial], names: Sequence[str], ap: dict) -> dict:
     """The :func:`cross_validate` row of one model on the validation runs ``val`` (file names ``names``):
     peak-yaw-rate errors per side (%), heading RMS (deg), overshoot errors (deg), score = peak RMS + heading."""
@@ -123,11 +138,7 @@ def cross_validate(cands: Mapping[str, Mapping] | None = None, *, root: Path | N
     """Fit every candidate on :data:`TRAIN`, score it on :data:`VALIDATE` (module docstring)."""
 
     cands = candidates() if cands is None else cands
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    train = [read_kvlcc2(f, root) for f in TRAIN]
-    runs = [R.smooth_run(tr) for tr in train]
-    ap = kvlcc2_autopilot(train, TRAIN)
-    val = [read_kvlcc2(f, root) for f in VALIDATE]
+    prior, train, runs, ap, val = large_angle_split(root)
     table: dict[str, dict] = {}
     for cname, cand in cands.items():
         cprior, free = R.apply_candidate(prior, cand)
@@ -158,4 +169,4 @@ def format_table(table: Mapping[str, dict]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["score_validation", "TRAIN", "VALIDATE", "candidates", "replay", "cross_validate", "format_table"]
+__all__ = ["large_angle_split", "score_validation", "TRAIN", "VALIDATE", "candidates", "replay", "cross_validate", "format_table"]

@@ -53,13 +53,11 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_kvlcc2
 from shipid.data.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg.candidates import apply_candidate, candidate_config
-from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, replay, score_validation
-from shipid.methods.mmg.study import zigzag_overshoots
-from shipid.methods.mmg.zigzag import kvlcc2_autopilot, zigzag_angles
+from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, large_angle_split, replay, score_validation
+from shipid.methods.mmg.zigzag import zigzag_angles
 from shipid.models import mmg
 
 #: γ_R asymmetry fractions tried (module docstring).
@@ -153,11 +151,7 @@ def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, roo
     if particulars:
         cands = {k: dict(c, particulars=dict(c.get("particulars") or {}, **particulars)) for k, c in cands.items()}
     suffix = "".join(f"/{k}-{v:g}" for k, v in (particulars or {}).items())
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    train = [read_kvlcc2(f, root) for f in TRAIN]
-    runs = [R.smooth_run(tr) for tr in train]
-    ap = kvlcc2_autopilot(train, TRAIN)
-    val = [read_kvlcc2(f, root) for f in VALIDATE]
+    prior, train, runs, ap, val = large_angle_split(root)
     out: dict[str, dict] = {}
     for base in bases:
         a, table = calibrate(runs, train, TRAIN, prior, cands[base], grid, parameter=parameter)

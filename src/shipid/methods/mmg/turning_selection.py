@@ -89,17 +89,16 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_kvlcc2
 from shipid.data.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
-from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE
+from shipid.methods.mmg.extrapolation import VALIDATE, large_angle_split
 from shipid.methods.mmg.side_calibration import (MIN_SWITCH_DEG, SIDE_GAIN_GRID, fit_candidate, refine_minimum,
                                                  score_validation, with_asymmetry)
-from shipid.methods.mmg.zigzag import execute_index, kvlcc2_autopilot, zigzag_angles
+from shipid.methods.mmg.zigzag import execute_index, zigzag_angles
 from shipid.models import mmg
 
 #: Key of a candidate whose particular of that name is calibrated on the training runs.
@@ -340,11 +339,7 @@ def nested_criterion_check(*, root: Path | None = None) -> dict[str, Any]:
     (and calibrated, :func:`resolve`) on them, and scored on the 20°–30° ones
     (:data:`~shipid.methods.mmg.extrapolation.VALIDATE`) by
     :func:`shipid.methods.mmg.side_calibration.score_validation`. Reads no other run."""
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    trs = [read_kvlcc2(f, root) for f in TRAIN]
-    runs = [R.smooth_run(t) for t in trs]
-    ap = kvlcc2_autopilot(trs, TRAIN)
-    val = [read_kvlcc2(f, root) for f in VALIDATE]
+    prior, trs, runs, ap, val = large_angle_split(root)
     cands = TURNING_CANDIDATES[prior.structure]
     out: dict[str, Any] = {}
     for crit in CRITERIA:
