@@ -67,6 +67,15 @@ def _file_id(path: str) -> str:
         return ""
 
 
+def undetermined_note(value: float, se: float) -> str:
+    """``""`` when the data determine a coefficient, else the note saying why not: its standard error is
+    not finite or not below its magnitude (the value is kept in the model)."""
+    if np.isfinite(se) and se < abs(value):
+        return ""
+    return (f"; SE {'not finite' if not np.isfinite(se) else 'not below |value|'}: not determined by the data "
+            "(the value is kept in the model)")
+
+
 def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *, structure_name: str,
                  selection: Mapping | None = None, smooth_config: SmoothConfig = SmoothConfig(),
                  fit_config: FitConfig = FitConfig(), extra_provenance: Mapping | None = None,
@@ -89,13 +98,8 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
             if c in f.free.get(mode, ()):
                 i = f.free[mode].index(c)
                 v, se = float(f.fits[mode].theta[i]), float(se_of[c])
-                # the data do not determine a coefficient whose SE is not finite or not below its magnitude
-                if np.isfinite(se) and se < abs(v):
-                    est[c] = Estimate(v, se, unit, "estimated", cov_note)
-                else:
-                    est[c] = Estimate(v, se, unit, "not determined",
-                                      f"{cov_note}; SE {'not finite' if not np.isfinite(se) else 'not below |value|'}"
-                                      ": not determined by the data (the value is kept in the model)")
+                why = undetermined_note(v, se)
+                est[c] = Estimate(v, se, unit, "not determined" if why else "estimated", cov_note + why)
             else:
                 why = "regime not visited in the training runs" if c in f.dropped.get(mode, ()) else \
                     "not free in the chosen structure"
@@ -265,11 +269,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     if oe is not None:
         for c in oe.names:
             e = res.estimates[c]
-            # the data do not determine a coefficient whose SE is not finite or not below its magnitude
-            ok = bool(np.isfinite(e.std) and e.std < abs(e.value))
-            why = "" if ok else ("; SE not finite" if not np.isfinite(e.std) else "; SE not below |value|") + \
-                ": not determined by the data (the value is kept in the model)"
-            res.estimates[c] = Estimate(e.value, e.std, e.unit, e.status if ok else "not determined",
+            why = undetermined_note(e.value, e.std)
+            res.estimates[c] = Estimate(e.value, e.std, e.unit, "not determined" if why else e.status,
                                         "output-error refinement on 60-s restarted horizons; horizon-cluster "
                                         "sandwich SE" + why)
         res.diagnostics["output_error"] = {
@@ -284,5 +285,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     return res
 
 
-__all__ = ["select_structure", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
+__all__ = ["select_structure", "undetermined_note", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
            "MIN_HORIZONS_PER_COEFFICIENT"]
