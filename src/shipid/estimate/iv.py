@@ -100,8 +100,17 @@ def lag_gram(ZT: np.ndarray, h: np.ndarray, nls: tuple[int, ...]) -> np.ndarray:
     ``S[(k,i+1), (l,j+1)] = S[(k,i), (l,j)] + h h^T - e e^T`` (``e`` the last row of ``Z``): every entry is
     a lag-0 row of ``S`` (a small product) plus a diagonal partial sum of ``D = h h^T - e e^T``.
     """
-    nz, f0, qidx, g1, g2, lag0 = _lag_layout(tuple(int(v) for v in nls))
-    e = ZT[:, -1]
+    lag0 = _lag_layout(tuple(int(v) for v in nls))[-1]
+    return lag_gram_from(ZT[lag0] @ ZT.T, h, ZT[:, -1], nls)
+
+
+def lag_gram_from(F0: np.ndarray, h: np.ndarray, e: np.ndarray, nls: tuple[int, ...]) -> np.ndarray:
+    """:func:`lag_gram` from its products: ``F0 = Z[:, lag0]^T Z`` (n_sig, n_z), the products of every
+    signal's lag-0 column with all columns, and ``e`` the last row of ``Z`` (``h`` as in :func:`lag_gram`).
+
+    Lets a caller form ``F0`` block by block without holding ``Z`` (:func:`shipid.methods.masscm.moments.lag_products`).
+    """
+    nz, f0, qidx, g1, g2, _lag0 = _lag_layout(tuple(int(v) for v in nls))
     D = np.outer(h, h) - np.outer(e, e)
     Q = np.zeros(nz * (2 * nz - 1))
     Q[qidx] = D.ravel()
@@ -109,7 +118,6 @@ def lag_gram(ZT: np.ndarray, h: np.ndarray, nls: tuple[int, ...]) -> np.ndarray:
     GCp = np.zeros((nz + 1, nz + 1))
     GCp[1:, 1:] = Qc.ravel()[qidx].reshape(nz, nz)
     GCf = GCp.ravel()
-    F0 = ZT[lag0] @ ZT.T
     return (F0.ravel()[f0] + GCf[g1] - GCf[g2]).reshape(nz, nz)
 
 
@@ -176,4 +184,5 @@ def iv_compress_products_compiled(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol
     return IVMoments(R=Rf[:ng, :ng].copy(), r=Rf[:ng, ng].copy(), rss0=rss0, n=n, rank_ok=bool(kept >= ng))
 
 
-__all__ = ["iv_compress_products_compiled", "lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram"]
+__all__ = ["iv_compress_products_compiled", "lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram",
+           "lag_gram_from"]

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from shipid.estimate.fir_kernels import fir_filter, lag_moments
-from shipid.estimate.iv import iv_compress, iv_compress_products, lag_gram, lag_matrix
+from shipid.estimate.iv import iv_compress, iv_compress_products, lag_gram_from, lag_matrix
 from shipid.methods.masscm.data import Dataset, diff2, first_row
 from shipid.methods.masscm.options import MassCMOptions
 from shipid.models.roll_reduced import KnownParams, bilinear_tf
@@ -128,16 +128,45 @@ def fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMO
     # Phi columns 0, 1 are -y delayed by 1, 2 samples (37): the filter commutes with the delay
     filt[4, 0], filt[4, 1:] = 0.0, -filt[9, :-1]
     filt[5, :2], filt[5, 2:] = 0.0, -filt[9, :-2]
+    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
+    ZtZ, ZtP = lag_products(filt, nls, filt[4:, s:], s)      # P: Phi columns then y, prefiltered
+    return iv_compress_products(ZtZ, ZtP, n - s)
+
+
+#: Instruments per block of :func:`lag_products` (a multiple of the 4 x 8 tile of the BLAS product kernel, so
+#: that each block's product computes every entry as the whole-matrix product does).
+LAG_BLOCK = 8
+
+
+def lag_products(F: np.ndarray, nls, P: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray]:
+    """``Z^T Z`` and ``Z^T P^T`` of the lag instruments (45) of the rows of ``F``, rows ``t = s .. n-1``.
+
+    Instrument ``(k, i)`` (signal after signal, lags ``i < nls[k]``) is ``F[k, t - i]``; ``P`` (n_P, n - s) the
+    prefiltered regressors and output on the same rows. The products are those of the explicit ``Z^T``
+    (``n_z x (n - s)``, the reference :func:`instruments`), formed :data:`LAG_BLOCK` instruments at a time:
+    the same dot products by the same BLAS calls on row blocks aligned as the whole matrix's, without
+    holding ``Z`` (at one hour of 50 Hz data ``Z^T`` is 72 MB, a block 12 MB). ``Z^T Z`` from the lag-0
+    products by :func:`shipid.estimate.iv.lag_gram_from`.
+    """
+    n = F.shape[1]
     m = n - s
-    blocks, h, nls = [], [], []
-    for k, nl in enumerate((options.n_y, options.n_as, options.n_r, options.n_delta)):
-        if nl:
-            blocks.append(np.lib.stride_tricks.sliding_window_view(filt[k, s - nl + 1:], m)[::-1])
-            h.append(filt[k, s - 1 - np.arange(nl)])
-            nls.append(nl)
-    ZT = np.concatenate(blocks, axis=0)                       # (n_z, m): row j = lag of one signal
-    P = filt[4:, s:]                                          # Phi columns then y, prefiltered
-    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(nls)), ZT @ P.T, m)
+    idx = [(k, i) for k, nl in enumerate(nls) for i in range(nl)]
+    used = tuple(nl for nl in nls if nl)
+    nz = len(idx)
+    A = np.ascontiguousarray(F[[k for k, nl in enumerate(nls) if nl], s:])     # the lag-0 rows of Z^T
+    F0 = np.empty((A.shape[0], nz))
+    ZtP = np.empty((nz, P.shape[0]))
+    W = np.empty((min(LAG_BLOCK, nz), m))
+    for g0 in range(0, nz, LAG_BLOCK):
+        rows = idx[g0:g0 + LAG_BLOCK]
+        Wb = W[:len(rows)]
+        for r, (k, i) in enumerate(rows):
+            Wb[r] = F[k, s - i:n - i]
+        ZtP[g0:g0 + len(rows)] = Wb @ P.T
+        F0[:, g0:g0 + len(rows)] = A @ Wb.T
+    h = np.array([F[k, s - 1 - i] for k, i in idx])
+    e = np.array([F[k, n - 1 - i] for k, i in idx])
+    return lag_gram_from(F0, h, e, used), ZtP
 
 
 def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
@@ -148,17 +177,17 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     (``lfilter``, from rest), the two delayed-``y`` columns of (37) are the delayed filtered ``y`` (the filter
     commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag structure
     (:func:`shipid.estimate.fir_kernels.lag_moments` when ``compute == "fast"``, else
-    :func:`shipid.estimate.iv.lag_gram`). Cost O(n n_z) per dataset and no n × n_z matrix, which is
-    what keeps long records linear in time and bounded in memory.
+    :func:`lag_products`). Cost O(n n_z) per dataset and no n × n_z matrix (the largest arrays are the
+    eight filtered signals and a block of :data:`LAG_BLOCK` instruments), which is what keeps long records
+    linear in time and bounded in memory.
     """
     s = first_row(options)
     n = ds.y.size
     da = diff2(a_hat)
     X, _nls = work_arrays(ds, options)
-    X = X.copy()
-    X[0] = y_hat - y_hat.mean()
-    X[1] = da - da.mean()
-    F = lfilter(L.a, L.c, X, axis=1) if L is not None else X          # = L.prefilter of each row
+    F = np.empty_like(X)                    # = L.prefilter of each row of X with rows 0, 1 replaced
+    for k, x in enumerate((y_hat - y_hat.mean(), da - da.mean(), *X[2:])):
+        F[k] = lfilter(L.a, L.c, x) if L is not None else x             # row by row: no second 8 x n array
     T = np.empty((6, n))
     T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
     T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
@@ -168,15 +197,8 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     if options.compute == "fast":
         ZtZ, ZtP = lag_moments(np.ascontiguousarray(F[:4]), np.array(nls, dtype=np.int64), T, s2)
         return iv_compress_products(ZtZ, ZtP, n - s2)
-    m = n - s2
-    blocks, h, used = [], [], []
-    for k, nl in enumerate(nls):
-        if nl:
-            blocks.append(np.lib.stride_tricks.sliding_window_view(F[k, s2 - nl + 1:], m)[::-1])
-            h.append(F[k, s2 - 1 - np.arange(nl)])
-            used.append(nl)
-    ZT = np.concatenate(blocks, axis=0)
-    return iv_compress_products(lag_gram(ZT, np.concatenate(h), tuple(used)), ZT @ T[:, s2:].T, m)
+    ZtZ, ZtP = lag_products(F, nls, T[:, s2:], s2)
+    return iv_compress_products(ZtZ, ZtP, n - s2)
 
 
 def build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMOptions):
@@ -219,4 +241,4 @@ def transient_length(L, n: int, options: MassCMOptions) -> int:
 
 
 __all__ = ["instruments", "closed_loop_sim", "fir_moments", "fir_moments_compiled", "fir_moments_numpy",
-           "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]
+           "LAG_BLOCK", "lag_products", "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]
