@@ -104,23 +104,30 @@ def work_arrays(ds: Dataset, options: MassCMOptions) -> tuple[np.ndarray, np.nda
     return ds.cache[key]
 
 
-def fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
-    """IV moments of one dataset for a FIR prefilter ``L = A(q)``, lag instruments, in numpy (reference).
-
-    The same quantities as the general path of :func:`build_moments` (``instruments`` + prefilter +
-    :func:`iv_compress`), arranged for speed: the iterate-independent columns are kept per dataset,
-    each of the ten signals is filtered once by ``np.convolve`` (what ``lfilter`` does for a FIR
-    filter), and the instrument matrix is built transposed and contiguous (one ``Z^T Z`` product).
-    """
-    s = first_row(options)
-    n = ds.y.size
+def input_differences(ds: Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """The iterate-independent instrument signals of dataset ``ds``: ``mu_hat`` of the black-box r (44) and the
+    rudder difference, both mean-removed (kept in ``ds.cache``; the other iterate-independent signals of the
+    numpy paths are read from ``ds.Phi`` and ``ds.y``, not copied)."""
     c = ds.cache
     if "dr0" not in c:
         dr0, dd = diff2(ds.r_hat0), diff2(ds.delta)
         c["dr0"], c["dd"] = dr0 - dr0.mean(), dd - dd.mean()
-        c["PhiT"] = np.ascontiguousarray(ds.Phi.T)
+    return c["dr0"], c["dd"]
+
+
+def fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMOptions):
+    """IV moments of one dataset for a FIR prefilter ``L = A(q)``, lag instruments, in numpy (reference).
+
+    The same quantities as the general path of :func:`build_moments` (``instruments`` + prefilter +
+    :func:`iv_compress`), arranged for speed: the iterate-independent signals are read from the dataset
+    (:func:`input_differences`, ``Phi``, ``y``), each of the ten signals is filtered once by ``np.convolve``
+    (what ``lfilter`` does for a FIR filter), and the products come from the lag structure block by block
+    (:func:`lag_products`).
+    """
+    s = first_row(options)
+    n = ds.y.size
     da = diff2(a_hat)
-    sig = [y_hat - y_hat.mean(), da - da.mean(), c["dr0"], c["dd"], None, None, *c["PhiT"][2:], ds.y]
+    sig = [y_hat - y_hat.mean(), da - da.mean(), *input_differences(ds), None, None, *ds.Phi[:, 2:].T, ds.y]
     filt = np.empty((len(sig), n))
     for k, x in enumerate(sig):
         if x is not None:
@@ -184,10 +191,10 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     s = first_row(options)
     n = ds.y.size
     da = diff2(a_hat)
-    X, _nls = work_arrays(ds, options)
-    F = np.empty_like(X)                    # = L.prefilter of each row of X with rows 0, 1 replaced
-    for k, x in enumerate((y_hat - y_hat.mean(), da - da.mean(), *X[2:])):
-        F[k] = lfilter(L.a, L.c, x) if L is not None else x             # row by row: no second 8 x n array
+    sig = (y_hat - y_hat.mean(), da - da.mean(), *input_differences(ds), *ds.Phi[:, 2:].T, ds.y)
+    F = np.empty((len(sig), n))             # the rows of work_arrays, prefiltered
+    for k, x in enumerate(sig):
+        F[k] = lfilter(L.a, L.c, x) if L is not None else x             # row by row: no 8 x n copy of the inputs
     T = np.empty((6, n))
     T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
     T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
@@ -241,4 +248,4 @@ def transient_length(L, n: int, options: MassCMOptions) -> int:
 
 
 __all__ = ["instruments", "closed_loop_sim", "fir_moments", "fir_moments_compiled", "fir_moments_numpy",
-           "LAG_BLOCK", "lag_products", "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]
+           "input_differences", "LAG_BLOCK", "lag_products", "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]
