@@ -102,11 +102,19 @@ def _format_si(units: dict[str, float]) -> str:
     return text
 
 
+#: Units already in the canonical SI spelling of :data:`shipid.data.trial.CHANNELS` (what ``shipid`` itself
+#: writes): SI unit = the unit, factor 1, no offset, without building the pint registry (about half a second of
+#: start-up). ``tests/data/test_units_si_spellings.py`` checks every entry against pint.
+SI_SPELLINGS = ("s", "m", "m/s", "m/s^2", "rad", "rad/s", "rad/s^2", "1/s", "kg", "kg*m^2", "N", "N*m", "-")
+
+
 @lru_cache(maxsize=512)
 def _parse(unit: str) -> tuple[str, str, float, bool]:
     """(pint expression, SI unit string, factor to SI, has offset) or raise ValueError."""
-    ureg = registry()
     expr = _pint_expr(unit)
+    if unit in SI_SPELLINGS:
+        return expr, unit, 1.0, False
+    ureg = registry()
     try:
         q = ureg.Quantity(1.0, expr)
         base = q.to_base_units()
