@@ -2,9 +2,10 @@
 
 ``theta_j = argmin sum_i ||R_i g_i(theta) - r_i||^2 / lam_i`` with ``R_i``, ``r_i`` the compressed IV moments
 of dataset i and ``g_i`` the map (33) of :mod:`shipid.models.roll_reduced`, in the load-moment
-parameterisation ``q = m z_m``. The map and its Jacobian are evaluated by the compiled kernel
+parameterisation ``q = m z_m``. The map and its Jacobian are evaluated by the kernel
 :func:`shipid.methods.masscm.search.g_and_jac` (tested against :func:`shipid.models.roll_reduced.discrete_coeffs`)
-for real arguments and by :func:`~shipid.models.roll_reduced.discrete_coeffs` itself for the complex step of the
+for real arguments (compiled in :func:`coeffs` on the fast path; run by the interpreter,
+:data:`~shipid.methods.masscm.search.g_and_jac_py`, in the residual functions, the same numbers) and by :func:`~shipid.models.roll_reduced.discrete_coeffs` itself for the complex step of the
 covariance. Searches: scipy's ``trf`` (reference), an undamped Gauss–Newton for warm starts
 (:func:`gauss_newton`), the compiled searches of :mod:`shipid.methods.masscm.search` (:func:`compiled_search`),
 and the initial-value-free linear start (:func:`linear_initial`).
@@ -19,7 +20,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from shipid.methods.masscm.options import I_ZF, MassCMOptions
-from shipid.methods.masscm.search import g_and_jac, gauss_newton as gauss_newton_compiled, known_array, \
+from shipid.methods.masscm.search import g_and_jac, g_and_jac_py, gauss_newton as gauss_newton_compiled, known_array, \
     levenberg_marquardt
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, KnownParams, discrete_coeffs
 
@@ -51,8 +52,9 @@ def residual_function(state: IVState, known: KnownParams, free: np.ndarray, thet
     entries ``x`` of theta (moment parameterisation), with the row ``(z_f - mean)/std`` of a prior.
 
     Returns ``(fun, full)``: ``fun(x)`` the residuals, ``fun.jac(x)`` their exact Jacobian and ``full(x)`` the
-    whole theta. Real ``x``: the map (33) and its Jacobian by the compiled
-    :func:`shipid.methods.masscm.search.g_and_jac`; complex ``x`` (complex-step derivatives of the covariance):
+    whole theta. Real ``x``: the map (33) and its Jacobian by :func:`shipid.methods.masscm.search.g_and_jac`
+    run by the interpreter (:data:`~shipid.methods.masscm.search.g_and_jac_py`: the same numbers, and the numpy
+    path of the estimator never starts numba, whose first call costs about 40 MB and 0.3 s); complex ``x`` (complex-step derivatives of the covariance):
     :func:`shipid.models.roll_reduced.discrete_coeffs`, the reference of that kernel.
     """
     w = 1.0 / np.sqrt(state.lam)
@@ -72,16 +74,16 @@ def residual_function(state: IVState, known: KnownParams, free: np.ndarray, thet
         if np.iscomplexobj(th):
             G = discrete_coeffs(th, known, state.conds, Ts, moment=True)
         else:
-            G = g_and_jac(th, code, Ts, kc, False)[0]
+            G = g_and_jac_py(th, code, Ts, kc, False)[0]
         res = (np.einsum("nij,nj->ni", Rs, G) - rs).ravel()
         if prior is not None:
             res = np.concatenate([res, np.atleast_1d((th[I_ZF] - prior[0]) / prior[1])])
         return res
 
     def jac(x):
-        """Exact Jacobian of ``fun`` (analytic, :func:`shipid.methods.masscm.search.g_and_jac`)."""
+        """Exact Jacobian of ``fun`` (analytic, :func:`shipid.methods.masscm.search.g_and_jac`, interpreted)."""
         th = full(x)
-        dG = g_and_jac(th, code, Ts, kc, True)[1][:, :, free]    # (n, 5, n_free)
+        dG = g_and_jac_py(th, code, Ts, kc, True)[1][:, :, free]    # (n, 5, n_free)
         J = np.einsum("nij,njk->nik", Rs, dG).reshape(-1, dG.shape[-1])
         if prior is not None:
             row = np.zeros((1, J.shape[1]))

@@ -26,6 +26,8 @@ without a cache, compiling all the mass-cm kernels costs about 27 s once per mac
 
 from __future__ import annotations
 
+import types
+
 import numpy as np
 from numba import njit
 
@@ -392,4 +394,22 @@ def levenberg_marquardt(x0, lo, hi, free_idx, th_fixed, Rs, rs, code, Ts, kc, pr
     return 0, x, nfev
 
 
-__all__ = ["NUMBA_LINALG_KEY", "CACHE_VALID", "sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
+
+def interpreted(kernel, **callees):
+    """The Python source of the compiled ``kernel`` run by the interpreter, the compiled functions it calls
+    replaced by ``callees`` (their Python sources, ``.py_func``).
+
+    The same IEEE double arithmetic (``njit`` without ``fastmath``: no reassociation, no fused multiply-add), so
+    the same numbers (``tests/methods/masscm/test_search_interpreted.py``), without numba's first-call start-up
+    (LLVM: about 40 MB of memory and 0.3 s), for a caller that evaluates a small kernel a few hundred times.
+    Differs where the compiled kernel raises: a float division by zero gives inf/nan here.
+    """
+    f = kernel.py_func
+    return types.FunctionType(f.__code__, {**f.__globals__, **callees}, f.__name__, f.__defaults__, f.__closure__)
+
+
+#: :func:`g_and_jac` run by the interpreter (:func:`interpreted`): what the residual functions of
+#: :mod:`shipid.methods.masscm.criterion` evaluate, so that the numpy path never starts numba.
+g_and_jac_py = interpreted(g_and_jac, _load_moment=_load_moment.py_func)
+
+__all__ = ["NUMBA_LINALG_KEY", "CACHE_VALID", "sim_terms", "lstsq_qr", "spd_solve", "g_and_jac", "interpreted", "g_and_jac_py", "residual", "gauss_newton", "levenberg_marquardt", "known_array", "KC_FIELDS"]
