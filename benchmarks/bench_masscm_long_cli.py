@@ -6,27 +6,29 @@ Three datasets (nominal, calibration, loaded) of ``DURATION`` s at 50 Hz each wi
 (:meth:`shipid.models.roll_sim.NoiseSpec.issue3`, seed ``SeedSequence([17, 0])`` as ``bench_masscm_long.py``)
 are written once as CSV files (by this tree), with the vessel's known quantities (z_f given) as TOML. Then
 ``python -m shipid identify mass-cm --nominal N --calibration C --loaded L --known K`` runs in a fresh process
-per tree (``PYTHONPATH`` = its ``src``; BLAS limited to one thread): this tree with ``-o FILE`` (the result
+per tree (``PYTHONPATH`` = its ``src``; every thread pool limited to one thread, :data:`ONE_CORE`): this tree with ``-o FILE`` (the result
 JSON), the peer (default ``/tmp/peer17/src``, a checkout of 83c235a, before issue 17's first change) with
-``--json``. Printed per tree and round: wall time of the process (imports, reading the CSV files, the estimate,
-writing), its peak resident set (``os.wait4``), the size of what it wrote; rounds alternate the order. What a
-user of the command sees, where ``bench_masscm_long.py`` isolates the estimate.
+``--json``. Printed per tree and round: the process's CPU time (user + sys of the child, ``os.wait4``: the
+measure of "on one core" on a shared machine), its wall time (imports, reading the CSV files, the estimate,
+writing; inflated by other load), its peak resident set, the size of what it wrote; rounds alternate the order.
+Then this tree against issue 17's target (CPU <= 5 s, max RSS <= 400 MB, JSON <= 2 MB) and the ratios
+this/peer of CPU time, wall time and max RSS. What a user of the command sees, where ``bench_masscm_long.py``
+isolates the estimate.
 
-Measured 2026-12-02 at load 2 (2 rounds): this tree 7.76 / 8.80 s, max RSS 468 MiB, result JSON 1.02 MB; peer
-15.58 / 16.95 s, 763 MiB; time ratio median 0.51. Of this tree's ~8 s, reading the three CSV files takes ~3-4.5 s
-(a Python float() per cell in ``data.io._read_csv``), the imports ~1.5-3 s, the estimate ~1.8 s
-(``bench_masscm_long.py``). Earlier at load 8-10: this tree 30.97 / 63.86 s, max RSS
-468 MiB (491 MB), result JSON 1.02 MB; peer (83c235a) 33.14 / 99.27 s, max RSS 763 MiB, ``--json`` output 91.3 MB
-(the issue's "0.79 GB and 92 MB" are these whole-process figures); time ratio median 0.79. Of this tree's 468
-MiB: 196 MiB after the imports (numpy 25, scipy +73, numba +53, the package +45), the estimate's own allocation
-peak 185 MiB (``bench_masscm_long.py``), and what reading the 55 MB of CSV leaves behind (reading alone takes the
-process to 410 MiB: ``data.io._read_csv`` holds every row's cell strings at once).
-
-With numpy's compiled reader for rows of the header's field count (``data.io._read_csv``), against the tree just
-before it (2026-12-02, load 3-5, 2 rounds): 16.65 / 26.77 s vs 36.66 / 34.07 s, time ratio median 0.62; max RSS
-437 MiB in both, so the peak is the estimate's, not the reading's.
+Measured 2026-12-02 at load 6-8 (2 rounds, peer = 83c235a at ``/tmp/peer83/src``): this tree CPU 4.39 / 4.55 s,
+wall 6.09 / 9.19 s, max RSS 294.6 / 292.8 MiB (308.9 MB), result JSON 1.027 MB; peer CPU 11.14 / 11.08 s, wall
+12.04 / 15.87 s, max RSS 763 MiB, ``--json`` output 91.3 MB; ratios this/peer: CPU 0.40, wall 0.54, max RSS 0.38.
+Against the target: CPU 0.89, max RSS 0.77. Of this tree's ~293 MiB, ~165 MiB are the imports (numpy, scipy
+with scipy.stats through scipy.signal, numba 53 MiB although the numpy path never calls a compiled kernel), ~47
+MiB the three trials, ~39 MiB the prepared datasets (regressors, black-box simulations), and the estimate's
+transient (the eight prefiltered signals of one dataset and a block of eight lagged instruments,
+``moments.lag_products``) ~45 MiB. Before this (the tree at 6057835, same files, load 2-7): CPU 6.3-7.7 s, max
+RSS 437-461 MiB: the moments formed the 50 x n instrument matrix (72 MB at one hour) and copied the 8 x n work
+arrays, the first residual evaluation started numba's LLVM (~40 MiB), and the CSV units built the pint registry
+(~0.5 s).
 
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2]
+        (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
 """
 
 import os
@@ -52,9 +54,14 @@ g = {g}
 z_f = -0.028
 """
 
+#: One core: every thread pool of the child limited to one thread.
+ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+#: Issue 17's target for the whole command on the three one-hour files.
+TARGET_CPU_S, TARGET_MB = 5.0, 400.0
+
 
 def run(src: str, files: dict, out: str | None, json_path: str) -> dict:
-    env = dict(os.environ, PYTHONPATH=src, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    env = dict(os.environ, PYTHONPATH=src, **ONE_CORE)
     cmd = [sys.executable, "-m", "shipid", "identify", "mass-cm", "--nominal", files["nominal"],
            "--calibration", files["calibration"], "--loaded", files["loaded"], "--known", files["known"]]
     cmd += ["-o", out, "--force"] if out else ["--json"]
@@ -65,8 +72,8 @@ def run(src: str, files: dict, out: str | None, json_path: str) -> dict:
     wall = time.perf_counter() - t0
     p.returncode = os.waitstatus_to_exitcode(status)
     size = Path(out).stat().st_size if out else Path(json_path).stat().st_size
-    return {"wall_s": wall, "maxrss_mib": ru.ru_maxrss / 1024, "bytes": size, "rc": p.returncode,
-            "stderr": p.stderr.read()[-400:]}
+    return {"wall_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime, "maxrss_mib": ru.ru_maxrss / 1024, "bytes": size,
+            "rc": p.returncode, "stderr": p.stderr.read()[-400:]}
 
 
 def main():
@@ -91,21 +98,32 @@ def main():
     trees = [("this tree", here, str(tmp / "this.json")), ("peer", peer, None)]
     if not Path(peer).is_dir():
         trees = trees[:1]
-    walls = {t[0]: [] for t in trees}
+    rows = {t[0]: [] for t in trees}
     for k in range(rounds):
         for label, src, out in (trees if k % 2 == 0 else trees[::-1]):
             r = run(src, files, out, str(tmp / f"{label.replace(' ', '_')}.stdout"))
             if r["rc"]:
                 print(f"  {label}: exit {r['rc']}: {r['stderr']}")
                 continue
-            walls[label].append(r["wall_s"])
-            print(f"  {label:10s} wall {r['wall_s']:7.2f} s  max RSS {r['maxrss_mib']:7.1f} MiB  "
+            rows[label].append(r)
+            print(f"  {label:10s} CPU {r['cpu_s']:6.2f} s  wall {r['wall_s']:7.2f} s  max RSS {r['maxrss_mib']:6.1f} MiB "
+                  f"({r['maxrss_mib'] * 2**20 / 1e6:5.1f} MB)  "
                   f"{'result JSON (-o)' if out else 'stdout (--json)'} {r['bytes'] / 1e6:.3f} MB  "
                   f"load {os.getloadavg()[0]:.1f}", flush=True)
-    if len(walls) == 2 and walls["peer"] and walls["this tree"]:
-        ratios = np.array(walls["this tree"]) / np.array(walls["peer"])
-        print(f"time ratio this/peer: median {np.median(ratios):.2f} (each {', '.join(f'{x:.2f}' for x in ratios)})")
-
+    this = rows["this tree"]
+    if this:
+        cpu = np.median([r["cpu_s"] for r in this])
+        mb = max(r["maxrss_mib"] for r in this) * 2**20 / 1e6
+        print(f"this tree against the target: CPU (user+sys) median {cpu:.2f} s / {TARGET_CPU_S:g} s = "
+              f"{cpu / TARGET_CPU_S:.2f}; max RSS {mb:.1f} MB / {TARGET_MB:g} MB = {mb / TARGET_MB:.2f}; "
+              f"result JSON {max(r['bytes'] for r in this) / 1e6:.3f} MB / 2 MB")
+    if rows.get("peer") and this:
+        n = min(len(this), len(rows["peer"]))
+        for key, name in (("cpu_s", "CPU time"), ("wall_s", "wall time"), ("maxrss_mib", "max RSS")):
+            ratios = np.array([a[key] for a in this[:n]]) / np.array([b[key] for b in rows["peer"][:n]])
+            print(f"ratio this/peer, {name}: median {np.median(ratios):.2f} (each {', '.join(f'{x:.2f}' for x in ratios)})")
+    print("(CPU: user+sys of the child process (os.wait4), the measure on a shared machine; wall time is what a user "
+          "waits, inflated by other load)")
 
 if __name__ == "__main__":
     main()
