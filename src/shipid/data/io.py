@@ -386,16 +386,19 @@ def _read_csv(p: Path, label: str) -> RawTable:
         data_lines = [line.replace(",", ".") for line in data_lines]
     ncol = len(names)
     meta = {"encoding": enc, "csv_dialect": dialect.as_meta()}
-    if not quoted and ncol > 1 and all(line.count(sep) == ncol - 1 for line in data_lines):
-        # every row has the header's field count: numpy's compiled reader, whose float parsing is
-        # correctly rounded as float() is (the same doubles); any cell it refuses (empty, '1_0', text)
-        # falls through to the cell-by-cell path below, which names the file, channel and row
+    if not quoted and ncol > 1:
+        # numpy's compiled reader, whose float parsing is correctly rounded as float() is (the same doubles),
+        # kept when it read every row with the header's field count: it refuses (ValueError) a row whose field
+        # count differs from the first row's and any cell it cannot parse (empty, '1_0', text), and skips empty
+        # lines (then it has fewer rows); all of these fall through to the cell-by-cell path below, which
+        # names the file, channel and row
         try:
             data = np.loadtxt(data_lines, delimiter=sep, dtype=np.float64, ndmin=2, comments=None)
         except ValueError:
             pass
         else:
-            return RawTable(names, units, data, np.arange(1, len(data_lines) + 1), meta)
+            if data.shape == (len(data_lines), ncol):
+                return RawTable(names, units, data, np.arange(1, len(data_lines) + 1), meta)
     if quoted:
         cells = list(csv.reader(data_lines, delimiter=sep))
     else:
