@@ -24,8 +24,8 @@ MiB the three trials, ~39 MiB the prepared datasets (regressors, black-box simul
 transient (the eight prefiltered signals of one dataset and a block of eight lagged instruments,
 ``moments.lag_products``) ~45 MiB. Against the tree just before (6057835 as the peer, load 6.5, 2 rounds): CPU
 4.16 / 4.27 s vs 5.14 / 5.27 s (ratio 0.81), max RSS 294 vs 438 MiB (459 MB; ratio 0.67), the same JSON. There
-the moments formed the 50 x n instrument matrix (72 MB at one hour) and copied the 8 x n work arrays, the first residual evaluation started numba's LLVM (~40 MiB), and the CSV units built the pint registry
-(~0.5 s).
+the moments formed the 50 x n instrument matrix (72 MB at one hour) and copied the 8 x n work arrays, the
+first residual evaluation started numba's LLVM (~40 MiB), and the CSV units built the pint registry (~0.5 s).
 
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2]
         (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
