@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'ef79af8c27e2f2b4'
+SOURCES = 'ccc91829ec235fa5'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -57,6 +57,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.cli.campaign_cmds', 'Export a campaign store to Parquet or CSV, one row per run.', False),
     ('study', 'kvlcc2-large-angle'):
         ('shipid.methods.mmg.cli', "KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the kvlcc2-zigzag study's held-out runs.", False),
+    ('study', 'kvlcc2-nested'):
+        ('shipid.methods.mmg.cli_turning_nested', 'KVLCC2 HSVA: default, turning and automatic selection, leave-one-rudder-angle-out (nested CV).', False),
     ('study', 'kvlcc2-sides'):
         ('shipid.methods.mmg.cli_side_calibration', 'KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.', False),
     ('study', 'kvlcc2-zigzag'):

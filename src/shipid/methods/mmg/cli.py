@@ -283,6 +283,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
               selection="auto"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg import turning_nested as TN
     from shipid.methods.mmg import turning_selection as TS
 
     if not paths:
@@ -316,6 +317,12 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
             raise ShipidError(f"--selection turning: no turning candidates for the structure '{pm.structure}' "
                               f"(only {', '.join(TS.TURNING_CANDIDATES)})")
         sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": TS.select_for_turning,
+                  "resolve": TS.resolve}
+    elif selection == "turning-auto":
+        if pm.structure not in TS.TURNING_CANDIDATES:
+            raise ShipidError(f"--selection turning-auto: no turning candidates for the structure '{pm.structure}' "
+                              f"(only {', '.join(TS.TURNING_CANDIDATES)})")
+        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": TN.select_auto,
                   "resolve": TS.resolve}
     else:
         sel_kw = {}
@@ -352,12 +359,14 @@ _ID_OPTS = [
     click.option("--structure", default="auto", show_default=True,
                  help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
     click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
-    click.option("--selection", default="auto", show_default=True, type=click.Choice(["auto", "horizons", "turning"]),
+    click.option("--selection", default="auto", show_default=True, type=click.Choice(["auto", "horizons", "turning", "turning-auto"]),
                  help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors, "
                       "shipid.methods.mmg.candidates.CANDIDATES), 'turning' (open-loop peak yaw rate per side and "
                       "heading of the left-out zig-zags, shipid.methods.mmg.turning_selection; Yasukawa-2015 "
                       "structure only, opt-in: its criterion was fixed after seeing a CV table, and on two training runs it chose a model "
-                      "with 11.9 deg heading RMS on a third run where horizons gave 2.4); 'auto': horizons."),
+                      "with 11.9 deg heading RMS on a third run where horizons gave 2.4); 'turning-auto' (the peak criterion "
+                      "under a heading limit, with the horizon choice below 4 runs with switch >= 5 deg at 2 "
+                      "rudder angles, shipid.methods.mmg.turning_nested); 'auto': horizons."),
     click.option("--refine", default="auto", show_default=True,
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "

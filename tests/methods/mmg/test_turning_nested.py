@@ -1,0 +1,106 @@
+"""The automatic turning selection's guard, heading constraint and decision rule (shipid.methods.mmg.turning_nested)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from shipid.methods.mmg import turning_nested as N
+
+
+def _runs(*names):
+    return [SimpleNamespace(meta={"source": f"/x/HSVA_CPMC_KVLCC2_Z_{n}.dat"}) for n in names]
+
+
+def test_guard_counts_runs_with_switch_of_5_deg_or_more_at_distinct_angles():
+    assert not N.guard(_runs("10_05", "15_05"))[0]                       # two runs
+    assert not N.guard(_runs("10_05", "10_10_P", "10_10_S", "10_05"))[0]  # one angle
+    assert not N.guard(_runs("10_01", "15_01", "10_05", "15_05", "20_05"))[0]  # 1-deg runs do not count: 3
+    assert N.guard(_runs("10_05", "10_10_P", "15_05", "20_05"))[0]
+    assert not N.guard(_runs("10_01", "15_01", "10_05", "15_05"))[0]     # only 2 count
+
+
+def _tables(monkeypatch, peak, psi, horizon):
+    names = list(peak)
+
+    def fake_default(trials, runs, prior, cands, config=None, folds=None):
+        t = {c: {"score": horizon[c]} for c in cands}
+        return min(t, key=lambda c: t[c]["score"]), t
+
+    def fake_turning(trials, runs, prior, cands, config=None, folds=None, *, criterion="peak"):
+        t = {c: {"score": peak[c], "psi_rms": psi[c]} for c in names}
+        return min(t, key=lambda c: t[c]["score"]), t, "m"
+
+    monkeypatch.setattr(N, "select_structure", fake_default)
+    monkeypatch.setattr(N.TS, "select_for_turning", fake_turning)
+    monkeypatch.setattr(N, "CANDIDATES", {"s": {"a": {}, "b": {}}})
+    return {c: {} for c in names}
+
+
+def test_select_auto_takes_lowest_peak_within_heading_limit(monkeypatch):
+    # default (horizons) chooses 'a' (heading 4); 'c' has the lowest peak error but heading 6.5 > 1.5 x 4
+    cands = _tables(monkeypatch, peak={"a": 6.0, "b": 5.0, "c": 3.0}, psi={"a": 4.0, "b": 5.9, "c": 6.5},
+                    horizon={"a": 1.0, "b": 2.0})
+    prior = SimpleNamespace(structure="s")
+    trials = _runs("10_05", "10_10_P", "15_05", "20_05")
+    name, table, method = N.select_auto(trials, None, prior, cands)
+    assert name == "b"
+    assert table["c"]["within_heading_limit"] is False and "6.00 deg" in method
+
+
+def test_select_auto_falls_back_to_default_on_few_runs(monkeypatch):
+    cands = _tables(monkeypatch, peak={"a": 6.0, "b": 1.0}, psi={"a": 4.0, "b": 4.0}, horizon={"a": 2.0, "b": 1.0})
+    name, table, method = N.select_auto(_runs("10_05", "15_05"), None, SimpleNamespace(structure="s"), cands)
+    assert name == "b" and "not used" in method and set(table) == {"a", "b"}
+
+
+def _fold(score, hor):
+    return {"score": score, "horizon_score": hor}
+
+
+@pytest.mark.parametrize("auto_big, auto_small, expect", [(10.0, 1.0, True), (10.0, 1.2, False), (16.0, 1.0, False)])
+def test_decision_rule(auto_big, auto_small, expect):
+    folds = {}
+    for a in (5, 10, 15, 20, 25, 30):
+        big = a >= 20
+        folds[str(a)] = {"default": _fold(15.0 if big else float("nan"), 1.1 if big else 1.0),
+                         "auto": _fold(auto_big if big else float("nan"), 1.1 if big else auto_small)}
+    s = N.summarise(folds, ("default", "auto"))
+    assert s["auto_becomes_default"] is expect
+    assert np.isclose(s["default"]["large_score_mean"], 15.0) and s["default"]["large_score_sd"] == 0.0
+
+
+@pytest.mark.slow
+def test_nested_cv_with_two_training_runs_falls_back_to_the_default(monkeypatch):
+    """Three zig-zags, one per angle: every outer fold trains on two runs, so the guard keeps the default
+    choice, and the automatic procedure scores exactly as the default; no other run is read."""
+    from shipid.data.basins import read_kvlcc2
+
+    read = []
+    monkeypatch.setattr(N, "read_kvlcc2", lambda f, root=None: read.append(f) or read_kvlcc2(f, root))
+    names = ("HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat")
+    try:
+        res = N.nested_cv(names, procedures=("default", "auto"))
+    except FileNotFoundError:
+        pytest.skip("HSVA data not available")
+    assert sorted(read) == sorted(names)
+    assert list(res["folds"]) == ["10", "15", "20"]
+    for row in res["folds"].values():
+        assert row["auto"]["chosen"] == row["default"]["chosen"]
+        assert row["auto"]["score"] == row["default"]["score"]
+
+
+def test_cli_turning_auto_refuses_a_structure_without_turning_candidates(capsys):
+    """--selection turning-auto with the Esso prior: one line naming the structure, exit 2, no traceback."""
+    from shipid.cli import main
+    from shipid.data import data_root
+
+    root = data_root()
+    rel = "esso_osaka_3m/data/zigzag/zigzag_31-Jul-2020_13_04_24.csv"
+    if root is None or not (root / rel).exists():
+        pytest.skip("shared data not found (set SHIPID_DATA)")
+    rc = main(["identify", "mmg", "--trial", str(root / rel), "--trial", str(root / rel), "--prior", "esso_osaka_3m",
+               "--selection", "turning-auto", "--json"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "turning-auto: no turning candidates for the structure 'esso-lowspeed'" in err
+    assert "Traceback" not in err
