@@ -41,7 +41,8 @@ Measured on the tuning seeds (``SeedSequence([100, i])``, 300-s records, the cov
 from -0.46 to the bound 2.0, true -0.182; the LS criterion 0.4-14 at its minimum against 2.6e4-4.3e4 at the IV
 estimate); sensors, 8 runs: IV in 8 (LS m 0.3957, spread 0.0024: biased by 1.8 spreads, against IV 0.3954,
 spread 0.0073; true 0.4); both, 8 runs: IV in 8 (LS m 0.4061, spread 0.0280; IV 0.3844, 0.0237). At the fresh
-seed 9101 (the realisations of ``shipid study mass-cm-coverage --seed 9101``): waves 100 of 100 IV (no p-value above
+seed 9101 (the realisations of ``shipid study mass-cm-coverage --seed 9101``; IV with the noise model
+re-fitted at every iteration, before :data:`~shipid.methods.masscm.noise_bj.FREEZE_AFTER`): waves 100 of 100 IV (no p-value above
 0.05; LS physical in 4; the LS criterion at its minimum below 0.002 of its value at the IV estimate in every run);
 sensors 30 of 30 (largest p 2e-85; LS m 0.3972, spread 0.0031, 5 standard errors of the mean below the truth, a
 spread 0.38 of the Cramér–Rao bound that only a biased estimator can have); both 30 of 30 (largest p 9e-6; LS m
