@@ -86,6 +86,35 @@ ratio measures how far rudder instruments are from an estimator that reconstruct
 noise-free channels. The time-domain IV scale of :mod:`shipid.methods.masscm.crlb_iv` (not a floor) is m 0.0251,
 zm_bar 0.0119, rho 0.0203 in waves and 0.0332 / 0.0153 / 0.0375 with both: Algorithm 1's spreads are 1.36 / 1.29
 / 1.70 and 1.11 / 1.11 / 1.07 of it.
+
+At fresh seeds with the noise model kept whole from iteration ``AUTO_HOLD + FREEZE_AFTER``
+(:data:`shipid.methods.masscm.noise_bj.FREEZE_AFTER`; ``--seed 9101``, 100 runs per regime; in brackets the same
+realisations with the noise model re-fitted at every iteration): spread / bound [chi-square 95 %], MAD spread /
+bound, coverage of ±2 std, over all runs:
+
+=========  ==================================  ==================================  ==================================
+regime     m                                   zm_bar                              rho
+=========  ==================================  ==================================  ==================================
+waves      2.66 [2.33, 3.09], MAD 1.56, 0.98   1.78 [1.57, 2.07], MAD 1.56, 0.96   12.6 [11.0, 14.6], MAD 9.47, 0.99
+ (former)  (172, MAD 1.57, 1.00)               (3.55, MAD 1.55, 0.96)              (44.3, MAD 9.55, 0.99)
+sensors    0.89 [0.78, 1.03], MAD 0.84, 0.97   0.87 [0.77, 1.01], MAD 0.92, 0.97   0.90 [0.79, 1.05], MAD 0.74, 0.98
+both       1.74 [1.53, 2.02], MAD 1.78, 0.97   1.51 [1.33, 1.76], MAD 1.54, 0.97   1.65 [1.45, 1.92], MAD 1.43, 0.97
+=========  ==================================  ==================================  ==================================
+
+No run flagged; means within one spread of the truth in every regime and quantity. Waves: 3 runs not converged
+(former: 8); with the noise model re-fitted every time the iteration drifted, iterate by iterate, from m ~ 0.4
+towards the degenerate minimum of :func:`shipid.methods.masscm.iteration.left_physical_region` (one run to m = 30,
+std 580), which that drift seen here motivated keeping the noise model (the rule itself was chosen on
+``SeedSequence([100, 0..24])``). Checked again on seed 9201, not looked at before (waves, 100 runs; former in
+brackets): m 6.81 [5.98, 7.91] (7.34), MAD 1.44 (1.51), coverage 0.97 (0.98); zm_bar 2.27 [1.99, 2.64] (2.52), MAD
+1.52 (1.62), 0.96 (0.98); rho 26.4 [23.2, 30.7] (29.4), MAD 7.71 (8.12), 0.97 (0.98); 2 (3) not converged: a few
+runs far out still carry the all-runs spread there. Sensors and both are unchanged to three digits. The waves
+target (spread <= 1.3 x bound) is not met: besides the runs far out, the MAD ratios 1.4–1.6 for m and zm_bar and
+8–9 for rho are what rudder instruments leave of the information that noise-free channels carry. Generalised least
+squares (the regression prefiltered by the fitted Box–Jenkins noise model, which would use the wave-driven
+variation of the regressors) is not an alternative there: ``a_t`` in (37) carries the current wave moment, and LS
+runs to the kinematic-identity minimum (:mod:`shipid.methods.masscm.gls`; its Durbin–Wu–Hausman test rejects LS in
+every waves, sensors and both run tried).
 """
 
 from __future__ import annotations

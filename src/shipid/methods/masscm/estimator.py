@@ -25,7 +25,8 @@ B. Iterate ``j = 1, 2, ...`` (:func:`~shipid.methods.masscm.iteration.iterate`):
    (b) residuals (42) and noise models (43)* (:mod:`~shipid.methods.masscm.noise`): by default
        (``noise_model="auto"``) per dataset the Box–Jenkins model ``eps = (1 - c q^-2)^k/A(q) e``, ``A`` AR(40) by
        least squares, ``(c, k)``, ``k <= 2``, chosen among ``noise_bj.BJ_CANDIDATES`` by the innovation likelihood
-       (Young & Jakeman's refined IV; :mod:`~shipid.methods.masscm.noise_bj`), prefilter ``L = A/(1 - c q^-2)^k``; ``"ar"`` is plain AR(40), ``L = A``; built at the mean of the last two iterates*
+       (Young & Jakeman's refined IV; :mod:`~shipid.methods.masscm.noise_bj`), prefilter ``L = A/(1 - c q^-2)^k``, ``(c, k)`` held from iteration 3 and the whole model from iteration 6*
+       (``noise_bj.FREEZE_AFTER``: against a drift towards the degenerate minimum in wave roll); ``"ar"`` is plain AR(40), ``L = A``; built at the mean of the last two iterates*
        (relaxation against period-2 cycles), of the last four from iteration ``cycle_after`` (10) on* (a
        period-4 cycle cannot persist under it); the prefilter start-up transient is dropped*;
    (c) instruments re-simulated in closed loop from the rudder with the current model (46)–(47) and the

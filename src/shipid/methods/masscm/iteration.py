@@ -19,7 +19,7 @@ from shipid.methods.masscm.criterion import (CONDITION_CODES, IVState, coeffs, c
 from shipid.methods.masscm.data import Dataset, first_row
 from shipid.methods.masscm.moments import build_moments, closed_loop_sim, work_arrays
 from shipid.methods.masscm.noise import AUTO_HOLD, fit_noise_model, initial_prefilter
-from shipid.methods.masscm.noise_bj import held_noise_model
+from shipid.methods.masscm.noise_bj import FREEZE_AFTER, held_noise_model
 from shipid.methods.masscm.options import I_ZF, I_ZM, MassCMOptions
 from shipid.methods.masscm.plausibility import implausible_identifiable
 from shipid.methods.masscm.search import sim_terms
@@ -248,7 +248,9 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             eps = ds.y - ds.Phi @ G_mid[i]
             s = first_row(options)
             if options.prefilter:
-                if options.noise_model in ("auto", "bj") and j >= AUTO_HOLD:   # (*) (c, k) held (noise_bj)
+                if options.noise_model in ("auto", "bj") and j >= AUTO_HOLD + FREEZE_AFTER:
+                    arma = state.L[i]          # (*) the whole noise model kept (noise_bj.FREEZE_AFTER)
+                elif options.noise_model in ("auto", "bj") and j >= AUTO_HOLD:   # (*) (c, k) held (noise_bj)
                     arma = held_noise_model(eps[s:], options, state.L[i])
                 else:
                     arma = fit_noise_model(eps[s:], options)

@@ -92,10 +92,18 @@ def noise_model_bj(eps: np.ndarray, options: MassCMOptions, candidates: tuple = 
     return best[1]
 
 
+#: (*) From iteration ``AUTO_HOLD + FREEZE_AFTER`` on the whole noise model (``D`` too) is kept: in wave roll without
+#: sensor noise, re-fitting ``D`` to the residuals of every iterate lets the refined-IV iteration drift, iterate by
+#: iterate, towards the degenerate minimum of :func:`shipid.methods.masscm.iteration.left_physical_region` (m growing
+#: from 0.4 to 30 over 18 iterations); the later iterations are then IV with a fixed prefilter and updated
+#: instruments. Chosen on the tuning seeds ``SeedSequence([100, 0..24])``.
+FREEZE_AFTER = 3
+
+
 def held_noise_model(eps: np.ndarray, options: MassCMOptions, L_prev) -> ARMA:
     """The noise model of a later iteration with the MA structure ``(c, k)`` of ``L_prev`` held (the choice
     between candidates, a discrete step, can otherwise keep the iteration from settling); D re-estimated."""
     return noise_model_bj(eps, options, (ma_structure(L_prev),))
 
 
-__all__ = ["BJ_CANDIDATES", "ma_poly", "ma_structure", "noise_model_bj", "held_noise_model"]
+__all__ = ["BJ_CANDIDATES", "FREEZE_AFTER", "ma_poly", "ma_structure", "noise_model_bj", "held_noise_model"]
