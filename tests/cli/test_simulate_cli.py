@@ -96,6 +96,7 @@ def test_vessels_lists_packaged_vessels_with_sources(capsys):
     assert "Yoon" in out and "Fossen" in out and "Linder" in out
 
 
+@pytest.mark.slow  # ~40 s: one full demo (all three methods and their reports); the slow suite runs it in CI
 def test_demo_writes_overwrites_with_force_and_does_not_clobber(tmp_path, capsys):
     """ONE full demo run (the slowest test here): with --force into a folder that already holds
     stale files of names the demo writes, which must all be replaced; then without --force it
