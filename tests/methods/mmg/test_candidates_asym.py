@@ -92,3 +92,29 @@ def test_regression_recovers_a_propeller_yaw_moment(published, own_run):
     est = dict(zip(f.free["N"], f.fits["N"].theta))
     assert est["NP_n"] == pytest.approx(-0.01, rel=0.05)
     assert est["N_v"] == pytest.approx(published.coef["N_v"], rel=0.05)
+
+
+def test_refinement_cv_takes_the_variants_from_a_pool(published, own_run):
+    """study_oe.cv_refinement looks the port/starboard variants up in ``pool``; on runs the published
+    model made itself both criteria of the variant predict them (scores finite, rows for both)."""
+    from shipid.methods.mmg import output_error as OE
+    from shipid.methods.mmg import study_oe as S
+
+    pool = dict(C.CANDIDATES["esso-lowspeed"])
+    pool.update(A.asym_variants(BASE, pool[BASE]))
+    name = f"{BASE}+prop-side"
+    trials = [own_run(published, 130.0, rudder_deg=a, period=p) for a, p in ((15.0, 40.0), (25.0, 60.0))]
+    runs = [R.smooth_run(tr) for tr in trials]
+    ref = S.cv_refinement(trials, runs, published, [name], folds=2, pool=pool,
+                          oe_config=OE.OEConfig(max_iter=1))
+    assert set(ref) == {name + "/regression", name + "/output-error"}
+    assert all(np.isfinite(r["score"]) and r["runs"] == 2 for r in ref.values())
+
+
+def test_cli_offers_the_symmetric_only_switch():
+    from click.testing import CliRunner
+
+    from shipid.cli import cli
+
+    out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
+    assert "--symmetric-only" in out
