@@ -103,6 +103,13 @@ The output-error horizon, tried on the base candidate before the held-out evalua
 −0.0037 ± 0.0013 (estimated), YP_n not determined. Held-out (read once, after this choice):
 mean over the 9 runs **7.79° / 0.613 m** (published 12.20° / 0.842 m; before the port/starboard
 terms 8.18° / 0.637 m). Target (≤ 6.5° / ≤ 0.55 m) NOT met.
+
+Bound on a per-run yaw-moment bias (training runs only, diagnosis, not part of the pipeline):
+with each left-out training run's own ``NP_n`` fitted by output error on that run's own horizons
+(in sample, so an upper bound on what a bias estimated from a run's data can give), the mean over
+the 32 left-out runs goes from 7.22° / 0.711 m to 5.93° / 0.635 m: the heading part of the target
+is within reach of a per-run moment, the position part is not (it is dominated by the fastest
+zig-zags, n ≈ 15 1/s, 13_57_45 2.9 m, 13_14_21 1.4 m, 14_03_39 1.0 m even with the bias).
 """
 
 from __future__ import annotations
