@@ -58,7 +58,7 @@ from shipid.simulate.model import ShipModel
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 INPUT_NAMES = ("delta", "n", "wind_speed", "wind_dir")
-STRUCTURES = ("esso-lowspeed", "yasukawa2015", "esso-cubic-hull", "yasukawa2015-asym")
+STRUCTURES = ("esso-lowspeed", "yasukawa2015", "esso-cubic-hull", "yasukawa2015-asym", "esso-lowspeed-asym")
 MODES = ("X", "Y", "N")
 
 # ----------------------------------------------------------------------------- coefficients
@@ -92,6 +92,15 @@ COEFS["esso-cubic-hull"] = {m: _HULL_CUBIC[m] + COEFS["esso-lowspeed"][m][3:] fo
 COEFS["yasukawa2015-asym"] = {"X": COEFS["yasukawa2015"]["X"],
                               "Y": COEFS["yasukawa2015"]["Y"] + ("YP_T", "YR_asym"),
                               "N": COEFS["yasukawa2015"]["N"] + ("NP_T", "NR_asym")}
+
+# The low-speed Esso model with two port/starboard terms that are zero in it: the side force and
+# moment of the ahead-turning propeller, ``Y = YP_n ρ n² D⁴``, ``N = NP_n ρ n² D⁴ L`` (n > 0; the
+# lateral force of a single propeller behind the hull), and a rudder neutral offset, the force of
+# the rudder's normal-force slope ``∂F_N/∂α = ½ ρ A_R U_R² f_α cos α_R`` times a constant angle
+# (``YR_0``, ``NR_0``: an offset of the rudder-angle zero or of the inflow angle at the rudder).
+COEFS["esso-lowspeed-asym"] = {"X": COEFS["esso-lowspeed"]["X"],
+                               "Y": COEFS["esso-lowspeed"]["Y"] + ("YP_n", "YR_0"),
+                               "N": COEFS["esso-lowspeed"]["N"] + ("NP_n", "NR_0")}
 
 #: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
 COEF_UNITS = {"NR_arm": "m"}
@@ -180,6 +189,14 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         out = basis_esso(p, u, v, r, delta, n)
         for m, H in zip(MODES, cubic_hull(p, u, v, r)):
             out[m] = (np.concatenate([H, out[m][0][..., 3:]], axis=-1), out[m][1])
+    elif model.structure == "esso-lowspeed-asym":
+        out = basis_esso(p, u, v, r, delta, n)
+        a = out["aux"]
+        T4 = (n > 0) * p["rho"] * p["D_p"] ** 4 * n * n
+        f_alpha = 6.13 * p["lambda_R"] / (2.25 + p["lambda_R"])
+        dFN = 0.5 * p["rho"] * p["A_R"] * a["U_R"] ** 2 * f_alpha * np.cos(a["alpha_R"]) * np.cos(delta)
+        for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
+            out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
     elif model.structure == "yasukawa2015-asym":
         out = basis_yasukawa(p, u, v, r, delta, n)
         T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]
@@ -471,8 +488,9 @@ def ship_model(model: MmgModel):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
                 "delta": U[:, 0], "n": U[:, 1]}
 
-    n0 = 10.0 if model.structure == "esso-lowspeed" else 10.23
-    U0 = 0.5 if model.structure == "esso-lowspeed" else 1.179
+    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym")
+    n0 = 10.0 if esso else 10.23
+    U0 = 0.5 if esso else 1.179
     return ShipModel(name=model.name, f=dynamics, theta=model, state_names=STATE_NAMES,
                      input_names=INPUT_NAMES, x0=x0, outputs=outputs, service_speed=U0, heading_index=2,
                      u0=lambda speed: np.array([0.0, n0 * speed / U0, 0.0, 0.0]))
