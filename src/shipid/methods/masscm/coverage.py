@@ -99,6 +99,8 @@ import numpy as np
 
 from shipid.methods.masscm.crlb import crlb, true_theta
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
+from shipid.methods.masscm.pem import FREE
+from shipid.methods.masscm.pem import refine as pem_refine
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
@@ -123,12 +125,15 @@ def _truth(vessel: str) -> dict:
 
 
 def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, vessel: str = "fishing-vessel",
-            noise_model: str = "ar", compute: str = "fast") -> dict:
+            noise_model: str = "ar", compute: str = "fast", refine: str = "none") -> dict:
     """One realisation: datasets from ``SeedSequence([seed, i])`` in ``regime``, then Algorithm 1 (z_f known).
 
     Returns ``m, zm_bar, rho`` and their standard errors, ``K_vdot, K_r, K_delta``, ``converged``,
     ``implausible`` (with ``implausible_reasons``), ``nuisance_outside_physical``, ``iterations``.
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
+    ``refine="pem"``: the maximum-likelihood refinement of :mod:`shipid.methods.masscm.pem` from Algorithm 1's
+    estimate; where it fails (``pem_ok`` False, ``pem_reason``) the run keeps Algorithm 1's estimate. Algorithm
+    1's own ``m, zm_bar, rho`` and standard errors are kept as ``iv_<name>``.
     """
     if regime not in REGIMES:
         raise ValueError(f"regime must be one of {', '.join(REGIMES)}")
@@ -143,6 +148,19 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
     out = {}
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = float(r.value(k)), float(r.std(k))
+    if refine == "pem":
+        for k in QUANTITIES:
+            out[f"iv_{k}"], out[f"iv_{k}_std"] = out[k], out[f"{k}_std"]
+        f = pem_refine(list(d.items()), known, z_f, np.array([r.value(n) for n in FREE]))
+        out.update({"pem_ok": bool(f.ok), "pem_reason": f.reason, "pem_waves": bool(f.waves),
+                    "pem_iterations": int(f.iterations)})
+        if f.ok:
+            i_m, i_z = FREE.index("m"), FREE.index("zm_bar")
+            out.update({"m": float(f.theta[i_m]), "m_std": float(np.sqrt(f.cov[i_m, i_m])),
+                        "zm_bar": float(f.theta[i_z]), "zm_bar_std": float(np.sqrt(f.cov[i_z, i_z])),
+                        "rho": float(f.rho), "rho_std": float(f.rho_std)})
+    elif refine != "none":
+        raise ValueError("refine must be 'none' or 'pem'")
     for k in NUISANCE:                   # weakly determined (finite-sample IV bias): reported, not judged
         out[k] = float(r.value(k))
     out.update({"converged": bool(r.diagnostics["converged"]), "iterations": int(r.diagnostics["iterations"]),

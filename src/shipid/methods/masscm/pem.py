@@ -22,9 +22,10 @@ accepted only when the likelihood increases. Start: Algorithm 1's ``theta``; the
 least-squares fit of ``v'`` and ``r'`` on the reconstructed states (:func:`initial_rows`: ``phi`` and ``v``
 integrated from ``p`` and from ``v' = z_s p' + g phi - U r - a_s`` (8)), the biases from the means, the sensor
 variances from second differences of the residuals, the wave frequency from the residual roll-rate spectrum.
-The local parameters are first fitted with ``theta`` held, without and with the wave filter; the wave
-structure is kept when it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio
-test, 3 parameters per dataset), then everything is fitted jointly in the chosen structure.
+Stages: the rudder response (rows, biases) with ``theta`` held; everything jointly without waves; the wave filter
+and sensor variances with the rest held. The wave structure is kept, and everything fitted jointly with it, when
+it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio test, 3 parameters per
+dataset).
 
 Standard errors: the inverse of the same information at the optimum (nuisance parameters included, so their
 uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, or an
@@ -41,6 +42,7 @@ from numba import njit
 from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
 from scipy.signal import welch
 
+from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, foh, wave_ss
 from shipid.models.roll_reduced import KnownParams, roll_terms
 
@@ -245,8 +247,9 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
                     vec[i] -= 2 * h
                     r = s.innov(t2, l2, waves)
                     h = -h
-                if r is None:
-                    return theta, locs, None, -f, it, False
+                if r is None:                           # not admissible either side: held this iteration
+                    psi[:, :, c], dL[c] = 0.0, 0.0
+                    continue
                 psi[:, :, c] = -(r[0] - eps) / h       # psi = -d eps / d p
                 dL[c] = (r[1] - Lam) / h
             A = Li @ dL                                   # (P, 3, 3)
@@ -333,6 +336,10 @@ def _initial_local(s: _Set, theta, known: KnownParams) -> np.ndarray:
     d2 = np.diff(s.y, n=2, axis=0)
     loc[15:18] = np.log(np.maximum(np.var(d2, axis=0) / 6, 1e-12))
     loc[18:21] = s.y.mean(axis=0)
+    for _ in range(30):              # a start must be a stable ship: more sway damping until it is (v is the
+        if s.innov(theta, loc, False) is not None:      # state the reconstruction determines worst)
+            break
+        loc[1] -= 0.05
     return loc
 
 
@@ -380,7 +387,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     """
     sets = [_Set(c, tr, known, z_f) for c, tr in datasets]
     theta = np.asarray(theta_free, dtype=float).copy()
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), one_blas_thread():
         locs = [_initial_local(s, theta, known) for s in sets]
         quick = PEMOptions(max_iter=options.start_iter, tol=1e-5, rel_step=options.rel_step)
         # (1) the rudder response (sway/yaw rows, biases) with theta and the sensor weights held
@@ -389,16 +396,17 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
             r = s.innov(theta, l, False)
             if r is not None:
                 l[15:18] = np.log(np.maximum(np.mean(r[0] ** 2, axis=0), 1e-300))
-        ll0 = -_objective(sets, theta, lo0, False)
-        waves = options.waves == "yes"
-        lo = lo0
-        if options.waves != "no":        # (3) wave filter and sensor variances, rows held
-            lw = [_wave_start(s, theta, l, known) for s, l in zip(sets, lo0)]
-            _, lw, infw, ll1, _, _ = _scoring(sets, theta, lw, True, quick, fix_theta=True, only=NOISE_LOCAL)
-            if options.waves == "auto":  # the structure by the likelihood ratio
-                waves = infw is not None and 2 * (ll1 - ll0) > WAVE_LR * len(sets)
-            lo = lw if waves else lo0
-        th, lo, info, ll, its, conv = _scoring(sets, theta, lo, waves, options)
+        # (3) everything jointly without waves (an output-error fit when the noise is coloured)
+        fit = _scoring(sets, theta, lo0, False, options) + (False,)
+        th0, lo0, ll0 = fit[0], fit[1], fit[3]
+        if options.waves != "no" and fit[2] is not None:
+            # (4) wave filter and sensor variances with the rest held, then everything jointly with waves
+            lw = [_wave_start(s, th0, l, known) for s, l in zip(sets, lo0)]
+            _, lw, infw, ll1, _, _ = _scoring(sets, th0, lw, True, quick, fix_theta=True, only=NOISE_LOCAL)
+            if options.waves == "yes" or (infw is not None and 2 * (ll1 - ll0) > WAVE_LR * len(sets)):
+                fw = _scoring(sets, th0, lw, True, options)
+                fit = fw[:4] + (fit[4] + fw[4], fw[5], True)
+    th, lo, info, ll, its, conv, waves = fit
     nan = np.full((N_TH, N_TH), np.nan)
     if info is None:
         return PEMFit(False, th, nan, np.nan, np.nan, ll, its, waves, "likelihood not computable", lo)
