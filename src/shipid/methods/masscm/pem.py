@@ -213,6 +213,48 @@ def _free_local(waves):
     return [i for i in range(N_LOC) if i not in (5, 11, 12, 13, 14)]
 
 
+def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
+    """Score (gradient of the log-likelihood) and expected information over ``theta[th_idx]`` and ``loc[fl]``.
+
+    ``g_a = sum eps^T Lam^-1 psi_a + 1/2 sum eps^T Lam^-1 dLam_a Lam^-1 eps - N/2 tr(Lam^-1 dLam_a)`` and
+    ``I_ab = sum psi_a^T Lam^-1 psi_b + N/2 tr(Lam^-1 dLam_a Lam^-1 dLam_b)``, ``psi = -d eps/dp`` by forward
+    differences (a parameter whose perturbation is not admissible either side is held: zero row).
+    """
+    nloc = len(fl)
+    P = len(th_idx) + nloc * len(sets)
+    g, info = np.zeros(P), np.zeros((P, P))
+    for d, (s, loc) in enumerate(zip(sets, locs)):
+        eps, Lam = s.innov(theta, loc, waves)
+        Li = np.linalg.inv(Lam)
+        cols = [("t", i) for i in th_idx] + [("l", i) for i in fl]
+        gi = list(range(len(th_idx))) + [len(th_idx) + d * nloc + j for j in range(nloc)]
+        psi = np.empty((s.n, 3, len(cols)))
+        dL = np.empty((len(cols), 3, 3))
+        for c, (kind, i) in enumerate(cols):
+            t2, l2 = theta.copy(), loc.copy()
+            vec = t2 if kind == "t" else l2
+            h = rel_step * max(abs(vec[i]), 0.1)
+            vec[i] += h
+            r = s.innov(t2, l2, waves)
+            if r is None:
+                vec[i] -= 2 * h
+                r = s.innov(t2, l2, waves)
+                h = -h
+            if r is None:
+                psi[:, :, c], dL[c] = 0.0, 0.0
+                continue
+            psi[:, :, c] = -(r[0] - eps) / h
+            dL[c] = (r[1] - Lam) / h
+        A = Li @ dL
+        wps = np.einsum("ij,kjc->kic", Li, psi)
+        el = eps @ Li
+        gd = np.einsum("ki,kic->c", eps, wps)
+        q = 0.5 * np.einsum("ki,cij,kj->c", el, dL, el) - 0.5 * s.n * np.trace(A, axis1=1, axis2=2)
+        g[gi] += gd + q
+        info[np.ix_(gi, gi)] += np.einsum("kic,kid->cd", psi, wps) + 0.5 * s.n * np.einsum("aij,bji->ab", A, A)
+    return g, 0.5 * (info + info.T)
+
+
 def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None):
     """Levenberg-damped Fisher scoring of the joint likelihood; returns theta, locs, info, loglik, its, converged.
 
@@ -229,36 +271,7 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
     mu, conv, it = 1e-3, False, 0
     info = None
     for it in range(1, opts.max_iter + 1):
-        g, info = np.zeros(P), np.zeros((P, P))
-        for d, (s, loc) in enumerate(zip(sets, locs)):
-            eps, Lam = s.innov(theta, loc, waves)
-            Li = np.linalg.inv(Lam)
-            cols = [("t", i) for i in th_idx] + [("l", i) for i in fl]
-            gi = list(th_idx) + [len(th_idx) + d * nloc + j for j in range(nloc)]
-            psi = np.empty((s.n, 3, len(cols)))
-            dL = np.empty((len(cols), 3, 3))
-            for c, (kind, i) in enumerate(cols):
-                t2, l2 = theta.copy(), loc.copy()
-                vec = t2 if kind == "t" else l2
-                h = opts.rel_step * max(abs(vec[i]), 0.1)
-                vec[i] += h
-                r = s.innov(t2, l2, waves)
-                if r is None:
-                    vec[i] -= 2 * h
-                    r = s.innov(t2, l2, waves)
-                    h = -h
-                if r is None:                           # not admissible either side: held this iteration
-                    psi[:, :, c], dL[c] = 0.0, 0.0
-                    continue
-                psi[:, :, c] = -(r[0] - eps) / h       # psi = -d eps / d p
-                dL[c] = (r[1] - Lam) / h
-            A = Li @ dL                                   # (P, 3, 3)
-            wps = np.einsum("ij,kjc->kic", Li, psi)
-            gd = np.einsum("ki,kic->c", eps, wps)          # sum eps^T Li psi (the ascent direction of -nll)
-            q = np.einsum("ki,cij,kj->c", eps @ Li, dL, eps @ Li) * 0.5 - 0.5 * s.n * np.trace(A, axis1=1, axis2=2)
-            Id = np.einsum("kic,kid->cd", psi, wps) + 0.5 * s.n * np.einsum("aij,bji->ab", A, A)
-            g[gi] += gd + q
-            info[np.ix_(gi, gi)] += Id
+        g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
         info = 0.5 * (info + info.T)
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
         In = info / np.outer(dg, dg)
