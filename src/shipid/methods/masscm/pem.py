@@ -60,10 +60,11 @@ class PEMOptions:
     """Tuning of the prediction-error refinement (our choices; see the module docstring)."""
 
     max_iter: int = 40
-    tol: float = 1e-7          # stop when the predicted log-likelihood gain is below tol * N
+    tol: float = 1e-3          # converged when the Newton decrement (predicted log-likelihood gain) is below tol
     waves: str = "auto"        # "auto": likelihood-ratio choice; "yes" / "no": force the structure
     rel_step: float = 1e-6     # forward-difference step relative to max(|p|, 0.1)
     start_iter: int = 6        # scoring iterations of the theta-fixed start fits
+    nowave_iter: int = 15      # ... and of the joint fit without waves (a start; its convergence is not needed)
 
 
 @dataclass
@@ -276,6 +277,10 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
         In = info / np.outer(dg, dg)
         gn = g / dg
+        decrement = 0.5 * float(gn @ np.linalg.lstsq(In, gn, rcond=None)[0])   # predicted gain of a full step
+        if decrement < opts.tol:
+            conv = True
+            break
         accepted = False
         for _ in range(12):
             try:
@@ -285,18 +290,14 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
                 continue
             t2, l2 = _apply(theta, locs, step, th_idx, fl, nloc)
             f2 = _objective(sets, t2, l2, waves)
-            pred = float(step @ g) - 0.5 * float(step @ info @ step)
             if np.isfinite(f2) and f2 <= f:
-                theta, locs, fold, f = t2, l2, f, f2
+                theta, locs, f = t2, l2, f2
                 mu = max(mu / 3, 1e-6)
                 accepted = True
                 break
             mu *= 10
-        if not accepted:
-            conv = abs(float(gn @ np.linalg.lstsq(In, gn, rcond=None)[0])) < opts.tol * sum(s.n for s in sets) * 100
-            break
-        if pred < opts.tol * sum(s.n for s in sets) and fold - f < opts.tol * sum(s.n for s in sets):
-            conv = True
+        if not accepted:                     # no ascent step: converged only if the gain left is negligible
+            conv = decrement < 100 * opts.tol
             break
     return theta, locs, info, -f, it, conv
 
@@ -402,7 +403,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     theta = np.asarray(theta_free, dtype=float).copy()
     with np.errstate(all="ignore"), one_blas_thread():
         locs = [_initial_local(s, theta, known) for s in sets]
-        quick = PEMOptions(max_iter=options.start_iter, tol=1e-5, rel_step=options.rel_step)
+        quick = PEMOptions(max_iter=options.start_iter, tol=options.tol, rel_step=options.rel_step)
         # (1) the rudder response (sway/yaw rows, biases) with theta and the sensor weights held
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
         for s, l in zip(sets, lo0):      # (2) white-noise variances: closed form without waves
@@ -410,7 +411,9 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
             if r is not None:
                 l[15:18] = np.log(np.maximum(np.mean(r[0] ** 2, axis=0), 1e-300))
         # (3) everything jointly without waves (an output-error fit when the noise is coloured)
-        fit = _scoring(sets, theta, lo0, False, options) + (False,)
+        nw = options if options.waves == "no" else PEMOptions(max_iter=options.nowave_iter, tol=options.tol,
+                                                              rel_step=options.rel_step)
+        fit = _scoring(sets, theta, lo0, False, nw) + (False,)
         th0, lo0, ll0 = fit[0], fit[1], fit[3]
         if options.waves != "no" and fit[2] is not None:
             # (4) wave filter and sensor variances with the rest held, then everything jointly with waves
