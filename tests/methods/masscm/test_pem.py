@@ -6,6 +6,7 @@ import pytest
 from shipid.methods.masscm import pem
 from shipid.methods.masscm.coverage import REGIMES
 from shipid.methods.masscm.crlb_kf import DatasetModel, true_free_theta
+from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import simulate_datasets
 from shipid.vessels import load_vessel
@@ -64,7 +65,8 @@ def test_score_matches_finite_differences():
 def test_refine_recovers_truth_both_regime():
     known, z_f, d, sets, locs = _case(duration=150.0, seed=(4243, 1))
     th = true_free_theta(VESSEL)
-    start = th * (1 + 0.05 * np.array([1, -1, 1, -1, 1, -1, 1, -1]))   # an Algorithm-1-like start, not the truth
+    r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False, options=MassCMOptions(compute="fast"))
+    start = np.array([r.value(n) for n in pem.FREE])   # Algorithm 1's estimate, the start the refinement is for
     f = pem.refine(list(d.items()), known, z_f, start)
     assert f.ok, f.reason
     assert f.waves                                 # the wave structure is chosen in the "both" regime
