@@ -94,3 +94,23 @@ def test_refine_reports_failure_instead_of_estimate():
     bad[pem.FREE.index("d")] = -5.0               # an unstable roll mode: no admissible likelihood at the start
     f = pem.refine(list(d.items()), known, z_f, bad)
     assert not f.ok and f.reason
+
+
+def test_option_refine_pem_replaces_estimates_and_keeps_algorithm1():
+    known, z_f, d, sets, locs = _case(regime="sensors", duration=60.0, seed=(4246, 4))
+    kw = dict(z_f=z_f, noise_check=False)
+    r0 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast"), **kw)
+    r1 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast", refine="pem"), **kw)
+    rec = r1.diagnostics["refine"]
+    assert rec["applied"], rec["reason"]
+    assert rec["algorithm1"]["m"] == [r0.value("m"), r0.std("m")]
+    assert r1.value("m") != r0.value("m") and np.isfinite(r1.std("m")) and r1.std("m") > 0
+    assert r1.covariance_names == list(pem.FREE)
+
+
+def test_option_refine_pem_without_known_zf_warns_and_keeps_algorithm1():
+    known, z_f, d, sets, locs = _case(regime="sensors", duration=30.0, seed=(4247, 5))
+    r = estimate_mass_cm(list(d.items()), known, z_f_prior=(z_f, 0.1), noise_check=False,
+                         options=MassCMOptions(compute="fast", refine="pem"))
+    assert not r.diagnostics["refine"]["applied"]
+    assert any("Algorithm 1's estimate is kept" in w for w in r.diagnostics["warnings"])

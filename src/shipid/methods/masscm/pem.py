@@ -175,8 +175,8 @@ class _Set:
         p = model_vector(theta, loc)
         try:
             (Ad, B0, B1, C, D), nm = noise_matrices(p, self.known, self.z_f, self.cond, self.T, waves)
-            if not np.all(np.isfinite(Ad)) or np.max(np.abs(np.linalg.eigvals(Ad))) >= 1.0:
-                return None
+            if not np.all(np.isfinite(Ad)) or (waves and np.max(np.abs(np.linalg.eigvals(Ad))) >= 1.0):
+                return None          # (without waves the rudder response over the record is finite either way)
             K, Lam = _gain(*nm)
             np.linalg.cholesky(Lam)
         except (ValueError, np.linalg.LinAlgError):
@@ -272,6 +272,9 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
     mu, conv, it = 1e-3, False, 0
     info = None
     for it in range(1, opts.max_iter + 1):
+        if not waves and 15 in fl:       # without waves the variances have a closed form given the rest
+            locs = [_closed_form_variances(s, theta, l) for s, l in zip(sets, locs)]
+            f = _objective(sets, theta, locs, waves)
         g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
         info = 0.5 * (info + info.T)
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
@@ -292,7 +295,7 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
             f2 = _objective(sets, t2, l2, waves)
             if np.isfinite(f2) and f2 <= f:
                 theta, locs, f = t2, l2, f2
-                mu = max(mu / 3, 1e-6)
+                mu = max(mu / 10, 1e-9)
                 accepted = True
                 break
             mu *= 10
@@ -300,6 +303,15 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
             conv = decrement < 100 * opts.tol
             break
     return theta, locs, info, -f, it, conv
+
+
+def _closed_form_variances(s, theta, loc):
+    """``loc`` with the sensor variances at their maximum-likelihood value given the rest (model without waves)."""
+    loc = loc.copy()
+    r = s.innov(theta, loc, False)
+    if r is not None:
+        loc[15:18] = np.log(np.maximum(np.mean(r[0] ** 2, axis=0), 1e-300))
+    return loc
 
 
 def _apply(theta, locs, step, th_idx, fl, nloc):
@@ -389,7 +401,11 @@ def physical_reason(theta, sets, locs, waves) -> str:
     if waves and any(not (0 < np.exp(l[13]) < 1) for l in locs):
         return "wave damping outside (0, 1)"
     if not np.isfinite(_objective(sets, theta, locs, waves)):
-        return "model unstable at the optimum"
+        return "likelihood not finite at the optimum"
+    for s, l in zip(sets, locs):
+        Ac = continuous_model(theta, l[:6], l[6:12], s.known, s.z_f, s.cond)[0]
+        if np.max(np.real(np.linalg.eigvals(Ac))) >= 0:
+            return f"ship model of dataset {s.cond} unstable at the optimum"
     return ""
 
 
@@ -406,10 +422,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
         quick = PEMOptions(max_iter=options.start_iter, tol=options.tol, rel_step=options.rel_step)
         # (1) the rudder response (sway/yaw rows, biases) with theta and the sensor weights held
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
-        for s, l in zip(sets, lo0):      # (2) white-noise variances: closed form without waves
-            r = s.innov(theta, l, False)
-            if r is not None:
-                l[15:18] = np.log(np.maximum(np.mean(r[0] ** 2, axis=0), 1e-300))
+        lo0 = [_closed_form_variances(s, theta, l) for s, l in zip(sets, lo0)]   # (2) white-noise variances
         # (3) everything jointly without waves (an output-error fit when the noise is coloured)
         nw = options if options.waves == "no" else PEMOptions(max_iter=options.nowave_iter, tol=options.tol,
                                                               rel_step=options.rel_step)
@@ -422,6 +435,9 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
             if options.waves == "yes" or (infw is not None and 2 * (ll1 - ll0) > WAVE_LR * len(sets)):
                 fw = _scoring(sets, th0, lw, True, options)
                 fit = fw[:4] + (fit[4] + fw[4], fw[5], True)
+        if not fit[6] and not fit[5] and fit[2] is not None:    # no waves: the joint fit on to convergence
+            fr = _scoring(sets, fit[0], fit[1], False, options)
+            fit = fr[:4] + (fit[4] + fr[4], fr[5], False)
     th, lo, info, ll, its, conv, waves = fit
     nan = np.full((N_TH, N_TH), np.nan)
     if info is None:
