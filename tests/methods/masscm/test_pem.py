@@ -131,3 +131,13 @@ def test_coverage_study_refine_flag(capsys):
     s = json.loads(capsys.readouterr().out)
     assert s["refine"] == "pem" and 0 <= s["refine_failed"] <= 2
     assert all(np.isfinite(s["quantities"][k]["spread"]) for k in ("m", "zm_bar", "rho"))
+
+
+def test_whiteness_check_rejects_no_wave_model_in_waves_and_accepts_it_with_sensor_noise():
+    th = true_free_theta(VESSEL)
+    _, _, _, sets, locs = _case(regime="waves", duration=30.0, seed=(4248, 6))
+    for l in locs:              # noise-free sensors: a variance is needed for the no-wave likelihood only
+        l[15:18] = np.log(1e-6)
+    assert "not white" in pem.whiteness_reason(sets, th, locs)
+    _, _, _, sets, locs = _case(regime="sensors", duration=60.0, seed=(4248, 7))
+    assert pem.whiteness_reason(sets, th, locs) == ""

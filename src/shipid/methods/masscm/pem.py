@@ -28,9 +28,11 @@ it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelih
 dataset).
 
 Standard errors: the inverse of the same information at the optimum (nuisance parameters included, so their
-uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, or an
-optimum outside the physical region (``k, A_x, d <= 0``, ``m <= 0``, unstable ship) returns ``ok=False`` with the
-reason; the caller keeps Algorithm 1's estimate and warns.
+uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, an optimum
+outside the physical region (``k, A_x, d, m <= 0``, unstable ship), or a model without waves whose innovations are
+not white (:func:`whiteness_reason`; e.g. wave roll with noise-free sensors, where the wave model is singular and
+the white-noise model is wrong) returns ``ok=False`` with the reason; the caller keeps Algorithm 1's estimate and
+warns.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
 from scipy.signal import welch
+from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, foh, wave_ss
@@ -52,6 +55,7 @@ N_TH = len(FREE)
 N_LOC = 21        # c_v (6) | c_r (6) | log w, log zeta, log sigma | log var (3) | bias (3)
 I_M, I_ZM = FREE.index("m"), FREE.index("zm_bar")
 MEAN_LOCAL = list(range(12)) + [18, 19, 20]
+WHITE_LAGS, WHITE_P = 20, 1e-4     # whiteness test of the model without waves (Ljung-Box, per channel)
 NOISE_LOCAL = list(range(12, 18))
 
 
@@ -388,6 +392,28 @@ def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
     return loc
 
 
+def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
+    """Empty when the innovations of the model without waves are white, else which are not.
+
+    Ljung-Box ``Q = N (N + 2) sum_{l <= lags} r_l^2 / (N - l)`` per dataset and channel against the chi-square
+    ``1 - p`` quantile with ``lags`` degrees of freedom: with coloured noise (waves and noise-free sensors) the
+    white-noise model is wrong and its standard errors are not valid.
+    """
+    crit = float(chi2.ppf(1 - p, lags))
+    for s, loc in zip(sets, locs):
+        eps = s.innov(theta, loc, False)[0]
+        e = eps - eps.mean(axis=0)
+        n = e.shape[0]
+        c0 = np.sum(e * e, axis=0)
+        r = np.array([np.sum(e[l:] * e[:-l], axis=0) / c0 for l in range(1, lags + 1)])
+        Q = n * (n + 2) * np.sum(r ** 2 / (n - np.arange(1, lags + 1))[:, None], axis=0)
+        for ch, q in zip(("p", "a_s", "r"), Q):
+            if q > crit:
+                return (f"innovations of {s.cond} {ch} not white (Ljung-Box Q = {q:.3g} > {crit:.3g}, {lags} lags): "
+                        "the model without waves does not fit")
+    return ""
+
+
 def rho_of(theta, known: KnownParams, z_f: float) -> float:
     """``rho = m z_m / (m_c z_c)`` (z about the centre of rotation)."""
     return float(theta[I_M] * (theta[I_ZM] + z_f) / (known.m_c * (known.zc_bar + z_f)))
@@ -452,7 +478,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     grad[I_M] = (th[I_ZM] + z_f) / (known.m_c * (known.zc_bar + z_f))
     grad[I_ZM] = th[I_M] / (known.m_c * (known.zc_bar + z_f))
     reason = "" if conv else f"search not converged in {its} iterations"
-    reason = reason or physical_reason(th, sets, lo, waves)
+    reason = reason or physical_reason(th, sets, lo, waves) or ("" if waves else whiteness_reason(sets, th, lo))
     return PEMFit(not reason, th, cov, rho_of(th, known, z_f), float(np.sqrt(grad @ cov @ grad)), ll, its,
                   waves, reason, lo)
 
