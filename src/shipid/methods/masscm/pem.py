@@ -33,6 +33,10 @@ outside the physical region (``k, A_x, d, m <= 0``, unstable ship), or a model w
 not white (:func:`whiteness_reason`; e.g. wave roll with noise-free sensors, where the wave model is singular and
 the white-noise model is wrong) returns ``ok=False`` with the reason; the caller keeps Algorithm 1's estimate and
 warns.
+Measured (:mod:`shipid.methods.masscm.coverage`, 300-s records, 100 runs per regime at a fresh seed): spread over
+the bound of :mod:`~shipid.methods.masscm.crlb_kf` 0.96 / 0.96 / 1.01 (m / zm_bar / rho) with waves and sensor
+noise (Algorithm 1: 1.41 / 1.35 / 1.45) and 0.94 / 0.92 / 1.01 with sensor noise alone, ±2-std coverage 0.94-0.97.
+About 5-15 s per three 300-s datasets on one core (three datasets, 71 parameters with waves).
 """
 
 from __future__ import annotations
