@@ -183,8 +183,8 @@ class _Set:
         p = model_vector(theta, loc)
         try:
             (Ad, B0, B1, C, D), nm = noise_matrices(p, self.known, self.z_f, self.cond, self.T, waves)
-            if not np.all(np.isfinite(Ad)) or (waves and np.max(np.abs(np.linalg.eigvals(Ad))) >= 1.0):
-                return None          # (without waves the rudder response over the record is finite either way)
+            if not np.all(np.isfinite(Ad)) or np.max(np.abs(np.linalg.eigvals(Ad))) >= 1.0:
+                return None          # only stable ships are admissible
             K, Lam = _gain(*nm)
             np.linalg.cholesky(Lam)
         except (ValueError, np.linalg.LinAlgError):
@@ -280,9 +280,6 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
     mu, conv, it = 1e-3, False, 0
     info = None
     for it in range(1, opts.max_iter + 1):
-        if not waves and 15 in fl:       # without waves the variances have a closed form given the rest
-            locs = [_closed_form_variances(s, theta, l) for s, l in zip(sets, locs)]
-            f = _objective(sets, theta, locs, waves)
         g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
         info = 0.5 * (info + info.T)
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
@@ -303,7 +300,7 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
             f2 = _objective(sets, t2, l2, waves)
             if np.isfinite(f2) and f2 <= f:
                 theta, locs, f = t2, l2, f2
-                mu = max(mu / 10, 1e-9)
+                mu = max(mu / 3, 1e-6)
                 accepted = True
                 break
             mu *= 10
