@@ -103,7 +103,8 @@ def test_refine_reports_failure_instead_of_estimate():
 
 
 def test_option_refine_pem_replaces_estimates_and_keeps_algorithm1():
-    known, z_f, d, sets, locs = _case(regime="sensors", duration=60.0, seed=(4246, 4))
+    # 300 s, the study's record length: on 60-s records the search without waves often does not converge
+    known, z_f, d, sets, locs = _case(regime="sensors", duration=300.0, seed=(4246, 4))
     kw = dict(z_f=z_f, noise_check=False)
     r0 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast"), **kw)
     r1 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast", refine="pem"), **kw)
