@@ -202,9 +202,12 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
+@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
+              help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
+                   "bound (methods/masscm/pem.py); a run where it fails keeps Algorithm 1's estimate.")
 @out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options
-def mass_cm_coverage(regime, runs, duration, noise_model, as_json, out, force, campaign):
+def mass_cm_coverage(regime, runs, duration, noise_model, refine, as_json, out, force, campaign):
     """Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.
 
     Fresh rudder and noise realisations per run (SeedSequence([seed, i])), z_f known; the bound is
@@ -217,13 +220,15 @@ def mass_cm_coverage(regime, runs, duration, noise_model, as_json, out, force, c
 
     t0 = time.perf_counter()
     kw = {"regime": regime, "duration": duration,
-          "noise_model": noise_model or MassCMOptions().noise_model}
+          "noise_model": noise_model or MassCMOptions().noise_model, "refine": refine}
     res = replace(campaign, progress=not as_json).run("shipid.methods.masscm.coverage:run_one", runs, kwargs=kw,
                                                      name="mass-cm-coverage",
                                                      warm_up="shipid.methods.masscm.coverage:warm_up")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, regime=regime, duration=duration, bound=bound_for(regime, duration))
-    s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"],
+    if refine != "none":
+        s["refine_failed"] = sum(1 for o in outs if o is not None and not o.get("pem_ok", True))
+    s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"], "refine": refine,
               "wall_s": time.perf_counter() - t0})
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _coverage_table(s, regime, duration, campaign.seed))
 

@@ -115,6 +115,29 @@ squares (the regression prefiltered by the fitted Box–Jenkins noise model, whi
 variation of the regressors) is not an alternative there: ``a_t`` in (37) carries the current wave moment, and LS
 runs to the kinematic-identity minimum (:mod:`shipid.methods.masscm.gls`; its Durbin–Wu–Hausman test rejects LS in
 every waves, sensors and both run tried).
+
+With the maximum-likelihood refinement (``--refine pem``, :mod:`shipid.methods.masscm.pem`: the exact
+Kalman-filter likelihood of the bound's own state-space model, started from Algorithm 1's estimate; a run where it
+fails keeps Algorithm 1's estimate and is counted), at a fresh seed (9201, 100 runs per regime, the runs of
+``run_one(i, 9201, regime=R, refine="pem")``; the refinement was tuned on seed 100, runs 0-3, and on the test
+seeds): spread / bound [chi-square 95 %], ±2-std coverage, over all runs (Algorithm 1 on the same realisations in
+brackets):
+
+=========  ================================  ================================  ================================
+regime     m                                 zm_bar                            rho
+=========  ================================  ================================  ================================
+both       0.96 [0.84, 1.11], 0.97 (1.41)    0.96 [0.84, 1.11], 0.97 (1.35)    1.01 [0.89, 1.17], 0.94 (1.45)
+sensors    0.94 [0.83, 1.09], 0.96 (0.97)    0.92 [0.81, 1.07], 0.97 (0.94)    1.01 [0.88, 1.17], 0.95 (0.92)
+=========  ================================  ================================  ================================
+
+Both: the wave structure chosen in 100 of 100 runs, no refinement failed; means 0.3998 / -0.1824 / 2.0971 (truth
+0.4 / -0.182 / 2.1; bias -0.09 / -0.39 / -1.10 standard errors of the mean); mean reported std over spread 1.05 /
+1.05 / 0.96. Sensors: no waves chosen in 99 runs, 4 refinements failed (3 not converged, 1 information not positive
+definite: Algorithm 1 kept); bias -1.20 / -1.60 / -0.20 standard errors of the mean. Waves alone (noise-free
+sensors) is not a regime for the refinement: the wave model is singular without sensor noise and the model without
+waves fails the whiteness check, so Algorithm 1's estimate is kept with a warning. (This study ran before the noise model was kept whole from iteration 6; in sensors and
+both that change leaves Algorithm 1's estimates unchanged to three digits, and the refinement's optimum does not
+depend on its start.)
 """
 
 from __future__ import annotations
@@ -128,6 +151,8 @@ import numpy as np
 
 from shipid.methods.masscm.crlb import crlb, true_theta
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
+from shipid.methods.masscm.pem import FREE
+from shipid.methods.masscm.pem import refine as pem_refine
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
@@ -152,12 +177,15 @@ def _truth(vessel: str) -> dict:
 
 
 def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, vessel: str = "fishing-vessel",
-            noise_model: str = "ar", compute: str = "fast") -> dict:
+            noise_model: str = "ar", compute: str = "fast", refine: str = "none") -> dict:
     """One realisation: datasets from ``SeedSequence([seed, i])`` in ``regime``, then Algorithm 1 (z_f known).
 
     Returns ``m, zm_bar, rho`` and their standard errors, ``K_vdot, K_r, K_delta``, ``converged``,
     ``implausible`` (with ``implausible_reasons``), ``nuisance_outside_physical``, ``iterations``.
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
+    ``refine="pem"``: the maximum-likelihood refinement of :mod:`shipid.methods.masscm.pem` from Algorithm 1's
+    estimate; where it fails (``pem_ok`` False, ``pem_reason``) the run keeps Algorithm 1's estimate. Algorithm
+    1's own ``m, zm_bar, rho`` and standard errors are kept as ``iv_<name>``.
     """
     if regime not in REGIMES:
         raise ValueError(f"regime must be one of {', '.join(REGIMES)}")
@@ -172,6 +200,19 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
     out = {}
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = float(r.value(k)), float(r.std(k))
+    if refine == "pem":
+        for k in QUANTITIES:
+            out[f"iv_{k}"], out[f"iv_{k}_std"] = out[k], out[f"{k}_std"]
+        f = pem_refine(list(d.items()), known, z_f, np.array([r.value(n) for n in FREE]))
+        out.update({"pem_ok": bool(f.ok), "pem_reason": f.reason, "pem_waves": bool(f.waves),
+                    "pem_iterations": int(f.iterations)})
+        if f.ok:
+            i_m, i_z = FREE.index("m"), FREE.index("zm_bar")
+            out.update({"m": float(f.theta[i_m]), "m_std": float(np.sqrt(f.cov[i_m, i_m])),
+                        "zm_bar": float(f.theta[i_z]), "zm_bar_std": float(np.sqrt(f.cov[i_z, i_z])),
+                        "rho": float(f.rho), "rho_std": float(f.rho_std)})
+    elif refine != "none":
+        raise ValueError("refine must be 'none' or 'pem'")
     for k in NUISANCE:                   # weakly determined (finite-sample IV bias): reported, not judged
         out[k] = float(r.value(k))
     out.update({"converged": bool(r.diagnostics["converged"]), "iterations": int(r.diagnostics["iterations"]),

@@ -83,13 +83,14 @@ This module gathers the public names of the method; the code lives in the module
 
 from __future__ import annotations
 
-from shipid.methods.masscm.assemble import (NOISE_CHECK_Z, MassCMFit, covariance, estimate_mass_cm, fit_mass_cm,
-                                            to_result)
+from shipid.methods.masscm.assemble import NOISE_CHECK_Z, MassCMFit, covariance, fit_mass_cm, to_result
+from shipid.methods.masscm.assemble import estimate_mass_cm as algorithm1
 from shipid.methods.masscm.criterion import IVState, linear_initial
 from shipid.methods.masscm.data import Dataset, prepare
 from shipid.methods.masscm.iteration import initial_state, iterate
 from shipid.methods.masscm.noise import AUTO_C, AUTO_HOLD
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, I_ZM, REQUIRED, MassCMOptions
+from shipid.methods.masscm.pem_result import refine_result
 from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable, implausible_reasons, rho_of
 
 #: The last coverage study of the stated std (read by the report's verdict panel): 300-s records,
@@ -98,6 +99,20 @@ from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable,
 COVERAGE = {"coverage": 0.93, "n": 300, "nominal": 0.954,
             "note": "lowest of m, zm_bar, rho over the regimes waves / sensors / both (100 runs each)",
             "source": "shipid study mass-cm-coverage --regime waves|sensors|both --runs 100 --seed 1800"}
+
+
+
+def estimate_mass_cm(datasets, known, *, theta0=None, z_f=None, z_f_prior=None, init=None,
+                     options: MassCMOptions = MassCMOptions(), noise_check: bool = True):
+    """Algorithm 1 (:func:`shipid.methods.masscm.assemble.estimate_mass_cm`, same arguments and result), then,
+    with ``options.refine == "pem"``, its maximum-likelihood refinement (:mod:`shipid.methods.masscm.pem_result`).
+    """
+    if options.refine not in ("none", "pem"):
+        raise ValueError("MassCMOptions.refine must be 'none' or 'pem'")
+    r = algorithm1(datasets, known, theta0=theta0, z_f=z_f, z_f_prior=z_f_prior, init=init, options=options,
+                   noise_check=noise_check)
+    return refine_result(r, datasets, known, z_f) if options.refine == "pem" else r
+
 
 __all__ = ["COVERAGE", "MassCMOptions", "MassCMFit", "Dataset", "IVState", "prepare", "initial_state", "iterate",
            "linear_initial", "estimate_mass_cm", "fit_mass_cm", "covariance", "to_result", "implausible_reasons",
