@@ -136,8 +136,7 @@ Both: the wave structure chosen in 100 of 100 runs, no refinement failed; means 
 definite: Algorithm 1 kept); bias -1.20 / -1.60 / -0.20 standard errors of the mean. Waves alone (noise-free
 sensors) is not a regime for the refinement: the wave model is singular without sensor noise and the model without
 waves fails the whiteness check, so Algorithm 1's estimate is kept with a warning. (This study ran before the noise model was kept whole from iteration 6; in sensors and
-both that change leaves Algorithm 1's estimates unchanged to three digits, and the refinement's optimum does not
-depend on its start.)
+both that change leaves Algorithm 1's estimates, the refinement's start, unchanged to three digits; not re-run since.)
 """
 
 from __future__ import annotations
