@@ -312,20 +312,14 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
     st = None if structure in (None, "auto") else structure
     if selection == "auto":
         selection = "horizons"
-    if selection == "turning":
+    selectors = {"turning": TS.select_for_turning, "turning-auto": TN.select_auto}
+    sel_kw = {}
+    if selection in selectors:
         if pm.structure not in TS.TURNING_CANDIDATES:
-            raise ShipidError(f"--selection turning: no turning candidates for the structure '{pm.structure}' "
+            raise ShipidError(f"--selection {selection}: no turning candidates for the structure '{pm.structure}' "
                               f"(only {', '.join(TS.TURNING_CANDIDATES)})")
-        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": TS.select_for_turning,
+        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": selectors[selection],
                   "resolve": TS.resolve}
-    elif selection == "turning-auto":
-        if pm.structure not in TS.TURNING_CANDIDATES:
-            raise ShipidError(f"--selection turning-auto: no turning candidates for the structure '{pm.structure}' "
-                              f"(only {', '.join(TS.TURNING_CANDIDATES)})")
-        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": TN.select_auto,
-                  "resolve": TS.resolve}
-    else:
-        sel_kw = {}
     res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine,
                      extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign,
                                        "selection": selection}, **sel_kw)
