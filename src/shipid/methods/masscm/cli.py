@@ -99,8 +99,9 @@ def _fmt(v: float) -> str:
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
 @click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma", "bj"]), default="auto",
               show_default=True,
-              help="Noise model of the prefilter (43): auto: AR(40) of eps/(1 - c q^-2) with c chosen by the data "
-                   "(innovation likelihood; c = 0 is plain AR); ar: AR(40); ar-structured: c = 0.99; structured ARMA.")
+              help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
+                   "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
+                   "arma: structured ARMA.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
