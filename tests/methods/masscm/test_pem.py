@@ -142,3 +142,33 @@ def test_whiteness_check_rejects_no_wave_model_in_waves_and_accepts_it_with_sens
     assert "not white" in pem.whiteness_reason(sets, th, locs)
     _, _, _, sets, locs = _case(regime="sensors", duration=60.0, seed=(4248, 7))
     assert pem.whiteness_reason(sets, th, locs) == ""
+
+
+@pytest.mark.slow
+def test_identify_cli_refine_pem_and_its_report_series(tmp_path, capsys):
+    """`identify mass-cm --refine pem` writes the refined estimate with Algorithm 1's beside it, and the stored
+    result's report series are made again from its files (Algorithm 1's, the refinement's start)."""
+    from shipid.data.io import write_trial
+    from shipid.result import Result
+
+    known, z_f, d, sets, locs = _case(regime="sensors", duration=300.0, seed=(4246, 4))
+    paths = {}
+    for cond, tr in d.items():
+        paths[cond] = str(tmp_path / f"{cond}.csv")
+        write_trial(tr, paths[cond])
+    kt = tmp_path / "known.toml"
+    kt.write_text("".join(f"{k} = {getattr(known, k)!r}\n" for k in known.__dataclass_fields__) + f"z_f = {z_f!r}\n")
+    out = tmp_path / "res.json"
+    args = ["identify", "mass-cm", "--nominal", paths["nominal"], "--calibration", paths["calibration"],
+            "--loaded", paths["loaded"], "--known", str(kt), "-o", str(out)]
+    assert main(args) == 0
+    assert main([*args[:-2], "--refine", "pem", "-o", str(tmp_path / "ref.json")]) == 0
+    r0 = Result.from_json(out.read_text())
+    r1 = Result.from_json((tmp_path / "ref.json").read_text())
+    rec = r1.diagnostics["refine"]
+    assert rec["applied"], rec["reason"]
+    assert rec["algorithm1"]["m"][0] == r0.value("m") and r1.value("m") != r0.value("m")
+    r1.series = {}
+    again = r1.with_series()
+    assert "overlays" in again.series
+    assert not any("report series not made" in w for w in again.diagnostics.get("warnings", []))

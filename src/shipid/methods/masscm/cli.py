@@ -102,11 +102,15 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
                    "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
                    "arma: structured ARMA.")
+@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
+              help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
+                   "bound (needs z_f known and sensor noise in the data; where it fails Algorithm 1's estimate is "
+                   "kept, with a warning). The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
-def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, cost_map,
-                     as_json, out, force):
+def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, refine,
+                     cost_map, as_json, out, force):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
     Channels: t [s], p [rad/s] roll rate, a_s [m/s^2] tangential acceleration at the IMU, r [rad/s]
@@ -115,6 +119,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     """
     from shipid.data.io import read_trial
     from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
+    from shipid.methods.masscm.pem_result import refine_result
     from shipid.methods.masscm.series import with_series
 
     kn = read_known(known_path)
@@ -122,10 +127,12 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     for cond, paths in (("nominal", nominal), ("calibration", calibration), ("loaded", loaded)):
         for p in paths:
             datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
-    opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model)
+    opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model, refine=refine)
     fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
                       options=opts, init="given" if kn["theta0"] is not None else "linear")
     res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
+    if refine == "pem":
+        res = refine_result(res, datasets, kn["known"], kn["z_f"])
     res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
     d = res.to_dict()

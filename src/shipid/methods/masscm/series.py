@@ -201,7 +201,9 @@ def with_series(fit, *, cost_map: bool = False, trials: Mapping | None = None) -
     ``{"nominal": ..., "calibration": ..., "loaded": ...}`` of trials or paths that ``shipid.identify("mass-cm", ...)``
     takes), else they are read again from the files the result records (``provenance["mass_cm_call"]``),
     Algorithm 1 is run with the recorded known parameters, options and
-    initialisation, and a copy of the result gets the series when that reproduces the stored m exactly (else,
+    initialisation, and a copy of the result gets the series when that reproduces the stored m exactly (for a
+    result refined by ``refine="pem"``: Algorithm 1's m recorded in ``diagnostics["refine"]``, so the series are
+    those of Algorithm 1's estimate, the refinement's start; else,
     or when a file is missing, a copy with one warning saying why; a result that records no files and is given
     no trials, or already has overlays, comes back unchanged). Report work on request: ``identify`` never does it;
     ``shipid identify mass-cm`` does it for the result it writes (``--cost-map`` adds the map).
@@ -243,9 +245,12 @@ def _from_files(result, cost_map: bool, trials: Mapping | None = None):
                               options=MassCMOptions(**opts), noise_check=False)
     except Exception as err:  # noqa: BLE001 - the report must still be written
         return noted(result, f"{type(err).__name__}: {' '.join(str(err).split())[:160]}")
-    if fit.result.value("m") != result.value("m"):
+    ref = result.diagnostics.get("refine") or {}
+    # a refined result stores Algorithm 1's m (the refinement's start) beside its own
+    want = ref["algorithm1"]["m"][0] if ref.get("applied") else result.value("m")
+    if fit.result.value("m") != want:
         return noted(result, f"Algorithm 1 on the recorded files gives m = {fit.result.value('m'):.6g} kg, "
-                              f"not the stored {result.value('m'):.6g} kg (files changed?)")
+                              f"not the stored {want:.6g} kg (files changed?)")
     made = with_series(fit, cost_map=cost_map)
     out = copy.deepcopy(result)
     kept = result.series if isinstance(result.series, Mapping) else {}
