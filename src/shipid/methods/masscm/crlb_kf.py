@@ -126,6 +126,28 @@ def foh(Ac, Bc, T: float):
     return Ad, G1 - G2, G2
 
 
+def noise_matrices(p, known: KnownParams, z_f: float, cond: str, T: float, waves: bool, R_floor=None):
+    """Ship ``(Ad, B0, B1, C, D)`` (:func:`continuous_model`, :func:`foh`) and noise model ``(F, G, H, J, R)`` of
+    the 26-vector ``p`` (see :class:`DatasetModel`): the wave states driven through the ship, ``s+ = F s + G e``,
+    ``n = H s + J e + v``, ``v`` white with covariance ``R = diag(p[23:26]) + diag(R_floor)``; ``F`` empty without
+    waves. Real or complex ``p`` (complex-step derivatives)."""
+    Ac, Bc, C, D = continuous_model(p[:8], p[8:14], p[14:20], known, z_f, cond)
+    Ad, B0, B1 = foh(Ac, Bc, T)
+    R = np.diag(p[23:26]) + np.diag(np.zeros(3) if R_floor is None else R_floor)
+    if not waves:
+        z = np.zeros((0, 0), dtype=Ad.dtype)
+        return (Ad, B0, B1, C, D), (z, np.zeros((0,), Ad.dtype), np.zeros((3, 0), Ad.dtype), np.zeros(3, Ad.dtype), R)
+    Aw, Bw, Cw, Dw = wave_ss(p[20], p[21], T)
+    s = p[22]
+    Bt = Ad @ B1[:, 1] + B0[:, 1]                 # xi = x - B1_tau tau removes the u_{k+1} term of the FOH
+    Ct = C @ B1[:, 1] + D[:, 1]
+    F = np.zeros((6, 6), dtype=Ad.dtype)
+    F[:4, :4], F[:4, 4:], F[4:, 4:] = Ad, s * np.outer(Bt, Cw), Aw
+    G = np.concatenate([s * Dw * Bt, Bw])
+    H = np.concatenate([C, s * np.outer(Ct, Cw)], axis=1)
+    return (Ad, B0, B1, C, D), (F, G, H, s * Dw * Ct, R)
+
+
 def wave_ss(w, zeta, T):
     """Tustin wave filter of :func:`shipid.models.roll_sim.wave_moment` as ``(Aw, Bw, Cw, Dw)`` (transposed DF II)."""
     b, a = _bilinear2([2 * zeta * w, 0.0 * w], [1.0 + 0 * w, 2 * zeta * w, w * w], T)
@@ -167,21 +189,7 @@ class DatasetModel:
 
     def noise_ss(self, p):
         """``(F, G, H, J, R)`` of the noise (waves through the ship, sensor noise); ``F`` empty without waves."""
-        Ad, B0, B1, C, D = self.ship(p)
-        R = np.diag(p[23:26]) + np.diag(self.R_floor)
-        if not self.waves:
-            z = np.zeros((0, 0), dtype=Ad.dtype)
-            return z, np.zeros((0,), Ad.dtype), np.zeros((3, 0), Ad.dtype), np.zeros(3, Ad.dtype), R
-        Aw, Bw, Cw, Dw = wave_ss(p[20], p[21], self.T)
-        s = p[22]
-        Bt = Ad @ B1[:, 1] + B0[:, 1]                 # xi = x - B1_tau tau removes the u_{k+1} term of the FOH
-        Ct = C @ B1[:, 1] + D[:, 1]
-        F = np.zeros((6, 6), dtype=Ad.dtype)
-        F[:4, :4], F[:4, 4:], F[4:, 4:] = Ad, s * np.outer(Bt, Cw), Aw
-        G = np.concatenate([s * Dw * Bt, Bw])
-        H = np.concatenate([C, s * np.outer(Ct, Cw)], axis=1)
-        J = s * Dw * Ct
-        return F, G, H, J, R
+        return noise_matrices(p, self.known, self.z_f, self.cond, self.T, self.waves, self.R_floor)[1]
 
     def roll_var(self, p):
         """Stationary variance of the roll angle (rad²) the ship and wave model of ``p`` imply."""

@@ -50,7 +50,9 @@ from scipy.signal import welch
 from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
-from shipid.methods.masscm.crlb_kf import FREE, continuous_model, foh, wave_ss
+from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
+from shipid.methods.masscm import plausibility
+from shipid.methods.masscm.options import I_ZF
 from shipid.models.roll_reduced import KnownParams, roll_terms
 
 #: 2 x the log-likelihood gain per dataset above which the wave structure is kept (chi-square, 3 dof: ~1e-5)
@@ -134,24 +136,6 @@ def _innovations(y, delta, Ad, b0, b1, C, dd, bias, F, K, H, out):
 def model_vector(theta, loc) -> np.ndarray:
     """The 26-vector of :class:`~shipid.methods.masscm.crlb_kf.DatasetModel` from ``theta`` and a local vector."""
     return np.concatenate([theta, loc[:12], np.exp(loc[12:15]), np.exp(loc[15:18])])
-
-
-def noise_matrices(p, known: KnownParams, z_f: float, cond: str, T: float, waves: bool):
-    """Ship ``(Ad, B0, B1, C, D)`` and noise model ``(F, G, H, J, R)`` of the 26-vector ``p`` (as crlb_kf)."""
-    Ac, Bc, C, D = continuous_model(p[:8], p[8:14], p[14:20], known, z_f, cond)
-    Ad, B0, B1 = foh(Ac, Bc, T)
-    R = np.diag(p[23:26])
-    if not waves:
-        return (Ad, B0, B1, C, D), (np.zeros((0, 0)), np.zeros(0), np.zeros((3, 0)), np.zeros(3), R)
-    Aw, Bw, Cw, Dw = wave_ss(p[20], p[21], T)
-    s = p[22]
-    Bt = Ad @ B1[:, 1] + B0[:, 1]
-    Ct = C @ B1[:, 1] + D[:, 1]
-    F = np.zeros((6, 6))
-    F[:4, :4], F[:4, 4:], F[4:, 4:] = Ad, s * np.outer(Bt, Cw), Aw
-    G = np.concatenate([s * Dw * Bt, Bw])
-    H = np.concatenate([C, s * np.outer(Ct, Cw)], axis=1)
-    return (Ad, B0, B1, C, D), (F, G, H, s * Dw * Ct, R)
 
 
 def _gain(F, G, H, J, R):
@@ -416,8 +400,9 @@ def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE
 
 
 def rho_of(theta, known: KnownParams, z_f: float) -> float:
-    """``rho = m z_m / (m_c z_c)`` (z about the centre of rotation)."""
-    return float(theta[I_M] * (theta[I_ZM] + z_f) / (known.m_c * (known.zc_bar + z_f)))
+    """``rho = m z_m / (m_c z_c)`` (z about the centre of rotation) of ``theta`` (names :data:`FREE`) and ``z_f``:
+    :func:`shipid.methods.masscm.plausibility.rho_of` of the whole theta of (30)."""
+    return float(plausibility.rho_of(np.insert(np.asarray(theta, dtype=float), I_ZF, z_f), known))
 
 
 def physical_reason(theta, sets, locs, waves) -> str:
