@@ -150,8 +150,7 @@ import numpy as np
 
 from shipid.methods.masscm.crlb import crlb, true_theta
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
-from shipid.methods.masscm.pem import FREE
-from shipid.methods.masscm.pem import refine as pem_refine
+from shipid.methods.masscm.pem_result import refine_result
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
@@ -196,22 +195,18 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
         warnings.simplefilter("ignore")
         r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,
                              options=MassCMOptions(noise_model=noise_model, compute=compute))
+    if refine not in ("none", "pem"):
+        raise ValueError("refine must be 'none' or 'pem'")
+    rr = refine_result(r, list(d.items()), known, z_f) if refine == "pem" else r
     out = {}
     for k in QUANTITIES:
-        out[k], out[f"{k}_std"] = float(r.value(k)), float(r.std(k))
+        out[k], out[f"{k}_std"] = float(rr.value(k)), float(rr.std(k))
     if refine == "pem":
+        rec = rr.diagnostics["refine"]
         for k in QUANTITIES:
-            out[f"iv_{k}"], out[f"iv_{k}_std"] = out[k], out[f"{k}_std"]
-        f = pem_refine(list(d.items()), known, z_f, np.array([r.value(n) for n in FREE]))
-        out.update({"pem_ok": bool(f.ok), "pem_reason": f.reason, "pem_waves": bool(f.waves),
-                    "pem_iterations": int(f.iterations)})
-        if f.ok:
-            i_m, i_z = FREE.index("m"), FREE.index("zm_bar")
-            out.update({"m": float(f.theta[i_m]), "m_std": float(np.sqrt(f.cov[i_m, i_m])),
-                        "zm_bar": float(f.theta[i_z]), "zm_bar_std": float(np.sqrt(f.cov[i_z, i_z])),
-                        "rho": float(f.rho), "rho_std": float(f.rho_std)})
-    elif refine != "none":
-        raise ValueError("refine must be 'none' or 'pem'")
+            out[f"iv_{k}"], out[f"iv_{k}_std"] = rec["algorithm1"][k]
+        out.update({"pem_ok": rec["applied"], "pem_reason": rec["reason"], "pem_waves": rec["waves"],
+                    "pem_iterations": rec["iterations"]})
     for k in NUISANCE:                   # weakly determined (finite-sample IV bias): reported, not judged
         out[k] = float(r.value(k))
     out.update({"converged": bool(r.diagnostics["converged"]), "iterations": int(r.diagnostics["iterations"]),
