@@ -102,7 +102,6 @@ COVERAGE = {"coverage": 0.96, "n": 300, "nominal": 0.954,
             "source": "shipid study mass-cm-coverage --regime waves|sensors|both --runs 100 --seed 9101"}
 
 
-
 def estimate_mass_cm(datasets, known, *, theta0=None, z_f=None, z_f_prior=None, init=None,
                      options: MassCMOptions = MassCMOptions(), noise_check: bool = True):
     """Algorithm 1 (:func:`shipid.methods.masscm.assemble.estimate_mass_cm`, same arguments and result), then,

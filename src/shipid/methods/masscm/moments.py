@@ -94,10 +94,9 @@ def work_arrays(ds: Dataset, options: MassCMOptions) -> tuple[np.ndarray, np.nda
     nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
     key = ("work", nls)
     if key not in ds.cache:
-        dr0, dd = diff2(ds.r_hat0), diff2(ds.delta)
         X = np.empty((8, ds.y.size))
         X[0:2] = 0.0
-        X[2], X[3] = dr0 - dr0.mean(), dd - dd.mean()
+        X[2], X[3] = input_differences(ds)
         X[4:7] = ds.Phi[:, 2:].T
         X[7] = ds.y
         ds.cache[key] = (X, np.array(nls, dtype=np.int64))
@@ -203,8 +202,8 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
     if options.compute == "fast":
         ZtZ, ZtP = lag_moments(np.ascontiguousarray(F[:4]), np.array(nls, dtype=np.int64), T, s2)
-        return iv_compress_products(ZtZ, ZtP, n - s2)
-    ZtZ, ZtP = lag_products(F, nls, T[:, s2:], s2)
+    else:
+        ZtZ, ZtP = lag_products(F, nls, T[:, s2:], s2)
     return iv_compress_products(ZtZ, ZtP, n - s2)
 
 

@@ -215,7 +215,6 @@ def with_series(fit, *, cost_map: bool = False, trials: Mapping | None = None) -
     return _from_files(fit, cost_map, trials)
 
 
-
 def _from_files(result, cost_map: bool, trials: Mapping | None = None):
     """:func:`with_series` of a stored result (see there)."""
     call = recorded_call(result, "mass-cm", "mass_cm_call", "overlays")
