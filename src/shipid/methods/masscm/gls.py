@@ -59,6 +59,7 @@ from shipid.estimate.iv import iv_compress
 from shipid.methods.masscm.assemble import covariance
 from shipid.methods.masscm.criterion import IVState, jacobian_cs, residual_function
 from shipid.methods.masscm.data import Dataset, first_row
+from shipid.methods.masscm.iteration import search_bounds
 from shipid.methods.masscm.moments import transient_length
 from shipid.methods.masscm.options import I_ZF, MassCMOptions
 from shipid.methods.masscm.plausibility import implausible_identifiable
@@ -86,8 +87,8 @@ def prefiltered_ls(core: dict, prep: list[Dataset], known: KnownParams,
     """GLS estimate of (35) with Algorithm 1's final noise models held (module docstring).
 
     ``core``: the output of :func:`shipid.methods.masscm.iteration.iterate` (its last state gives ``L_i`` and
-    ``lam_i``; its estimate is the start). The search is scipy's ``trf`` inside the same ``|zm_bar| <= zm_bound``
-    box as Algorithm 1. Returns a dict like ``core`` (``theta``, ``theta_q``, ``free``, ``J``, ``prior``) with
+    ``lam_i``; its estimate is the start). The search is scipy's ``trf`` inside the bounds of Algorithm 1's searches
+    (:func:`~shipid.methods.masscm.iteration.search_bounds`). Returns a dict like ``core`` (``theta``, ``theta_q``, ``free``, ``J``, ``prior``) with
     ``criterion`` the GLS criterion at the LS and at the IV estimate.
     """
     st = core["state"]
@@ -95,10 +96,7 @@ def prefiltered_ls(core: dict, prep: list[Dataset], known: KnownParams,
     free, prior = core["free"], core["prior"]
     th = np.asarray(core["theta_q"], dtype=float).copy()
     fun = residual_function(state, known, free, th, prior)[0]
-    lo = np.full(int(free.sum()), -np.inf)
-    hi = np.full(int(free.sum()), np.inf)
-    izm = int(free.sum()) - 1                        # zm_bar is the last parameter
-    lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
+    lo, hi = search_bounds(free, prior, options)
     x0 = np.clip(th[free], lo + 1e-9, hi - 1e-9)
     x = least_squares(fun, x0, jac=fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10, gtol=1e-10,
                       max_nfev=2000, x_scale="jac").x

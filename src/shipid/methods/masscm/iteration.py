@@ -78,6 +78,22 @@ def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: K
     return bool(implausible_identifiable(from_moment(theta_q), known, conds))
 
 
+def search_bounds(free: np.ndarray, prior, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds ``(lo, hi)`` on the free entries of theta (moment parameterisation) of the searches of step B(a)."""
+    # (*) trust-region search with the load's centre kept inside |zm_bar| <= zm_bound: outside it the
+    # moment parameterisation degenerates (q -> 0 with q*zm_bar finite fits like an extra free A2)
+    lo = np.full(int(free.sum()), -np.inf)
+    hi = np.full(int(free.sum()), np.inf)
+    izm = int(np.sum(free[:I_ZM]))
+    lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
+    if free[I_ZF] and prior is None:
+        # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
+        # negative) on both sides (see shipid.methods.masscm.identifiability); keep the search inside it
+        lo[:3] = 0.0
+        lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
+    return lo, hi
+
+
 def initial_state(prep: list[Dataset], options: MassCMOptions = MassCMOptions()) -> "IVState":
     """IV moments of the first iteration (step A): black-box instruments and the initial prefilter.
 
@@ -135,17 +151,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
     dgs: list[float] = []
     j = 0
     fun = None
-    # (*) trust-region search with the load's centre kept inside |zm_bar| <= zm_bound: outside it the
-    # moment parameterisation degenerates (q -> 0 with q*zm_bar finite fits like an extra free A2)
-    lo = np.full(int(free.sum()), -np.inf)
-    hi = np.full(int(free.sum()), np.inf)
-    izm = int(np.sum(free[:I_ZM]))
-    lo[izm], hi[izm] = -options.zm_bound, options.zm_bound
-    if free[I_ZF] and prior is None:
-        # (*) z_f free: the exact-fit family is flat in z_f and leaves the physical region (A_x, k or d
-        # negative) on both sides (see shipid.methods.masscm.identifiability); keep the search inside it
-        lo[:3] = 0.0
-        lo[int(np.sum(free[:I_ZF]))], hi[int(np.sum(free[:I_ZF]))] = -1.0, 1.0
+    lo, hi = search_bounds(free, prior, options)
     lo_in, hi_in = lo.copy(), hi.copy()
     fl, fh = np.isfinite(lo), np.isfinite(hi)
     lo_in[fl] += 1e-6 * np.maximum(1.0, np.abs(lo[fl]))
@@ -274,4 +280,4 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             "history": np.array(history), "dg": dgs, "state": state, "warnings": warn, "prior": prior}
 
 
-__all__ = ["fused", "step_compiled", "left_physical_region", "initial_state", "iterate"]
+__all__ = ["fused", "step_compiled", "left_physical_region", "search_bounds", "initial_state", "iterate"]
