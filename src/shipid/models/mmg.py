@@ -52,7 +52,7 @@ import numpy as np
 from shipid.data.paths import data_root
 from shipid.errors import InputError
 from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa, crossflow_integrals, cubic_hull,
-                                      fujiwara_coefficients, wind_forces)
+                                      fujii_f_alpha, fujiwara_coefficients, wind_forces)
 from shipid.simulate.integrate import rk4_step
 from shipid.simulate.model import ShipModel
 
@@ -193,7 +193,7 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         out = basis_esso(p, u, v, r, delta, n)
         a = out["aux"]
         T4 = (n > 0) * p["rho"] * p["D_p"] ** 4 * n * n
-        f_alpha = 6.13 * p["lambda_R"] / (2.25 + p["lambda_R"])
+        f_alpha = fujii_f_alpha(p["lambda_R"])
         dFN = 0.5 * p["rho"] * p["A_R"] * a["U_R"] ** 2 * f_alpha * np.cos(a["alpha_R"]) * np.cos(delta)
         for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])

@@ -105,6 +105,12 @@ def crossflow_integrals(v, r, L, C_Y, C_N):
 
 
 # ----------------------------------------------------------------------------- structures
+def fujii_f_alpha(lambda_R):
+    """Rudder normal-force slope coefficient ``f_α = 6.13 Λ / (2.25 + Λ)`` of aspect ratio ``Λ`` (Fujii's formula,
+    the low-speed Esso model's rudder)."""
+    return 6.13 * lambda_R / (2.25 + lambda_R)
+
+
 def basis_esso(p, u, v, r, delta, n):
     """Regressors of the low-speed Esso Osaka model (hull after Yoshimura, four-quadrant propeller,
     low-speed rudder; mmg-1p1r-simulator c54ef807), as :func:`shipid.models.mmg.basis` returns them."""
@@ -169,7 +175,7 @@ def basis_esso(p, u, v, r, delta, n):
     vR = np.where(v + p["x_R"] * r >= 0, -p["gamma_R_plus"] * (v + lR * r), -p["gamma_R_minus"] * (v + lR * r))
     UR2 = uR * uR + vR * vR
     aR = delta - np.arctan2(vR, uR)
-    f_alpha = 6.13 * p["lambda_R"] / (2.25 + p["lambda_R"])
+    f_alpha = fujii_f_alpha(p["lambda_R"])
     FN = 0.5 * rho * p["A_R"] * UR2 * f_alpha * np.sin(aR)
     HX = np.stack([qX * u * U * (1 - ab), qX * u * U * ab, qX * v * r * L,
                    pos * T4, pos * T4 * J, pos * T4 * J * J,
@@ -249,5 +255,5 @@ def basis_yasukawa(p, u, v, r, delta, n):
     return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
 
 
-__all__ = ["apparent_wind", "fujiwara_coefficients", "wind_forces", "crossflow_integrals", "basis_esso",
+__all__ = ["apparent_wind", "fujiwara_coefficients", "wind_forces", "crossflow_integrals", "fujii_f_alpha", "basis_esso",
            "cubic_hull", "basis_yasukawa"]
