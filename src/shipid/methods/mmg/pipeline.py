@@ -58,6 +58,12 @@ def select_structure(trials: Sequence[Trial], runs: Sequence[SmoothedRun], prior
     return best, table
 
 
+def horizon_method(folds: int | None = None) -> str:
+    """The one-line description of :func:`select_structure`'s criterion that a result's selection records."""
+    return (f"{'leave-one-run-out' if folds is None else f'{folds}-fold'} CV on the training runs, "
+            "60-s restarted horizons, errors pooled over folds, score = RMS psi/10 deg + RMS pos/1 m")
+
+
 # ----------------------------------------------------------------------------- result
 def _file_id(path: str) -> str:
     try:
@@ -217,8 +223,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     if structure is None and select and len(trials) >= 2:
         if selector is None:
             structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
-            method = (f"{'leave-one-run-out' if folds is None else f'{folds}-fold'} CV on the training runs, "
-                      "60-s restarted horizons, errors pooled over folds, score = RMS psi/10 deg + RMS pos/1 m")
+            method = horizon_method(folds)
         else:
             structure, table, method = selector(trials, runs, prior, cands, fit_config, folds)
         selection = {"method": method, "table": table, "chosen": structure,
@@ -285,5 +290,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     return res
 
 
-__all__ = ["select_structure", "undetermined_note", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
+__all__ = ["select_structure", "horizon_method", "undetermined_note", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
            "MIN_HORIZONS_PER_COEFFICIENT"]

@@ -90,7 +90,7 @@ from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import turning_selection as TS
 from shipid.methods.mmg.candidates import CANDIDATES
-from shipid.methods.mmg.pipeline import select_structure
+from shipid.methods.mmg.pipeline import horizon_method, select_structure
 from shipid.methods.mmg.side_calibration import MIN_SWITCH_DEG, fit_candidate
 from shipid.methods.mmg.study import KVLCC2_TRAIN
 from shipid.methods.mmg.zigzag import zigzag_angles
@@ -107,26 +107,15 @@ SMALL_ANGLE_TOLERANCE = 1.05
 #: Rudder angles (deg) of the outer folds counted as large (decision rule a) and small (b).
 LARGE_ANGLES = (20.0, 25.0, 30.0)
 SMALL_ANGLES = (5.0, 10.0, 15.0)
-HORIZON_METHOD = ("leave-one-run-out CV on the training runs, 60-s restarted horizons, errors pooled over folds, "
-                  "score = RMS psi/10 deg + RMS pos/1 m")
-
-
-def _angles(trials: Sequence[Trial]) -> list[float | None]:
-    out = []
-    for tr in trials:
-        try:
-            out.append(float(np.degrees(zigzag_angles(Path(str(tr.meta.get("source", ""))).name)[0])))
-        except InputError:
-            out.append(None)
-    return out
 
 
 def guard(trials: Sequence[Trial]) -> tuple[bool, str]:
     """Rule 1: may the peak criterion decide on these runs? ``(ok, reason)``."""
     use = TS.peak_runs(trials)
-    ang = {a for a, u in zip(_angles(trials), use) if u and a is not None}
+    rudder = [None if a is None else float(np.degrees(a[0])) for a in map(TS.trial_angles, trials)]
+    ang = {a for a, u in zip(rudder, use) if u and a is not None}
     n = int(sum(use))
-    unknown = sum(1 for a, u in zip(_angles(trials), use) if u and a is None)
+    unknown = sum(1 for a, u in zip(rudder, use) if u and a is None)
     k = len(ang) + (1 if unknown else 0)
     ok = n >= MIN_PEAK_RUNS and k >= MIN_PEAK_ANGLES
     return ok, (f"{n} runs with switch >= {MIN_SWITCH_DEG:g} deg at {k} rudder angle(s) (needs {MIN_PEAK_RUNS} "
@@ -143,7 +132,7 @@ def select_auto(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: m
     frozen = {k: v for k, v in CANDIDATES[prior.structure].items() if k in cands}
     d, dtable = select_structure(trials, runs, prior, frozen, config=config, folds=folds)
     ok, why = guard(trials)
-    hmethod = HORIZON_METHOD if folds is None else HORIZON_METHOD.replace("leave-one-run-out", f"{folds}-fold")
+    hmethod = horizon_method(folds)
     if not ok:
         return d, dtable, f"{hmethod} (turning criterion not used: {why})"
     best, table, method = TS.select_for_turning(trials, runs, prior, cands, config, folds, criterion="peak")

@@ -175,16 +175,19 @@ def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mappin
     return out  # type: ignore[return-value]
 
 
+def trial_angles(tr: Trial) -> tuple[float, float] | None:
+    """``(rudder, switch)`` angles (rad) of a zig-zag run named by its source file, or None when the name says none
+    (:func:`shipid.methods.mmg.zigzag.zigzag_angles`)."""
+    try:
+        return zigzag_angles(Path(str(tr.meta.get("source", ""))).name)
+    except InputError:
+        return None
+
+
 def peak_runs(trials: Sequence[Trial]) -> list[bool]:
     """Per run: does its peak yaw rate enter the criteria (switch ≥ MIN_SWITCH_DEG, or angles unknown)."""
-    ok = []
-    for tr in trials:
-        try:
-            ok.append(bool(np.degrees(zigzag_angles(Path(str(tr.meta.get("source", ""))).name)[1])
-                           >= MIN_SWITCH_DEG - 1e-9))
-        except InputError:
-            ok.append(True)
-    return ok
+    angles = [trial_angles(tr) for tr in trials]
+    return [True if a is None else bool(np.degrees(a[1]) >= MIN_SWITCH_DEG - 1e-9) for a in angles]
 
 
 def _fit(runs, prior, cand, config):
@@ -352,5 +355,5 @@ def nested_criterion_check(*, root: Path | None = None) -> dict[str, Any]:
 
 
 __all__ = ["CALIBRATE", "PARAMETER", "TURNING_CANDIDATES", "turning_candidates", "replay_data", "batch_replay",
-           "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD", "CRITERIA", "DEFAULT_CRITERION",
+           "trial_angles", "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD", "CRITERIA", "DEFAULT_CRITERION",
            "nested_criterion_check"]
