@@ -88,19 +88,3 @@ def test_nested_cv_with_two_training_runs_falls_back_to_the_default(monkeypatch)
     for row in res["folds"].values():
         assert row["auto"]["chosen"] == row["default"]["chosen"]
         assert row["auto"]["score"] == row["default"]["score"]
-
-
-def test_cli_turning_auto_refuses_a_structure_without_turning_candidates(capsys):
-    """--selection turning-auto with the Esso prior: one line naming the structure, exit 2, no traceback."""
-    from shipid.cli import main
-    from shipid.data import data_root
-
-    root = data_root()
-    rel = "esso_osaka_3m/data/zigzag/zigzag_31-Jul-2020_13_04_24.csv"
-    if root is None or not (root / rel).exists():
-        pytest.skip("shared data not found (set SHIPID_DATA)")
-    rc = main(["identify", "mmg", "--trial", str(root / rel), "--trial", str(root / rel), "--prior", "esso_osaka_3m",
-               "--selection", "turning-auto", "--json"])
-    err = capsys.readouterr().err
-    assert rc == 2 and "turning-auto: no turning candidates for the structure 'esso-lowspeed'" in err
-    assert "Traceback" not in err

@@ -128,17 +128,19 @@ def test_identify_fits_a_calibrated_candidate_with_the_gain_calibrated_on_its_ru
     assert res.model["particulars"]["rudder_crossflow"] == 1.0
 
 
-def test_cli_turning_selection_refuses_a_structure_without_turning_candidates(capsys):
-    """--selection turning with the Esso prior: one line naming the structure, exit 2, no traceback."""
+@pytest.mark.parametrize("selection", ["turning", "turning-auto"])
+def test_cli_turning_selection_refuses_a_structure_without_turning_candidates(selection, capsys):
+    """--selection turning / turning-auto with the Esso prior: one line naming the structure, exit 2, no traceback."""
     from shipid.cli import main
 
     rel = "esso_osaka_3m/data/zigzag/zigzag_31-Jul-2020_13_04_24.csv"
     if ROOT is None or not (ROOT / rel).exists():
         pytest.skip("shared data not found (set SHIPID_DATA)")
     rc = main(["identify", "mmg", "--trial", str(ROOT / rel), "--trial", str(ROOT / rel), "--prior", "esso_osaka_3m",
-               "--selection", "turning", "--json"])
+               "--selection", selection, "--json"])
     err = capsys.readouterr().err
-    assert rc == 2 and "no turning candidates for the structure 'esso-lowspeed'" in err and "Traceback" not in err
+    assert rc == 2 and f"{selection}: no turning candidates for the structure 'esso-lowspeed'" in err
+    assert "Traceback" not in err
 
 
 def test_criteria_scores(setup):
