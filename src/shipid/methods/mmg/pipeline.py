@@ -290,5 +290,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     return res
 
 
-__all__ = ["select_structure", "horizon_method", "undetermined_note", "build_result", "identify", "default_refine", "REFINE_BY_DEFAULT",
-           "MIN_HORIZONS_PER_COEFFICIENT"]
+__all__ = ["select_structure", "horizon_method", "undetermined_note", "build_result", "identify", "default_refine",
+           "REFINE_BY_DEFAULT", "MIN_HORIZONS_PER_COEFFICIENT"]

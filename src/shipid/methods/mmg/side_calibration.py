@@ -136,8 +136,6 @@ def refine_minimum(x: Sequence[float], y: Sequence[float]) -> float:
     return float(np.clip(-B / (2 * A), x0, x2))
 
 
-
-
 def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, root: Path | None = None,
                    grid: Sequence[float] = GRID, every_grid_value: bool = False,
                    particulars: Mapping[str, float] | None = None, parameter: str = "gamma_R_asymmetry",
@@ -170,5 +168,5 @@ def cross_validate(bases: Sequence[str] = ("linear-hull+rudder", "full"), *, roo
     return out
 
 
-__all__ = ["GRID", "SIDE_GAIN_GRID", "MIN_SWITCH_DEG", "with_asymmetry", "fit_candidate", "peak_score", "calibrate", "refine_minimum", "score_validation",
-           "cross_validate"]
+__all__ = ["GRID", "SIDE_GAIN_GRID", "MIN_SWITCH_DEG", "with_asymmetry", "fit_candidate", "peak_score", "calibrate",
+           "refine_minimum", "cross_validate"]

@@ -95,9 +95,9 @@ from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
-from shipid.methods.mmg.extrapolation import VALIDATE, large_angle_split
+from shipid.methods.mmg.extrapolation import VALIDATE, large_angle_split, score_validation
 from shipid.methods.mmg.side_calibration import (MIN_SWITCH_DEG, SIDE_GAIN_GRID, fit_candidate, refine_minimum,
-                                                 score_validation, with_asymmetry)
+                                                 with_asymmetry)
 from shipid.methods.mmg.zigzag import execute_index, zigzag_angles
 from shipid.models import mmg
 
@@ -341,7 +341,7 @@ def nested_criterion_check(*, root: Path | None = None) -> dict[str, Any]:
     10°/15° zig-zags (:data:`shipid.methods.mmg.extrapolation.TRAIN`), the chosen candidate fitted
     (and calibrated, :func:`resolve`) on them, and scored on the 20°–30° ones
     (:data:`~shipid.methods.mmg.extrapolation.VALIDATE`) by
-    :func:`shipid.methods.mmg.side_calibration.score_validation`. Reads no other run."""
+    :func:`shipid.methods.mmg.extrapolation.score_validation`. Reads no other run."""
     prior, trs, runs, ap, val = large_angle_split(root)
     cands = TURNING_CANDIDATES[prior.structure]
     out: dict[str, Any] = {}
