@@ -80,10 +80,11 @@ def with_asymmetry(cand: Mapping, a: float, parameter: str = "gamma_R_asymmetry"
     return c
 
 
-def fit_candidate(runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping) -> mmg.MmgModel:
+def fit_candidate(runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping,
+                  config: R.FitConfig = R.FitConfig()) -> mmg.MmgModel:
     """The regression fit of ``cand`` on ``runs``."""
     cprior, free = apply_candidate(prior, cand)
-    return R.fit(runs, cprior, free, candidate_config(R.FitConfig(), cand)).model
+    return R.fit(runs, cprior, free, candidate_config(config, cand)).model
 
 
 def peak_score(model: mmg.MmgModel, trials: Sequence[Trial], names: Sequence[str]) -> float:

@@ -94,7 +94,7 @@ from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import validate as V
-from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
+from shipid.methods.mmg.candidates import CANDIDATES
 from shipid.methods.mmg.extrapolation import VALIDATE, large_angle_split, score_validation
 from shipid.methods.mmg.side_calibration import (MIN_SWITCH_DEG, SIDE_GAIN_GRID, fit_candidate, refine_minimum,
                                                  with_asymmetry)
@@ -191,9 +191,9 @@ def peak_runs(trials: Sequence[Trial]) -> list[bool]:
 
 
 def _fit(runs, prior, cand, config):
-    cprior, free = apply_candidate(prior, cand)
+    """:func:`~shipid.methods.mmg.side_calibration.fit_candidate`, or None where the fit fails."""
     try:
-        return R.fit(runs, cprior, free, candidate_config(config, cand)).model
+        return fit_candidate(runs, prior, cand, config)
     except (ShipidError, ValueError, np.linalg.LinAlgError):
         return None
 
