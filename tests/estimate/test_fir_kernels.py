@@ -80,3 +80,20 @@ def test_compiled_projection_qr_equals_iv_compress_products(rank_deficient):
     assert np.allclose(a.R.T @ a.r, b.R.T @ b.r, rtol=1e-11, atol=1e-13 * np.abs(b.R.T @ b.r).max())
     assert np.isclose(a.rss0, b.rss0, rtol=1e-10)
     assert np.allclose(np.abs(np.diag(a.R)), np.abs(np.diag(b.R)), rtol=1e-11)
+
+
+def test_fewer_instrument_directions_than_regressors_pad_the_factor_with_zero_rows():
+    """Three instruments for five regressors: both paths return the (5, 5) factor of the same criterion,
+    rows beyond the rank zero, and ``rank_ok`` False (the reference path returned a (3, 5) factor, which
+    the stacking of the datasets' moments in masscm.criterion could not take)."""
+    from shipid.estimate.iv import iv_compress_products, iv_compress_products_compiled
+    rng = np.random.default_rng(11)
+    Z = rng.standard_normal((500, 3))
+    P = rng.standard_normal((500, 6))
+    a = iv_compress_products_compiled(Z.T @ Z, Z.T @ P, 500)
+    b = iv_compress_products(Z.T @ Z, Z.T @ P, 500)
+    for mo in (a, b):
+        assert mo.R.shape == (5, 5) and mo.r.shape == (5,) and not mo.rank_ok
+        assert np.all(mo.R[3:] == 0.0) and np.all(mo.r[3:] == 0.0)
+    assert np.allclose(a.R.T @ a.R, b.R.T @ b.R, rtol=1e-11, atol=1e-13)
+    assert np.allclose(a.R.T @ a.r, b.R.T @ b.r, rtol=1e-11, atol=1e-13)

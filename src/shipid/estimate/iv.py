@@ -152,7 +152,8 @@ def iv_compress(Z: np.ndarray, y: np.ndarray, Phi: np.ndarray, rtol: float = 1e-
     eigen-decomposition ``Z^T Z = V S V^T`` the projections are ``S^-1/2 V^T Z^T [Phi, y]`` (equal to
     ``Qz^T [Phi, y]`` up to an orthogonal rotation, which leaves the criterion unchanged). Instrument
     directions with eigenvalues below ``rtol`` times the largest are dropped instead of inverting a
-    singular Q (lagged instruments of smooth signals are strongly collinear).
+    singular Q (lagged instruments of smooth signals are strongly collinear). With fewer directions kept
+    than parameters the factor is padded with zero rows (the same criterion; ``rank_ok`` False).
     """
     return iv_compress_products(Z.T @ Z, Z.T @ np.column_stack([Phi, y]), y.size, rtol)
 
@@ -165,11 +166,13 @@ def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float =
     s, V = np.linalg.eigh(ZtZ)
     keep = s > rtol * max(s[-1], 1e-300)
     P = (V[:, keep].T @ ZtP) / np.sqrt(s[keep])[:, None]
-    Rf = np.linalg.qr(P, mode="r")
     ng = ZtP.shape[1] - 1
+    Rf = np.zeros((ng + 1, ng + 1))
+    Rq = np.linalg.qr(P, mode="r")
+    Rf[:Rq.shape[0]] = Rq               # fewer directions than columns: rows beyond the rank are zero
     R = Rf[:ng, :ng]
     r = Rf[:ng, ng]
-    rss0 = float(Rf[ng, ng] ** 2) if Rf.shape[0] > ng else 0.0
+    rss0 = float(Rf[ng, ng] ** 2)
     return IVMoments(R=R, r=r, rss0=rss0, n=n, rank_ok=bool(keep.sum() >= ng))
 
 

@@ -268,6 +268,10 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
                     "K_vdot, K_r, K_delta carry a finite-sample IV bias under sensor noise (module docstring, "
                     "'Known limitations'); m, zm_bar and rho are judged on their own and not flagged")
     st = core["state"]
+    for i, mo in enumerate(st.moments):
+        if not mo.rank_ok:
+            warn.append(f"dataset {i + 1}: the instruments span fewer directions than the 5 regressors of (37) "
+                        "at the last iteration; the estimate leans on the other datasets")
     resid = []
     for i, ds in enumerate(prep):
         G = discrete_coeffs(core["theta_q"], known, conds, np.array([d.T for d in prep]), moment=True)[i]
