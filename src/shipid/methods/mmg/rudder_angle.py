@@ -1,0 +1,187 @@
+"""Angle-dependent rudder terms for the KVLCC2 at large rudder angles, chosen by a CV that only extrapolates in angle.
+
+Question: which rudder normal-force model, fitted on small-angle zig-zags, predicts the larger-angle
+ones best on each side? The optional terms are those of :mod:`shipid.models.mmg_forces`
+(:data:`~shipid.models.mmg_forces.RUDDER_LARGE_ANGLE`): a stall per inflow side, the cross-flow part
+per side, and a port/starboard effectiveness growing with the rudder angle; against them the
+default rudder and the constant side gain of :mod:`shipid.methods.mmg.side_calibration`.
+
+Candidates (:func:`candidates`, fixed a priori; every one on the free set and flow straightening the
+default selection chose in five of the six folds of :mod:`shipid.methods.mmg.turning_nested`,
+``linear-hull+rudder/symmetric-gamma_R``; ``C_Dc = 1`` after Hoerner 1985 ch. 3, not tuned):
+
+* ``default`` — the standard ``f_α sin α_R``;
+* ``cf`` — with the cross-flow part ``C_Dc sin α_R |sin α_R|``;
+* ``cf/side-gain`` — and ``F_N (1 + s sign δ)``, ``s`` calibrated (the constant side gain);
+* ``side-slope``, ``cf/side-slope`` — ``F_N (1 + k δ)``, ``k`` calibrated (the side difference grows
+  with ``|δ|``);
+* ``cf/crossflow-side`` — ``C_Dc (1 ± b)`` on the ``α_R ≷ 0`` side, ``b`` calibrated;
+* ``cf/stall-plus`` — an effective stall angle on the ``α_R > 0`` (starboard-turn) side, calibrated.
+
+A calibrated parameter is chosen on the fold's TRAINING runs only, by the criterion of
+:func:`shipid.methods.mmg.side_calibration.calibrate` (RMS over the training zig-zags with switch ≥ 5°
+and both sides of the open-loop peak-yaw-rate error, %; a grid refined by a parabola's vertex;
+:func:`shipid.methods.mmg.turning_selection.calibrate_folds`).
+
+Cross-validation (stated, with the rule below, before any score was computed): forward folds over the
+HSVA zig-zags by rudder angle (:data:`FOLDS`), each trained on all runs below an angle and scored on
+all runs above it, so that every prediction extrapolates in angle: train 10°–15° → score 20°–35°;
+train 10°–20° → score 25°–35°; train 10°–25° → score 30°–35°. (The 5°/1° run is not used: its turn is
+set by the switching.) Each scored run is replayed open loop from execute with the measured rudder and
+propeller (:func:`shipid.methods.mmg.turning_selection.batch_replay`). Fold score = RMS over the scored
+runs and sides of the peak-yaw-rate error (%) + RMS over the scored runs of the whole-run heading RMS
+(deg), the large-angle score of :mod:`shipid.methods.mmg.turning_nested`.
+
+Decision rule: the candidate with the lowest mean fold score wins if that mean is lower than the
+default's and its fold score is lower than the default's in at least :data:`MIN_FOLDS_BETTER` of the
+three folds; otherwise the default stays.
+
+Runs read: the twelve HSVA zig-zags of :data:`RUNS` (the HSVA basin only; no run of another basin).
+The 20°/10° and 35°/5° runs are the held-out runs of the frozen overshoot study
+(:mod:`shipid.methods.mmg.study`), which this study does not change.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.basins import read_kvlcc2
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import turning_selection as TS
+from shipid.methods.mmg.candidates import CANDIDATES
+from shipid.methods.mmg.side_calibration import SIDE_GAIN_GRID, fit_candidate, with_asymmetry
+from shipid.methods.mmg.zigzag import zigzag_angles
+from shipid.models import mmg
+
+#: The HSVA zig-zags the study reads (all but the 5°/1° one).
+RUNS = ("HSVA_CPMC_KVLCC2_Z_10_01.dat", "HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_10_10_P.dat",
+        "HSVA_CPMC_KVLCC2_Z_10_10_S.dat", "HSVA_CPMC_KVLCC2_Z_15_01.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat",
+        "HSVA_CPMC_KVLCC2_Z_20_05.dat", "HSVA_CPMC_KVLCC2_Z_20_10_P.dat", "HSVA_CPMC_KVLCC2_Z_20_10_S.dat",
+        "HSVA_CPMC_KVLCC2_Z_25_05.dat", "HSVA_CPMC_KVLCC2_Z_30_05.dat", "HSVA_CPMC_KVLCC2_Z_35_05.dat")
+#: Forward folds: (name, largest training rudder angle, deg); scored on every run above it.
+FOLDS = (("10-15", 15.0), ("10-20", 20.0), ("10-25", 25.0))
+#: Decision rule: least number of folds in which the winner must beat the default.
+MIN_FOLDS_BETTER = 2
+#: Base candidate of every row (module docstring).
+BASE = "linear-hull+rudder/symmetric-gamma_R"
+#: Calibration grids per parameter: side slope k (1/rad), cross-flow side b, stall angle (rad).
+SLOPE_GRID = (-0.4, -0.3, -0.2, -0.1, 0.0, 0.1, 0.2)
+CROSSFLOW_SIDE_GRID = (-1.0, -0.75, -0.5, -0.25, 0.0, 0.25, 0.5)
+STALL_GRID = tuple(np.deg2rad([10.0, 15.0, 20.0, 25.0, 30.0, 40.0, 60.0]).tolist())
+GRIDS = {"rudder_side_gain": SIDE_GAIN_GRID, "rudder_side_slope": SLOPE_GRID,
+         "rudder_crossflow_side": CROSSFLOW_SIDE_GRID, "rudder_stall_plus": STALL_GRID}
+
+
+def candidates() -> dict[str, dict]:
+    """The candidates of the module docstring (``calibrate``: the particular calibrated on the training runs)."""
+    base = CANDIDATES["yasukawa2015"][BASE]
+    part = dict(base.get("particulars") or {})
+    cf = dict(base, particulars=dict(part, rudder_crossflow=1.0))
+    cal = TS.CALIBRATE
+    return {"default": dict(base), "cf": cf, "cf/side-gain": dict(cf, **{cal: "rudder_side_gain"}),
+            "side-slope": dict(base, **{cal: "rudder_side_slope"}), "cf/side-slope": dict(cf, **{cal: "rudder_side_slope"}),
+            "cf/crossflow-side": dict(cf, **{cal: "rudder_crossflow_side"}),
+            "cf/stall-plus": dict(cf, **{cal: "rudder_stall_plus"})}
+
+
+def rudder_angles(names: Sequence[str]) -> list[float]:
+    """Rudder angle (deg) of each zig-zag by its file name."""
+    return [float(np.degrees(zigzag_angles(f)[0])) for f in names]
+
+
+def fold_sets(names: Sequence[str]) -> list[tuple[str, list[int], list[int]]]:
+    """``(fold, training indices, scored indices)`` of :data:`FOLDS` over ``names``."""
+    ang = rudder_angles(names)
+    return [(f, [i for i, a in enumerate(ang) if a <= top + 1e-9], [i for i, a in enumerate(ang) if a > top + 1e-9])
+            for f, top in FOLDS]
+
+
+def calibrated(cand: Mapping, runs, data, use, prior, train: Sequence[int]) -> tuple[dict, float | None]:
+    """``cand`` with its calibrated particular chosen on the runs ``train`` (and the value), or unchanged."""
+    par = cand.get(TS.CALIBRATE)
+    c = {k: v for k, v in cand.items() if k != TS.CALIBRATE}
+    if not par:
+        return c, None
+    (a, _), = TS.calibrate_folds(runs, data, use, prior, c, [list(train)], grid=GRIDS[par], parameter=par)
+    return with_asymmetry(c, a, par), float(a)
+
+
+def score_rows(rep: Sequence[Mapping]) -> dict[str, float]:
+    """Fold score of the replays ``rep`` of the scored runs (module docstring) and its parts."""
+    pk = np.array([[r["r_peak_stbd_err_pct"], r["r_peak_port_err_pct"]] for r in rep], float)
+    psi = np.array([r["psi_rms"] for r in rep], float)
+    out = {"r_peak_rms_pct": float(np.sqrt(np.mean(pk ** 2))), "r_peak_stbd_mean_pct": float(pk[:, 0].mean()),
+           "r_peak_port_mean_pct": float(pk[:, 1].mean()), "psi_rms_deg": float(np.sqrt(np.mean(psi ** 2)))}
+    s = out["r_peak_rms_pct"] + out["psi_rms_deg"]
+    out["score"] = float(s) if np.isfinite(s) else float("inf")
+    return out
+
+
+def cross_validate(cands: Mapping[str, Mapping] | None = None, *, names: Sequence[str] = RUNS,
+                   root: Path | None = None, progress=None) -> dict[str, Any]:
+    """The forward-fold CV of the module docstring. Returns per fold and candidate the calibrated value,
+    the :func:`score_rows` numbers and the per-run replays; and :func:`decide`."""
+    cands = candidates() if cands is None else cands
+    prior = mmg.load_published("kvlcc2_hsva", root)
+    trials = [read_kvlcc2(f, root) for f in names]
+    runs = [R.smooth_run(tr) for tr in trials]
+    data = [TS.replay_data(tr) for tr in trials]
+    use = TS.peak_runs(trials)
+    folds: dict[str, Any] = {}
+    for fold, train, test in fold_sets(names):
+        row: dict[str, Any] = {"train": [names[i] for i in train], "scored": [names[i] for i in test]}
+        for cname, cand in cands.items():
+            c, a = calibrated(cand, runs, data, use, prior, train)
+            model = fit_candidate([runs[i] for i in train], prior, c)
+            rep = TS.batch_replay([(model, i) for i in test], data)
+            row[cname] = {"calibrated": a, **score_rows(rep), "runs": dict(zip(row["scored"], rep))}
+            if progress is not None:
+                progress(f"{fold}: {cname} {row[cname]['score']:.2f}")
+        folds[fold] = row
+    return {"folds": folds, "decision": decide(folds, list(cands))}
+
+
+def decide(folds: Mapping[str, Mapping], names: Sequence[str]) -> dict[str, Any]:
+    """The decision rule of the module docstring: mean fold score per candidate, folds better than the
+    default, and the choice."""
+    mean = {c: float(np.mean([folds[f][c]["score"] for f in folds])) for c in names}
+    better = {c: int(sum(folds[f][c]["score"] < folds[f]["default"]["score"] for f in folds)) for c in names}
+    best = min(names, key=lambda c: mean[c])
+    wins = best != "default" and mean[best] < mean["default"] and better[best] >= MIN_FOLDS_BETTER
+    return {"mean_score": mean, "folds_better_than_default": better, "best_mean": best,
+            "chosen": best if wins else "default"}
+
+
+def format_cv(res: Mapping[str, Any]) -> str:
+    """Per fold and candidate: calibrated value, score, RMS peak %, mean peak per side %, heading RMS deg;
+    per candidate on the first fold the peak errors per scored run and side; the decision."""
+    lines = [f"  {'fold':<6} {'candidate':<18} {'value':>8} {'score':>7} {'r_pk%':>6} {'stbd%':>7} {'port%':>7} "
+             f"{'psi°':>6}"]
+    for f, row in res["folds"].items():
+        for c, r in row.items():
+            if c in ("train", "scored"):
+                continue
+            v = "" if r["calibrated"] is None else f"{r['calibrated']:.4g}"
+            lines.append(f"  {f:<6} {c:<18} {v:>8} {r['score']:7.2f} {r['r_peak_rms_pct']:6.2f} "
+                         f"{r['r_peak_stbd_mean_pct']:+7.2f} {r['r_peak_port_mean_pct']:+7.2f} {r['psi_rms_deg']:6.2f}")
+    first = next(iter(res["folds"].values()))
+    lines.append("  fold 10-15, per scored run: peak yaw-rate error stbd / port %, heading RMS deg")
+    for c, r in first.items():
+        if c in ("train", "scored"):
+            continue
+        cells = [f"{n.split('_Z_')[1][:-4]} {x['r_peak_stbd_err_pct']:+.1f}/{x['r_peak_port_err_pct']:+.1f} "
+                 f"{x['psi_rms']:.1f}" for n, x in r["runs"].items()]
+        lines.append(f"  {c:<18} " + "; ".join(cells))
+    d = res["decision"]
+    lines.append("  mean fold score: " + ", ".join(f"{c} {v:.2f} ({d['folds_better_than_default'][c]} better)"
+                                                  for c, v in d["mean_score"].items()))
+    lines.append(f"  decision rule: lowest mean '{d['best_mean']}'; chosen '{d['chosen']}'")
+    return "\n".join(lines)
+
+
+__all__ = ["RUNS", "FOLDS", "MIN_FOLDS_BETTER", "BASE", "SLOPE_GRID", "CROSSFLOW_SIDE_GRID", "STALL_GRID", "GRIDS",
+           "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "cross_validate", "decide",
+           "format_cv"]
