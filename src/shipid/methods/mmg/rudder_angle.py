@@ -87,6 +87,18 @@ def candidates() -> dict[str, dict]:
             "cf/stall-plus": dict(cf, **{cal: "rudder_stall_plus"})}
 
 
+#: The candidate the decision rule chose (``shipid study kvlcc2-rudder-angle``; module docstring);
+#: ``shipid identify mmg --selection large-angle`` fits it.
+CHOSEN = "cf/crossflow-side"
+
+
+def resolve(trials, runs, prior: mmg.MmgModel, cand: Mapping, config: R.FitConfig = R.FitConfig()):
+    """:func:`shipid.methods.mmg.turning_selection.resolve` on the grid of the calibrated particular
+    (:data:`GRIDS`); the ``resolve`` of :func:`shipid.methods.mmg.pipeline.identify`."""
+    par = cand.get(TS.CALIBRATE)
+    return TS.resolve(trials, runs, prior, cand, config, grid=GRIDS[par] if par else SIDE_GAIN_GRID)
+
+
 def rudder_angles(names: Sequence[str]) -> list[float]:
     """Rudder angle (deg) of each zig-zag by its file name."""
     return [float(np.degrees(zigzag_angles(f)[0])) for f in names]
@@ -182,6 +194,6 @@ def format_cv(res: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["RUNS", "FOLDS", "MIN_FOLDS_BETTER", "BASE", "SLOPE_GRID", "CROSSFLOW_SIDE_GRID", "STALL_GRID", "GRIDS",
+__all__ = ["RUNS", "FOLDS", "CHOSEN", "resolve", "MIN_FOLDS_BETTER", "BASE", "SLOPE_GRID", "CROSSFLOW_SIDE_GRID", "STALL_GRID", "GRIDS",
            "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "cross_validate", "decide",
            "format_cv"]

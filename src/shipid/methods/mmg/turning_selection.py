@@ -256,14 +256,15 @@ def calibrate_folds(runs: Sequence[R.SmoothedRun], data: Sequence[Mapping], use:
 
 
 def resolve(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping,
-            config: R.FitConfig = R.FitConfig()) -> tuple[dict, dict | None]:
+            config: R.FitConfig = R.FitConfig(), *, grid: Sequence[float] = SIDE_GAIN_GRID
+            ) -> tuple[dict, dict | None]:
     """The candidate to fit on all training runs: a calibrated one with its particular calibrated on them
-    (and the calibration's table), any other unchanged (and None)."""
+    (on ``grid``, then the parabola's vertex; and the calibration's table), any other unchanged (and None)."""
     par = cand.get(CALIBRATE)
     if not par:
         return dict(cand), None
     data = [replay_data(tr) for tr in trials]
-    (a, table), = calibrate_folds(runs, data, peak_runs(trials), prior, cand, [list(range(len(runs)))],
+    (a, table), = calibrate_folds(runs, data, peak_runs(trials), prior, cand, [list(range(len(runs)))], grid=grid,
                                   config=config, parameter=par)
     c = with_asymmetry(cand, a, par)
     c.pop(CALIBRATE, None)
