@@ -81,6 +81,7 @@ def test_batch_replay_with_large_angle_terms_per_row_matches_each_replay(setup):
             np.testing.assert_allclose(v, ref[k], rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_calibration_of_a_new_term_is_that_of_side_calibration(setup):
     """The batched per-fold calibration gives the value of the reference (unbatched) calibration."""
     prior, trials, runs = setup
@@ -92,3 +93,33 @@ def test_calibration_of_a_new_term_is_that_of_side_calibration(setup):
     ref, table = S.calibrate(runs, trials, names, prior, plain, RA.SLOPE_GRID, parameter="rudder_side_slope")
     assert a == pytest.approx(ref, abs=1e-12) and np.isfinite(table[ref])
     assert c["particulars"]["rudder_side_slope"] == a and T.CALIBRATE not in c
+
+
+def test_identify_with_the_chosen_candidate_calibrates_its_side_parameter_on_its_grid(setup):
+    from shipid.methods.mmg import pipeline as P
+
+    prior, trials, runs = setup
+    cand = RA.candidates()[RA.CHOSEN]
+    par = cand[T.CALIBRATE]
+    res = P.identify(trials, prior, structure="c", candidates={"c": cand}, resolve=RA.resolve, refine="none")
+    cal = res.diagnostics["calibration"]
+    plain = {k: v for k, v in cand.items() if k != T.CALIBRATE}
+    (a, table), = T.calibrate_folds(runs, [T.replay_data(t) for t in trials], T.peak_runs(trials), prior, plain,
+                                    [[0, 1, 2]], grid=RA.GRIDS[par], parameter=par)
+    assert cal["parameter"] == par and cal["value"] == a
+    assert all(f"{g:g}" in cal["training_peak_score"] for g in RA.GRIDS[par])
+    assert res.model["particulars"][par] == a and res.model["particulars"]["rudder_crossflow"] == 1.0
+
+
+def test_cli_rudder_angle_selection_refuses_another_structure(capsys):
+    """--selection rudder-angle with the Esso prior: one line naming the structure, exit 2, no traceback."""
+    from shipid.cli import main
+
+    rel = "esso_osaka_3m/data/zigzag/zigzag_31-Jul-2020_13_04_24.csv"
+    if ROOT is None or not (ROOT / rel).exists():
+        pytest.skip("shared data not found (set SHIPID_DATA)")
+    rc = main(["identify", "mmg", "--trial", str(ROOT / rel), "--prior", "esso_osaka_3m",
+               "--selection", "rudder-angle", "--json"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "rudder-angle: for the structure 'yasukawa2015' only (not 'esso-lowspeed')" in err
+    assert "Traceback" not in err
