@@ -123,3 +123,21 @@ def test_cli_rudder_angle_selection_refuses_another_structure(capsys):
     err = capsys.readouterr().err
     assert rc == 2 and "rudder-angle: for the structure 'yasukawa2015' only (not 'esso-lowspeed')" in err
     assert "Traceback" not in err
+
+
+def test_study_command_prints_the_table_and_the_decision(monkeypatch, capsys):
+    """``shipid study kvlcc2-rudder-angle`` formats what cross_validate returns (here a small stand-in)."""
+    import json
+
+    from shipid.cli import main
+
+    rep = {"psi_rms": 2.0, "r_peak_stbd_err_pct": 1.0, "r_peak_port_err_pct": -3.0}
+    row = {"calibrated": None, **RA.score_rows([rep]), "runs": {"HSVA_CPMC_KVLCC2_Z_35_05.dat": rep}}
+    folds = {f: {"train": [], "scored": [], "default": dict(row), "cf": dict(row, score=1.0)} for f, _ in RA.FOLDS}
+    fake = {"folds": folds, "decision": RA.decide(folds, ["default", "cf"])}
+    monkeypatch.setattr(RA, "cross_validate", lambda progress=None: fake)
+    assert main(["study", "kvlcc2-rudder-angle"]) == 0
+    out = capsys.readouterr().out
+    assert "chosen 'cf'" in out and "35_05 +1.0/-3.0 2.0" in out
+    assert main(["study", "kvlcc2-rudder-angle", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["decision"]["chosen"] == "cf"

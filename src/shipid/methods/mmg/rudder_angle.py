@@ -84,6 +84,13 @@ tactical diameter 3.11 / 3.15 L (starboard) and 3.23 / 3.38 L (port), against 3.
 3.44 / 4.03 for the default selection; the bands (±2 std 0.04–0.07 L) hold the parameter covariance
 only, not the calibrated ``b``.
 
+A check made after the choice (a diagnostic, not a selection): the same CV on the frozen candidate
+``full/symmetric-gamma_R`` (the default selection's choice on all 13 runs; ``candidates(base_name=...)``)
+gives mean fold scores default 24.11, cf 23.71, cf/side-gain 16.66, side-slope 15.92, cf/side-slope
+13.21, cf/crossflow-side 13.38, cf/stall-plus 14.57: the angle-dependent terms again beat the constant
+side gain in every fold, but the order of the best two is reversed; the port deficit is larger on that
+base (35°/5°, fold 10-15: −18.1 % default, −12.5 % cf/crossflow-side).
+
 Runs read: the twelve HSVA zig-zags of :data:`RUNS` (the HSVA basin only; no run of another basin).
 The 20°/10° and 35°/5° runs are the held-out runs of the frozen overshoot study
 (:mod:`shipid.methods.mmg.study`), which this study does not change.
