@@ -361,8 +361,8 @@ _ID_OPTS = [
     click.option("--structure", default="auto", show_default=True,
                  help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
     click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
-    click.option("--selection", default="auto", show_default=True, type=click.Choice(["auto", "horizons", "turning", "turning-auto",
-                                                                          "rudder-angle"]),
+    click.option("--selection", default="auto", show_default=True,
+                 type=click.Choice(["auto", "horizons", "turning", "turning-auto", "rudder-angle"]),
                  help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors, "
                       "shipid.methods.mmg.candidates.CANDIDATES), 'turning' (open-loop peak yaw rate per side and "
                       "heading of the left-out zig-zags, shipid.methods.mmg.turning_selection; Yasukawa-2015 "
