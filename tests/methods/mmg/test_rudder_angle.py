@@ -141,3 +141,12 @@ def test_study_command_prints_the_table_and_the_decision(monkeypatch, capsys):
     assert "chosen 'cf'" in out and "35_05 +1.0/-3.0 2.0" in out
     assert main(["study", "kvlcc2-rudder-angle", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["decision"]["chosen"] == "cf"
+
+
+def test_heading_drift_is_zero_for_the_model_that_made_the_run(setup):
+    prior, trials, _ = setup
+    truth, _ = apply_candidate(prior, {m: () for m in mmg.MODES}
+                               | {"particulars": {"gamma_R": "symmetric", "rudder_crossflow": 1.0,
+                                                  "rudder_side_slope": -0.2}})
+    d = RA.heading_drift(truth, trials[0])
+    assert abs(d["r_mean_err_deg_s"]) < 1e-6 and abs(d["psi_end_err_deg"]) < 1e-4

@@ -84,6 +84,21 @@ tactical diameter 3.11 / 3.15 L (starboard) and 3.23 / 3.38 L (port), against 3.
 3.44 / 4.03 for the default selection; the bands (±2 std 0.04–0.07 L) hold the parameter covariance
 only, not the calibrated ``b``.
 
+Why the heading RMS of the 20°/25° runs grows (:func:`heading_drift` of the fold 10-15 models: mean
+yaw-rate error deg/s, final heading error deg, of the open-loop replay; computed after the table)::
+
+    candidate          20/5          20/10P        20/10S        25/5          30/5          35/5
+    default            -0.033 -5.7   -0.018 -3.4   +0.003 +0.6   +0.021 +3.9   +0.159 +31.7  +0.224 +46.8
+    cf/side-gain       -0.101 -17.7  -0.059 -11.2  -0.047 -9.0   -0.047 -8.7   +0.080 +16.0  +0.143 +29.8
+    cf/side-slope      -0.150 -26.4  -0.094 -17.8  -0.082 -15.5  -0.124 -22.7  -0.013 -2.6   +0.037 +7.6
+    cf/crossflow-side  -0.150 -26.4  -0.095 -17.9  -0.082 -15.6  -0.116 -21.3  +0.002 +0.4   +0.059 +12.2
+
+The default's yaw balance over a zig-zag is nearly right up to 25° and drifts to starboard at 30°/35°
+(the port turn too weak); each side term, calibrated on the 10°/15° peaks, shifts the balance to port
+at every angle, which fixes 30°/35° and spoils 20°/25°. The port deficit sets in between 25° and 30°,
+faster than any term here that is linear in the angle or in ``sin α_R |sin α_R|``; the training peaks
+of 10°/15° (and the stall angle calibrated on them, which stays at the grid's end) cannot show where.
+
 A check made after the choice (a diagnostic, not a selection): the same CV on the frozen candidate
 ``full/symmetric-gamma_R`` (the default selection's choice on all 13 runs; ``candidates(base_name=...)``)
 gives mean fold scores default 24.11, cf 23.71, cf/side-gain 16.66, side-slope 15.92, cf/side-slope
@@ -223,6 +238,16 @@ def decide(folds: Mapping[str, Mapping], names: Sequence[str]) -> dict[str, Any]
             "chosen": best if wins else "default"}
 
 
+def heading_drift(model: mmg.MmgModel, trial) -> dict[str, float]:
+    """Mean yaw-rate error (deg/s) and final heading error (deg) of the open-loop replay from execute
+    (:func:`shipid.methods.mmg.extrapolation.replay`'s integration): a drift of the whole-run heading."""
+    d = TS.replay_data(trial)
+    t = np.concatenate([[0.0], np.cumsum(d["h"])])
+    X = mmg.simulate_batch(model, t, d["x0"][None], d["U"][None])[0]
+    e = np.degrees(np.unwrap(X[:, 2]) - np.unwrap(d["psi"]))
+    return {"r_mean_err_deg_s": float(np.degrees(np.mean(X[:, 5] - d["r"]))), "psi_end_err_deg": float(e[-1])}
+
+
 def format_cv(res: Mapping[str, Any]) -> str:
     """Per fold and candidate: calibrated value, score, RMS peak %, mean peak per side %, heading RMS deg;
     per candidate on the first fold the peak errors per scored run and side; the decision."""
@@ -251,5 +276,5 @@ def format_cv(res: Mapping[str, Any]) -> str:
 
 
 __all__ = ["RUNS", "FOLDS", "CHOSEN", "resolve", "MIN_FOLDS_BETTER", "BASE", "SLOPE_GRID", "CROSSFLOW_SIDE_GRID", "STALL_GRID", "GRIDS",
-           "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "cross_validate", "decide",
+           "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "cross_validate", "decide", "heading_drift",
            "format_cv"]
