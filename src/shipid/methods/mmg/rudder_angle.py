@@ -106,6 +106,12 @@ gives mean fold scores default 24.11, cf 23.71, cf/side-gain 16.66, side-slope 1
 side gain in every fold, but the order of the best two is reversed; the port deficit is larger on that
 base (35°/5°, fold 10-15: −18.1 % default, −12.5 % cf/crossflow-side).
 
+A zero-rudder yaw moment does not rescue the balance: with the propeller side force and moment ∝ thrust
+free in the regression (structure ``yasukawa2015-asym``, ``YP_T``, ``NP_T``; candidates built ad hoc and
+passed to :func:`cross_validate`, after the table), the mean fold scores are default 26.51,
+cf/side-gain 32.31, cf/crossflow-side 37.43 (against 23.85, 13.42, 12.52 without): worse in every fold,
+as the free asymmetry terms of :mod:`shipid.methods.mmg.extrapolation` were.
+
 Runs read: the twelve HSVA zig-zags of :data:`RUNS` (the HSVA basin only; no run of another basin).
 The 20°/10° and 35°/5° runs are the held-out runs of the frozen overshoot study
 (:mod:`shipid.methods.mmg.study`), which this study does not change.
