@@ -206,6 +206,66 @@ def cubic_hull(p, u, v, r):
     return HX, HY, HN
 
 
+# ----------------------------------------------------------------------------- rudder at large angles
+#: Particulars of the optional angle-dependent rudder terms (:func:`rudder_lift_and_crossflow`,
+#: :func:`rudder_side_slope`); each absent or 0 leaves the standard method's normal force unchanged,
+#: each may be a scalar or one value per row of a batch.
+RUDDER_LARGE_ANGLE = ("rudder_stall_plus", "rudder_stall_minus", "rudder_crossflow_side", "rudder_side_slope")
+
+
+def stalled_sine(sa, alpha_s):
+    """Saturating lift part ``g(α) = s tanh(sin α / s)``, ``s = sin α_s`` (``α_s > 0``; ``α_s ≤ 0``: no stall, ``g = sin α``).
+
+    ``g`` is odd, increases monotonically with ``sin α``, equals ``sin α`` to first order and never exceeds
+    ``s`` in magnitude: the linear slope and the ceiling meet at the effective stall angle ``α_s``, a smooth
+    stand-in for the normal-force plateau of a rudder past stall (Molland & Turnock, Marine Rudders and
+    Control Surfaces, 2007, ch. 3: behind a propeller the plateau sets in later and more gently than in free
+    stream, which a soft saturation rather than a drop represents).
+    """
+    a = np.asarray(alpha_s, float)
+    on = a > 0
+    s = np.where(on, np.sin(np.where(on, a, 1.0)), 1.0)
+    return np.where(on, s * np.tanh(sa / s), sa)
+
+
+def rudder_lift_and_crossflow(p, alpha_R, sa):
+    """Lift part ``g(α_R)`` and cross-flow coefficient of the rudder normal force, per inflow side.
+
+    ``F_N = ½ ρ A_R U_R² (f_α g(α_R) + C_Dc,± sin α_R |sin α_R|)`` (Yasukawa & Yoshimura 2015 eq. 23 with
+    ``g = sin α_R`` and ``C_Dc = 0``; the cross-flow part after Hoerner 1985 ch. 3). Optional particulars
+    (all absent or 0 by default: ``g = sin α_R``, ``C_Dc,± = rudder_crossflow``, bit-identical):
+
+    * ``rudder_stall_plus`` / ``rudder_stall_minus``: effective stall angle (rad) for ``α_R ≥ 0`` / ``α_R < 0``
+      (:func:`stalled_sine`);
+    * ``rudder_crossflow_side`` ``b``: ``C_Dc,± = C_Dc (1 ± b)``, the cross-flow part larger on one side
+      (``b < 0``: on the ``α_R < 0`` side).
+
+    Returns ``(g, C_Dc,±)``.
+    """
+    lift = sa
+    sp, sm = p.get("rudder_stall_plus", 0.0), p.get("rudder_stall_minus", 0.0)
+    if np.any(sp) or np.any(sm):
+        lift = stalled_sine(sa, np.where(alpha_R >= 0, sp, sm))
+    cdc = p.get("rudder_crossflow", 0.0)
+    b = p.get("rudder_crossflow_side", 0.0)
+    if np.any(b):
+        cdc = cdc * (1.0 + b * np.sign(alpha_R))
+    return lift, cdc
+
+
+def rudder_side_slope(p, FN, delta):
+    """``F_N (1 + k δ)``: a port/starboard rudder effectiveness that grows with the rudder angle.
+
+    ``rudder_side_slope`` ``k`` (1/rad; absent or 0: ``F_N`` unchanged) makes the relative difference between
+    the sides proportional to ``|δ|`` (``k < 0``: the ``δ < 0`` side stronger), where ``rudder_side_gain``
+    makes it constant. The factor is clipped at 0.
+    """
+    k = p.get("rudder_side_slope", 0.0)
+    if not np.any(k):
+        return FN
+    return FN * np.maximum(1.0 + k * delta, 0.0)
+
+
 def basis_yasukawa(p, u, v, r, delta, n):
     """Regressors of the MMG standard method (Yasukawa & Yoshimura 2015, eqs. 8–12, 15, 23–28),
     as :func:`shipid.models.mmg.basis` returns them."""
@@ -239,13 +299,16 @@ def basis_yasukawa(p, u, v, r, delta, n):
     aR = delta - np.arctan2(vR, uR)
     sa = np.sin(aR)
     # optional cross-flow drag part of the normal force (Hoerner 1965: C_N = f_a sin a + C_Dc sin a |sin a|);
-    # "rudder_crossflow" = C_Dc, absent or 0 for the standard method
-    FN = 0.5 * rho * p["A_R"] * UR2 * (p["f_alpha"] * sa + p.get("rudder_crossflow", 0.0) * sa * np.abs(sa))
+    # "rudder_crossflow" = C_Dc, absent or 0 for the standard method; optional angle-dependent terms per side
+    # (stall, cross-flow per side, side gain growing with the angle): rudder_large_angle, all off by default
+    lift, cdc = rudder_lift_and_crossflow(p, aR, sa)
+    FN = 0.5 * rho * p["A_R"] * UR2 * (p["f_alpha"] * lift + cdc * sa * np.abs(sa))
     # optional port/starboard rudder effectiveness (propeller swirl): F_N (1 + s sign(delta)), "rudder_side_gain" = s
     # (a scalar, or one value per row of a batch)
     sg = p.get("rudder_side_gain", 0.0)
     if np.any(sg):
         FN = FN * (1.0 + sg * np.sign(delta))
+    FN = rudder_side_slope(p, FN, delta)
     HX = np.stack([-qX, qX * vp * vp, qX * vp * rp, qX * rp * rp, qX * vp ** 4, T, -FN * np.sin(delta)], axis=-1)
     hull = [vp, rp, vp ** 3, vp * vp * rp, vp * rp * rp, rp ** 3]
     HY = np.stack([qX * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
@@ -256,4 +319,5 @@ def basis_yasukawa(p, u, v, r, delta, n):
 
 
 __all__ = ["apparent_wind", "fujiwara_coefficients", "wind_forces", "crossflow_integrals", "fujii_f_alpha", "basis_esso",
-           "cubic_hull", "basis_yasukawa"]
+           "cubic_hull", "RUDDER_LARGE_ANGLE", "stalled_sine", "rudder_lift_and_crossflow", "rudder_side_slope",
+           "basis_yasukawa"]

@@ -283,6 +283,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
               selection="auto"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg import rudder_angle as RA
     from shipid.methods.mmg import turning_nested as TN
     from shipid.methods.mmg import turning_selection as TS
 
@@ -314,7 +315,14 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         selection = "horizons"
     selectors = {"turning": TS.select_for_turning, "turning-auto": TN.select_auto}
     sel_kw = {}
-    if selection in selectors:
+    if selection == "rudder-angle":
+        if pm.structure != "yasukawa2015":
+            raise ShipidError(f"--selection rudder-angle: for the structure 'yasukawa2015' only (not '{pm.structure}')")
+        name = f"{RA.BASE}/{RA.CHOSEN}"
+        if st is not None and st != name:
+            raise ShipidError(f"--selection rudder-angle fixes the candidate '{name}': leave --structure out")
+        st, sel_kw = name, {"candidates": {name: RA.candidates()[RA.CHOSEN]}, "resolve": RA.resolve}
+    elif selection in selectors:
         if pm.structure not in TS.TURNING_CANDIDATES:
             raise ShipidError(f"--selection {selection}: no turning candidates for the structure '{pm.structure}' "
                               f"(only {', '.join(TS.TURNING_CANDIDATES)})")
@@ -353,14 +361,18 @@ _ID_OPTS = [
     click.option("--structure", default="auto", show_default=True,
                  help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
     click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
-    click.option("--selection", default="auto", show_default=True, type=click.Choice(["auto", "horizons", "turning", "turning-auto"]),
+    click.option("--selection", default="auto", show_default=True,
+                 type=click.Choice(["auto", "horizons", "turning", "turning-auto", "rudder-angle"]),
                  help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors, "
                       "shipid.methods.mmg.candidates.CANDIDATES), 'turning' (open-loop peak yaw rate per side and "
                       "heading of the left-out zig-zags, shipid.methods.mmg.turning_selection; Yasukawa-2015 "
                       "structure only, opt-in: its criterion was fixed after seeing a CV table, and on two training runs it chose a model "
                       "with 11.9 deg heading RMS on a third run where horizons gave 2.4); 'turning-auto' (the peak criterion "
                       "under a heading limit, with the horizon choice below 4 runs with switch >= 5 deg at 2 "
-                      "rudder angles, shipid.methods.mmg.turning_nested); 'auto': horizons."),
+                      "rudder angles, shipid.methods.mmg.turning_nested); 'rudder-angle' (Yasukawa-2015 only: no "
+                      "selection, the candidate with the rudder cross-flow part per side that the forward CV by "
+                      "rudder angle of 'shipid study kvlcc2-rudder-angle' chose on HSVA runs, its side parameter "
+                      "calibrated on the given runs; shipid.methods.mmg.rudder_angle); 'auto': horizons."),
     click.option("--refine", default="auto", show_default=True,
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "

@@ -100,6 +100,7 @@ from shipid.methods.mmg.side_calibration import (MIN_SWITCH_DEG, SIDE_GAIN_GRID,
                                                  with_asymmetry)
 from shipid.methods.mmg.zigzag import execute_index, zigzag_angles
 from shipid.models import mmg
+from shipid.models.mmg_forces import RUDDER_LARGE_ANGLE
 
 #: Key of a candidate whose particular of that name is calibrated on the training runs.
 CALIBRATE = "calibrate"
@@ -134,8 +135,14 @@ def replay_data(tr: Trial) -> dict[str, Any]:
     return {"x0": Z[k0], "U": U[k0:], "h": np.diff(t), "psi": Z[k0:, 2], "r": Z[k0:, 5], "n": int(t.size)}
 
 
+#: Particulars that may differ between the rows of one replay batch (the side gain and the optional
+#: large-angle rudder terms of :mod:`shipid.models.mmg_forces`; 0 where a row's model has none).
+ROW_PARTICULARS = (PARAMETER,) + RUDDER_LARGE_ANGLE
+
+
 def _group_key(m: mmg.MmgModel) -> str:
-    return m.structure + json.dumps({k: float(v) for k, v in sorted(m.particulars.items()) if k != PARAMETER})
+    return m.structure + json.dumps({k: float(v) for k, v in sorted(m.particulars.items())
+                                     if k not in ROW_PARTICULARS})
 
 
 def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mapping]) -> list[dict[str, float]]:
@@ -149,8 +156,9 @@ def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mappin
         D = [data[rows[j][1]] for j in js]
         L = max(d["n"] for d in D)
         m0 = rows[js[0]][0]
-        sg = np.array([float(rows[j][0].particulars.get(PARAMETER, 0.0)) for j in js])
-        m0 = _replace(m0, particulars=dict(m0.particulars, **{PARAMETER: sg}))
+        per_row = {k: np.array([float(rows[j][0].particulars.get(k, 0.0)) for j in js]) for k in ROW_PARTICULARS
+                   if any(k in rows[j][0].particulars for j in js) or k == PARAMETER}
+        m0 = _replace(m0, particulars=dict(m0.particulars, **per_row))
         Th = {md: np.stack([np.asarray(rows[j][0].theta(md), float) for j in js]) for md in mmg.MODES}
         U = np.stack([np.pad(d["U"], [(0, L - d["n"]), (0, 0)], mode="edge") for d in D])
         h = np.stack([np.pad(d["h"], (0, L - d["n"]), mode="edge") for d in D])
@@ -248,14 +256,15 @@ def calibrate_folds(runs: Sequence[R.SmoothedRun], data: Sequence[Mapping], use:
 
 
 def resolve(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping,
-            config: R.FitConfig = R.FitConfig()) -> tuple[dict, dict | None]:
+            config: R.FitConfig = R.FitConfig(), *, grid: Sequence[float] = SIDE_GAIN_GRID
+            ) -> tuple[dict, dict | None]:
     """The candidate to fit on all training runs: a calibrated one with its particular calibrated on them
-    (and the calibration's table), any other unchanged (and None)."""
+    (on ``grid``, then the parabola's vertex; and the calibration's table), any other unchanged (and None)."""
     par = cand.get(CALIBRATE)
     if not par:
         return dict(cand), None
     data = [replay_data(tr) for tr in trials]
-    (a, table), = calibrate_folds(runs, data, peak_runs(trials), prior, cand, [list(range(len(runs)))],
+    (a, table), = calibrate_folds(runs, data, peak_runs(trials), prior, cand, [list(range(len(runs)))], grid=grid,
                                   config=config, parameter=par)
     c = with_asymmetry(cand, a, par)
     c.pop(CALIBRATE, None)
@@ -354,6 +363,6 @@ def nested_criterion_check(*, root: Path | None = None) -> dict[str, Any]:
     return out
 
 
-__all__ = ["CALIBRATE", "PARAMETER", "TURNING_CANDIDATES", "turning_candidates", "replay_data", "batch_replay",
+__all__ = ["CALIBRATE", "PARAMETER", "ROW_PARTICULARS", "TURNING_CANDIDATES", "turning_candidates", "replay_data", "batch_replay",
            "trial_angles", "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD", "CRITERIA", "DEFAULT_CRITERION",
            "nested_criterion_check"]
