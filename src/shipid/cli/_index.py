@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '53d5e288760cafac'
+SOURCES = '0c0a4f58f3f59f8a'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -59,6 +59,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.mmg.cli', "KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the kvlcc2-zigzag study's held-out runs.", False),
     ('study', 'kvlcc2-nested'):
         ('shipid.methods.mmg.cli_turning_nested', 'KVLCC2 HSVA: default, turning and automatic selection, leave-one-rudder-angle-out (nested CV).', False),
+    ('study', 'kvlcc2-rudder-angle'):
+        ('shipid.methods.mmg.cli_rudder_angle', 'KVLCC2 HSVA: angle-dependent rudder terms, trained on smaller and scored on larger rudder angles.', False),
     ('study', 'kvlcc2-sides'):
         ('shipid.methods.mmg.cli_side_calibration', 'KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.', False),
     ('study', 'kvlcc2-zigzag'):
