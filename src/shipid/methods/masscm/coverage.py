@@ -150,7 +150,8 @@ import numpy as np
 
 from shipid.methods.masscm.crlb import crlb, true_theta
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
-from shipid.methods.masscm.pem_result import refine_result
+from shipid.methods.masscm.refine import REFINE_MODES
+from shipid.methods.masscm.refine import apply as apply_refine
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
@@ -175,18 +176,22 @@ def _truth(vessel: str) -> dict:
 
 
 def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, vessel: str = "fishing-vessel",
-            noise_model: str = "ar", compute: str = "fast", refine: str = "none") -> dict:
+            noise_model: str = "ar", compute: str = "fast", refine: str = "auto") -> dict:
     """One realisation: datasets from ``SeedSequence([seed, i])`` in ``regime``, then Algorithm 1 (z_f known).
 
     Returns ``m, zm_bar, rho`` and their standard errors, ``K_vdot, K_r, K_delta``, ``converged``,
     ``implausible`` (with ``implausible_reasons``), ``nuisance_outside_physical``, ``iterations``.
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
-    ``refine="pem"``: the maximum-likelihood refinement of :mod:`shipid.methods.masscm.pem` from Algorithm 1's
-    estimate; where it fails (``pem_ok`` False, ``pem_reason``) the run keeps Algorithm 1's estimate. Algorithm
-    1's own ``m, zm_bar, rho`` and standard errors are kept as ``iv_<name>``.
+    ``refine`` (:data:`shipid.methods.masscm.refine.REFINE_MODES`): ``"auto"`` (the estimator's default) refines
+    where the rule of :mod:`shipid.methods.masscm.refine` says so, ``"pem"`` always by
+    :mod:`shipid.methods.masscm.pem`; ``refine_decision`` is the engine the rule chose (``"none"`` or one), and
+    where a refinement ran ``pem_ok`` / ``pem_reason`` say whether it was used (else the run keeps Algorithm 1's
+    estimate). Algorithm 1's own ``m, zm_bar, rho`` and standard errors are kept as ``iv_<name>``.
     """
     if regime not in REGIMES:
         raise ValueError(f"regime must be one of {', '.join(REGIMES)}")
+    if refine not in REFINE_MODES:
+        raise ValueError(f"refine must be one of {', '.join(REFINE_MODES)}")
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     d = simulate_datasets(vessel, seed=ss, duration=duration, noise=REGIMES[regime])
     known = KnownParams.from_vessel(vessel)
@@ -194,19 +199,20 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,
-                             options=MassCMOptions(noise_model=noise_model, compute=compute))
-    if refine not in ("none", "pem"):
-        raise ValueError("refine must be 'none' or 'pem'")
-    rr = refine_result(r, list(d.items()), known, z_f) if refine == "pem" else r
+                             options=MassCMOptions(noise_model=noise_model, compute=compute, refine="none"))
+    iv = {k: (float(r.value(k)), float(r.std(k))) for k in QUANTITIES}
+    rr = apply_refine(r, list(d.items()), known, z_f, refine)
     out = {}
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = float(rr.value(k)), float(rr.std(k))
-    if refine == "pem":
-        rec = rr.diagnostics["refine"]
-        for k in QUANTITIES:
-            out[f"iv_{k}"], out[f"iv_{k}_std"] = rec["algorithm1"][k]
-        out.update({"pem_ok": rec["applied"], "pem_reason": rec["reason"], "pem_waves": rec["waves"],
-                    "pem_iterations": rec["iterations"]})
+        out[f"iv_{k}"], out[f"iv_{k}_std"] = iv[k]
+    rec = rr.diagnostics["refine"]
+    out["refine_decision"] = rec["decision"]
+    if rec["decision"] != "none":
+        out.update({"pem_ok": rec["applied"], "pem_reason": rec["reason"], "pem_waves": rec.get("waves"),
+                    "pem_iterations": rec.get("iterations")})
+    if refine == "auto":
+        out["sensor_level"] = rec["sensor_test"]["level"]
     for k in NUISANCE:                   # weakly determined (finite-sample IV bias): reported, not judged
         out[k] = float(r.value(k))
     out.update({"converged": bool(r.diagnostics["converged"]), "iterations": int(r.diagnostics["iterations"]),

@@ -91,6 +91,8 @@ from shipid.methods.masscm.iteration import initial_state, iterate
 from shipid.methods.masscm.noise import AUTO_C, AUTO_HOLD
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, I_ZM, REQUIRED, MassCMOptions
 from shipid.methods.masscm.pem_result import refine_result
+from shipid.methods.masscm.refine import REFINE_MODES
+from shipid.methods.masscm.refine import apply as apply_refine
 from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable, implausible_reasons, rho_of
 
 #: The last coverage study of the stated std (read by the report's verdict panel): 300-s records,
@@ -104,14 +106,16 @@ COVERAGE = {"coverage": 0.96, "n": 300, "nominal": 0.954,
 
 def estimate_mass_cm(datasets, known, *, theta0=None, z_f=None, z_f_prior=None, init=None,
                      options: MassCMOptions = MassCMOptions(), noise_check: bool = True):
-    """Algorithm 1 (:func:`shipid.methods.masscm.assemble.estimate_mass_cm`, same arguments and result), then,
-    with ``options.refine == "pem"``, its maximum-likelihood refinement (:mod:`shipid.methods.masscm.pem_result`).
+    """Algorithm 1 (:func:`shipid.methods.masscm.assemble.estimate_mass_cm`, same arguments and result), then its
+    refinement by :func:`shipid.methods.masscm.refine.apply` according to ``options.refine``: ``"auto"`` (default)
+    refines only where the rule of :mod:`shipid.methods.masscm.refine` finds sensor noise and a wave structure,
+    ``"pem"`` always (:mod:`shipid.methods.masscm.pem_result`), ``"none"`` never.
     """
-    if options.refine not in ("none", "pem"):
-        raise ValueError("MassCMOptions.refine must be 'none' or 'pem'")
+    if options.refine not in REFINE_MODES:
+        raise ValueError(f"MassCMOptions.refine must be one of {', '.join(REFINE_MODES)}")
     r = algorithm1(datasets, known, theta0=theta0, z_f=z_f, z_f_prior=z_f_prior, init=init, options=options,
                    noise_check=noise_check)
-    return refine_result(r, datasets, known, z_f) if options.refine == "pem" else r
+    return apply_refine(r, datasets, known, z_f, options.refine)
 
 
 __all__ = ["COVERAGE", "MassCMOptions", "MassCMFit", "Dataset", "IVState", "prepare", "initial_state", "iterate",
