@@ -50,16 +50,25 @@ def test_table3_data_are_noise_free_for_the_rule():
     assert not s["detected"] and s["level"] < 0.5 * refine.SENSOR_NOISE_MIN
 
 
-def test_rule_refines_waves_with_sensor_noise_and_not_noise_free_data():
+def test_wave_colour_test_separates_waves_from_white_sensor_noise():
+    sens, both = (refine.wave_colour(_data(g))["level"] for g in ("sensors", "both"))
+    assert sens < refine.WAVE_Z_MIN < both, (sens, both)
+    # a white residual gives z ~ N(0, 1)
+    rng = np.random.default_rng(5)
+    z = [refine.portmanteau_z(rng.standard_normal(6000), 10, 150) for _ in range(20)]
+    assert abs(np.mean(z)) < 1.0 and 0.4 < np.std(z) < 1.8, z
+
+
+def test_rule_refines_waves_with_sensor_noise_only():
     both = _data("both")
     engine, rec = refine.choose(both, _alg1(both), ZF)
     assert engine == refine.AUTO_ENGINE == "pem", rec
     assert rec["sensor_test"]["detected"] and rec["wave_test"]["detected"]
-    engine, rec = refine.choose(both, _alg1(both), None)          # z_f unknown: nothing to refine
+    engine, rec = refine.choose(both, None, None)          # z_f unknown: nothing to refine
     assert engine == "none" and rec["decision_reason"] == "z_f not known"
-    waves = _data("waves")
-    engine, rec = refine.choose(waves, _alg1(waves), ZF)
-    assert engine == "none" and not rec["sensor_test"]["detected"], rec
+    for regime, why in (("waves", "no sensor noise"), ("sensors", "no wave colour"), ("none", "no sensor noise")):
+        engine, rec = refine.choose(_data(regime), None, ZF)
+        assert engine == "none" and why in rec["decision_reason"], (regime, rec)
 
 
 def test_default_on_noise_free_data_is_algorithm1_and_records_the_decision():
@@ -73,8 +82,8 @@ def test_default_on_noise_free_data_is_algorithm1_and_records_the_decision():
     assert rec["mode"] == "auto" and rec["decision"] == "none" and not rec["applied"]
     assert "no sensor noise" in rec["decision_reason"]
     assert not any("refine" in w.lower() for w in r.diagnostics.get("warnings", []))   # a skip is not a failure
-    for k in r.estimates:
-        assert r.value(k) == r0.value(k) and r.std(k) == r0.std(k)
+    for k in r.estimates:      # bit-identical (np.array_equal: a std that is nan in both counts as equal)
+        assert np.array_equal([r.value(k), r.std(k)], [r0.value(k), r0.std(k)], equal_nan=True), k
     assert r0.diagnostics["refine"]["decision"] == "none"
 
 
