@@ -6,6 +6,9 @@ import warnings
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
+
+from shipid.cli import cli
 
 from shipid.methods.masscm import refine
 from shipid.methods.masscm.assemble import estimate_mass_cm as algorithm1
@@ -90,6 +93,15 @@ def test_default_on_noise_free_data_is_algorithm1_and_records_the_decision():
 def test_unknown_refine_mode_is_refused():
     with pytest.raises(ValueError, match="refine must be one of"):
         refine.apply(None, [], KNOWN, ZF, "whatever")
+
+
+def test_coverage_text_counts_the_refined_runs():
+    # sensor noise alone: the default refines none of them (Algorithm 1 is at the bound there)
+    res = CliRunner().invoke(cli, ["study", "mass-cm-coverage", "--regime", "sensors", "--runs", "2", "--duration",
+                                   "60", "--workers", "1", "--seed", "5152"])
+    assert res.exit_code == 0, res.output
+    line = next(x for x in res.output.splitlines() if "refine auto:" in x)
+    assert "refined in 0 of 2 runs" in line, line
 
 
 @pytest.mark.slow
