@@ -54,6 +54,14 @@ Plausibility (:mod:`~shipid.methods.masscm.plausibility`): judged on what the da
 their standard errors, the identified roll mode of every dataset); nuisance coefficients outside their physical
 range are reported apart (``diagnostics["nuisance_outside_physical"]``).
 
+Refinement (``MassCMOptions.refine``; :mod:`shipid.methods.masscm.refine`): by default (``"auto"``) the
+maximum-likelihood refinement of :mod:`shipid.methods.masscm.pem` replaces Algorithm 1's estimate only where two
+tests on the data find both sensor noise (a one-step linear prediction of the gyros that is exact for noise-free
+sensors leaves more) and a coloured roll disturbance (the portmanteau statistic of the roll-rate prediction
+residual without ``a_s``), with z_f known: Algorithm 1 is at the bound with sensor noise alone and the
+refinement's model is singular with noise-free sensors. ``"pem"`` refines always, ``"none"`` never; the decision
+is in ``diagnostics["refine"]``.
+
 Known limitations (measured; reproduced by ``tests/methods/masscm/test_masscm_limits.py``):
 
 * **Finite-sample bias of K_vdot, K_r, K_delta.** With white sensor noise alone (accelerometer 0.02 m/s^2)
