@@ -69,7 +69,10 @@ def test_plausibility_is_judged_on_the_identifiable_quantities():
     the nuisance finding is still reported (diagnostics and one warning line)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = estimate_mass_cm(_data(2, 300.0), KNOWN, z_f=ZF, noise_check=False, options=MassCMOptions(noise_model="ar"))
+        # Algorithm 1's estimate: the default refinement (refine="auto" refines this issue-3 noise) ends with a
+        # physical K_vdot on this realisation, so it is not the case this test is about
+        r = estimate_mass_cm(_data(2, 300.0), KNOWN, z_f=ZF, noise_check=False,
+                             options=MassCMOptions(noise_model="ar", refine="none"))
     theta = np.array([r.value(n) for n in THETA_NAMES])
     assert implausible_reasons(theta, KNOWN), "this realisation was chosen to have the K_vdot bias"
     assert not r.diagnostics["implausible"], r.diagnostics["implausible_reasons"]
