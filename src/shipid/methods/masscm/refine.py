@@ -32,7 +32,7 @@ both sensor noise and coloured (wave) equation error, by two cheap tests:
     differenced regressors of (37) put that factor on the sensor noise; measured 30 of 30 sensors runs.)
 
 Rule: refine (with :data:`AUTO_ENGINE`) iff z_f is known, (a) and (b). With noise-free sensors (a) fails
-whatever (b) says (the noise-free rudder response leaves a coloured, rounding-level residual, so (b) alone would
+whatever (b) says (the noise-free rudder response leaves a small but coloured residual, so (b) alone would
 refine the noise-free data). Otherwise Algorithm 1's estimate is the
 answer and no warning is written (a skipped refinement is the rule's decision, not a failure); a refinement that
 runs and fails keeps Algorithm 1's estimate with one warning line (:mod:`shipid.methods.masscm.pem_result`). The
@@ -61,7 +61,8 @@ REFINE_MODES = ("auto", "none", "pem")
 #: with ``applied`` and ``reason``; a failure keeps Algorithm 1's estimate with one warning line).
 ENGINES = {"pem": _pem}
 
-#: Engine ``refine="auto"`` dispatches to when the rule says refine (a name :func:`refine_with` knows).
+#: Engine ``refine="auto"`` dispatches to when the rule says refine (a key of :data:`ENGINES`; another engine is
+#: added there, and to :data:`REFINE_MODES` and the CLI choices, and chosen here).
 AUTO_ENGINE = "pem"
 
 #: Lags of every channel in the one-step prediction of test (a).
