@@ -8,8 +8,8 @@ fails after 30–50 s and Algorithm 1's estimate is kept. :func:`choose` therefo
 both sensor noise and coloured (wave) equation error, by two cheap tests:
 
 (a) **Sensor noise** (:func:`sensor_noise_level`, before any refinement; a few ms for three 300-s datasets). With
-    noise-free sensors the sampled outputs of the roll–sway–yaw model are an exact linear function of a few lags of
-    the measured channels, whatever the wave moment: the single unmeasured input ``tau`` enters ``a_s`` directly
+    noise-free sensors the sampled outputs of the linearised roll–sway–yaw model are a linear function of a few
+    lags of the measured channels, whatever the wave moment: the single unmeasured input ``tau`` enters ``a_s`` directly
     (through ``p'`` and ``v'``, eq. 8), so it and the state are reconstructed from lags of ``(p, a_s, r, delta)``.
     Per dataset and gyro channel ``x`` in ``(p, r)`` the statistic is the relative RMS residual of the
     least-squares one-step prediction
