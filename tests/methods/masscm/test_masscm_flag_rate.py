@@ -31,7 +31,7 @@ def test_flag_rate_and_its_upper_limit():
 
 def test_coverage_text_prints_the_flag_rate():
     res = CliRunner().invoke(cli, ["study", "mass-cm-coverage", "--regime", "both", "--runs", "2", "--duration", "60",
-                                   "--workers", "1", "--seed", "4"])
+                                   "--workers", "1", "--seed", "4", "--refine", "none"])
     assert res.exit_code == 0, res.output
     line = next(x for x in res.output.splitlines() if "flagged implausible:" in x)
     assert " of 2 = " in line and "upper limit" in line

@@ -79,7 +79,8 @@ def test_first_estimate_matches_offline_algorithm1(noise_model):
     st = sim["stream"]
     off = estimate_mass_cm([("nominal", sim["nominal"]), ("calibration", sim["calibration"]),
                             ("loaded", Trial(st.t, {k: st[k] for k in ("p", "a_s", "r", "delta")}))],
-                           KN, z_f=Z_F, noise_check=False, options=MassCMOptions(noise_model=noise_model))
+                           KN, z_f=Z_F, noise_check=False,
+                           options=MassCMOptions(noise_model=noise_model, refine="none"))   # Algorithm 1 alone
     u = ups[-1]
     # same data, same prefilters; the block instruments differ slightly (per-block mean removal, the
     # first 64 samples dropped), so agreement to a fraction of the standard error, not to rounding

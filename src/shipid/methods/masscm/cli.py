@@ -102,10 +102,12 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
                    "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
                    "arma: structured ARMA.")
-@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
-              help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
-                   "bound (needs z_f known and sensor noise in the data; where it fails Algorithm 1's estimate is "
-                   "kept, with a warning). The report series stay Algorithm 1's.")
+@click.option("--refine", type=click.Choice(["auto", "none", "pem"]), default="auto", show_default=True,
+              help="auto: refine only where the data show sensor noise and a wave structure (the rule of "
+                   "methods/masscm/refine.py); pem: always the maximum-likelihood refinement of Algorithm 1's "
+                   "estimate on the state-space model of the bound (needs z_f known and sensor noise in the data); "
+                   "none: Algorithm 1 alone. A refinement that fails keeps Algorithm 1's estimate, with a warning; "
+                   "the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
@@ -119,7 +121,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     """
     from shipid.data.io import read_trial
     from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
-    from shipid.methods.masscm.pem_result import refine_result
+    from shipid.methods.masscm.refine import apply as apply_refine
     from shipid.methods.masscm.series import with_series
 
     kn = read_known(known_path)
@@ -131,8 +133,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
                       options=opts, init="given" if kn["theta0"] is not None else "linear")
     res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
-    if refine == "pem":
-        res = refine_result(res, datasets, kn["known"], kn["z_f"])
+    res = apply_refine(res, datasets, kn["known"], kn["z_f"], refine)
     res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
     d = res.to_dict()
@@ -210,9 +211,11 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
-@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
-              help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
-                   "bound (methods/masscm/pem.py); a run where it fails keeps Algorithm 1's estimate.")
+@click.option("--refine", type=click.Choice(["auto", "none", "pem"]), default="auto", show_default=True,
+              help="auto (the estimator's default): refine where the rule of methods/masscm/refine.py finds sensor "
+                   "noise and a wave structure; pem: always the maximum-likelihood refinement of Algorithm 1's "
+                   "estimate (methods/masscm/pem.py); none: Algorithm 1 alone. A run whose refinement fails keeps "
+                   "Algorithm 1's estimate.")
 @out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options
 def mass_cm_coverage(regime, runs, duration, noise_model, refine, as_json, out, force, campaign):
@@ -235,6 +238,7 @@ def mass_cm_coverage(regime, runs, duration, noise_model, refine, as_json, out, 
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, regime=regime, duration=duration, bound=bound_for(regime, duration))
     if refine != "none":
+        s["refined"] = sum(1 for o in outs if o is not None and o.get("refine_decision", "none") != "none")
         s["refine_failed"] = sum(1 for o in outs if o is not None and not o.get("pem_ok", True))
     s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"], "refine": refine,
               "wall_s": time.perf_counter() - t0})
@@ -261,6 +265,9 @@ def _coverage_table(s: dict, regime: str, duration: float, seed: int) -> None:
     click.echo(f"  flagged implausible: {fr['flagged']} of {fr['of']} = {100 * fr['rate']:.1f} % (one-sided 95 % "
                f"upper limit {100 * fr['upper95']:.1f} %); nuisance K_vdot/K_r/K_delta outside their physical "
                f"range (reported, not flagged): {s['nuisance_outside_physical']}")
+    if "refined" in s:
+        click.echo(f"  refine {s['refine']}: refined in {s['refined']} of {s['runs']} runs, failed (Algorithm 1 kept) "
+                   f"in {s['refine_failed']}")
 
 
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
