@@ -136,6 +136,8 @@ from shipid.methods.mmg import output_error as OE
 from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates_asym import asym_variants
+from shipid.methods.mmg.candidates_surge import BASE_STRUCTURES as SURGE_BASES
+from shipid.methods.mmg.candidates_surge import surge_variants
 from shipid.models import mmg
 
 #: Seed of the ``"seeded"`` draw of the ninth (random-manoeuvre) test run.
@@ -212,7 +214,7 @@ def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior:
 
 
 def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int = 4, refine_candidates: int = 2,
-                   oe_config: OE.OEConfig = OE.OEConfig(), asymmetry: bool = True,
+                   oe_config: OE.OEConfig = OE.OEConfig(), asymmetry: bool = True, surge: bool = True,
                    progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Training side (module docstring, steps 1–3). Reads no test run.
 
@@ -220,6 +222,9 @@ def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int
     ``asymmetry``: then :func:`cv_refinement` also scores the port/starboard variants
     (:func:`shipid.methods.mmg.candidates_asym.asym_variants`) of the candidate (low-speed hull) that
     the first refinement CV ranks best, and the choice is among all.
+    ``surge``: then it also scores the surge and slipstream-rudder variants
+    (:func:`shipid.methods.mmg.candidates_surge.surge_variants`) of the candidate ranked best so far
+    (if it is on a low-speed hull), and the choice is among all.
     """
     say = progress or (lambda s: None)
     sp = heldout9_split(root, ninth)
@@ -244,6 +249,15 @@ def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int
         say(f"heldout9: output-error CV of the port/starboard variants of '{base}'")
         ref.update(cv_refinement(trials, runs, prior, list(extra), folds=folds, oe_config=oe_config, pool=pool,
                                  progress=say))
+    if surge:
+        # the surge / slipstream-rudder variants of the candidate ranked best so far (on a low-speed hull)
+        best = min(ref, key=lambda k: ref[k]["score"]).rsplit("/", 1)[0]
+        if pool[best].get("structure", prior.structure) in SURGE_BASES:
+            extra = surge_variants(best, pool[best])
+            pool.update(extra)
+            say(f"heldout9: output-error CV of the surge / slipstream-rudder variants of '{best}'")
+            ref.update(cv_refinement(trials, runs, prior, list(extra), folds=folds, oe_config=oe_config, pool=pool,
+                                     progress=say))
     choice = min(ref, key=lambda k: ref[k]["score"])
     structure, criterion = choice.rsplit("/", 1)
     res = P.identify(trials, prior, structure=structure, select=False, candidates=pool,
