@@ -202,7 +202,7 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
         if model.structure == "esso-lowspeed-ext":
-            out = ext_columns(p, u, v, r, delta, n, out)
+            out = ext_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
     elif model.structure == "yasukawa2015-asym":
         out = basis_yasukawa(p, u, v, r, delta, n)
         T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]

@@ -33,8 +33,11 @@ from typing import Mapping
 
 import numpy as np
 
+from shipid.models.mmg_forces import wind_forces
+
 #: The extra coefficients of ``esso-lowspeed-ext`` per mode, in column order.
-EXT_COEFS: dict[str, tuple[str, ...]] = {"X": ("X_vv", "X_rr", "XR_D", "XR_s"), "Y": ("YR_s",), "N": ("NR_s",)}
+EXT_COEFS: dict[str, tuple[str, ...]] = {"X": ("X_vv", "X_rr", "XR_D", "XR_s", "XW_g"), "Y": ("YR_s", "YW_g"),
+                                         "N": ("NR_s", "NW_g")}
 
 
 def slipstream_share(p: Mapping[str, float], u, n, J, U_R):
@@ -46,9 +49,9 @@ def slipstream_share(p: Mapping[str, float], u, n, J, U_R):
     return np.where(ok, np.clip(1.0 - (eps_R * uP / UR) ** 2, 0.0, 1.0), 0.0)
 
 
-def ext_columns(p: Mapping[str, float], u, v, r, delta, n, out: dict) -> dict:
+def ext_columns(p: Mapping[str, float], u, v, r, delta, n, out: dict, U_A=0.0, gamma_A=0.0) -> dict:
     """``out`` (the ``esso-lowspeed-asym`` regressors of :func:`shipid.models.mmg.basis`, before wind)
-    with the :data:`EXT_COEFS` columns appended to each mode."""
+    with the :data:`EXT_COEFS` columns appended to each mode; ``U_A``, ``gamma_A`` the apparent wind."""
     L, d, rho = p["L"], p["d"], p["rho"]
     a = out["aux"]
     qX = 0.5 * rho * L * d
@@ -56,9 +59,11 @@ def ext_columns(p: Mapping[str, float], u, v, r, delta, n, out: dict) -> dict:
     u_R = U_R * np.cos(delta - alpha_R)           # alpha_R = delta - atan2(v_R, u_R)
     phi = slipstream_share(p, u, n, a["J"], U_R)
     sd, cd = np.sin(delta), np.cos(delta)
-    cols = {"X": (qX * v * v, qX * (r * L) ** 2, -0.5 * rho * p["A_R"] * U_R * u_R, -FN * sd * phi),
-            "Y": (-FN * cd * phi,),
-            "N": (-FN * cd * phi,)}
+    XA, YA, NA = (np.broadcast_to(F, u.shape) for F in wind_forces(p, np.asarray(U_A, float),
+                                                                    np.asarray(gamma_A, float)))
+    cols = {"X": (qX * v * v, qX * (r * L) ** 2, -0.5 * rho * p["A_R"] * U_R * u_R, -FN * sd * phi, XA),
+            "Y": (-FN * cd * phi, YA),
+            "N": (-FN * cd * phi, NA)}
     res = dict(out)
     for m, extra in cols.items():
         H, F0 = out[m]

@@ -86,13 +86,27 @@ def test_slipstream_gain_scales_the_rudder_force_by_the_slipstream_share(publish
     assert np.all(np.diff(s) > 0)
 
 
+def test_wind_gains_scale_the_fixed_air_force(published):
+    """XW_g, YW_g, NW_g add that fraction of Fujiwara's air force (shipid.models.mmg.wind_forces) per component."""
+    m, _ = _ext(published, "wind-gain", XW_g=0.5, YW_g=-0.2, NW_g=1.0)
+    g = np.random.default_rng(4)
+    UA, gA = g.uniform(0.0, 5.0, 300), g.uniform(-np.pi, np.pi, 300)
+    s = _states(4)
+    F1, F0 = mmg.forces(m, *s, UA, gA), mmg.forces(published, *s, UA, gA)
+    W = mmg.wind_forces(published.particulars, UA, gA)
+    for a, b, k, w in zip(F1, F0, (0.5, -0.2, 1.0), W):
+        np.testing.assert_allclose(a - b, k * w, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(mmg.forces(m, *s)[1], mmg.forces(published, *s)[1], rtol=0, atol=1e-12)
+
+
 def test_variants_extend_the_low_speed_and_port_starboard_candidates(published):
     cands = C.CANDIDATES["esso-lowspeed"]
     v = SG.surge_variants(BASE, cands[BASE])
     assert set(v) == {f"{BASE}+{t}" for t in SG.SURGE_TERMS}
     allv = v[f"{BASE}+surge-hull+rudder-drag+rudder-slipstream"]
     assert allv["structure"] == SG.STRUCTURE and allv["weighting"] == "nondimensional"
-    assert allv["X"][-4:] == EXT_COEFS["X"] and allv["N"][-1] == "NR_s"
+    assert allv["X"][-4:] == EXT_COEFS["X"][:4] and allv["N"][-1] == "NR_s"
+    assert v[f"{BASE}+surge-hull+wind-gain"]["N"][-1] == "NW_g"
     ps = A.asym_variant(cands[BASE], "prop-side")
     w = SG.surge_variant(ps, "surge-hull")
     assert "NP_n" in w["N"] and w["X"][-2:] == ("X_vv", "X_rr")

@@ -17,7 +17,11 @@ hull terms of drift and turning. The terms are those of
     ``XR_D``: the rudder's profile drag in its own inflow;
 ``rudder-slipstream``
     ``XR_s``, ``YR_s``, ``NR_s``: the rudder force gain on the slipstream share of the
-    rudder inflow (a propeller-rate-dependent rudder inflow).
+    rudder inflow (a propeller-rate-dependent rudder inflow);
+``wind-gain``
+    ``XW_g``, ``YW_g``, ``NW_g``: gains on the three components of the fixed air force
+    (the runs are in 1.5–2.4 m/s mean wind at 0.2–0.35 m/s ship speed; added after the
+    first five variants scored within 0.01 of the base).
 
 :func:`surge_variants` adds them (alone and combined, a fixed list) to a candidate of
 ``esso-lowspeed`` or ``esso-lowspeed-asym``; which (if any) is kept is chosen by the
@@ -37,6 +41,7 @@ _TERMS = {
     "surge-hull": {"X": ("X_vv", "X_rr"), "Y": (), "N": ()},
     "rudder-drag": {"X": ("XR_D",), "Y": (), "N": ()},
     "rudder-slipstream": {"X": ("XR_s",), "Y": ("YR_s",), "N": ("NR_s",)},
+    "wind-gain": {"X": ("XW_g",), "Y": ("YW_g",), "N": ("NW_g",)},
 }
 
 
@@ -45,13 +50,15 @@ def _combine(*names: str) -> dict[str, tuple[str, ...]]:
 
 
 #: The extra free coefficients of each variant (fixed list: each term alone, surge hull with the
-#: slipstream rudder, and all three).
+#: slipstream rudder, all three; the wind gains alone and with the surge hull).
 SURGE_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
     "surge-hull": _combine("surge-hull"),
     "rudder-drag": _combine("rudder-drag"),
     "rudder-slipstream": _combine("rudder-slipstream"),
     "surge-hull+rudder-slipstream": _combine("surge-hull", "rudder-slipstream"),
     "surge-hull+rudder-drag+rudder-slipstream": _combine("surge-hull", "rudder-drag", "rudder-slipstream"),
+    "wind-gain": _combine("wind-gain"),
+    "surge-hull+wind-gain": _combine("surge-hull", "wind-gain"),
 }
 
 
