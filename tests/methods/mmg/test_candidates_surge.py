@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from shipid.data import data_root
+from shipid.data.trial import Trial
 from shipid.methods.mmg import candidates as C
 from shipid.methods.mmg import candidates_asym as A
 from shipid.methods.mmg import candidates_surge as SG
@@ -127,22 +128,22 @@ def _exact_run(model, trial):
                          nis_mean=float("nan"), loglik=float("nan"), sigma=np.zeros(6))
 
 
-def test_regression_recovers_surge_and_slipstream_terms(published, own_run):
+@pytest.mark.slow
+def test_regression_recovers_surge_and_slipstream_terms(published):
     """Zig-zags at two propeller rates of a model with X_vv, X_rr, YR_s, NR_s set (the rest published), with
     the model's exact accelerations: the step-2 regression with them free (and X_0F, Y_v, N_r) finds each
     within 2 %. (Through step-1 smoothing of the square-wave rudder the rudder terms come out some 30 % low:
     the smoother's lag at each rudder switch, not the regression.)"""
     truth, _ = _ext(published, "surge-hull+rudder-slipstream", X_vv=-0.4, X_rr=0.03, YR_s=0.3, NR_s=-0.45)
     runs = []
+    t = np.arange(0.0, 120.0, 0.1)
     for a, per, n in ((15.0, 40.0, 6.0), (30.0, 60.0, 14.0)):
-        tr = own_run(truth, 120.0, rudder_deg=a, period=per)
-        t = tr.t
         Uin = np.zeros((t.size, 4))
-        Uin[:, 0], Uin[:, 1] = tr.channels["delta"], n
+        Uin[:, 0], Uin[:, 1] = np.deg2rad(a) * np.sign(np.sin(2 * np.pi * t / per)), n
         X = mmg.simulate_batch(truth, t, np.array([[0, 0, 0, 0.4, 0, 0]]), Uin)[0]
         ch = {c: X[:, i] for i, c in enumerate(mmg.STATE_NAMES)}
         ch.update(delta=Uin[:, 0], n=Uin[:, 1])
-        runs.append(_exact_run(truth, type(tr)(t, ch, {}, {})))
+        runs.append(_exact_run(truth, Trial(t, ch, {}, {})))
     free = {"X": ("X_0F", "X_vv", "X_rr"), "Y": ("Y_v", "YR_s"), "N": ("N_r", "NR_s")}
     start = truth.with_coef({"X_vv": 0.0, "X_rr": 0.0, "YR_s": 0.0, "NR_s": 0.0})
     f = R.fit(runs, start, free, R.FitConfig(weighting="nondimensional"))
@@ -151,6 +152,7 @@ def test_regression_recovers_surge_and_slipstream_terms(published, own_run):
         assert est[c] == pytest.approx(true, rel=0.02), c
 
 
+@pytest.mark.slow
 def test_refinement_cv_scores_the_surge_variants_from_a_pool(published, own_run):
     """study_oe.cv_refinement looks the surge variants up in ``pool`` and refines them by output error; on runs
     the published model made itself both criteria predict them (scores finite, rows for both)."""
