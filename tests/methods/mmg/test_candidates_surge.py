@@ -152,24 +152,6 @@ def test_regression_recovers_surge_and_slipstream_terms(published):
         assert est[c] == pytest.approx(true, rel=0.02), c
 
 
-@pytest.mark.slow
-def test_refinement_cv_scores_the_surge_variants_from_a_pool(published, own_run):
-    """study_oe.cv_refinement looks the surge variants up in ``pool`` and refines them by output error; on runs
-    the published model made itself both criteria predict them (scores finite, rows for both)."""
-    from shipid.methods.mmg import output_error as OE
-    from shipid.methods.mmg import study_oe as S
-
-    pool = dict(C.CANDIDATES["esso-lowspeed"])
-    pool.update(SG.surge_variants(BASE, pool[BASE]))
-    name = f"{BASE}+surge-hull+rudder-slipstream"
-    trials = [own_run(published, 130.0, rudder_deg=a, period=p) for a, p in ((15.0, 40.0), (25.0, 60.0))]
-    runs = [R.smooth_run(tr) for tr in trials]
-    ref = S.cv_refinement(trials, runs, published, [name], folds=2, pool=pool,
-                          oe_config=OE.OEConfig(max_iter=1))
-    assert set(ref) == {name + "/regression", name + "/output-error"}
-    assert all(np.isfinite(r["score"]) and r["runs"] == 2 for r in ref.values())
-
-
 def test_cli_offers_the_no_surge_terms_switch():
     from click.testing import CliRunner
 

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
+from shipid.methods.mmg.candidates_asym import with_terms
 from shipid.models import mmg
 
 STRUCTURE = "esso-lowspeed-ext"
@@ -64,14 +65,7 @@ SURGE_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
 
 def surge_variant(cand: Mapping, terms: str) -> dict:
     """``cand`` on the ``esso-lowspeed-ext`` structure with the free coefficients of ``SURGE_TERMS[terms]`` added."""
-    st = cand.get("structure", "esso-lowspeed")
-    if st not in BASE_STRUCTURES:
-        raise ValueError(f"surge variants are defined for the {' / '.join(BASE_STRUCTURES)} hull, not {st}")
-    out = dict(cand)
-    for m in mmg.MODES:
-        out[m] = tuple(cand[m]) + SURGE_TERMS[terms][m]
-    out["structure"] = STRUCTURE
-    return out
+    return with_terms(cand, SURGE_TERMS[terms], STRUCTURE, BASE_STRUCTURES)
 
 
 def surge_variants(name: str, cand: Mapping) -> dict[str, dict]:
