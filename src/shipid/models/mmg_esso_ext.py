@@ -1,7 +1,7 @@
 """Extra surge and rudder-inflow columns of the low-speed Esso Osaka model (structure ``esso-lowspeed-ext``).
 
 ``esso-lowspeed-ext`` is the ``esso-lowspeed-asym`` structure of :mod:`shipid.models.mmg`
-with six more linear coefficients, each zero in the published model (so that the
+with nine more linear coefficients, each zero in the published model (so that the
 structure with them at zero is the published one, term for term). They are the
 high-speed / high-propeller-rate terms that the low-speed hull of Yoshimura (as coded in
 NAOE-5thLab/mmg-1p1r-simulator c54ef807) leaves out:

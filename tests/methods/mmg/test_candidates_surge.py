@@ -36,7 +36,7 @@ def _states(seed=0, k=300):
 
 
 def test_zero_extra_terms_give_the_low_speed_model(published):
-    """With the six extra coefficients (and the port/starboard ones) at zero the forces are esso-lowspeed's."""
+    """With the extra coefficients of EXT_COEFS (and the port/starboard ones) at zero the forces are esso-lowspeed's."""
     m, _ = _ext(published)
     assert m.structure == SG.STRUCTURE
     s = _states()
