@@ -2,9 +2,9 @@
 
 ``esso-lowspeed-ext`` is the ``esso-lowspeed-asym`` structure of :mod:`shipid.models.mmg`
 with nine more linear coefficients, each zero in the published model (so that the
-structure with them at zero is the published one, term for term). They are the
-high-speed / high-propeller-rate terms that the low-speed hull of Yoshimura (as coded in
-NAOE-5thLab/mmg-1p1r-simulator c54ef807) leaves out:
+structure with them at zero is the published one, term for term): high-speed /
+high-propeller-rate terms that the low-speed hull of Yoshimura (as coded in
+NAOE-5thLab/mmg-1p1r-simulator c54ef807) leaves out, and gains on its fixed air force:
 
 ``X_vv``, ``X_rr``
     the second-order surge hull terms of the MMG standard method (Yasukawa & Yoshimura
