@@ -137,6 +137,8 @@ test run was read). Fitted on all 32 runs: YW_g = −0.31 ± 0.07, NW_g = −0.5
 side force and yaw moment too large for this model), XW_g not determined, NP_n = −0.0018 ± 0.0008.
 Held-out (read once, after this choice): mean over the 9 runs **7.12° / 0.556 m** (published
 12.20° / 0.842 m; before these terms 7.79° / 0.613 m). Target (≤ 6.5° / ≤ 0.55 m) NOT met.
+Rerun end to end with this rule (``shipid study esso-osaka-heldout9``): the same tables, choice and
+7.12° / 0.556 m; 17.6 CPU-min (12 output-error CVs), 39 min wall at a machine load of about 7.
 
 Bound on a per-run yaw-moment bias (training runs only, diagnosis, not part of the pipeline):
 with each left-out training run's own ``NP_n`` fitted by output error on that run's own horizons
