@@ -53,6 +53,7 @@ from shipid.data.paths import data_root
 from shipid.errors import InputError
 from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa, crossflow_integrals, cubic_hull,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
+from shipid.models.mmg_esso_ext import EXT_COEFS, ext_columns
 from shipid.simulate.integrate import rk4_step
 from shipid.simulate.model import ShipModel
 
@@ -101,9 +102,12 @@ COEFS["yasukawa2015-asym"] = {"X": COEFS["yasukawa2015"]["X"],
 COEFS["esso-lowspeed-asym"] = {"X": COEFS["esso-lowspeed"]["X"],
                                "Y": COEFS["esso-lowspeed"]["Y"] + ("YP_n", "YR_0"),
                                "N": COEFS["esso-lowspeed"]["N"] + ("NP_n", "NR_0")}
+# ``esso-lowspeed-asym`` with the surge and slipstream-rudder columns of :mod:`shipid.models.mmg_esso_ext`.
+STRUCTURES = STRUCTURES + ("esso-lowspeed-ext",)
+COEFS["esso-lowspeed-ext"] = {m: COEFS["esso-lowspeed-asym"][m] + EXT_COEFS[m] for m in MODES}
 
 #: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
-COEF_UNITS = {"NR_arm": "m"}
+COEF_UNITS = {"NR_arm": "m", "NR_s": "m"}
 
 @dataclass(frozen=True)
 class MmgModel:
@@ -189,7 +193,7 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         out = basis_esso(p, u, v, r, delta, n)
         for m, H in zip(MODES, cubic_hull(p, u, v, r)):
             out[m] = (np.concatenate([H, out[m][0][..., 3:]], axis=-1), out[m][1])
-    elif model.structure == "esso-lowspeed-asym":
+    elif model.structure in ("esso-lowspeed-asym", "esso-lowspeed-ext"):
         out = basis_esso(p, u, v, r, delta, n)
         a = out["aux"]
         T4 = (n > 0) * p["rho"] * p["D_p"] ** 4 * n * n
@@ -197,6 +201,8 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         dFN = 0.5 * p["rho"] * p["A_R"] * a["U_R"] ** 2 * f_alpha * np.cos(a["alpha_R"]) * np.cos(delta)
         for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
+        if model.structure == "esso-lowspeed-ext":
+            out = ext_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
     elif model.structure == "yasukawa2015-asym":
         out = basis_yasukawa(p, u, v, r, delta, n)
         T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]
@@ -488,7 +494,7 @@ def ship_model(model: MmgModel):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
                 "delta": U[:, 0], "n": U[:, 1]}
 
-    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym")
+    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym", "esso-lowspeed-ext")
     n0 = 10.0 if esso else 10.23
     U0 = 0.5 if esso else 1.179
     return ShipModel(name=model.name, f=dynamics, theta=model, state_names=STATE_NAMES,

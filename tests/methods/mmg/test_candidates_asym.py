@@ -94,15 +94,19 @@ def test_regression_recovers_a_propeller_yaw_moment(published, own_run):
     assert est["N_v"] == pytest.approx(published.coef["N_v"], rel=0.05)
 
 
-def test_refinement_cv_takes_the_variants_from_a_pool(published, own_run):
-    """study_oe.cv_refinement looks the port/starboard variants up in ``pool``; on runs the published
-    model made itself both criteria of the variant predict them (scores finite, rows for both)."""
+@pytest.mark.parametrize("kind, terms", [("asym", "prop-side"),
+                                         pytest.param("surge", "surge-hull+wind-gain", marks=pytest.mark.slow)])
+def test_refinement_cv_takes_the_variants_from_a_pool(published, own_run, kind, terms):
+    """study_oe.cv_refinement looks the port/starboard (and the surge / wind, candidates_surge) variants
+    up in ``pool``; on runs the published model made itself both criteria of the variant predict them
+    (scores finite, rows for both)."""
+    from shipid.methods.mmg import candidates_surge as SG
     from shipid.methods.mmg import output_error as OE
     from shipid.methods.mmg import study_oe as S
 
     pool = dict(C.CANDIDATES["esso-lowspeed"])
-    pool.update(A.asym_variants(BASE, pool[BASE]))
-    name = f"{BASE}+prop-side"
+    pool.update((A.asym_variants if kind == "asym" else SG.surge_variants)(BASE, pool[BASE]))
+    name = f"{BASE}+{terms}"
     trials = [own_run(published, 130.0, rudder_deg=a, period=p) for a, p in ((15.0, 40.0), (25.0, 60.0))]
     runs = [R.smooth_run(tr) for tr in trials]
     ref = S.cv_refinement(trials, runs, published, [name], folds=2, pool=pool,

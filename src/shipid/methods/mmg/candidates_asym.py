@@ -34,15 +34,23 @@ ASYM_TERMS: dict[str, dict[str, tuple[str, ...]]] = {
 }
 
 
-def asym_variant(cand: Mapping, terms: str) -> dict:
-    """``cand`` on the ``esso-lowspeed-asym`` structure with the free coefficients of ``ASYM_TERMS[terms]`` added."""
-    if cand.get("structure", "esso-lowspeed") != "esso-lowspeed":
-        raise ValueError(f"asymmetry variants are defined for the esso-lowspeed hull, not {cand.get('structure')}")
+def with_terms(cand: Mapping, extra: Mapping[str, tuple[str, ...]], structure: str,
+               bases: tuple[str, ...] = ("esso-lowspeed",)) -> dict:
+    """``cand`` moved to ``structure`` with the free coefficients ``extra[mode]`` added to each mode;
+    ``cand`` must be on one of the ``bases`` structures (default ``esso-lowspeed``)."""
+    st = cand.get("structure", "esso-lowspeed")
+    if st not in bases:
+        raise ValueError(f"{structure} variants are defined for the {' / '.join(bases)} hull, not {st}")
     out = dict(cand)
     for m in mmg.MODES:
-        out[m] = tuple(cand[m]) + ASYM_TERMS[terms][m]
-    out["structure"] = STRUCTURE
+        out[m] = tuple(cand[m]) + tuple(extra[m])
+    out["structure"] = structure
     return out
+
+
+def asym_variant(cand: Mapping, terms: str) -> dict:
+    """``cand`` on the ``esso-lowspeed-asym`` structure with the free coefficients of ``ASYM_TERMS[terms]`` added."""
+    return with_terms(cand, ASYM_TERMS[terms], STRUCTURE)
 
 
 def asym_variants(name: str, cand: Mapping) -> dict[str, dict]:
@@ -50,4 +58,4 @@ def asym_variants(name: str, cand: Mapping) -> dict[str, dict]:
     return {f"{name}+{t}": asym_variant(cand, t) for t in ASYM_TERMS}
 
 
-__all__ = ["STRUCTURE", "ASYM_TERMS", "asym_variant", "asym_variants"]
+__all__ = ["STRUCTURE", "ASYM_TERMS", "with_terms", "asym_variant", "asym_variants"]

@@ -21,16 +21,20 @@ from shipid.cli._common import emit, loud_lines, out_options, strict_option
 @click.option("--train-only", is_flag=True, help="Stop after the CV tables and the choice: no test run is read.")
 @click.option("--symmetric-only", is_flag=True,
               help="Leave the port/starboard variants (shipid.methods.mmg.candidates_asym) out of the refinement CV.")
+@click.option("--no-surge-terms", is_flag=True,
+              help="Leave the surge / slipstream-rudder variants (shipid.methods.mmg.candidates_surge) out of the "
+                   "refinement CV.")
 @out_options(json_help="Print everything as JSON on stdout.")
 @strict_option
-def heldout9_cmd(ninth, folds, train_only, symmetric_only, as_json, out, force):
+def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, as_json, out, force):
     """Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on
-    the other 32 (structure; regression vs output-error refinement; port/starboard terms), then the held-out
-    table."""
+    the other 32 (structure; regression vs output-error refinement; port/starboard terms; surge and
+    slipstream-rudder terms), then the held-out table."""
     from shipid.methods.mmg import study_oe as S
 
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
-    st = S.heldout9_train(ninth=ninth, folds=folds, asymmetry=not symmetric_only, progress=say)
+    st = S.heldout9_train(ninth=ninth, folds=folds, asymmetry=not symmetric_only,
+                          surge=not no_surge_terms, progress=say)
     if not as_json:
         click.echo(S.format_heldout9(st))
     if not train_only:
