@@ -112,3 +112,22 @@ def test_default_refines_a_both_regime_run_and_keeps_algorithm1_beside_it():
     assert o["refine_decision"] == "pem" and o["sensor_level"] > refine.SENSOR_NOISE_MIN
     assert o["pem_ok"], o["pem_reason"]
     assert o["m"] != o["iv_m"] and abs(o["m"] - 0.4) < 3 * o["m_std"]
+
+
+def test_plausibility_is_judged_again_on_the_refined_estimate():
+    from dataclasses import replace
+
+    r = _alg1(_data("both"))
+    assert not r.diagnostics["implausible"]
+    # a stale Algorithm-1 line goes when the (here: unchanged, physical) estimate is judged again
+    r.diagnostics["warnings"].append("nuisance coefficients outside their physical range (A_x <= 0): stale")
+    r.diagnostics["refine"] = {"applied": True}
+    refine.rejudge(r, KNOWN, ZF)
+    assert not any("stale" in w for w in r.diagnostics["warnings"])
+    assert r.diagnostics["nuisance_outside_physical"] == []
+    assert r.diagnostics["refine"]["algorithm1_plausibility"]["implausible"] is False
+    # a refined m that is not a load (far below zero beyond its std) is flagged, with the entry relabelled
+    r.estimates["m"] = replace(r.estimates["m"], value=-1.0, std=0.01)
+    refine.rejudge(r, KNOWN, ZF)
+    assert r.diagnostics["implausible"] and r.estimates["m"].status == "not determined"
+    assert sum(w.startswith("implausible solution: ") for w in r.diagnostics["warnings"]) == 1

@@ -49,9 +49,13 @@ the gyro signal counts as none (Algorithm 1 is kept).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from shipid.methods.masscm.pem_result import refine_result as _pem
+from shipid.methods.masscm.plausibility import implausible_identifiable, implausible_reasons
+from shipid.models.roll_reduced import THETA_NAMES
 
 #: The values of ``MassCMOptions.refine``: ``"auto"`` the rule of this module, ``"none"`` Algorithm 1 alone, or an
 #: engine of :data:`ENGINES` run unconditionally.
@@ -235,8 +239,47 @@ def apply(result, datasets, known, z_f, mode: str = "auto"):
         return result
     out = ENGINES[engine](result, datasets, known, z_f)
     out.diagnostics["refine"] = {**rec, **(out.diagnostics.get("refine") or {})}
+    if out.diagnostics["refine"].get("applied"):
+        rejudge(out, known, z_f)
     return out
 
 
-__all__ = ["REFINE_MODES", "ENGINES", "apply", "AUTO_ENGINE", "PREDICTION_LAGS", "SENSOR_NOISE_MIN", "prediction_residual", "sensor_noise_level",
+#: the warning lines :func:`shipid.methods.masscm.assemble.to_result` writes from its plausibility judgement
+_PLAUSIBILITY_LINES = ("implausible solution: ", "nuisance coefficients outside their physical range (")
+
+
+def rejudge(result, known, z_f: float) -> None:
+    """Judge plausibility again on the refined estimate, in place.
+
+    Algorithm 1's result carries ``implausible``, ``implausible_reasons``, ``nuisance_outside_physical`` and their
+    warning lines for Algorithm 1's ``theta``; after a refinement the estimates are the refinement's, so the same
+    rules (:func:`~shipid.methods.masscm.plausibility.implausible_identifiable` on m, zm_bar with their refined
+    standard errors, :func:`~shipid.methods.masscm.plausibility.implausible_reasons` for the nuisance split) are
+    applied to them and the lines replaced; Algorithm 1's judgement is kept in ``diagnostics["refine"]
+    ["algorithm1_plausibility"]``.
+    """
+    d, est = result.diagnostics, result.estimates
+    theta = np.array([float(z_f) if n == "z_f" else est[n].value for n in THETA_NAMES])
+    conds = list(result.model.get("conditions") or [])
+    std = {"m": est["m"].std, "zm_bar": est["zm_bar"].std}
+    reasons = implausible_identifiable(theta, known, conds, std)
+    nuisance = [w for w in implausible_reasons(theta, known, conds) if w != "non-finite estimate"]
+    d["refine"]["algorithm1_plausibility"] = {"implausible": d.get("implausible"),
+                                              "implausible_reasons": d.get("implausible_reasons"),
+                                              "nuisance_outside_physical": d.get("nuisance_outside_physical")}
+    warn = [w for w in d.get("warnings", []) if not w.startswith(_PLAUSIBILITY_LINES)]
+    if reasons:
+        why = "implausible solution (" + ", ".join(reasons) + "): not an estimate of the load"
+        for n in ("m", "zm_bar", "rho"):
+            e = est[n]
+            est[n] = replace(e, status="not determined", note=why)
+        warn.append("implausible solution: " + ", ".join(reasons))
+    elif nuisance:
+        warn.append("nuisance coefficients outside their physical range (" + ", ".join(nuisance) + ") after "
+                    "the refinement; m, zm_bar and rho are judged on their own and not flagged")
+    d.update({"implausible": bool(reasons), "implausible_reasons": reasons, "nuisance_outside_physical": nuisance,
+              "warnings": warn})
+
+
+__all__ = ["REFINE_MODES", "ENGINES", "apply", "rejudge", "AUTO_ENGINE", "PREDICTION_LAGS", "SENSOR_NOISE_MIN", "prediction_residual", "sensor_noise_level",
            "WAVE_LAGS", "WAVE_LAG_WINDOW", "WAVE_Z_MIN", "portmanteau_z", "wave_colour", "choose"]
