@@ -102,9 +102,10 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
                    "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
                    "arma: structured ARMA.")
-@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
+@click.option("--refine", type=click.Choice(["none", "pem", "whittle"]), default="none", show_default=True,
               help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
-                   "bound (needs z_f known and sensor noise in the data; where it fails Algorithm 1's estimate is "
+                   "bound, whittle: the same in the frequency domain (cost per iteration independent of the record "
+                   "length) (both need z_f known and sensor noise in the data; where it fails Algorithm 1's estimate is "
                    "kept, with a warning). The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
@@ -119,7 +120,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     """
     from shipid.data.io import read_trial
     from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
-    from shipid.methods.masscm.pem_result import refine_result
+    from shipid.methods.masscm import pem_result, whittle_result
     from shipid.methods.masscm.series import with_series
 
     kn = read_known(known_path)
@@ -131,8 +132,9 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
                       options=opts, init="given" if kn["theta0"] is not None else "linear")
     res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
-    if refine == "pem":
-        res = refine_result(res, datasets, kn["known"], kn["z_f"])
+    if refine != "none":
+        mod = {"pem": pem_result, "whittle": whittle_result}[refine]
+        res = mod.refine_result(res, datasets, kn["known"], kn["z_f"])
     res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])
     d = res.to_dict()
@@ -210,9 +212,10 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
-@click.option("--refine", type=click.Choice(["none", "pem"]), default="none", show_default=True,
+@click.option("--refine", type=click.Choice(["none", "pem", "whittle"]), default="none", show_default=True,
               help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
-                   "bound (methods/masscm/pem.py); a run where it fails keeps Algorithm 1's estimate.")
+                   "bound (methods/masscm/pem.py), whittle: the same in the frequency domain (whittle.py); a run "
+                   "where it fails keeps Algorithm 1's estimate.")
 @out_options(json_help="Print the coverage summary as JSON on stdout.")
 @campaign_options
 def mass_cm_coverage(regime, runs, duration, noise_model, refine, as_json, out, force, campaign):

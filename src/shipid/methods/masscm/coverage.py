@@ -151,6 +151,7 @@ import numpy as np
 from shipid.methods.masscm.crlb import crlb, true_theta
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 from shipid.methods.masscm.pem_result import refine_result
+from shipid.methods.masscm import whittle_result
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 from shipid.vessels import load_vessel
@@ -195,13 +196,17 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
         warnings.simplefilter("ignore")
         r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,
                              options=MassCMOptions(noise_model=noise_model, compute=compute))
-    if refine not in ("none", "pem"):
-        raise ValueError("refine must be 'none' or 'pem'")
-    rr = refine_result(r, list(d.items()), known, z_f) if refine == "pem" else r
+    if refine not in ("none", "pem", "whittle"):
+        raise ValueError("refine must be 'none', 'pem' or 'whittle'")
+    rr = r
+    if refine == "pem":
+        rr = refine_result(r, list(d.items()), known, z_f)
+    elif refine == "whittle":
+        rr = whittle_result.refine_result(r, list(d.items()), known, z_f)
     out = {}
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = float(rr.value(k)), float(rr.std(k))
-    if refine == "pem":
+    if refine != "none":
         rec = rr.diagnostics["refine"]
         for k in QUANTITIES:
             out[f"iv_{k}"], out[f"iv_{k}_std"] = rec["algorithm1"][k]

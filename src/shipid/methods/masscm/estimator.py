@@ -91,6 +91,7 @@ from shipid.methods.masscm.iteration import initial_state, iterate
 from shipid.methods.masscm.noise import AUTO_C, AUTO_HOLD
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, I_ZM, REQUIRED, MassCMOptions
 from shipid.methods.masscm.pem_result import refine_result
+from shipid.methods.masscm import whittle_result
 from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable, implausible_reasons, rho_of
 
 #: The last coverage study of the stated std (read by the report's verdict panel): 300-s records,
@@ -105,12 +106,15 @@ COVERAGE = {"coverage": 0.96, "n": 300, "nominal": 0.954,
 def estimate_mass_cm(datasets, known, *, theta0=None, z_f=None, z_f_prior=None, init=None,
                      options: MassCMOptions = MassCMOptions(), noise_check: bool = True):
     """Algorithm 1 (:func:`shipid.methods.masscm.assemble.estimate_mass_cm`, same arguments and result), then,
-    with ``options.refine == "pem"``, its maximum-likelihood refinement (:mod:`shipid.methods.masscm.pem_result`).
+    with ``options.refine == "pem"``, its maximum-likelihood refinement (:mod:`shipid.methods.masscm.pem_result`),
+    with ``"whittle"`` the frequency-domain one (:mod:`shipid.methods.masscm.whittle_result`).
     """
-    if options.refine not in ("none", "pem"):
-        raise ValueError("MassCMOptions.refine must be 'none' or 'pem'")
+    if options.refine not in ("none", "pem", "whittle"):
+        raise ValueError("MassCMOptions.refine must be 'none', 'pem' or 'whittle'")
     r = algorithm1(datasets, known, theta0=theta0, z_f=z_f, z_f_prior=z_f_prior, init=init, options=options,
                    noise_check=noise_check)
+    if options.refine == "whittle":
+        return whittle_result.refine_result(r, datasets, known, z_f)
     return refine_result(r, datasets, known, z_f) if options.refine == "pem" else r
 
 

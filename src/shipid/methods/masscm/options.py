@@ -53,7 +53,8 @@ class MassCMOptions:
     #                                 explicitly (the reference of filtered_lag_moments; O(n n_z^2), n x n_z memory)
     compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
     refine: str = "none"            # "pem": maximum-likelihood refinement of the estimate on the state-space model
-    #                                 of the bound (z_f known; methods/masscm/pem.py); "none": Algorithm 1 alone
+    #                                 of the bound (z_f known; methods/masscm/pem.py); "whittle": the same in the
+    #                                 frequency domain (methods/masscm/whittle.py); "none": Algorithm 1 alone
 
 
 __all__ = ["REQUIRED", "I_ZF", "I_M", "I_ZM", "DEFAULT_THETA0", "MassCMOptions"]

@@ -178,17 +178,21 @@ class _FSet:
         else:
             c = np.zeros(4)
         nz = z.size
-        Mz = z[:, None, None] * np.eye(4) - Ad
-        rhs = np.stack([b0[None, :] + z[:, None] * b1[None, :], z[:, None] * c[None, :]], axis=-1)
-        X = np.linalg.solve(Mz, rhs)                                     # (nz, 4, 2)
-        CX = np.einsum("ij,kjl->kil", C, X)
+        zc = z[:, None, None]
+        Ra = np.linalg.inv(zc * np.eye(4) - Ad)                          # (nz, 4, 4)
+        CR = C @ Ra                                                      # (nz, 3, 4)
         A = np.zeros((nz, 3, 5), dtype=complex)
         A[:, :, :3] = np.eye(3)
-        A[:, :, 3] = -(CX[:, :, 0] + D[:, 0])
-        A[:, :, 4] = -CX[:, :, 1]
+        A[:, :, 3] = -(CR @ b0 + z[:, None] * (CR @ b1) + D[:, 0])
+        A[:, :, 4] = -z[:, None] * (CR @ c)
         if F.shape[0]:
-            Xs = np.linalg.solve(z[:, None, None] * np.eye(F.shape[0]) - F, np.broadcast_to(G[:, None], (nz, G.size, 1)))
-            Tz = np.einsum("ij,kj->ki", H, Xs[:, :, 0]) + J
+            # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
+            Aw, F12 = F[4:, 4:], F[:4, 4:]
+            a, b_, c_, d_ = z - Aw[0, 0], -Aw[0, 1] + 0 * z, -Aw[1, 0] + 0 * z, z - Aw[1, 1]
+            det = a * d_ - b_ * c_
+            Rw = np.stack([np.stack([d_, -b_], -1), np.stack([-c_, a], -1)], -2) / det[:, None, None]
+            HR = np.concatenate([CR, (CR @ F12 + H[:, 4:]) @ Rw], axis=2)  # H (zI - F)^-1, H[:, :4] = C
+            Tz = HR @ G + J
             S = Tz[:, :, None] * np.conj(Tz[:, None, :]) + R
         else:
             S = np.broadcast_to(R.astype(complex), (nz, 3, 3)).copy()
@@ -196,34 +200,50 @@ class _FSet:
             return None
         if F.shape[0] and band_centres:
             try:
-                A[:, :, 4] -= self._noise_transient(A, S, F, H, z)
+                A[:, :, 4] -= self._noise_transient(A, S, z[:, None, None] * HR)
             except np.linalg.LinAlgError:
                 return None
         return A, S
 
-    def _noise_transient(self, A, S, F, H, z):
+    def _noise_transient(self, A, S, Gam):
         """``Gam_b t`` with ``Gam(z) = z H (zI - F)^-1`` and the real ``t = s_0 - s_N`` of the noise states that
         minimises ``sum_b tr(W A M A^H)`` (profiled out, closed form; see the module docstring)."""
-        ns = F.shape[0]
-        Gam = z[:, None, None] * np.einsum("ij,kjl->kil", H, np.linalg.inv(z[:, None, None] * np.eye(ns) - F))
-        WG = np.linalg.solve(S, Gam)                                          # W Gam (nb, 3, ns)
-        e1 = np.einsum("kij,kj->ki", A, self.M[:, :, 4])                      # A_b sum_j Z_j / sqrt(N)
+        WG = inv_herm3(S) @ Gam                                               # W Gam (nb, 3, ns)
+        e1 = (A @ self.M[:, :, 4:5])[:, :, 0]                                 # A_b sum_j Z_j / sqrt(N)
         b = np.real(np.einsum("kil,ki->l", np.conj(WG), e1))
-        Hm = np.real(np.einsum("k,kil,kim->lm", np.real(self.M[:, 4, 4]), np.conj(Gam), WG))
+        Hm = np.real(np.einsum("kil,kim->lm", np.conj(Gam) * np.real(self.M[:, 4, 4])[:, None, None], WG))
         t = np.linalg.solve(0.5 * (Hm + Hm.T), b)
-        return np.einsum("kil,l->ki", Gam, t)
+        return Gam @ t
 
     def residual_periodogram(self, A):
         """``A_b M_b A_b^H`` (nb, 3, 3): the band-summed residual cross-periodogram."""
-        return np.einsum("kij,kjl,kml->kim", A, self.M, np.conj(A))
+        return (A @ self.M) @ np.conj(np.swapaxes(A, 1, 2))
 
     def nll(self, A, S):
-        sign, ld = np.linalg.slogdet(S)
-        if np.any(np.real(sign) <= 0):
+        det = np.real(det3(S))
+        if np.any(det <= 0):
             return np.inf
-        W = np.linalg.inv(S)
         RM = self.residual_periodogram(A)
-        return float(np.sum(self.nb * np.real(ld)) + np.real(np.einsum("kij,kji->", W, RM)))
+        return float(self.nb @ np.log(det) + np.real(np.sum(inv_herm3(S) * np.swapaxes(RM, 1, 2))))
+
+
+def det3(S):
+    """Determinants of a stack of 3 x 3 matrices (cofactor expansion)."""
+    return (S[:, 0, 0] * (S[:, 1, 1] * S[:, 2, 2] - S[:, 1, 2] * S[:, 2, 1])
+            - S[:, 0, 1] * (S[:, 1, 0] * S[:, 2, 2] - S[:, 1, 2] * S[:, 2, 0])
+            + S[:, 0, 2] * (S[:, 1, 0] * S[:, 2, 1] - S[:, 1, 1] * S[:, 2, 0]))
+
+
+def inv_herm3(S):
+    """Inverses of a stack of 3 x 3 matrices by the adjugate (the spectra here are well conditioned: they
+    contain the sensor-noise floor ``R``)."""
+    adj = np.empty_like(S)
+    for i in range(3):
+        for j in range(3):
+            r = [k for k in range(3) if k != j]
+            c = [k for k in range(3) if k != i]
+            adj[:, i, j] = (-1) ** (i + j) * (S[:, r[0], c[0]] * S[:, r[1], c[1]] - S[:, r[0], c[1]] * S[:, r[1], c[0]])
+    return adj / det3(S)[:, None, None]
 
 
 def _objective(sets, theta, locs, waves):
@@ -254,7 +274,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
     g, info = np.zeros(P), np.zeros((P, P))
     for d, (s, loc) in enumerate(zip(sets, locs)):
         A, S = s.matrices(theta, loc, waves)
-        W = np.linalg.inv(S)
+        W = inv_herm3(S)
         cols = [("t", i) for i in th_idx] + [("l", i) for i in fl]
         gi = list(range(len(th_idx))) + [len(th_idx) + d * nloc + j for j in range(nloc)]
         nc = len(cols)
@@ -275,14 +295,17 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
             dA[c] = (r[0] - A) / h
             dS[c] = (r[1] - S) / h
         RM = s.residual_periodogram(A)
-        V = np.einsum("kij,ckjl->ckil", W, dS)                                   # W dS_a
-        MAh = np.einsum("kij,klj->kil", s.M, np.conj(A))                         # M A^H
-        grad = (np.einsum("k,ckii->c", s.nb, V) - np.einsum("ckij,kjl,kli->c", V, W, RM)
-                + 2 * np.einsum("kij,ckjl,kli->c", W, dA, MAh))
+        nb = dA.shape[1]
+        V = W[None] @ dS                                                          # W dS_a
+        X = np.swapaxes((s.M @ np.conj(np.swapaxes(A, 1, 2))) @ W, 1, 2)          # (M A^H W)^T
+        grad = (np.trace(V, axis1=2, axis2=3) @ s.nb
+                - np.sum(V * np.swapaxes(W @ RM, 1, 2)[None], axis=(1, 2, 3))
+                + 2 * dA.reshape(nc, -1) @ X.reshape(-1))
         g[gi] += -np.real(grad)
-        WdAM = np.einsum("kij,ckjl,klm->ckim", W, dA, s.M)
-        Imean = 2 * np.real(np.einsum("akij,bkij->ab", np.conj(dA), WdAM))
-        Icov = np.real(np.einsum("k,akij,bkji->ab", s.nb, V, V))
+        WdAM = (W[None] @ dA) @ s.M[None]
+        Imean = 2 * np.real(np.conj(dA.reshape(nc, -1)) @ WdAM.reshape(nc, -1).T)
+        Vt = np.swapaxes(V, 2, 3).reshape(nc, -1)
+        Icov = np.real((V.reshape(nc, -1) * np.repeat(s.nb, 9)[None]) @ Vt.T)
         info[np.ix_(gi, gi)] += Imean + Icov
     return g, 0.5 * (info + info.T)
 
