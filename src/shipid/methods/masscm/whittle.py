@@ -131,13 +131,14 @@ class _FSet:
         """Band sums for the band number ``idx`` of each bin."""
         starts = np.flatnonzero(np.r_[True, np.diff(idx) != 0])
         self.nb = np.diff(np.r_[starts, idx.size]).astype(float)
-        M = np.empty((starts.size, 5, 5), dtype=complex)
-        for a in range(5):                          # pair by pair: no (K, 5, 5) transient
-            for b in range(a, 5):
-                M[:, a, b] = np.add.reduceat(self.Z[:, a] * np.conj(self.Z[:, b]), starts)
+        self.wb = np.add.reduceat(self.w, starts) / self.nb
+        Zt = np.concatenate([self.Z, (self.w - self.wb[idx])[:, None] * self.Z], axis=1)     # [Z, (w - w_b) Z]
+        M = np.empty((starts.size, 10, 10), dtype=complex)
+        for a in range(10):                         # pair by pair: no (K, 10, 10) transient
+            for b in range(a, 10):
+                M[:, a, b] = np.add.reduceat(Zt[:, a] * np.conj(Zt[:, b]), starts)
                 M[:, b, a] = np.conj(M[:, a, b])
         self.M = M
-        self.wb = np.add.reduceat(self.w, starts) / self.nb
         self.zb = np.exp(1j * self.wb)
 
     def design_bands(self, theta, loc, waves, opts: WhittleOptions):
@@ -181,10 +182,15 @@ class _FSet:
         zc = z[:, None, None]
         Ra = np.linalg.inv(zc * np.eye(4) - Ad)                          # (nz, 4, 4)
         CR = C @ Ra                                                      # (nz, 3, 4)
-        A = np.zeros((nz, 3, 5), dtype=complex)
+        CR2 = CR @ Ra
+        zz = z[:, None]
+        A = np.zeros((nz, 3, 10), dtype=complex)
         A[:, :, :3] = np.eye(3)
-        A[:, :, 3] = -(CR @ b0 + z[:, None] * (CR @ b1) + D[:, 0])
-        A[:, :, 4] = -z[:, None] * (CR @ c)
+        A[:, :, 3] = -(CR @ b0 + zz * (CR @ b1) + D[:, 0])
+        A[:, :, 4] = -zz * (CR @ c)
+        # d/dw = i z d/dz of the two model columns (the noise-state transient below is held over the band)
+        A[:, :, 8] = -1j * zz * (CR @ b1 - CR2 @ b0 - zz * (CR2 @ b1))
+        A[:, :, 9] = -1j * zz * (CR @ c - zz * (CR2 @ c))
         if F.shape[0]:
             # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
             Aw, F12 = F[4:, 4:], F[:4, 4:]
@@ -409,7 +415,7 @@ def _wave_start(s: _FSet, theta, loc, known: KnownParams) -> np.ndarray:
 def time_residuals(s: _FSet, theta, loc) -> np.ndarray:
     """Time-domain residual ``y - mu`` (N, 3), mean removed: inverse DFT of ``E_j`` at every bin (once)."""
     m = s.matrices(theta, loc, False, z=np.exp(1j * s.w))
-    E = np.einsum("kij,kj->ki", m[0], s.Z) * np.sqrt(s.n)
+    E = np.einsum("kij,kj->ki", m[0][:, :, :5], s.Z) * np.sqrt(s.n)
     full = np.zeros((s.n // 2 + 1, 3), dtype=complex)
     full[1:E.shape[0] + 1] = E
     return np.fft.irfft(full, n=s.n, axis=0)
