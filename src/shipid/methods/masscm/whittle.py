@@ -141,12 +141,15 @@ class _FSet:
         starts = np.flatnonzero(np.r_[True, np.diff(idx) != 0])
         self.nb = np.diff(np.r_[starts, idx.size]).astype(float)
         self.wb = np.add.reduceat(self.w, starts) / self.nb
-        Zt = np.concatenate([self.Z, (self.w - self.wb[idx])[:, None] * self.Z], axis=1)     # [Z, (w - w_b) Z]
-        M = np.empty((starts.size, 10, 10), dtype=complex)
-        for a in range(10):                         # pair by pair: no (K, 10, 10) transient
-            for b in range(a, 10):
-                M[:, a, b] = np.add.reduceat(Zt[:, a] * np.conj(Zt[:, b]), starts)
-                M[:, b, a] = np.conj(M[:, a, b])
+        dw = self.w - self.wb[idx]
+        P = np.empty((3, starts.size, 5, 5), dtype=complex)   # P_k = sum_j (w_j - w_b)^k Z_j Z_j^H
+        for a in range(5):                                      # pair by pair: no (K, 5, 5) transient
+            for b in range(a, 5):
+                zz = self.Z[:, a] * np.conj(self.Z[:, b])
+                for k in range(3):
+                    P[k, :, a, b] = np.add.reduceat(zz * dw ** k, starts)
+                    P[k, :, b, a] = np.conj(P[k, :, a, b])
+        M = np.block([[P[0], P[1]], [P[1], P[2]]])             # moments of Zt = [Z, (w - w_b) Z]
         self.M = M
         self.zb = np.exp(1j * self.wb)
 
