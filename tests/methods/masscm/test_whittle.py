@@ -154,3 +154,29 @@ def test_whiteness_check_rejects_no_wave_model_in_waves_and_accepts_it_with_sens
     assert "not white" in whittle.whiteness_reason(sets, th, locs)
     _, _, _, sets, locs, _ = _case(regime="sensors", duration=60.0, seed=(4248, 7))
     assert whittle.whiteness_reason(sets, th, locs) == ""
+
+
+@pytest.mark.slow
+def test_coverage_study_refine_whittle_flag(capsys):
+    """`study mass-cm-coverage --refine whittle` runs the refinement per run and counts the runs where it failed."""
+    import json
+
+    from shipid.cli import main
+    rc = main(["study", "mass-cm-coverage", "--regime", "both", "--runs", "2", "--duration", "120",
+               "--workers", "1", "--seed", "5", "--refine", "whittle", "--json"])
+    assert rc in (0, None)
+    s = json.loads(capsys.readouterr().out)
+    assert s["refine"] == "whittle" and 0 <= s["refine_failed"] <= 2
+    assert all(np.isfinite(s["quantities"][k]["spread"]) for k in ("m", "zm_bar", "rho"))
+
+
+def test_option_refine_whittle_replaces_estimates_and_keeps_algorithm1():
+    known, z_f, d, sets, locs, models = _case(duration=120.0, seed=(4254, 2))
+    kw = dict(z_f=z_f, noise_check=False)
+    r0 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast"), **kw)
+    r1 = estimate_mass_cm(list(d.items()), known, options=MassCMOptions(compute="fast", refine="whittle"), **kw)
+    rec = r1.diagnostics["refine"]
+    assert rec["method"] == "whittle" and rec["applied"], rec["reason"]
+    assert rec["algorithm1"]["m"] == [r0.value("m"), r0.std("m")]
+    assert r1.value("m") != r0.value("m") and np.isfinite(r1.std("m")) and r1.std("m") > 0
+    assert r1.covariance_names == list(pem.FREE)

@@ -104,9 +104,9 @@ def _fmt(v: float) -> str:
                    "arma: structured ARMA.")
 @click.option("--refine", type=click.Choice(["none", "pem", "whittle"]), default="none", show_default=True,
               help="pem: maximum-likelihood refinement of Algorithm 1's estimate on the state-space model of the "
-                   "bound, whittle: the same in the frequency domain (cost per iteration independent of the record "
-                   "length) (both need z_f known and sensor noise in the data; where it fails Algorithm 1's estimate is "
-                   "kept, with a warning). The report series stay Algorithm 1's.")
+                   "bound, whittle: the same in the frequency domain (cost per iteration independent of the "
+                   "record length); both need z_f known and sensor noise in the data; where one fails Algorithm 1's "
+                   "estimate is kept, with a warning. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
