@@ -129,12 +129,15 @@ class _FSet:
         self.delta = np.ascontiguousarray(trial["delta"], dtype=float)
         self.T = float(trial.dt)
         self.n = n = self.y.shape[0]
-        K = (n - 1) // 2
-        sq = np.sqrt(n)
+        self.w = 2 * np.pi * np.arange(1, (n - 1) // 2 + 1) / n        # rad / sample
+
+    def transform(self):
+        """The DFTs ``Z_j`` (K, 5); the time-domain outputs are not needed after this (and are released)."""
+        K, sq = self.w.size, np.sqrt(self.n)
         Yf = np.fft.rfft(self.y, axis=0)[1:K + 1] / sq
         Df = np.fft.rfft(self.delta)[1:K + 1] / sq
-        self.Z = np.column_stack([Yf, Df, np.full(K, 1.0 / sq)])      # (K, 5)
-        self.w = 2 * np.pi * np.arange(1, K + 1) / n                   # rad / sample
+        self.Z = np.column_stack([Yf, Df, np.full(K, 1.0 / sq)])
+        self.y = None
 
     def set_bands(self, idx):
         """Band sums for the band number ``idx`` of each bin."""
@@ -474,8 +477,9 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free,
     theta = np.asarray(theta_free, dtype=float).copy()
     o = options
     with np.errstate(all="ignore"), one_blas_thread():
-        locs = [_initial_local(s, theta, known) for s in sets]
+        locs = [_initial_local(s, theta, known) for s in sets]      # time domain (before the DFTs: less memory)
         for s, l in zip(sets, locs):
+            s.transform()
             s.design_bands(theta, l, False, o)
         quick = PEMOptions(max_iter=o.start_iter, tol=o.tol, rel_step=o.rel_step)
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
