@@ -137,6 +137,21 @@ definite: Algorithm 1 kept); bias -1.20 / -1.60 / -0.20 standard errors of the m
 sensors) is not a regime for the refinement: the wave model is singular without sensor noise and the model without
 waves fails the whiteness check, so Algorithm 1's estimate is kept with a warning. (This study ran before the noise model was kept whole from iteration 6; in sensors and
 both that change leaves Algorithm 1's estimates, the refinement's start, unchanged to three digits; not re-run since.)
+
+With the frequency-domain refinement (``--refine whittle``, :mod:`shipid.methods.masscm.whittle`: the same model,
+start and search with the banded Whittle likelihood; bands tuned on seeds 100 and 101), at a fresh seed (9401,
+``shipid study mass-cm-coverage --regime R --runs N --seed 9401 --workers 1 --refine whittle``): spread / bound
+[chi-square 95 %], ±2-std coverage (Algorithm 1's spread / bound on the same realisations in brackets):
+
+=========  ================================  ================================  ================================
+regime     m                                 zm_bar                            rho
+=========  ================================  ================================  ================================
+both       1.06 [0.93, 1.23], 0.95 (1.33)    1.03 [0.91, 1.20], 0.93 (1.26)    1.05 [0.93, 1.22], 0.94 (1.46)
+=========  ================================  ================================  ================================
+
+Both (100 runs): the wave structure chosen and the refinement applied in all 100; means 0.4038 / -0.181 / 2.103
+(bias +1.52 / +0.80 / +1.16 standard errors of the mean); mean reported std over spread 0.96 / 0.97 / 0.93;
+median 2.3 s CPU per run (simulation, Algorithm 1 and the refinement).
 """
 
 from __future__ import annotations

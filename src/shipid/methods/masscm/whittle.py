@@ -50,6 +50,14 @@ Whittle expected information ``sum_b 2 Re tr(dAt_a^H W dAt_b Mt_b) + n_b tr(W dS
 errors from its inverse at the optimum (asymptotically the exact information's), ``rho`` by the delta method.
 A model without waves is checked for white residuals (Ljung-Box, as pem's ``whiteness_reason``, on the time-domain
 residual obtained by the inverse DFT of ``E_j`` at every bin, once).
+
+Measured (300-s "both" records, issue-3 noise, start Algorithm 1): against pem on ``SeedSequence([9402, i])``,
+i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.08 / +0.08 / +0.02, +0.09 / +0.09 / +0.07 and +0.01 /
++0.02 / -0.03 of pem's standard errors, the standard errors by 0.996-1.013 of pem's, at 1.4-2.1 s CPU against
+pem's 4.7-5.5 s (load ~8 on 2 cores). Coverage study (:mod:`shipid.methods.masscm.coverage`, seed 9401, 100 runs):
+spread / bound 1.06 / 1.03 / 1.05, ±2-std coverage 0.95 / 0.93 / 0.94, wave structure chosen and refinement applied
+in all 100 runs. One hour at 50 Hz x three datasets: 13-15 iterations, the refinement adds 1.9-2.9 s CPU to the
+command (``benchmarks/bench_masscm_long_cli.py 3600 - 1 whittle``).
 """
 
 from __future__ import annotations
