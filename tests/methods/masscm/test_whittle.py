@@ -40,7 +40,7 @@ def test_rudder_path_dft_is_exact_and_one_band_per_bin_is_unbinned_whittle():
     for s, l, dm in zip(sets, locs, models):
         s.design_bands(th, l, False, whittle.WhittleOptions(exact=True))
         assert s.nb.size == s.w.size and np.all(s.nb == 1)
-        A, S = s.matrices(th, l, False)
+        A, S = s.matrices(th, l, False, z=s.zb)        # at given z: without the profiled initial-state term
         mu = dm.mean_response(dm.p0, s.delta)
         K = s.w.size
         y = np.column_stack([d[s.cond][c] for c in ("p", "a_s", "r")])
@@ -48,6 +48,7 @@ def test_rudder_path_dft_is_exact_and_one_band_per_bin_is_unbinned_whittle():
         R = np.diag(np.exp(l[15:18]))
         direct = K * np.log(np.linalg.det(R)) + float(np.real(np.sum(np.conj(E) * (E @ np.linalg.inv(R)))))
         assert s.nll(A, S) == pytest.approx(direct, rel=1e-10)
+        assert s.nll(*s.matrices(th, l, False)) <= s.nll(A, S)     # the profiled transient can only fit better
 
 
 def test_banded_data_part_is_the_quadratic_form_of_the_bins():
@@ -81,14 +82,16 @@ def test_frequency_slope_columns_are_the_derivative_of_the_model_columns():
 
 
 def test_band_count_grows_only_logarithmically_with_record_length():
+    """The bands are set by the model's curves, not the bin spacing: measured 365 / 394 / 416 bands at 300 / 1200 /
+    3600 s (7499 / 29999 / 89999 bins), 234 at 60 s where the bins are too coarse for the curves."""
     th = true_free_theta(VESSEL)
     counts = []
-    for dur in (60.0, 600.0):
-        known, z_f, d, sets, locs, models = _case(regime="sensors", duration=dur, seed=(4253, 1))
+    for dur in (300.0, 1200.0):
+        known, z_f, d, sets, locs, models = _case(regime="both", duration=dur, seed=(4253, 1))
         s = sets[0]
         s.design_bands(th, locs[0], True, whittle.WhittleOptions())
         counts.append(s.nb.size)
-    assert counts[1] < 1.5 * counts[0]              # ten times the bins, not ten times the bands
+    assert counts[1] < 1.2 * counts[0]              # four times the bins, not four times the bands
 
 
 def test_score_matches_finite_differences():
