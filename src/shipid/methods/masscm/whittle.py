@@ -58,13 +58,11 @@ errors from its inverse at the optimum (asymptotically the exact information's),
 A model without waves is checked for white residuals (Ljung-Box, as pem's ``whiteness_reason``, on the time-domain
 residual obtained by the inverse DFT of ``E_j`` at every bin, once).
 
-Measured with ``band_tol = band_rel = 0.2`` (300-s "both" records, issue-3 noise, start Algorithm 1): against pem on ``SeedSequence([9402, i])``,
-i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.08 / +0.08 / +0.02, +0.09 / +0.09 / +0.07 and +0.01 /
-+0.02 / -0.03 of pem's standard errors, the standard errors by 0.996-1.013 of pem's, at 1.4-2.1 s CPU against
-pem's 4.7-5.5 s (load ~8 on 2 cores). Coverage study (:mod:`shipid.methods.masscm.coverage`, seed 9401, 100 runs):
-spread / bound 1.06 / 1.03 / 1.05, ±2-std coverage 0.95 / 0.93 / 0.94, wave structure chosen and refinement applied
-in all 100 runs. One hour at 50 Hz x three datasets: 13-15 iterations, the refinement adds 1.9-2.9 s CPU to the
-command (``benchmarks/bench_masscm_long_cli.py 3600 - 1 whittle``).
+Measured (300-s "both" records, issue-3 noise, start Algorithm 1, default bands): against pem on
+``SeedSequence([9402, i])``, i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.05 / +0.04 / +0.04, +0.07 /
++0.07 / +0.06 and -0.02 / -0.01 / -0.05 of pem's standard errors, the standard errors by 0.997-1.008 of pem's, at
+2.6-5.9 s CPU against pem's 5.2-6.6 s (load ~8 on 2 cores; the cost of an iteration is set by the ~400 bands, not by
+the 15 000 samples). Coverage: :mod:`shipid.methods.masscm.coverage`.
 """
 
 from __future__ import annotations
