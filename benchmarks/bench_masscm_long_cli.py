@@ -34,7 +34,8 @@ this tree CPU 46.65 s, wall 218 s, max RSS 709.5 MiB (744 MB), JSON 1.030 MB; pe
 measured above. On these data (the same seed, in-process) the refinement converged in 15 iterations: m 0.3988 ±
 0.0068 against Algorithm 1's 0.3997 ± 0.0104 (true 0.4).
 
-Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2]
+Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2] [REFINE=none]
+        (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, without it)
         (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
 """
 
@@ -67,10 +68,10 @@ ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREAD
 TARGET_CPU_S, TARGET_MB = 5.0, 400.0
 
 
-def run(src: str, files: dict, out: str | None, json_path: str) -> dict:
+def run(src: str, files: dict, out: str | None, json_path: str, extra=()) -> dict:
     env = dict(os.environ, PYTHONPATH=src, **ONE_CORE)
     cmd = [sys.executable, "-m", "shipid", "identify", "mass-cm", "--nominal", files["nominal"],
-           "--calibration", files["calibration"], "--loaded", files["loaded"], "--known", files["known"]]
+           "--calibration", files["calibration"], "--loaded", files["loaded"], "--known", files["known"], *extra]
     cmd += ["-o", out, "--force"] if out else ["--json"]
     t0 = time.perf_counter()
     with open(json_path, "w") as fh:
@@ -87,6 +88,7 @@ def main():
     duration = float(sys.argv[1]) if len(sys.argv) > 1 else 3600.0
     peer = sys.argv[2] if len(sys.argv) > 2 else "/tmp/peer17/src"
     rounds = int(sys.argv[3]) if len(sys.argv) > 3 else 2
+    refine = sys.argv[4] if len(sys.argv) > 4 else "none"
     here = str(Path(__file__).resolve().parents[1] / "src")
     tmp = Path(tempfile.mkdtemp(prefix="bench_long_cli_"))
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,
@@ -105,10 +107,14 @@ def main():
     trees = [("this tree", here, str(tmp / "this.json")), ("peer", peer, None)]
     if not Path(peer).is_dir():
         trees = trees[:1]
+    if refine != "none":      # this tree with --refine REFINE, against itself without it as a second peer
+        print(f"this tree with --refine {refine}; 'no refine' = this tree without it")
+        trees.append(("no refine", here, str(tmp / "norefine.json")))
     rows = {t[0]: [] for t in trees}
     for k in range(rounds):
         for label, src, out in (trees if k % 2 == 0 else trees[::-1]):
-            r = run(src, files, out, str(tmp / f"{label.replace(' ', '_')}.stdout"))
+            extra = ("--refine", refine) if label == "this tree" and refine != "none" else ()
+            r = run(src, files, out, str(tmp / f"{label.replace(' ', '_')}.stdout"), extra)
             if r["rc"]:
                 print(f"  {label}: exit {r['rc']}: {r['stderr']}")
                 continue
@@ -124,11 +130,14 @@ def main():
         print(f"this tree against the target: CPU (user+sys) median {cpu:.2f} s / {TARGET_CPU_S:g} s = "
               f"{cpu / TARGET_CPU_S:.2f}; max RSS {mb:.1f} MB / {TARGET_MB:g} MB = {mb / TARGET_MB:.2f}; "
               f"result JSON {max(r['bytes'] for r in this) / 1e6:.3f} MB / 2 MB")
-    if rows.get("peer") and this:
-        n = min(len(this), len(rows["peer"]))
+    for pl in ("peer", "no refine"):
+        if not (rows.get(pl) and this):
+            continue
+        n = min(len(this), len(rows[pl]))
         for key, name in (("cpu_s", "CPU time"), ("wall_s", "wall time"), ("maxrss_mib", "max RSS")):
-            ratios = np.array([a[key] for a in this[:n]]) / np.array([b[key] for b in rows["peer"][:n]])
-            print(f"ratio this/peer, {name}: median {np.median(ratios):.2f} (each {', '.join(f'{x:.2f}' for x in ratios)})")
+            ratios = np.array([a[key] for a in this[:n]]) / np.array([b[key] for b in rows[pl][:n]])
+            print(f"ratio this/{pl}, {name}: median {np.median(ratios):.2f} "
+                  f"(each {', '.join(f'{x:.2f}' for x in ratios)})")
     print("(CPU: user+sys of the child process (os.wait4), the measure on a shared machine; wall time is what a user "
           "waits, inflated by other load)")
 

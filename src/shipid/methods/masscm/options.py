@@ -54,7 +54,8 @@ class MassCMOptions:
     compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
     refine: str = "auto"            # "auto": refine (engine masscm.refine.AUTO_ENGINE) only where the data show sensor
     #                                 noise and a wave structure (the rule of masscm.refine); "pem": always the
-    #                                 maximum-likelihood refinement on the state-space model; "none": Algorithm 1 alone
+    #                                 maximum-likelihood refinement on the state-space model; "whittle": the same in
+    #                                 the frequency domain (auto's engine); "none": Algorithm 1 alone
 
 
 __all__ = ["REQUIRED", "I_ZF", "I_M", "I_ZM", "DEFAULT_THETA0", "MassCMOptions"]
