@@ -52,6 +52,7 @@ from scipy.stats import chi2
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
+from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
 from shipid.models.roll_reduced import KnownParams, roll_terms
 
@@ -142,44 +143,6 @@ def _innovations(y, delta, Ad, b0, b1, C, dd, bias, F, K, H, out):
             s[i] = sn[i]
 
 
-@njit(cache=True)
-def _initial_response(A, H, n, out):
-    """``out[k, :, j] = -(H A^k)[:, j]``: the innovations' response to a unit error ``e_j`` in the predictor's
-    initial noise state (``A = F - K H``, the predictor's error dynamics)."""
-    ns = A.shape[0]
-    Z = np.eye(ns)
-    Zn = np.zeros((ns, ns))
-    for k in range(n):
-        for i in range(H.shape[0]):
-            for j in range(ns):
-                acc = 0.0
-                for l in range(ns):
-                    acc += H[i, l] * Z[l, j]
-                out[k, i, j] = -acc
-        for i in range(ns):
-            for j in range(ns):
-                acc = 0.0
-                for l in range(ns):
-                    acc += A[i, l] * Z[l, j]
-                Zn[i, j] = acc
-        for i in range(ns):
-            for j in range(ns):
-                Z[i, j] = Zn[i, j]
-
-
-def _without_initial_state(eps, F, K, H, Lam):
-    """``eps`` less its response to the initial noise state that minimises ``sum eps^T Lam^-1 eps`` (weighted least
-    squares): the likelihood with the initial state concentrated out (Ljung 1999 §7.3), used with the sensor floor,
-    where the steady-state predictor's slow error modes would carry a start from zero over minutes."""
-    Phi = np.empty((eps.shape[0], 3, F.shape[0]))
-    _initial_response(np.ascontiguousarray(F - K @ H), H, eps.shape[0], Phi)
-    L = np.linalg.cholesky(Lam)
-    w = np.linalg.solve(L, eps.T).T.reshape(-1)
-    Pw = np.einsum("ij,kjc->kic", np.linalg.inv(L), Phi).reshape(-1, F.shape[0])
-    s0 = np.linalg.lstsq(Pw, w, rcond=None)[0]
-    return eps - Phi @ s0
-
-
 def model_vector(theta, loc) -> np.ndarray:
     """The 26-vector of :class:`~shipid.methods.masscm.crlb_kf.DatasetModel` from ``theta`` and a local vector."""
     return np.concatenate([theta, loc[:12], np.exp(loc[12:15]), np.exp(loc[15:18])])
@@ -229,7 +192,7 @@ class _Set:
         if not np.all(np.isfinite(out)):
             return None
         if self.fit_initial and F.shape[0]:
-            out = _without_initial_state(out, F, np.ascontiguousarray(K), H, Lam)
+            out = without_initial_state(out, F, np.ascontiguousarray(K), H, Lam)
         return out, Lam
 
 

@@ -47,4 +47,15 @@ def refine_result(result: Result, datasets, known: KnownParams, z_f: float | Non
     return replace(result, estimates=est, covariance=np.array(f.cov), covariance_names=list(FREE))
 
 
-__all__ = ["refine_result"]
+def refine_result_floor(result: Result, datasets, known: KnownParams, z_f: float | None,
+                        floor: float = 1e-3) -> Result:
+    """``refine="pem-floor"``: :func:`refine_result` for noise-free sensors, the likelihood of the model with the
+    sensor floor ``floor`` of :func:`~shipid.methods.masscm.crlb_kf.crlb_kf` (``PEMOptions(sensor_floor=floor)``:
+    the three sensor variances held at ``floor^2`` x each output's wave-driven variance, the wave structure kept);
+    ``diagnostics["refine"]`` says ``method: "pem-floor"`` and the floor."""
+    r = refine_result(result, datasets, known, z_f, PEMOptions(sensor_floor=float(floor)))
+    r.diagnostics["refine"].update({"method": "pem-floor", "sensor_floor": float(floor)})
+    return r
+
+
+__all__ = ["refine_result", "refine_result_floor"]
