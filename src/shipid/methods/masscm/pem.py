@@ -27,6 +27,18 @@ and sensor variances with the rest held. The wave structure is kept, and everyth
 it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio test, 3 parameters per
 dataset).
 
+Noise-free sensors (``PEMOptions.sensor_floor = f``, ``MassCMOptions`` ``refine="pem-floor"`` through
+:func:`shipid.methods.masscm.pem_result.refine_result_floor`): the model with waves is singular without sensor
+noise, so the three sensor variances of each dataset are held at ``f^2`` times the variance of that output's
+residual about the no-wave fit's rudder response (its wave-driven variance), the white floor that the bound of
+:func:`~shipid.methods.masscm.crlb_kf.crlb_kf` assumes in that regime; the wave structure is kept and everything else
+(``theta``, rows, wave filter, biases) is fitted, at floors ``0.1, 0.01, ..., f`` in turn (:func:`floor_schedule`),
+each from the previous optimum. The predictor's initial noise state is concentrated out
+(:mod:`shipid.methods.masscm.pem_initial`), and the search stops when the log-likelihood rises by less than
+:data:`FLOOR_GAIN` over :data:`GAIN_ITERS` iterations (the data carry less noise than the model, so the expected
+information overstates the curvature and the Newton decrement the gain left). The information, and so the standard
+errors, are those of that model: the variances are not parameters, as in the bound.
+
 Standard errors: the inverse of the same information at the optimum (nuisance parameters included, so their
 uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, an optimum
 outside the physical region (``k, A_x, d, m <= 0``, unstable ship), or a model without waves whose innovations are
