@@ -79,7 +79,6 @@ NOISE_LOCAL = list(range(12, 18))
 FLOOR_START = 0.1                  # continuation start of the sensor floor (PEMOptions.sensor_floor)
 FLOOR_MORE = 2                       # sensor floor: further max_iter rounds at the last floor if not converged
 FLOOR_GAIN, GAIN_ITERS = 0.1, 5      # sensor floor: converged when the log-likelihood rose < 0.1 over 5 iterations
-RESTART_ZERO = ("K_r", "K_vdot", "K_delta")   # sensor floor: zeroed in the one restart of an inadmissible start
 FLOOR_FREE = [i for i in range(N_LOC) if i not in (15, 16, 17)]    # sensor variances held at the floor
 
 
@@ -512,15 +511,11 @@ def physical_reason(theta, sets, locs, waves) -> str:
     return ""
 
 
-def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOptions = PEMOptions(),
-           restart: bool = True) -> PEMFit:
+def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOptions = PEMOptions()) -> PEMFit:
     """Maximum-likelihood refinement of ``theta_free`` (names :data:`FREE`, e.g. Algorithm 1's estimate).
 
     ``datasets`` are ``(condition, Trial)`` pairs with ``p, a_s, r, delta``. Returns a :class:`PEMFit`;
     ``ok=False`` (with ``reason``) when the search did not converge or ended outside the physical region.
-    With the sensor floor and ``restart``, a start where no likelihood is computable (e.g. Algorithm 1 stopped
-    where ``k - K_vdot g <= 0``, an unstable roll mode) is retried once with the weakly determined
-    :data:`RESTART_ZERO` coefficients at zero (the reason then says so).
     """
     sets = [_Set(c, tr, known, z_f) for c, tr in datasets]
     for s in sets:
@@ -551,12 +546,6 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
             fit = fr[:4] + (fit[4] + fr[4], fr[5], False)
     th, lo, info, ll, its, conv, waves = fit
     nan = np.full((N_TH, N_TH), np.nan)
-    if info is None and restart and options.sensor_floor is not None:
-        t0 = np.asarray(theta_free, dtype=float).copy()
-        t0[[FREE.index(n) for n in RESTART_ZERO]] = 0.0
-        f = refine(datasets, known, z_f, t0, options, restart=False)
-        f.reason = f.reason and f.reason + " (restarted with " + ", ".join(RESTART_ZERO) + " = 0)"
-        return f
     if info is None:
         return PEMFit(False, th, nan, np.nan, np.nan, ll, its, waves, "likelihood not computable", lo)
     try:
