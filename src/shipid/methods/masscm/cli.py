@@ -102,13 +102,15 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
                    "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
                    "arma: structured ARMA.")
-@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle"]), default="auto", show_default=True,
+@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle", "pem-floor"]), default="auto",
+              show_default=True,
               help="auto: refine only where the data show sensor noise and a wave structure (the rule of "
                    "methods/masscm/refine.py); pem: always the maximum-likelihood refinement of Algorithm 1's "
                    "estimate on the state-space model of the bound (needs z_f known and sensor noise in the data); "
                    "whittle: the same in the frequency domain (the engine auto uses; cost per iteration independent "
-                   "of the record length); none: Algorithm 1 alone. A refinement that fails keeps Algorithm 1's estimate, with a warning; "
-                   "the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
+                   "of the record length); pem-floor: pem for noise-free sensors, the sensor variances held at "
+                   "the bound's floor (slow, opt-in; methods/masscm/pem.py); none: Algorithm 1 alone. A refinement "
+                   "that fails keeps Algorithm 1's estimate, with a warning; the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
@@ -212,7 +214,8 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
-@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle"]), default="auto", show_default=True,
+@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle", "pem-floor"]), default="auto",
+              show_default=True,
               help="auto (the estimator's default): refine where the rule of methods/masscm/refine.py finds sensor "
                    "noise and a wave structure; pem: always the maximum-likelihood refinement of Algorithm 1's "
                    "estimate (methods/masscm/pem.py); whittle: the same in the frequency domain (whittle.py, auto's "

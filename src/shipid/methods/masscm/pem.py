@@ -27,6 +27,18 @@ and sensor variances with the rest held. The wave structure is kept, and everyth
 it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio test, 3 parameters per
 dataset).
 
+Noise-free sensors (``PEMOptions.sensor_floor = f``, ``MassCMOptions`` ``refine="pem-floor"`` through
+:func:`shipid.methods.masscm.pem_result.refine_result_floor`): the model with waves is singular without sensor
+noise, so the three sensor variances of each dataset are held at ``f^2`` times the variance of that output's
+residual about the no-wave fit's rudder response (its wave-driven variance), the white floor that the bound of
+:func:`~shipid.methods.masscm.crlb_kf.crlb_kf` assumes in that regime; the wave structure is kept and everything else
+(``theta``, rows, wave filter, biases) is fitted, at floors ``0.1, 0.01, ..., f`` in turn (:func:`floor_schedule`),
+each from the previous optimum. The predictor's initial noise state is concentrated out
+(:mod:`shipid.methods.masscm.pem_initial`), and the search stops when the log-likelihood rises by less than
+:data:`FLOOR_GAIN` over :data:`GAIN_ITERS` iterations (the data carry less noise than the model, so the expected
+information overstates the curvature and the Newton decrement the gain left). The information, and so the standard
+errors, are those of that model: the variances are not parameters, as in the bound.
+
 Standard errors: the inverse of the same information at the optimum (nuisance parameters included, so their
 uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, an optimum
 outside the physical region (``k, A_x, d, m <= 0``, unstable ship), or a model without waves whose innovations are
@@ -52,6 +64,7 @@ from scipy.stats import chi2
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
+from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
 from shipid.models.roll_reduced import KnownParams, roll_terms
 
@@ -63,6 +76,10 @@ I_M, I_ZM = FREE.index("m"), FREE.index("zm_bar")
 MEAN_LOCAL = list(range(12)) + [18, 19, 20]
 WHITE_LAGS, WHITE_P = 20, 1e-4     # whiteness test of the model without waves (Ljung-Box, per channel)
 NOISE_LOCAL = list(range(12, 18))
+FLOOR_START = 0.1                  # continuation start of the sensor floor (PEMOptions.sensor_floor)
+FLOOR_MORE = 2                       # sensor floor: further max_iter rounds at the last floor if not converged
+FLOOR_GAIN, GAIN_ITERS = 0.1, 5      # sensor floor: converged when the log-likelihood rose < 0.1 over 5 iterations
+FLOOR_FREE = [i for i in range(N_LOC) if i not in (15, 16, 17)]    # sensor variances held at the floor
 
 
 @dataclass(frozen=True)
@@ -75,6 +92,12 @@ class PEMOptions:
     rel_step: float = 1e-6     # forward-difference step relative to max(|p|, 0.1)
     start_iter: int = 6        # scoring iterations of the theta-fixed start fits
     nowave_iter: int = 15      # ... and of the joint fit without waves (a start; its convergence is not needed)
+    #: None: the sensor variances are estimated (sensor noise). A number ``f``: noise-free sensors; the wave
+    #: structure is kept and the three sensor variances of each dataset are held at ``f^2`` times the variance of
+    #: that output's residual about the rudder response (the no-wave fit: the wave-driven variance), the white
+    #: floor that :func:`~shipid.methods.masscm.crlb_kf.crlb_kf` assumes (``floor``) in that regime; the rest is
+    #: fitted by maximum likelihood, with the floor lowered geometrically from :data:`FLOOR_START` to ``f``
+    sensor_floor: float | None = None
 
 
 @dataclass
@@ -161,6 +184,7 @@ class _Set:
         self.delta = np.ascontiguousarray(trial["delta"], dtype=float)
         self.T = float(trial.dt)
         self.n = self.y.shape[0]
+        self.fit_initial = False       # True: the initial noise state is concentrated out (sensor floor)
 
     def innov(self, theta, loc, waves):
         """``(eps (N, 3), Lam)`` or ``None`` where the model is not admissible (unstable, Riccati fails)."""
@@ -180,6 +204,8 @@ class _Set:
                      np.ascontiguousarray(K), H, out)
         if not np.all(np.isfinite(out)):
             return None
+        if self.fit_initial and F.shape[0]:
+            out = without_initial_state(out, F, np.ascontiguousarray(K), H, Lam)
         return out, Lam
 
 
@@ -248,10 +274,14 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
     return g, 0.5 * (info + info.T)
 
 
-def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None):
+def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None, gain_stop=None):
     """Levenberg-damped Fisher scoring of the joint likelihood; returns theta, locs, info, loglik, its, converged.
 
-    ``fix_theta`` holds ``theta``; ``only`` (local indices) frees just those local parameters.
+    ``fix_theta`` holds ``theta``; ``only`` (local indices) frees just those local parameters. ``gain_stop`` (the
+    sensor floor, where the data carry less noise than the model, so the expected information is not the
+    curvature): each accepted step is rescaled by the minimum of the parabola through the likelihood at 0, 1/2 and
+    1 step, and the search has converged when the log-likelihood rose by less than ``gain_stop`` over the last
+    :data:`GAIN_ITERS` iterations (besides the Newton-decrement rule).
     """
     fl = [i for i in _free_local(waves) if only is None or i in only]
     th_idx = [] if fix_theta else list(range(N_TH))
@@ -262,8 +292,11 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
     if not np.isfinite(f):
         return theta, locs, None, -np.inf, 0, False
     mu, conv, it = 1e-3, False, 0
-    info = None
+    info, hist = None, [f]
     for it in range(1, opts.max_iter + 1):
+        if gain_stop is not None and len(hist) > GAIN_ITERS and hist[-1 - GAIN_ITERS] - f < gain_stop:
+            conv = True
+            break
         g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
         info = 0.5 * (info + info.T)
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
@@ -283,7 +316,10 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
             t2, l2 = _apply(theta, locs, step, th_idx, fl, nloc)
             f2 = _objective(sets, t2, l2, waves)
             if np.isfinite(f2) and f2 <= f:
+                if gain_stop is not None:
+                    t2, l2, f2 = _parabola_step(sets, theta, locs, step, th_idx, fl, nloc, waves, f, t2, l2, f2)
                 theta, locs, f = t2, l2, f2
+                hist.append(f)
                 mu = max(mu / 3, 1e-6)
                 accepted = True
                 break
@@ -292,6 +328,26 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
             conv = decrement < 100 * opts.tol
             break
     return theta, locs, info, -f, it, conv
+
+
+def _parabola_step(sets, theta, locs, step, th_idx, fl, nloc, waves, f0, t1, l1, f1):
+    """The best of the full step ``(t1, l1, f1)``, the half step and the minimum of the parabola through the
+    negative log-likelihood at 0, 1/2 and 1 step (``alpha`` in [0.1, 3])."""
+    best = (t1, l1, f1)
+    th, lh = _apply(theta, locs, 0.5 * step, th_idx, fl, nloc)
+    fh = _objective(sets, th, lh, waves)
+    if not np.isfinite(fh):
+        return best
+    if fh < f1:
+        best = (th, lh, fh)
+    c = 2.0 * ((f1 - f0) - 2.0 * (fh - f0))
+    if c > 0:
+        a = float(np.clip(-((f1 - f0) - c) / (2 * c), 0.1, 3.0))
+        ta, la = _apply(theta, locs, a * step, th_idx, fl, nloc)
+        fa = _objective(sets, ta, la, waves)
+        if np.isfinite(fa) and fa < best[2]:
+            best = (ta, la, fa)
+    return best
 
 
 def _closed_form_variances(s, theta, loc):
@@ -377,6 +433,40 @@ def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
     return loc
 
 
+def floor_schedule(floor: float) -> list:
+    """Sensor floors of the continuation of :func:`_floor_fit`: ``FLOOR_START``, a tenth of it, ..., ``floor``."""
+    out, f = [], FLOOR_START
+    while f > floor * (1 + 1e-9):
+        out.append(f)
+        f /= 10
+    return out + [floor]
+
+
+def _floor_fit(sets, theta, locs, known: KnownParams, options: PEMOptions):
+    """Stage (4f) of :func:`refine` for noise-free sensors (``options.sensor_floor``): the wave structure with the
+    sensor variances held at ``floor^2`` x the variance of each output's residual about the rudder response of the
+    no-wave fit ``locs`` (the wave-driven variance), the wave filter first fitted alone, then everything else jointly,
+    at each floor of :func:`floor_schedule` from the previous optimum (the likelihood sharpens as the floor falls).
+    Returns the tuple of :func:`_scoring` with the iterations summed and ``waves=True``."""
+    wave_var = [np.var(s.innov(theta, l, False)[0], axis=0) for s, l in zip(sets, locs)]
+    lw = [_wave_start(s, theta, l, known) for s, l in zip(sets, locs)]
+    quick = PEMOptions(max_iter=options.start_iter, tol=options.tol, rel_step=options.rel_step)
+    its = 0
+    for j, f in enumerate(floor_schedule(options.sensor_floor)):
+        for l, v in zip(lw, wave_var):
+            l[15:18] = np.log(f * f * v)
+        if j == 0:
+            lw = _scoring(sets, theta, lw, True, quick, fix_theta=True, only=[12, 13, 14])[1]
+        r = _scoring(sets, theta, lw, True, options, only=FLOOR_FREE, gain_stop=FLOOR_GAIN)
+        theta, lw, its = r[0], r[1], its + r[4]
+    for _ in range(FLOOR_MORE):       # the last floor not converged in max_iter: on from where it stopped
+        if r[5] or r[2] is None:
+            break
+        r = _scoring(sets, theta, lw, True, options, only=FLOOR_FREE, gain_stop=FLOOR_GAIN)
+        theta, lw, its = r[0], r[1], its + r[4]
+    return r[:4] + (its, r[5], True)
+
+
 def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
     """Empty when the innovations of the model without waves are white, else which are not.
 
@@ -428,6 +518,8 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     ``ok=False`` (with ``reason``) when the search did not converge or ended outside the physical region.
     """
     sets = [_Set(c, tr, known, z_f) for c, tr in datasets]
+    for s in sets:
+        s.fit_initial = options.sensor_floor is not None
     theta = np.asarray(theta_free, dtype=float).copy()
     with np.errstate(all="ignore"), one_blas_thread():
         locs = [_initial_local(s, theta, known) for s in sets]
@@ -440,7 +532,9 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
                                                               rel_step=options.rel_step)
         fit = _scoring(sets, theta, lo0, False, nw) + (False,)
         th0, lo0, ll0 = fit[0], fit[1], fit[3]
-        if options.waves != "no" and fit[2] is not None:
+        if options.sensor_floor is not None and fit[2] is not None:    # (4f) noise-free sensors: the floor
+            fit = _floor_fit(sets, th0, lo0, known, options)
+        elif options.waves != "no" and fit[2] is not None:
             # (4) wave filter and sensor variances with the rest held, then everything jointly with waves
             lw = [_wave_start(s, th0, l, known) for s, l in zip(sets, lo0)]
             _, lw, infw, ll1, _, _ = _scoring(sets, th0, lw, True, quick, fix_theta=True, only=NOISE_LOCAL)
