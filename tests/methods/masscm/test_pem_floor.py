@@ -89,4 +89,4 @@ def test_floor_refinement_recovers_truth_with_noise_free_sensors():
 
 def test_pem_floor_is_an_opt_in_engine_not_the_auto_one():
     from shipid.methods.masscm import refine
-    assert "pem-floor" in refine.REFINE_MODES and refine.AUTO_ENGINE != "pem-floor"
+    assert "pem-floor" in refine.REFINE_MODES and "pem-floor" not in refine.AUTO_ENGINES

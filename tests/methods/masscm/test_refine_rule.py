@@ -65,7 +65,7 @@ def test_wave_colour_test_separates_waves_from_white_sensor_noise():
 def test_rule_refines_waves_with_sensor_noise_only():
     both = _data("both")
     engine, rec = refine.choose(both, _alg1(both), ZF)
-    assert engine == refine.AUTO_ENGINE == "whittle", rec
+    assert engine == refine.auto_engine(both) == "pem", rec          # 120-s records: the exact likelihood
     assert rec["sensor_test"]["detected"] and rec["wave_test"]["detected"]
     engine, rec = refine.choose(both, None, None)          # z_f unknown: nothing to refine
     assert engine == "none" and rec["decision_reason"] == "z_f not known"
@@ -109,7 +109,7 @@ def test_default_refines_a_both_regime_run_and_keeps_algorithm1_beside_it():
     """300-s records (the study's length), waves and sensor noise: the default refines; the decision, the tests
     and Algorithm 1's estimate are in the record."""
     o = run_one(0, 5151, regime="both")
-    assert o["refine_decision"] == refine.AUTO_ENGINE and o["sensor_level"] > refine.SENSOR_NOISE_MIN
+    assert o["refine_decision"] == "pem" and o["sensor_level"] > refine.SENSOR_NOISE_MIN
     assert o["pem_ok"], o["pem_reason"]
     assert o["m"] != o["iv_m"] and abs(o["m"] - 0.4) < 3 * o["m_std"]
 
@@ -131,3 +131,9 @@ def test_plausibility_is_judged_again_on_the_refined_estimate():
     refine.rejudge(r, KNOWN, ZF)
     assert r.diagnostics["implausible"] and r.estimates["m"].status == "not determined"
     assert sum(w.startswith("implausible solution: ") for w in r.diagnostics["warnings"]) == 1
+
+
+def test_auto_engine_is_the_exact_likelihood_on_short_records_and_whittle_on_long_ones():
+    short = [("nominal", {"p": np.zeros(refine.EXACT_MAX_SAMPLES)})]
+    long_ = [("nominal", {"p": np.zeros(refine.EXACT_MAX_SAMPLES + 1)})]
+    assert refine.auto_engine(short) == "pem" and refine.auto_engine(long_) == "whittle"

@@ -52,10 +52,10 @@ class MassCMOptions:
     explicit_moments: bool = False  # how (not what): True forms the instrument matrix Z of an IIR prefilter
     #                                 explicitly (the reference of filtered_lag_moments; O(n n_z^2), n x n_z memory)
     compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
-    refine: str = "auto"            # "auto": refine (engine masscm.refine.AUTO_ENGINE) only where the data show sensor
+    refine: str = "auto"            # "auto": refine (engine masscm.refine.auto_engine) only where the data show sensor
     #                                 noise and a wave structure (the rule of masscm.refine); "pem": always the
     #                                 maximum-likelihood refinement on the state-space model; "whittle": the same in
-    #                                 the frequency domain (auto's engine); "none": Algorithm 1 alone
+    #                                 the frequency domain (auto's engine beyond 10 min); "none": Algorithm 1 alone
 
 
 __all__ = ["REQUIRED", "I_ZF", "I_M", "I_ZM", "DEFAULT_THETA0", "MassCMOptions"]
