@@ -43,7 +43,7 @@ def test_issue3_noise_flags_at_most_5_percent():
     noise (regime 'both'), default options, z_f known. Measured: 0 of 100 flagged (upper 95 % limit 3.0 %),
     18 with a nuisance coefficient outside its physical range (reported, not flagged)."""
     res = run_campaign("shipid.methods.masscm.coverage:run_one", 100, seed=3117, kwargs={"regime": "both",
-                       "noise_model": "auto"}, workers=1, progress=False)
+                       "noise_model": "auto"}, workers=2, progress=False)   # the default refines each run: 2 workers
     outs = [r.outputs for r in res.records if r.status == "ok"]
     assert len(outs) == 100
     s = summarise(outs, regime="both", duration=300.0)
