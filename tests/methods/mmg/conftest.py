@@ -2,7 +2,8 @@
 
 ``own_run``: a noise-free zig-zag (the model's own prediction of it is exact); ``noisy_run``: random
 rudder/propeller orders in a steady wind with seeded measurement noise (for identification).
-Both are session-scoped factories (pure functions of their arguments).
+Both are session-scoped factories (pure functions of their arguments). ``esso_published``: the published Esso
+Osaka 3-m model (skips without the shared data); :func:`esso_states`: a factory of seeded states for force comparisons.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from shipid.data import data_root
 from shipid.data.trial import Trial
 from shipid.models import mmg
 
@@ -61,3 +63,25 @@ def own_run():
 def noisy_run():
     """:func:`random_orders_run`, a seeded noisy run under random orders."""
     return random_orders_run
+
+
+@pytest.fixture(scope="module")
+def esso_published():
+    """The published Esso Osaka 3-m model (``params/`` of the shared data); skips where it is absent."""
+    root = data_root()
+    if root is None or not (root / "params").is_dir():
+        pytest.skip("shared data (params/) not found (set SHIPID_DATA)")
+    return mmg.load_published("esso_osaka_3m")
+
+
+def _random_states(seed: int = 0, k: int = 200, n_max: float = 15.0):
+    """``k`` seeded states ``(u, v, r, delta, n)`` over the low-speed Esso range (forces compared state by state)."""
+    g = np.random.default_rng(seed)
+    return (g.uniform(-0.1, 0.4, k), g.uniform(-0.05, 0.05, k), g.uniform(-0.05, 0.05, k),
+            g.uniform(-0.6, 0.6, k), g.uniform(-15.0, n_max, k))
+
+
+@pytest.fixture(scope="session")
+def esso_states():
+    """A factory ``(seed=0, k=200, n_max=15.0) -> (u, v, r, delta, n)`` of seeded low-speed Esso states."""
+    return _random_states
