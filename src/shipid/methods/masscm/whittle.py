@@ -77,7 +77,7 @@ from scipy.linalg import solve_discrete_lyapunov
 from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
-from shipid.methods.masscm.crlb_kf import continuous_model, noise_matrices
+from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
 from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, initial_rows, model_vector, rho_of)
 from shipid.models.roll_reduced import KnownParams
 
@@ -145,6 +145,7 @@ class _FSet:
         self.T = float(trial.dt)
         self.n = n = self.y.shape[0]
         self.w = 2 * np.pi * np.arange(1, (n - 1) // 2 + 1) / n        # rad / sample
+        self._ship_key = self._ship_val = None
 
     def transform(self):
         """The DFTs ``Z_j`` (K, 5); the time-domain outputs are not needed after this (and are released)."""
@@ -170,6 +171,7 @@ class _FSet:
         M = np.block([[P[0], P[1]], [P[1], P[2]]])             # moments of Zt = [Z, (w - w_b) Z]
         self.M = M
         self.zb = np.exp(1j * self.wb)
+        self._ship_key = self._ship_val = None
 
     def design_bands(self, theta, loc, waves, opts: WhittleOptions):
         if opts.exact:
@@ -188,16 +190,67 @@ class _FSet:
 
     def matrices(self, theta, loc, waves, z=None, with_tail=True):
         """``(At (nz, 3, 10), S (nz, 3, 3))`` at ``z`` (default: the band centres, with the profiled noise transient)
-        or ``None`` where the model is not admissible (unstable ship or wave filter)."""
+        or ``None`` where the model is not admissible (unstable ship or wave filter).
+
+        The ship part (everything that depends on ``theta`` and the sway / yaw rows ``loc[:12]`` only) of the last
+        ship evaluated is kept (:meth:`_ship`), so a change of the wave or sensor-noise entries alone (their
+        derivative columns, the noise-only stages) recomputes just the noise model; the same operations in the same
+        order, so the same numbers."""
         band_centres = z is None
         z = self.zb if band_centres else z
         p = model_vector(theta, loc)
+        sh = self._ship(theta, loc, z, band_centres, with_tail)
+        if sh is None:
+            return None
+        ship, rho, A0, CR = sh
         try:
-            (Ad, B0, B1, C, D), (F, G, H, J, R) = noise_matrices(p, self.known, self.z_f, self.cond, self.T, waves)
+            _, (F, G, H, J, R) = noise_from_ship(ship, p, self.T, waves)
+            if F.shape[0] and np.max(np.abs(np.linalg.eigvals(F))) >= 1.0:
+                return None
+        except (ValueError, np.linalg.LinAlgError):
+            return None
+        nz = z.size
+        A = A0.copy()
+        if F.shape[0]:
+            # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
+            Aw, F12 = F[4:, 4:], F[:4, 4:]
+            a, b_, c_, d_ = z - Aw[0, 0], -Aw[0, 1] + 0 * z, -Aw[1, 0] + 0 * z, z - Aw[1, 1]
+            det = a * d_ - b_ * c_
+            Rw = np.stack([np.stack([d_, -b_], -1), np.stack([-c_, a], -1)], -2) / det[:, None, None]
+            HR = np.concatenate([CR, (CR @ F12 + H[:, 4:]) @ Rw], axis=2)  # H (zI - F)^-1, H[:, :4] = C
+            Tz = HR @ G + J
+            S = Tz[:, :, None] * np.conj(Tz[:, None, :]) + R
+        else:
+            S = np.broadcast_to(R.astype(complex), (nz, 3, 3)).copy()
+        if not np.all(np.isfinite(S)):
+            return None
+        if band_centres:          # transient of the noise states (with waves) or of the ship states (without)
+            try:
+                A[:, :, 4] -= self._noise_transient(A, S, z[:, None, None] * (HR if F.shape[0] else CR))
+            except np.linalg.LinAlgError:
+                return None
+        return A, S
+
+    def _ship(self, theta, loc, z, band_centres, with_tail):
+        """``(ship matrices, rho(Ad), At without the noise transient, C (zI - Ad)^-1)`` or ``None``; the last one
+        evaluated is kept, keyed on ``theta``, ``loc[:12]`` and the frequencies."""
+        key = (theta.tobytes(), np.asarray(loc[:12]).tobytes(), band_centres, with_tail,
+               None if band_centres else z.tobytes())
+        if self._ship_key == key:
+            return self._ship_val
+        val = self._ship_eval(theta, loc, z, with_tail)
+        self._ship_key, self._ship_val = key, val
+        return val
+
+    def _ship_eval(self, theta, loc, z, with_tail):
+        p = model_vector(theta, loc)
+        try:
+            Ac, Bc, C, D = continuous_model(p[:8], p[8:14], p[14:20], self.known, self.z_f, self.cond)
+            Ad, B0, B1 = foh(Ac, Bc, self.T)
             if not np.all(np.isfinite(Ad)):
                 return None
             rho = np.max(np.abs(np.linalg.eigvals(Ad)))
-            if rho >= 1.0 or (F.shape[0] and np.max(np.abs(np.linalg.eigvals(F))) >= 1.0):
+            if rho >= 1.0:
                 return None
         except (ValueError, np.linalg.LinAlgError):
             return None
@@ -222,25 +275,9 @@ class _FSet:
         # d/dw = i z d/dz of the two model columns (the noise-state transient below is held over the band)
         A[:, :, 8] = -1j * zz * (CR @ b1 - CR2 @ b0 - zz * (CR2 @ b1))
         A[:, :, 9] = -1j * zz * (CR @ c - zz * (CR2 @ c))
-        if F.shape[0]:
-            # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
-            Aw, F12 = F[4:, 4:], F[:4, 4:]
-            a, b_, c_, d_ = z - Aw[0, 0], -Aw[0, 1] + 0 * z, -Aw[1, 0] + 0 * z, z - Aw[1, 1]
-            det = a * d_ - b_ * c_
-            Rw = np.stack([np.stack([d_, -b_], -1), np.stack([-c_, a], -1)], -2) / det[:, None, None]
-            HR = np.concatenate([CR, (CR @ F12 + H[:, 4:]) @ Rw], axis=2)  # H (zI - F)^-1, H[:, :4] = C
-            Tz = HR @ G + J
-            S = Tz[:, :, None] * np.conj(Tz[:, None, :]) + R
-        else:
-            S = np.broadcast_to(R.astype(complex), (nz, 3, 3)).copy()
-        if not np.all(np.isfinite(A)) or not np.all(np.isfinite(S)):
+        if not np.all(np.isfinite(A)):
             return None
-        if band_centres:          # transient of the noise states (with waves) or of the ship states (without)
-            try:
-                A[:, :, 4] -= self._noise_transient(A, S, z[:, None, None] * (HR if F.shape[0] else CR))
-            except np.linalg.LinAlgError:
-                return None
-        return A, S
+        return (Ad, B0, B1, C, D), rho, A, CR
 
     def _noise_transient(self, A, S, Gam):
         """``Gam_b t`` with ``Gam(z) = z H (zI - F)^-1`` (without waves ``z C (zI - Ad)^-1``) and the real ``t``
@@ -318,7 +355,9 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         nc = len(cols)
         dA = np.zeros((nc,) + A.shape, dtype=complex)
         dS = np.zeros((nc,) + S.shape, dtype=complex)
-        for c, (kind, i) in enumerate(cols):
+        order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
+        for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
+            kind, i = cols[c]
             t2, l2 = theta.copy(), loc.copy()
             vec = t2 if kind == "t" else l2
             h = rel_step * max(abs(vec[i]), 0.1)
