@@ -44,7 +44,7 @@ of 0.2 visible (the no-wave log-likelihood 380 below that at 0.05, and the wave 
 **Noise-state transient.** The noise states do not start stationary (the simulator starts waves and ship at rest);
 their DFT carries ``z H (zI - F)^-1 (s_0 - s_N) / sqrt(N)`` (as the rudder path's), large at low frequency where the
 slow sway and yaw poles amplify it and the wave spectrum has its zero. Its real 6-vector is profiled out in closed
-form (generalised least squares over the bands, :meth:`_FSet._noise_transient`); ignored, the likelihood of a
+form (generalised least squares over the bands, :func:`~shipid.methods.masscm.whittle_kernels.transient_normal`); ignored, the likelihood of a
 300-s "both" record (``SeedSequence([100, 0])``) peaked at m = 2.99 where pem's is at 0.44 +- 0.03. The model
 without waves gets the same over the ship states (an initial state not at rest), so that the likelihood-ratio test
 of the wave structure compares like with like: with the transient in the wave model only, the wave structure was
@@ -78,6 +78,7 @@ from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
+from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
 from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, initial_rows, model_vector, rho_of)
 from shipid.models.roll_reduced import KnownParams
 
@@ -89,6 +90,7 @@ NOISE_LOCAL = list(range(12, 18))
 WHITE_LAGS, WHITE_P = 20, 1e-4
 GRID = 4000       # frequencies of the band design grid
 TAIL_TOL = 1e-12  # x_N from the last L samples, rho(Ad)^L < TAIL_TOL
+_Z42, _Z32, _Z22, _Z6 = np.zeros((4, 2)), np.zeros((3, 2)), np.zeros((2, 2)), np.zeros(6)   # no waves
 
 
 @dataclass(frozen=True)
@@ -194,8 +196,8 @@ class _FSet:
 
         The ship part (everything that depends on ``theta`` and the sway / yaw rows ``loc[:12]`` only) of the last
         ship evaluated is kept (:meth:`_ship`), so a change of the wave or sensor-noise entries alone (their
-        derivative columns, the noise-only stages) recomputes just the noise model; the same operations in the same
-        order, so the same numbers."""
+        derivative columns, the noise-only stages) recomputes just the noise model. The per-band loops are the
+        compiled kernels of :mod:`~shipid.methods.masscm.whittle_kernels`."""
         band_centres = z is None
         z = self.zb if band_centres else z
         p = model_vector(theta, loc)
@@ -209,24 +211,18 @@ class _FSet:
                 return None
         except (ValueError, np.linalg.LinAlgError):
             return None
-        nz = z.size
         A = A0.copy()
         if F.shape[0]:
-            # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
-            Aw, F12 = F[4:, 4:], F[:4, 4:]
-            a, b_, c_, d_ = z - Aw[0, 0], -Aw[0, 1] + 0 * z, -Aw[1, 0] + 0 * z, z - Aw[1, 1]
-            det = a * d_ - b_ * c_
-            Rw = np.stack([np.stack([d_, -b_], -1), np.stack([-c_, a], -1)], -2) / det[:, None, None]
-            HR = np.concatenate([CR, (CR @ F12 + H[:, 4:]) @ Rw], axis=2)  # H (zI - F)^-1, H[:, :4] = C
-            Tz = HR @ G + J
-            S = Tz[:, :, None] * np.conj(Tz[:, None, :]) + R
+            S, Gam = noise_spectrum(z, CR, np.ascontiguousarray(F[:4, 4:]), np.ascontiguousarray(H[:, 4:]),
+                                    np.ascontiguousarray(F[4:, 4:]), G, J, R, True)
         else:
-            S = np.broadcast_to(R.astype(complex), (nz, 3, 3)).copy()
+            S, Gam = noise_spectrum(z, CR, _Z42, _Z32, _Z22, _Z6, J, R, False)
         if not np.all(np.isfinite(S)):
             return None
         if band_centres:          # transient of the noise states (with waves) or of the ship states (without)
             try:
-                A[:, :, 4] -= self._noise_transient(A, S, z[:, None, None] * (HR if F.shape[0] else CR))
+                Hm, b = transient_normal(A, S, Gam, self.M)
+                A[:, :, 4] -= Gam @ np.linalg.solve(0.5 * (Hm + Hm.T), b)
             except np.linalg.LinAlgError:
                 return None
         return A, S
@@ -262,33 +258,11 @@ class _FSet:
             c = b1 * (self.delta[-1] - self.delta[0]) - xN
         else:
             c = np.zeros(4)
-        nz = z.size
-        zc = z[:, None, None]
-        Ra = np.linalg.inv(zc * np.eye(4) - Ad)                          # (nz, 4, 4)
-        CR = C @ Ra                                                      # (nz, 3, 4)
-        CR2 = CR @ Ra
-        zz = z[:, None]
-        A = np.zeros((nz, 3, 10), dtype=complex)
-        A[:, :, :3] = np.eye(3)
-        A[:, :, 3] = -(CR @ b0 + zz * (CR @ b1) + D[:, 0])
-        A[:, :, 4] = -zz * (CR @ c)
-        # d/dw = i z d/dz of the two model columns (the noise-state transient below is held over the band)
-        A[:, :, 8] = -1j * zz * (CR @ b1 - CR2 @ b0 - zz * (CR2 @ b1))
-        A[:, :, 9] = -1j * zz * (CR @ c - zz * (CR2 @ c))
+        A, CR = ship_columns(np.ascontiguousarray(z), np.ascontiguousarray(Ad), np.ascontiguousarray(b0),
+                             np.ascontiguousarray(b1), np.ascontiguousarray(C), np.ascontiguousarray(D[:, 0]), c)
         if not np.all(np.isfinite(A)):
             return None
         return (Ad, B0, B1, C, D), rho, A, CR
-
-    def _noise_transient(self, A, S, Gam):
-        """``Gam_b t`` with ``Gam(z) = z H (zI - F)^-1`` (without waves ``z C (zI - Ad)^-1``) and the real ``t``
-        (``s_0 - s_N`` of the noise states) that minimises ``sum_b tr(W A M A^H)`` (profiled out, closed form; see
-        the module docstring)."""
-        WG = inv_herm3(S) @ Gam                                               # W Gam (nb, 3, ns)
-        e1 = (A @ self.M[:, :, 4:5])[:, :, 0]                                 # A_b sum_j Z_j / sqrt(N)
-        b = np.real(np.einsum("kil,ki->l", np.conj(WG), e1))
-        Hm = np.real(np.einsum("kil,kim->lm", np.conj(Gam) * np.real(self.M[:, 4, 4])[:, None, None], WG))
-        t = np.linalg.solve(0.5 * (Hm + Hm.T), b)
-        return Gam @ t
 
     def residual_periodogram(self, A):
         """``At_b Mt_b At_b^H`` (nb, 3, 3): the band-summed residual cross-periodogram."""
