@@ -89,6 +89,7 @@ MEAN_LOCAL = list(range(12))
 NOISE_LOCAL = list(range(12, 18))
 WHITE_LAGS, WHITE_P = 20, 1e-4
 GRID = 4000       # frequencies of the band design grid
+MODEL_COLS = [3, 4, 8, 9]   # the columns of At that depend on the parameters (the rest: [I, 0])
 TAIL_TOL = 1e-12  # x_N from the last L samples, rho(Ad)^L < TAIL_TOL
 _Z42, _Z32, _Z22, _Z6 = np.zeros((4, 2)), np.zeros((3, 2)), np.zeros((2, 2)), np.zeros(6)   # no waves
 
@@ -327,7 +328,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         cols = [("t", i) for i in th_idx] + [("l", i) for i in fl]
         gi = list(range(len(th_idx))) + [len(th_idx) + d * nloc + j for j in range(nloc)]
         nc = len(cols)
-        dA = np.zeros((nc,) + A.shape, dtype=complex)
+        dA = np.zeros((nc, A.shape[0], 3, len(MODEL_COLS)), dtype=complex)     # the other columns of At are fixed
         dS = np.zeros((nc,) + S.shape, dtype=complex)
         order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
         for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
@@ -343,7 +344,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
                 h = -h
             if r is None:
                 continue
-            dA[c] = (r[0] - A) / h
+            dA[c] = (r[0][:, :, MODEL_COLS] - A[:, :, MODEL_COLS]) / h
             dS[c] = (r[1] - S) / h
         RM = s.residual_periodogram(A)
         nb = dA.shape[1]
@@ -351,9 +352,9 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         X = np.swapaxes((s.M @ np.conj(np.swapaxes(A, 1, 2))) @ W, 1, 2)          # (M A^H W)^T
         grad = (np.trace(V, axis1=2, axis2=3) @ s.nb
                 - np.sum(V * np.swapaxes(W @ RM, 1, 2)[None], axis=(1, 2, 3))
-                + 2 * dA.reshape(nc, -1) @ X.reshape(-1))
+                + 2 * dA.reshape(nc, -1) @ np.ascontiguousarray(X[:, :, MODEL_COLS]).reshape(-1))
         g[gi] += -np.real(grad)
-        WdAM = (W[None] @ dA) @ s.M[None]
+        WdAM = (W[None] @ dA) @ s.M[:, MODEL_COLS][:, :, MODEL_COLS][None]
         Imean = 2 * np.real(np.conj(dA.reshape(nc, -1)) @ WdAM.reshape(nc, -1).T)
         Vt = np.swapaxes(V, 2, 3).reshape(nc, -1)
         Icov = np.real((V.reshape(nc, -1) * np.repeat(s.nb, 9)[None]) @ Vt.T)
