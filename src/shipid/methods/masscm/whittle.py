@@ -79,7 +79,8 @@ from scipy.stats import chi2
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
-from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, initial_rows, model_vector, rho_of)
+from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, model_vector, rho_of
+from shipid.methods.masscm.whittle_start import initial_rows
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
@@ -89,6 +90,7 @@ MEAN_LOCAL = list(range(12))
 NOISE_LOCAL = list(range(12, 18))
 WHITE_LAGS, WHITE_P = 20, 1e-4
 GRID = 4000       # frequencies of the band design grid
+RESIDUAL_CHUNK = 4096  # bins per model evaluation in time_residuals
 MODEL_COLS = [3, 4, 8, 9]   # the columns of At that depend on the parameters (the rest: [I, 0])
 TAIL_TOL = 1e-12  # x_N from the last L samples, rho(Ad)^L < TAIL_TOL
 _Z42, _Z32, _Z22, _Z6 = np.zeros((4, 2)), np.zeros((3, 2)), np.zeros((2, 2)), np.zeros(6)   # no waves
@@ -425,7 +427,8 @@ def _white_variances(s: _FSet, theta, loc):
 
 
 def _initial_local(s: _FSet, theta, known: KnownParams) -> np.ndarray:
-    """pem's start: rows from :func:`~shipid.methods.masscm.pem.initial_rows`, sensor variances from second
+    """pem's start: rows as :func:`~shipid.methods.masscm.pem.initial_rows` (computed in less memory by
+    :func:`~shipid.methods.masscm.whittle_start.initial_rows`), sensor variances from second
     differences (here their spectral form ``sum |2 sin(w/2)|^4 P(w) / 6``), biases from the means."""
     loc = np.zeros(N_LOC)
     loc[:12] = initial_rows(s, theta, known)
@@ -459,11 +462,13 @@ def _wave_start(s: _FSet, theta, loc, known: KnownParams) -> np.ndarray:
 
 
 def time_residuals(s: _FSet, theta, loc) -> np.ndarray:
-    """Time-domain residual ``y - mu`` (N, 3), mean removed: inverse DFT of ``E_j`` at every bin (once)."""
-    m = s.matrices(theta, loc, False, z=np.exp(1j * s.w))
-    E = np.einsum("kij,kj->ki", m[0][:, :, :5], s.Z) * np.sqrt(s.n)
+    """Time-domain residual ``y - mu`` (N, 3), mean removed: inverse DFT of ``E_j`` at every bin (once; the model
+    evaluated :data:`RESIDUAL_CHUNK` bins at a time, so its memory does not grow with the record length)."""
     full = np.zeros((s.n // 2 + 1, 3), dtype=complex)
-    full[1:E.shape[0] + 1] = E
+    for j0 in range(0, s.w.size, RESIDUAL_CHUNK):
+        j1 = min(j0 + RESIDUAL_CHUNK, s.w.size)
+        m = s.matrices(theta, loc, False, z=np.exp(1j * s.w[j0:j1]))
+        full[1 + j0:1 + j1] = np.einsum("kij,kj->ki", m[0][:, :, :5], s.Z[j0:j1]) * np.sqrt(s.n)
     return np.fft.irfft(full, n=s.n, axis=0)
 
 
@@ -503,14 +508,16 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free,
            options: WhittleOptions = WhittleOptions()) -> PEMFit:
     """Whittle maximum-likelihood refinement of ``theta_free`` (names :data:`FREE`); same contract as
     :func:`shipid.methods.masscm.pem.refine` (a :class:`~shipid.methods.masscm.pem.PEMFit`)."""
-    sets = [_FSet(c, tr, known, z_f) for c, tr in datasets]
     theta = np.asarray(theta_free, dtype=float).copy()
     o = options
     with np.errstate(all="ignore"), one_blas_thread():
-        locs = [_initial_local(s, theta, known) for s in sets]      # time domain (before the DFTs: less memory)
-        for s, l in zip(sets, locs):
+        sets, locs = [], []
+        for c, tr in datasets:    # one dataset at a time: the start in the time domain, then the DFTs (less memory)
+            s = _FSet(c, tr, known, z_f)
+            sets.append(s)
+            locs.append(_initial_local(s, theta, known))
             s.transform()
-            s.design_bands(theta, l, False, o)
+            s.design_bands(theta, locs[-1], False, o)
         quick = PEMOptions(max_iter=o.start_iter, tol=o.tol, rel_step=o.rel_step)
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
         lo0 = [_white_variances(s, theta, l) for s, l in zip(sets, lo0)]
