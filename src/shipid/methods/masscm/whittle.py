@@ -62,8 +62,13 @@ Measured (300-s "both" records, issue-3 noise, start Algorithm 1, default bands)
 ``SeedSequence([9402, i])``, i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.05 / +0.04 / +0.04, +0.07 /
 +0.07 / +0.06 and -0.02 / -0.01 / -0.05 of pem's standard errors, the standard errors by 0.997-1.008 of pem's, at
 2.6-5.9 s CPU against pem's 5.2-6.6 s (load ~8 on 2 cores; the cost of an iteration is set by the ~400 bands, not by
-the 15 000 samples). One hour at 50 Hz x three datasets (``benchmarks/bench_masscm_long_cli.py 3600 - 1
-whittle``): the whole command 8.56 s CPU and 403 MB against 6.10 s and 341 MB without the refinement (load 6.4).
+the 15 000 samples). One hour at 50 Hz x three datasets (the files of ``benchmarks/bench_masscm_long_cli.py``, default
+``refine="auto"``, which runs this refinement there; 2026-12-02, load 2.5-3.1, 2 rounds): the whole command 7.90 /
+7.79 s CPU and 357.6 MB against 5.57 / 5.53 s and 307.2 MB with ``--refine none`` (the refinement ~2.3 s) and 9.11 /
+8.68 s, 362.4 MB for the numpy form of the band matrices before (~3.3 s); in-process, on the same data, the
+refinement itself is 1.1-1.7 s CPU, of which the band matrices (``matrices``, compiled loops of
+:mod:`~shipid.methods.masscm.whittle_kernels`) ~55 % and the information's algebra ~25 %; the first call of the
+compiled kernels loads them from numba's cache (~0.3 s; ~5 s to compile them where there is no cache yet).
 Coverage: :mod:`shipid.methods.masscm.coverage`.
 """
 
