@@ -35,7 +35,7 @@ measured above. On these data (the same seed, in-process) the refinement converg
 0.0068 against Algorithm 1's 0.3997 ± 0.0104 (true 0.4).
 
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2] [REFINE=none]
-        (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, without it)
+        (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, with ``--refine none``)
         (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
 """
 
@@ -107,13 +107,14 @@ def main():
     trees = [("this tree", here, str(tmp / "this.json")), ("peer", peer, None)]
     if not Path(peer).is_dir():
         trees = trees[:1]
-    if refine != "none":      # this tree with --refine REFINE, against itself without it as a second peer
-        print(f"this tree with --refine {refine}; 'no refine' = this tree without it")
+    if refine != "none":      # this tree with --refine REFINE, against itself with --refine none as a second peer
+        print(f"this tree with --refine {refine}; 'no refine' = this tree with --refine none")
         trees.append(("no refine", here, str(tmp / "norefine.json")))
     rows = {t[0]: [] for t in trees}
     for k in range(rounds):
         for label, src, out in (trees if k % 2 == 0 else trees[::-1]):
-            extra = ("--refine", refine) if label == "this tree" and refine != "none" else ()
+            extra = (("--refine", refine) if label == "this tree" and refine != "none"
+                     else ("--refine", "none") if label == "no refine" else ())
             r = run(src, files, out, str(tmp / f"{label.replace(' ', '_')}.stdout"), extra)
             if r["rc"]:
                 print(f"  {label}: exit {r['rc']}: {r['stderr']}")

@@ -133,6 +133,14 @@ def noise_matrices(p, known: KnownParams, z_f: float, cond: str, T: float, waves
     waves. Real or complex ``p`` (complex-step derivatives)."""
     Ac, Bc, C, D = continuous_model(p[:8], p[8:14], p[14:20], known, z_f, cond)
     Ad, B0, B1 = foh(Ac, Bc, T)
+    return noise_from_ship((Ad, B0, B1, C, D), p, T, waves, R_floor)
+
+
+def noise_from_ship(ship, p, T: float, waves: bool, R_floor=None):
+    """:func:`noise_matrices` given its ship part ``(Ad, B0, B1, C, D)`` (the ship of ``p[:20]``): the same
+    ``(ship, (F, G, H, J, R))``, without recomputing the ship when only the wave or sensor-noise entries of ``p``
+    change."""
+    Ad, B0, B1, C, D = ship
     R = np.diag(p[23:26]) + np.diag(np.zeros(3) if R_floor is None else R_floor)
     if not waves:
         z = np.zeros((0, 0), dtype=Ad.dtype)
@@ -443,4 +451,4 @@ def crlb_kf(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.
 
 
 __all__ = ["crlb_kf", "fisher_information", "theta_covariance", "continuous_model", "true_nuisance", "whiten",
-           "spectral_info", "foh", "wave_ss", "FREE", "CONDS", "DatasetModel", "true_free_theta"]
+           "spectral_info", "foh", "noise_from_ship", "wave_ss", "FREE", "CONDS", "DatasetModel", "true_free_theta"]

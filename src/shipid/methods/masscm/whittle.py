@@ -44,7 +44,7 @@ of 0.2 visible (the no-wave log-likelihood 380 below that at 0.05, and the wave 
 **Noise-state transient.** The noise states do not start stationary (the simulator starts waves and ship at rest);
 their DFT carries ``z H (zI - F)^-1 (s_0 - s_N) / sqrt(N)`` (as the rudder path's), large at low frequency where the
 slow sway and yaw poles amplify it and the wave spectrum has its zero. Its real 6-vector is profiled out in closed
-form (generalised least squares over the bands, :meth:`_FSet._noise_transient`); ignored, the likelihood of a
+form (generalised least squares over the bands, :func:`~shipid.methods.masscm.whittle_kernels.transient_normal`); ignored, the likelihood of a
 300-s "both" record (``SeedSequence([100, 0])``) peaked at m = 2.99 where pem's is at 0.44 +- 0.03. The model
 without waves gets the same over the ship states (an initial state not at rest), so that the likelihood-ratio test
 of the wave structure compares like with like: with the transient in the wave model only, the wave structure was
@@ -62,8 +62,13 @@ Measured (300-s "both" records, issue-3 noise, start Algorithm 1, default bands)
 ``SeedSequence([9402, i])``, i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.05 / +0.04 / +0.04, +0.07 /
 +0.07 / +0.06 and -0.02 / -0.01 / -0.05 of pem's standard errors, the standard errors by 0.997-1.008 of pem's, at
 2.6-5.9 s CPU against pem's 5.2-6.6 s (load ~8 on 2 cores; the cost of an iteration is set by the ~400 bands, not by
-the 15 000 samples). One hour at 50 Hz x three datasets (``benchmarks/bench_masscm_long_cli.py 3600 - 1
-whittle``): the whole command 8.56 s CPU and 403 MB against 6.10 s and 341 MB without the refinement (load 6.4).
+the 15 000 samples). One hour at 50 Hz x three datasets (the files of ``benchmarks/bench_masscm_long_cli.py``, default
+``refine="auto"``, which runs this refinement there; 2026-12-02, load 2.5-3.1, 2 rounds): the whole command 7.90 /
+7.79 s CPU and 357.6 MB against 5.57 / 5.53 s and 307.2 MB with ``--refine none`` (the refinement ~2.3 s) and 9.11 /
+8.68 s, 362.4 MB for the numpy form of the band matrices before (~3.3 s); in-process, on the same data, the
+refinement itself is 1.1-1.7 s CPU, of which the band matrices (``matrices``, compiled loops of
+:mod:`~shipid.methods.masscm.whittle_kernels`) ~55 % and the information's algebra ~25 %; the first call of the
+compiled kernels loads them from numba's cache (~0.3 s; ~5 s to compile them where there is no cache yet).
 Coverage: :mod:`shipid.methods.masscm.coverage`.
 """
 
@@ -77,8 +82,10 @@ from scipy.linalg import solve_discrete_lyapunov
 from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
-from shipid.methods.masscm.crlb_kf import continuous_model, noise_matrices
-from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, initial_rows, model_vector, rho_of)
+from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
+from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
+from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, model_vector, rho_of
+from shipid.methods.masscm.whittle_start import initial_rows
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
@@ -88,7 +95,10 @@ MEAN_LOCAL = list(range(12))
 NOISE_LOCAL = list(range(12, 18))
 WHITE_LAGS, WHITE_P = 20, 1e-4
 GRID = 4000       # frequencies of the band design grid
+RESIDUAL_CHUNK = 4096  # bins per model evaluation in time_residuals
+MODEL_COLS = [3, 4, 8, 9]   # the columns of At that depend on the parameters (the rest: [I, 0])
 TAIL_TOL = 1e-12  # x_N from the last L samples, rho(Ad)^L < TAIL_TOL
+_Z42, _Z32, _Z22, _Z6 = np.zeros((4, 2)), np.zeros((3, 2)), np.zeros((2, 2)), np.zeros(6)   # no waves
 
 
 @dataclass(frozen=True)
@@ -145,6 +155,7 @@ class _FSet:
         self.T = float(trial.dt)
         self.n = n = self.y.shape[0]
         self.w = 2 * np.pi * np.arange(1, (n - 1) // 2 + 1) / n        # rad / sample
+        self._ship_key = self._ship_val = None
 
     def transform(self):
         """The DFTs ``Z_j`` (K, 5); the time-domain outputs are not needed after this (and are released)."""
@@ -170,6 +181,7 @@ class _FSet:
         M = np.block([[P[0], P[1]], [P[1], P[2]]])             # moments of Zt = [Z, (w - w_b) Z]
         self.M = M
         self.zb = np.exp(1j * self.wb)
+        self._ship_key = self._ship_val = None
 
     def design_bands(self, theta, loc, waves, opts: WhittleOptions):
         if opts.exact:
@@ -188,16 +200,61 @@ class _FSet:
 
     def matrices(self, theta, loc, waves, z=None, with_tail=True):
         """``(At (nz, 3, 10), S (nz, 3, 3))`` at ``z`` (default: the band centres, with the profiled noise transient)
-        or ``None`` where the model is not admissible (unstable ship or wave filter)."""
+        or ``None`` where the model is not admissible (unstable ship or wave filter).
+
+        The ship part (everything that depends on ``theta`` and the sway / yaw rows ``loc[:12]`` only) of the last
+        ship evaluated is kept (:meth:`_ship`), so a change of the wave or sensor-noise entries alone (their
+        derivative columns, the noise-only stages) recomputes just the noise model. The per-band loops are the
+        compiled kernels of :mod:`~shipid.methods.masscm.whittle_kernels`."""
         band_centres = z is None
         z = self.zb if band_centres else z
         p = model_vector(theta, loc)
+        sh = self._ship(theta, loc, z, band_centres, with_tail)
+        if sh is None:
+            return None
+        ship, rho, A0, CR = sh
         try:
-            (Ad, B0, B1, C, D), (F, G, H, J, R) = noise_matrices(p, self.known, self.z_f, self.cond, self.T, waves)
+            _, (F, G, H, J, R) = noise_from_ship(ship, p, self.T, waves)
+            if F.shape[0] and np.max(np.abs(np.linalg.eigvals(F))) >= 1.0:
+                return None
+        except (ValueError, np.linalg.LinAlgError):
+            return None
+        A = A0.copy()
+        if F.shape[0]:
+            S, Gam = noise_spectrum(z, CR, np.ascontiguousarray(F[:4, 4:]), np.ascontiguousarray(H[:, 4:]),
+                                    np.ascontiguousarray(F[4:, 4:]), G, J, R, True)
+        else:
+            S, Gam = noise_spectrum(z, CR, _Z42, _Z32, _Z22, _Z6, J, R, False)
+        if not np.all(np.isfinite(S)):
+            return None
+        if band_centres:          # transient of the noise states (with waves) or of the ship states (without)
+            try:
+                Hm, b = transient_normal(A, S, Gam, self.M)
+                A[:, :, 4] -= Gam @ np.linalg.solve(0.5 * (Hm + Hm.T), b)
+            except np.linalg.LinAlgError:
+                return None
+        return A, S
+
+    def _ship(self, theta, loc, z, band_centres, with_tail):
+        """``(ship matrices, rho(Ad), At without the noise transient, C (zI - Ad)^-1)`` or ``None``; the last one
+        evaluated is kept, keyed on ``theta``, ``loc[:12]`` and the frequencies."""
+        key = (theta.tobytes(), np.asarray(loc[:12]).tobytes(), band_centres, with_tail,
+               None if band_centres else z.tobytes())
+        if self._ship_key == key:
+            return self._ship_val
+        val = self._ship_eval(theta, loc, z, with_tail)
+        self._ship_key, self._ship_val = key, val
+        return val
+
+    def _ship_eval(self, theta, loc, z, with_tail):
+        p = model_vector(theta, loc)
+        try:
+            Ac, Bc, C, D = continuous_model(p[:8], p[8:14], p[14:20], self.known, self.z_f, self.cond)
+            Ad, B0, B1 = foh(Ac, Bc, self.T)
             if not np.all(np.isfinite(Ad)):
                 return None
             rho = np.max(np.abs(np.linalg.eigvals(Ad)))
-            if rho >= 1.0 or (F.shape[0] and np.max(np.abs(np.linalg.eigvals(F))) >= 1.0):
+            if rho >= 1.0:
                 return None
         except (ValueError, np.linalg.LinAlgError):
             return None
@@ -209,49 +266,11 @@ class _FSet:
             c = b1 * (self.delta[-1] - self.delta[0]) - xN
         else:
             c = np.zeros(4)
-        nz = z.size
-        zc = z[:, None, None]
-        Ra = np.linalg.inv(zc * np.eye(4) - Ad)                          # (nz, 4, 4)
-        CR = C @ Ra                                                      # (nz, 3, 4)
-        CR2 = CR @ Ra
-        zz = z[:, None]
-        A = np.zeros((nz, 3, 10), dtype=complex)
-        A[:, :, :3] = np.eye(3)
-        A[:, :, 3] = -(CR @ b0 + zz * (CR @ b1) + D[:, 0])
-        A[:, :, 4] = -zz * (CR @ c)
-        # d/dw = i z d/dz of the two model columns (the noise-state transient below is held over the band)
-        A[:, :, 8] = -1j * zz * (CR @ b1 - CR2 @ b0 - zz * (CR2 @ b1))
-        A[:, :, 9] = -1j * zz * (CR @ c - zz * (CR2 @ c))
-        if F.shape[0]:
-            # (zI - F)^-1 by blocks: F = [[Ad, F12], [0, Aw]] (noise_matrices), Aw 2 x 2
-            Aw, F12 = F[4:, 4:], F[:4, 4:]
-            a, b_, c_, d_ = z - Aw[0, 0], -Aw[0, 1] + 0 * z, -Aw[1, 0] + 0 * z, z - Aw[1, 1]
-            det = a * d_ - b_ * c_
-            Rw = np.stack([np.stack([d_, -b_], -1), np.stack([-c_, a], -1)], -2) / det[:, None, None]
-            HR = np.concatenate([CR, (CR @ F12 + H[:, 4:]) @ Rw], axis=2)  # H (zI - F)^-1, H[:, :4] = C
-            Tz = HR @ G + J
-            S = Tz[:, :, None] * np.conj(Tz[:, None, :]) + R
-        else:
-            S = np.broadcast_to(R.astype(complex), (nz, 3, 3)).copy()
-        if not np.all(np.isfinite(A)) or not np.all(np.isfinite(S)):
+        A, CR = ship_columns(np.ascontiguousarray(z), np.ascontiguousarray(Ad), np.ascontiguousarray(b0),
+                             np.ascontiguousarray(b1), np.ascontiguousarray(C), np.ascontiguousarray(D[:, 0]), c)
+        if not np.all(np.isfinite(A)):
             return None
-        if band_centres:          # transient of the noise states (with waves) or of the ship states (without)
-            try:
-                A[:, :, 4] -= self._noise_transient(A, S, z[:, None, None] * (HR if F.shape[0] else CR))
-            except np.linalg.LinAlgError:
-                return None
-        return A, S
-
-    def _noise_transient(self, A, S, Gam):
-        """``Gam_b t`` with ``Gam(z) = z H (zI - F)^-1`` (without waves ``z C (zI - Ad)^-1``) and the real ``t``
-        (``s_0 - s_N`` of the noise states) that minimises ``sum_b tr(W A M A^H)`` (profiled out, closed form; see
-        the module docstring)."""
-        WG = inv_herm3(S) @ Gam                                               # W Gam (nb, 3, ns)
-        e1 = (A @ self.M[:, :, 4:5])[:, :, 0]                                 # A_b sum_j Z_j / sqrt(N)
-        b = np.real(np.einsum("kil,ki->l", np.conj(WG), e1))
-        Hm = np.real(np.einsum("kil,kim->lm", np.conj(Gam) * np.real(self.M[:, 4, 4])[:, None, None], WG))
-        t = np.linalg.solve(0.5 * (Hm + Hm.T), b)
-        return Gam @ t
+        return (Ad, B0, B1, C, D), rho, A, CR
 
     def residual_periodogram(self, A):
         """``At_b Mt_b At_b^H`` (nb, 3, 3): the band-summed residual cross-periodogram."""
@@ -316,9 +335,11 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         cols = [("t", i) for i in th_idx] + [("l", i) for i in fl]
         gi = list(range(len(th_idx))) + [len(th_idx) + d * nloc + j for j in range(nloc)]
         nc = len(cols)
-        dA = np.zeros((nc,) + A.shape, dtype=complex)
+        dA = np.zeros((nc, A.shape[0], 3, len(MODEL_COLS)), dtype=complex)     # the other columns of At are fixed
         dS = np.zeros((nc,) + S.shape, dtype=complex)
-        for c, (kind, i) in enumerate(cols):
+        order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
+        for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
+            kind, i = cols[c]
             t2, l2 = theta.copy(), loc.copy()
             vec = t2 if kind == "t" else l2
             h = rel_step * max(abs(vec[i]), 0.1)
@@ -330,7 +351,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
                 h = -h
             if r is None:
                 continue
-            dA[c] = (r[0] - A) / h
+            dA[c] = (r[0][:, :, MODEL_COLS] - A[:, :, MODEL_COLS]) / h
             dS[c] = (r[1] - S) / h
         RM = s.residual_periodogram(A)
         nb = dA.shape[1]
@@ -338,9 +359,9 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         X = np.swapaxes((s.M @ np.conj(np.swapaxes(A, 1, 2))) @ W, 1, 2)          # (M A^H W)^T
         grad = (np.trace(V, axis1=2, axis2=3) @ s.nb
                 - np.sum(V * np.swapaxes(W @ RM, 1, 2)[None], axis=(1, 2, 3))
-                + 2 * dA.reshape(nc, -1) @ X.reshape(-1))
+                + 2 * dA.reshape(nc, -1) @ np.ascontiguousarray(X[:, :, MODEL_COLS]).reshape(-1))
         g[gi] += -np.real(grad)
-        WdAM = (W[None] @ dA) @ s.M[None]
+        WdAM = (W[None] @ dA) @ s.M[:, MODEL_COLS][:, :, MODEL_COLS][None]
         Imean = 2 * np.real(np.conj(dA.reshape(nc, -1)) @ WdAM.reshape(nc, -1).T)
         Vt = np.swapaxes(V, 2, 3).reshape(nc, -1)
         Icov = np.real((V.reshape(nc, -1) * np.repeat(s.nb, 9)[None]) @ Vt.T)
@@ -411,7 +432,8 @@ def _white_variances(s: _FSet, theta, loc):
 
 
 def _initial_local(s: _FSet, theta, known: KnownParams) -> np.ndarray:
-    """pem's start: rows from :func:`~shipid.methods.masscm.pem.initial_rows`, sensor variances from second
+    """pem's start: rows as :func:`~shipid.methods.masscm.pem.initial_rows` (computed in less memory by
+    :func:`~shipid.methods.masscm.whittle_start.initial_rows`), sensor variances from second
     differences (here their spectral form ``sum |2 sin(w/2)|^4 P(w) / 6``), biases from the means."""
     loc = np.zeros(N_LOC)
     loc[:12] = initial_rows(s, theta, known)
@@ -445,11 +467,13 @@ def _wave_start(s: _FSet, theta, loc, known: KnownParams) -> np.ndarray:
 
 
 def time_residuals(s: _FSet, theta, loc) -> np.ndarray:
-    """Time-domain residual ``y - mu`` (N, 3), mean removed: inverse DFT of ``E_j`` at every bin (once)."""
-    m = s.matrices(theta, loc, False, z=np.exp(1j * s.w))
-    E = np.einsum("kij,kj->ki", m[0][:, :, :5], s.Z) * np.sqrt(s.n)
+    """Time-domain residual ``y - mu`` (N, 3), mean removed: inverse DFT of ``E_j`` at every bin (once; the model
+    evaluated :data:`RESIDUAL_CHUNK` bins at a time, so its memory does not grow with the record length)."""
     full = np.zeros((s.n // 2 + 1, 3), dtype=complex)
-    full[1:E.shape[0] + 1] = E
+    for j0 in range(0, s.w.size, RESIDUAL_CHUNK):
+        j1 = min(j0 + RESIDUAL_CHUNK, s.w.size)
+        m = s.matrices(theta, loc, False, z=np.exp(1j * s.w[j0:j1]))
+        full[1 + j0:1 + j1] = np.einsum("kij,kj->ki", m[0][:, :, :5], s.Z[j0:j1]) * np.sqrt(s.n)
     return np.fft.irfft(full, n=s.n, axis=0)
 
 
@@ -489,14 +513,16 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free,
            options: WhittleOptions = WhittleOptions()) -> PEMFit:
     """Whittle maximum-likelihood refinement of ``theta_free`` (names :data:`FREE`); same contract as
     :func:`shipid.methods.masscm.pem.refine` (a :class:`~shipid.methods.masscm.pem.PEMFit`)."""
-    sets = [_FSet(c, tr, known, z_f) for c, tr in datasets]
     theta = np.asarray(theta_free, dtype=float).copy()
     o = options
     with np.errstate(all="ignore"), one_blas_thread():
-        locs = [_initial_local(s, theta, known) for s in sets]      # time domain (before the DFTs: less memory)
-        for s, l in zip(sets, locs):
+        sets, locs = [], []
+        for c, tr in datasets:    # one dataset at a time: the start in the time domain, then the DFTs (less memory)
+            s = _FSet(c, tr, known, z_f)
+            sets.append(s)
+            locs.append(_initial_local(s, theta, known))
             s.transform()
-            s.design_bands(theta, l, False, o)
+            s.design_bands(theta, locs[-1], False, o)
         quick = PEMOptions(max_iter=o.start_iter, tol=o.tol, rel_step=o.rel_step)
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
         lo0 = [_white_variances(s, theta, l) for s, l in zip(sets, lo0)]
