@@ -544,6 +544,15 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
         if not fit[6] and not fit[5] and fit[2] is not None:    # no waves: the joint fit on to convergence
             fr = _scoring(sets, fit[0], fit[1], False, options)
             fit = fr[:4] + (fit[4] + fr[4], fr[5], False)
+    return finish(fit, sets, known, z_f, physical_reason, whiteness_reason)
+
+
+def finish(fit, sets, known: KnownParams, z_f: float, physical, whiteness) -> PEMFit:
+    """The :class:`PEMFit` of a finished search ``fit = (theta, locals, information, loglik, iterations,
+    converged, waves)``: the covariance of ``theta`` from the inverse information (checked positive definite,
+    symmetrised), ``rho`` by the delta method, and the failure reason (not computable, information not positive
+    definite, not converged, ``physical(theta, sets, locals, waves)``, and without waves ``whiteness(sets, theta,
+    locals)``); shared by this module and :mod:`shipid.methods.masscm.whittle`."""
     th, lo, info, ll, its, conv, waves = fit
     nan = np.full((N_TH, N_TH), np.nan)
     if info is None:
@@ -558,10 +567,10 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     grad[I_M] = (th[I_ZM] + z_f) / (known.m_c * (known.zc_bar + z_f))
     grad[I_ZM] = th[I_M] / (known.m_c * (known.zc_bar + z_f))
     reason = "" if conv else f"search not converged in {its} iterations"
-    reason = reason or physical_reason(th, sets, lo, waves) or ("" if waves else whiteness_reason(sets, th, lo))
+    reason = reason or physical(th, sets, lo, waves) or ("" if waves else whiteness(sets, th, lo))
     return PEMFit(not reason, th, cov, rho_of(th, known, z_f), float(np.sqrt(grad @ cov @ grad)), ll, its,
                   waves, reason, lo)
 
 
-__all__ = ["PEMOptions", "PEMFit", "refine", "noise_matrices", "model_vector", "initial_rows", "rho_of",
+__all__ = ["PEMOptions", "PEMFit", "refine", "finish", "noise_matrices", "model_vector", "initial_rows", "rho_of",
            "physical_reason", "WAVE_LR"]

@@ -84,7 +84,7 @@ from scipy.stats import chi2
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
-from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, model_vector, rho_of
+from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, finish, model_vector
 from shipid.methods.masscm.whittle_start import initial_rows
 from shipid.models.roll_reduced import KnownParams
 
@@ -542,23 +542,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free,
         if not fit[6] and not fit[5] and fit[2] is not None:
             fr = _scoring(sets, fit[0], fit[1], False, o)
             fit = fr[:4] + (fit[4] + fr[4], fr[5], False)
-        th, lo, info, ll, its, conv, waves = fit
-        nan = np.full((N_TH, N_TH), np.nan)
-        if info is None:
-            return PEMFit(False, th, nan, np.nan, np.nan, ll, its, waves, "likelihood not computable", lo)
-        try:
-            cov = np.linalg.inv(info)[:N_TH, :N_TH]
-            np.linalg.cholesky(cov)
-        except np.linalg.LinAlgError:
-            return PEMFit(False, th, nan, np.nan, np.nan, ll, its, waves, "information not positive definite", lo)
-        cov = 0.5 * (cov + cov.T)
-        grad = np.zeros(N_TH)
-        grad[I_M] = (th[I_ZM] + z_f) / (known.m_c * (known.zc_bar + z_f))
-        grad[I_ZM] = th[I_M] / (known.m_c * (known.zc_bar + z_f))
-        reason = "" if conv else f"search not converged in {its} iterations"
-        reason = reason or physical_reason(th, sets, lo, waves) or ("" if waves else whiteness_reason(sets, th, lo))
-    return PEMFit(not reason, th, cov, rho_of(th, known, z_f), float(np.sqrt(grad @ cov @ grad)), ll, its,
-                  waves, reason, lo)
+        return finish(fit, sets, known, z_f, physical_reason, whiteness_reason)
 
 
 __all__ = ["WhittleOptions", "refine", "band_index", "time_residuals", "whiteness_reason", "physical_reason"]
