@@ -495,14 +495,17 @@ def rho_of(theta, known: KnownParams, z_f: float) -> float:
     return float(plausibility.rho_of(np.insert(np.asarray(theta, dtype=float), I_ZF, z_f), known))
 
 
-def physical_reason(theta, sets, locs, waves) -> str:
-    """Empty when the optimum is physical, else why not (k, A_x, d, m <= 0, or an unstable / failed model)."""
+def physical_reason(theta, sets, locs, waves, objective=None) -> str:
+    """Empty when the optimum is physical, else why not (k, A_x, d, m <= 0, or an unstable / failed model);
+    ``objective(sets, theta, locs, waves)`` is the negative log-likelihood checked finite (this module's by
+    default; :mod:`shipid.methods.masscm.whittle` passes its own)."""
+    objective = _objective if objective is None else objective
     for nm in ("k", "A_x", "d", "m"):
         if theta[FREE.index(nm)] <= 0:
             return f"{nm} = {theta[FREE.index(nm)]:.3g} <= 0"
     if waves and any(not (0 < np.exp(l[13]) < 1) for l in locs):
         return "wave damping outside (0, 1)"
-    if not np.isfinite(_objective(sets, theta, locs, waves)):
+    if not np.isfinite(objective(sets, theta, locs, waves)):
         return "likelihood not finite at the optimum"
     for s, l in zip(sets, locs):
         Ac = continuous_model(theta, l[:6], l[6:12], s.known, s.z_f, s.cond)[0]

@@ -85,6 +85,7 @@ from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
 from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, finish, model_vector
+from shipid.methods.masscm.pem import physical_reason as _pem_physical
 from shipid.methods.masscm.whittle_start import initial_rows
 from shipid.models.roll_reduced import KnownParams
 
@@ -494,19 +495,8 @@ def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE
 
 
 def physical_reason(theta, sets, locs, waves) -> str:
-    """Empty when the optimum is physical, else why not (as pem's ``physical_reason``)."""
-    for nm in ("k", "A_x", "d", "m"):
-        if theta[FREE.index(nm)] <= 0:
-            return f"{nm} = {theta[FREE.index(nm)]:.3g} <= 0"
-    if waves and any(not (0 < np.exp(l[13]) < 1) for l in locs):
-        return "wave damping outside (0, 1)"
-    if not np.isfinite(_objective(sets, theta, locs, waves)):
-        return "likelihood not finite at the optimum"
-    for s, l in zip(sets, locs):
-        Ac = continuous_model(theta, l[:6], l[6:12], s.known, s.z_f, s.cond)[0]
-        if np.max(np.real(np.linalg.eigvals(Ac))) >= 0:
-            return f"ship model of dataset {s.cond} unstable at the optimum"
-    return ""
+    """Empty when the optimum is physical, else why not: pem's ``physical_reason`` with the Whittle likelihood."""
+    return _pem_physical(theta, sets, locs, waves, objective=_objective)
 
 
 def refine(datasets, known: KnownParams, z_f: float, theta_free,
