@@ -212,7 +212,7 @@ def summarise(outputs: list[dict], *, vessel: str = "fishing-vessel", zf_mode: s
 
 def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool = True,
                    instruments: str = "lags", vessel: str = "fishing-vessel") -> dict:
-    """One noise realisation of the issue-3 efficiency check (beyond the paper).
+    """One noise realisation of the issue-3 efficiency check of Algorithm 1 (beyond the paper; no refinement).
 
     Three datasets of ``duration`` s with :meth:`NoiseSpec.issue3` noise (white gyro / accelerometer
     noise, constant biases, 0.5 deg wave roll), z_f known, linear initialisation; returns the
@@ -224,8 +224,8 @@ def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool =
     z_f = float(load_vessel(vessel).value("general", "z_f"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,   # the estimator alone
-                             options=MassCMOptions(prefilter=prefilter, instruments=instruments))
+        r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,   # Algorithm 1 alone
+                             options=MassCMOptions(prefilter=prefilter, instruments=instruments, refine="none"))
     out = {k: r.value(k) for k in ("m", "zm_bar", "rho", "k", "A_x", "d", "K_r", "K_vdot", "K_delta")}
     out.update({f"{k}_std": r.std(k) for k in ("m", "zm_bar", "rho")})
     out.update({"converged": r.diagnostics["converged"], "iterations": r.diagnostics["iterations"],
