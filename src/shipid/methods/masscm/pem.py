@@ -19,13 +19,13 @@ stationary covariance is an O(1) term against the O(N) likelihood).
 Search: Fisher scoring with Levenberg damping (the expected information ``sum psi^T Lam^-1 psi + N/2 tr(Lam^-1
 dLam Lam^-1 dLam)``, ``psi`` the innovation sensitivities by forward differences, Ljung 1999 §10.2), steps
 accepted only when the likelihood increases. Start: Algorithm 1's ``theta``; the sway and yaw rows from a
-least-squares fit of ``v'`` and ``r'`` on the reconstructed states (:func:`initial_rows`: ``phi`` and ``v``
-integrated from ``p`` and from ``v' = z_s p' + g phi - U r - a_s`` (8)), the biases from the means, the sensor
-variances from second differences of the residuals, the wave frequency from the residual roll-rate spectrum.
-Stages: the rudder response (rows, biases) with ``theta`` held; everything jointly without waves; the wave filter
-and sensor variances with the rest held. The wave structure is kept, and everything fitted jointly with it, when
-it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio test, 3 parameters per
-dataset).
+least-squares fit of ``v'`` and ``r'`` on the reconstructed states (:mod:`shipid.methods.masscm.refine_start`:
+``phi`` and ``v`` integrated from ``p`` and from ``v' = z_s p' + g phi - U r - a_s`` (8)), the biases from the
+means, the sensor variances from second differences of the residuals, the wave frequency from the residual
+roll-rate spectrum. Stages: the rudder response (rows, biases) with ``theta`` held; everything jointly without
+waves; the wave filter and sensor variances with the rest held. The wave structure is kept, and everything fitted
+jointly with it, when it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio
+test, 3 parameters per dataset).
 
 Noise-free sensors (``PEMOptions.sensor_floor = f``, ``MassCMOptions`` ``refine="pem-floor"`` through
 :func:`shipid.methods.masscm.pem_result.refine_result_floor`): the model with waves is singular without sensor
@@ -66,7 +66,8 @@ from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
-from shipid.models.roll_reduced import KnownParams, roll_terms
+from shipid.methods.masscm.refine_start import initial_rows
+from shipid.models.roll_reduced import KnownParams
 
 #: 2 x the log-likelihood gain per dataset above which the wave structure is kept (chi-square, 3 dof: ~1e-5)
 WAVE_LR = 25.0
@@ -370,36 +371,6 @@ def _apply(theta, locs, step, th_idx, fl, nloc):
     return t2, l2
 
 
-def initial_rows(s: _Set, theta, known: KnownParams) -> np.ndarray:
-    """Start values ``c_v, c_r`` by least squares of ``v', r'`` on reconstructed states and wave moment.
-
-    ``phi`` integrates ``p``, ``v`` integrates ``v' = z_s p' + g phi - U r - a_s`` (8), ``p', r'`` are central
-    differences and the wave moment ``tau`` is the remainder of the roll row (23) at ``theta``; all signals then
-    pass the same zero-phase band-pass (0.02-2 Hz), which keeps the linear relations and removes the
-    integration drift and the biases.
-    """
-    from scipy.signal import butter, sosfiltfilt
-    T = s.T
-    sos = butter(2, [0.02, min(2.0, 0.4 / T)], btype="bandpass", fs=1.0 / T, output="sos")
-    p, a, r = (s.y[:, i] - s.y[:, i].mean() for i in range(3))
-    phi = np.cumsum(p) * T
-    pd, rd = np.gradient(p, T), np.gradient(r, T)
-    zs = known.zs_bar + s.z_f
-    vd = zs * pd + known.g * phi - known.U * r - a
-    v = np.cumsum(vd - vd.mean()) * T
-    th = list(theta[:6]) + [s.z_f] + list(theta[6:])
-    t = roll_terms(np.array(th), known, [s.cond])
-    B, A1, kp, dd, Kr, Kd = (t[n][0] for n in ("B", "A1", "kp", "d", "K_r", "K_delta"))
-    dl = s.delta - s.delta.mean()
-    tau = A1 * pd + (kp + B * known.g) * phi + dd * p - B * vd - (Kr + B * known.U) * r - Kd * dl
-    X = sosfiltfilt(sos, np.column_stack([phi, v, p, r, dl, tau]), axis=0)
-    Yv, Yr = sosfiltfilt(sos, np.column_stack([vd, rd]), axis=0).T
-    sl = slice(s.n // 20, s.n - s.n // 20)
-    cv = np.linalg.lstsq(X[sl], Yv[sl], rcond=None)[0]
-    cr = np.linalg.lstsq(X[sl], Yr[sl], rcond=None)[0]
-    return np.concatenate([cv, cr])
-
-
 def _initial_local(s: _Set, theta, known: KnownParams) -> np.ndarray:
     loc = np.zeros(N_LOC)
     loc[:12] = initial_rows(s, theta, known)
@@ -575,5 +546,5 @@ def finish(fit, sets, known: KnownParams, z_f: float, physical, whiteness) -> PE
                   waves, reason, lo)
 
 
-__all__ = ["PEMOptions", "PEMFit", "refine", "finish", "noise_matrices", "model_vector", "initial_rows", "rho_of",
+__all__ = ["PEMOptions", "PEMFit", "refine", "finish", "noise_matrices", "model_vector", "rho_of",
            "physical_reason", "WAVE_LR"]

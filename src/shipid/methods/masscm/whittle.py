@@ -86,7 +86,7 @@ from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
 from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, finish, model_vector
 from shipid.methods.masscm.pem import physical_reason as _pem_physical
-from shipid.methods.masscm.whittle_start import initial_rows
+from shipid.methods.masscm.refine_start import initial_rows
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
@@ -433,8 +433,7 @@ def _white_variances(s: _FSet, theta, loc):
 
 
 def _initial_local(s: _FSet, theta, known: KnownParams) -> np.ndarray:
-    """pem's start: rows as :func:`~shipid.methods.masscm.pem.initial_rows` (computed in less memory by
-    :func:`~shipid.methods.masscm.whittle_start.initial_rows`), sensor variances from second
+    """pem's start: rows from :func:`~shipid.methods.masscm.refine_start.initial_rows`, sensor variances from second
     differences (here their spectral form ``sum |2 sin(w/2)|^4 P(w) / 6``), biases from the means."""
     loc = np.zeros(N_LOC)
     loc[:12] = initial_rows(s, theta, known)

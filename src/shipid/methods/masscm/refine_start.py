@@ -1,11 +1,13 @@
-"""Start values of the sway and yaw rows for the Whittle refinement, in bounded memory (Linder et al. 2015, seed 000;
+"""Start values of the sway and yaw rows for the maximum-likelihood refinements (Linder et al. 2015, seed 000;
 beyond the paper).
 
-:func:`initial_rows` computes exactly :func:`shipid.methods.masscm.pem.initial_rows` (the same reconstructed
-states ``phi, v``, central differences, wave-moment remainder of the roll row (23), the same zero-phase 0.02-2 Hz
-band-pass and least squares; the same numbers, checked in ``tests/methods/masscm/test_whittle_start.py``), with the
-band-pass applied one signal at a time into one preallocated regressor matrix instead of to a stacked copy of all
-eight signals, so that on a one-hour record at 50 Hz its transient is about a third of pem's.
+:func:`initial_rows` is the start of :mod:`shipid.methods.masscm.pem` and :mod:`shipid.methods.masscm.whittle`:
+a least-squares fit of ``v'`` and ``r'`` on reconstructed states and the wave moment. ``phi`` integrates ``p``,
+``v`` integrates ``v' = z_s p' + g phi - U r - a_s`` (8), ``p', r'`` are central differences and the wave moment
+``tau`` is the remainder of the roll row (23) at ``theta``; all signals then pass the same zero-phase band-pass
+(0.02-2 Hz), which keeps the linear relations and removes the integration drift and the biases. The band-pass is
+applied one signal at a time into one preallocated regressor matrix (not to a stacked copy of all eight signals),
+so that on a one-hour record at 50 Hz its transient is about a third of the stacked form's.
 """
 
 from __future__ import annotations
@@ -17,8 +19,9 @@ from shipid.models.roll_reduced import KnownParams, roll_terms
 
 
 def initial_rows(s, theta, known: KnownParams) -> np.ndarray:
-    """``c_v, c_r`` (12,) of :func:`shipid.methods.masscm.pem.initial_rows` for a dataset ``s`` with ``y (N, 3)``
-    (``p, a_s, r``), ``delta``, ``T``, ``n``, ``cond``, ``z_f``; see the module docstring."""
+    """Start values ``c_v, c_r`` (12,) (coefficients of ``[phi, v, p, r, delta, tau]`` of (11)) for a dataset
+    ``s`` with ``y (N, 3)`` (``p, a_s, r``), ``delta``, ``T``, ``n``, ``cond``, ``z_f`` at ``theta`` (names
+    :data:`~shipid.methods.masscm.crlb_kf.FREE`); see the module docstring."""
     T = s.T
     sos = butter(2, [0.02, min(2.0, 0.4 / T)], btype="bandpass", fs=1.0 / T, output="sos")
     p, a, r = (s.y[:, i] - s.y[:, i].mean() for i in range(3))
