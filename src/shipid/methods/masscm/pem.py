@@ -67,6 +67,7 @@ from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
 from shipid.methods.masscm.refine_start import initial_rows
+from shipid.methods.masscm.scoring import fisher_scoring
 from shipid.models.roll_reduced import KnownParams
 
 #: 2 x the log-likelihood gain per dataset above which the wave structure is kept (chi-square, 3 dof: ~1e-5)
@@ -276,7 +277,8 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
 
 
 def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None, gain_stop=None):
-    """Levenberg-damped Fisher scoring of the joint likelihood; returns theta, locs, info, loglik, its, converged.
+    """:func:`~shipid.methods.masscm.scoring.fisher_scoring` of the joint likelihood; returns theta, locs, info,
+    loglik, its, converged.
 
     ``fix_theta`` holds ``theta``; ``only`` (local indices) frees just those local parameters. ``gain_stop`` (the
     sensor floor, where the data carry less noise than the model, so the expected information is not the
@@ -284,71 +286,10 @@ def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=N
     1 step, and the search has converged when the log-likelihood rose by less than ``gain_stop`` over the last
     :data:`GAIN_ITERS` iterations (besides the Newton-decrement rule).
     """
-    fl = [i for i in _free_local(waves) if only is None or i in only]
-    th_idx = [] if fix_theta else list(range(N_TH))
-    nloc = len(fl)
-    P = len(th_idx) + nloc * len(sets)
-    theta, locs = theta.copy(), [l.copy() for l in locs]
-    f = _objective(sets, theta, locs, waves)
-    if not np.isfinite(f):
-        return theta, locs, None, -np.inf, 0, False
-    mu, conv, it = 1e-3, False, 0
-    info, hist = None, [f]
-    for it in range(1, opts.max_iter + 1):
-        if gain_stop is not None and len(hist) > GAIN_ITERS and hist[-1 - GAIN_ITERS] - f < gain_stop:
-            conv = True
-            break
-        g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
-        info = 0.5 * (info + info.T)
-        dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
-        In = info / np.outer(dg, dg)
-        gn = g / dg
-        decrement = 0.5 * float(gn @ np.linalg.lstsq(In, gn, rcond=None)[0])   # predicted gain of a full step
-        if decrement < opts.tol:
-            conv = True
-            break
-        accepted = False
-        for _ in range(12):
-            try:
-                step = np.linalg.solve(In + mu * np.eye(P), gn) / dg
-            except np.linalg.LinAlgError:
-                mu *= 10
-                continue
-            t2, l2 = _apply(theta, locs, step, th_idx, fl, nloc)
-            f2 = _objective(sets, t2, l2, waves)
-            if np.isfinite(f2) and f2 <= f:
-                if gain_stop is not None:
-                    t2, l2, f2 = _parabola_step(sets, theta, locs, step, th_idx, fl, nloc, waves, f, t2, l2, f2)
-                theta, locs, f = t2, l2, f2
-                hist.append(f)
-                mu = max(mu / 3, 1e-6)
-                accepted = True
-                break
-            mu *= 10
-        if not accepted:                     # no ascent step: converged only if the gain left is negligible
-            conv = decrement < 100 * opts.tol
-            break
-    return theta, locs, info, -f, it, conv
-
-
-def _parabola_step(sets, theta, locs, step, th_idx, fl, nloc, waves, f0, t1, l1, f1):
-    """The best of the full step ``(t1, l1, f1)``, the half step and the minimum of the parabola through the
-    negative log-likelihood at 0, 1/2 and 1 step (``alpha`` in [0.1, 3])."""
-    best = (t1, l1, f1)
-    th, lh = _apply(theta, locs, 0.5 * step, th_idx, fl, nloc)
-    fh = _objective(sets, th, lh, waves)
-    if not np.isfinite(fh):
-        return best
-    if fh < f1:
-        best = (th, lh, fh)
-    c = 2.0 * ((f1 - f0) - 2.0 * (fh - f0))
-    if c > 0:
-        a = float(np.clip(-((f1 - f0) - c) / (2 * c), 0.1, 3.0))
-        ta, la = _apply(theta, locs, a * step, th_idx, fl, nloc)
-        fa = _objective(sets, ta, la, waves)
-        if np.isfinite(fa) and fa < best[2]:
-            best = (ta, la, fa)
-    return best
+    return fisher_scoring(lambda t, l: _objective(sets, t, l, waves),
+                          lambda t, l, ti, fl: score_information(sets, t, l, waves, ti, fl, opts.rel_step),
+                          theta, locs, _free_local(waves), N_TH, opts.max_iter, opts.tol, fix_theta=fix_theta,
+                          only=only, gain_stop=gain_stop, gain_iters=GAIN_ITERS)
 
 
 def _closed_form_variances(s, theta, loc):
@@ -358,17 +299,6 @@ def _closed_form_variances(s, theta, loc):
     if r is not None:
         loc[15:18] = np.log(np.maximum(np.mean(r[0] ** 2, axis=0), 1e-300))
     return loc
-
-
-def _apply(theta, locs, step, th_idx, fl, nloc):
-    t2 = theta.copy()
-    t2[th_idx] += step[:len(th_idx)]
-    l2 = []
-    for d, loc in enumerate(locs):
-        l = loc.copy()
-        l[fl] += step[len(th_idx) + d * nloc: len(th_idx) + (d + 1) * nloc]
-        l2.append(l)
-    return t2, l2
 
 
 def _initial_local(s: _Set, theta, known: KnownParams) -> np.ndarray:

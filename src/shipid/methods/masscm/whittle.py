@@ -87,6 +87,7 @@ from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, 
 from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, finish, model_vector
 from shipid.methods.masscm.pem import physical_reason as _pem_physical
 from shipid.methods.masscm.refine_start import initial_rows
+from shipid.methods.masscm.scoring import fisher_scoring
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
@@ -370,56 +371,13 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
     return g, 0.5 * (info + info.T)
 
 
-def _apply(theta, locs, step, th_idx, fl, nloc):
-    t2 = theta.copy()
-    t2[th_idx] += step[:len(th_idx)]
-    l2 = []
-    for d, loc in enumerate(locs):
-        l = loc.copy()
-        l[fl] += step[len(th_idx) + d * nloc: len(th_idx) + (d + 1) * nloc]
-        l2.append(l)
-    return t2, l2
-
-
 def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None):
-    """Levenberg-damped Fisher scoring (as :mod:`~shipid.methods.masscm.pem`); theta, locs, info, loglik, its, conv."""
-    fl = [i for i in _free_local(waves) if only is None or i in only]
-    th_idx = [] if fix_theta else list(range(N_TH))
-    nloc = len(fl)
-    P = len(th_idx) + nloc * len(sets)
-    theta, locs = theta.copy(), [l.copy() for l in locs]
-    f = _objective(sets, theta, locs, waves)
-    if not np.isfinite(f):
-        return theta, locs, None, -np.inf, 0, False
-    mu, conv, it, info = 1e-3, False, 0, None
-    for it in range(1, opts.max_iter + 1):
-        g, info = score_information(sets, theta, locs, waves, th_idx, fl, opts.rel_step)
-        dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
-        In = info / np.outer(dg, dg)
-        gn = g / dg
-        decrement = 0.5 * float(gn @ np.linalg.lstsq(In, gn, rcond=None)[0])
-        if decrement < opts.tol:
-            conv = True
-            break
-        accepted = False
-        for _ in range(12):
-            try:
-                step = np.linalg.solve(In + mu * np.eye(P), gn) / dg
-            except np.linalg.LinAlgError:
-                mu *= 10
-                continue
-            t2, l2 = _apply(theta, locs, step, th_idx, fl, nloc)
-            f2 = _objective(sets, t2, l2, waves)
-            if np.isfinite(f2) and f2 <= f:
-                theta, locs, f = t2, l2, f2
-                mu = max(mu / 3, 1e-6)
-                accepted = True
-                break
-            mu *= 10
-        if not accepted:
-            conv = decrement < 100 * opts.tol
-            break
-    return theta, locs, info, -f, it, conv
+    """:func:`~shipid.methods.masscm.scoring.fisher_scoring` of the Whittle likelihood (as pem's, without the
+    sensor floor's gain rule); theta, locs, info, loglik, its, conv."""
+    return fisher_scoring(lambda t, l: _objective(sets, t, l, waves),
+                          lambda t, l, ti, fl: score_information(sets, t, l, waves, ti, fl, opts.rel_step),
+                          theta, locs, _free_local(waves), N_TH, opts.max_iter, opts.tol, fix_theta=fix_theta,
+                          only=only)
 
 
 def _white_variances(s: _FSet, theta, loc):

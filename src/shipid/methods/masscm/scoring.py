@@ -1,0 +1,133 @@
+"""Levenberg-damped Fisher scoring of a refinement likelihood (Linder et al. 2015, seed 000; beyond the paper).
+
+The one search of the maximum-likelihood refinements :mod:`shipid.methods.masscm.pem` (exact time-domain
+likelihood) and :mod:`shipid.methods.masscm.whittle` (banded Whittle likelihood), which differ only in the
+likelihood, its score and information, and which local parameters a model has. The parameters are the shared
+``theta`` (all ``n_theta`` entries, or none) and, per dataset, the entries ``fl`` of its local vector; a step
+vector is ``[theta[th_idx], loc_0[fl], loc_1[fl], ...]`` (:func:`apply_step`).
+
+Iteration (Ljung 1999 §10.2): with the expected information ``I`` (symmetrised) and the
+score ``g`` scaled to unit diagonal (``In = I / (d d^T)``, ``gn = g / d``, ``d = sqrt(diag I)``), the Newton
+decrement ``gn^T In^+ gn / 2`` (the log-likelihood gain a full step predicts) below ``tol`` is convergence;
+otherwise the step ``(In + mu I)^-1 gn / d`` is accepted when the negative log-likelihood does not increase
+(``mu`` divided by 3, floored at 1e-6), else ``mu`` grows tenfold, up to 12 tries. With no ascent step the search
+stops, converged only if the decrement is below ``100 tol``.
+
+``gain_stop`` (used by :mod:`~shipid.methods.masscm.pem` with a sensor floor, where the data carry less noise than
+the model, so the expected information is not the curvature): each accepted step is replaced by the best of it,
+the half step and the minimum of the parabola through the likelihood at 0, 1/2 and 1 step
+(:func:`parabola_step`), and the search has also converged when the log-likelihood rose by less than ``gain_stop``
+over the last ``gain_iters`` iterations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def apply_step(theta, locs, step, th_idx, fl, nloc):
+    """``theta`` and the local vectors ``locs`` moved by ``step`` (layout of the module docstring); copies."""
+    t2 = theta.copy()
+    t2[th_idx] += step[:len(th_idx)]
+    l2 = []
+    for d, loc in enumerate(locs):
+        l = loc.copy()
+        l[fl] += step[len(th_idx) + d * nloc: len(th_idx) + (d + 1) * nloc]
+        l2.append(l)
+    return t2, l2
+
+
+def parabola_step(objective, theta, locs, step, th_idx, fl, f0, t1, l1, f1):
+    """The best of the full step ``(t1, l1, f1)``, the half step and the minimum of the parabola through the
+    negative log-likelihood ``objective(theta, locs)`` at 0, 1/2 and 1 step (``alpha`` in [0.1, 3])."""
+    nloc = len(fl)
+    best = (t1, l1, f1)
+    th, lh = apply_step(theta, locs, 0.5 * step, th_idx, fl, nloc)
+    fh = objective(th, lh)
+    if not np.isfinite(fh):
+        return best
+    if fh < f1:
+        best = (th, lh, fh)
+    c = 2.0 * ((f1 - f0) - 2.0 * (fh - f0))
+    if c > 0:
+        a = float(np.clip(-((f1 - f0) - c) / (2 * c), 0.1, 3.0))
+        ta, la = apply_step(theta, locs, a * step, th_idx, fl, nloc)
+        fa = objective(ta, la)
+        if np.isfinite(fa) and fa < best[2]:
+            best = (ta, la, fa)
+    return best
+
+
+def fisher_scoring(objective, score_information, theta, locs, free_local, n_theta: int, max_iter: int, tol: float,
+                   *, fix_theta: bool = False, only=None, gain_stop: float | None = None, gain_iters: int = 5):
+    """Levenberg-damped Fisher scoring (module docstring) from ``theta`` and the local vectors ``locs``.
+
+    Parameters
+    ----------
+    objective : callable
+        ``objective(theta, locs) -> float``, the negative log-likelihood (``inf`` where not admissible).
+    score_information : callable
+        ``score_information(theta, locs, th_idx, fl) -> (g, I)``: score of the log-likelihood and expected
+        information over ``theta[th_idx]`` and each dataset's ``loc[fl]``.
+    free_local : list of int
+        The local parameters of the model; ``only`` (local indices) frees just those of them.
+    n_theta : int
+        Length of ``theta``; ``fix_theta`` holds it.
+    max_iter, tol : int, float
+        Iteration limit and the Newton-decrement convergence threshold.
+    gain_stop, gain_iters : float or None, int
+        The parabola step and the gain rule of the module docstring (``None``: neither).
+
+    Returns
+    -------
+    tuple
+        ``(theta, locs, information (None if the start is not admissible), loglik, iterations, converged)``.
+    """
+    fl = [i for i in free_local if only is None or i in only]
+    th_idx = [] if fix_theta else list(range(n_theta))
+    nloc = len(fl)
+    P = len(th_idx) + nloc * len(locs)
+    theta, locs = theta.copy(), [l.copy() for l in locs]
+    f = objective(theta, locs)
+    if not np.isfinite(f):
+        return theta, locs, None, -np.inf, 0, False
+    mu, conv, it = 1e-3, False, 0
+    info, hist = None, [f]
+    for it in range(1, max_iter + 1):
+        if gain_stop is not None and len(hist) > gain_iters and hist[-1 - gain_iters] - f < gain_stop:
+            conv = True
+            break
+        g, info = score_information(theta, locs, th_idx, fl)
+        info = 0.5 * (info + info.T)
+        dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
+        In = info / np.outer(dg, dg)
+        gn = g / dg
+        decrement = 0.5 * float(gn @ np.linalg.lstsq(In, gn, rcond=None)[0])   # predicted gain of a full step
+        if decrement < tol:
+            conv = True
+            break
+        accepted = False
+        for _ in range(12):
+            try:
+                step = np.linalg.solve(In + mu * np.eye(P), gn) / dg
+            except np.linalg.LinAlgError:
+                mu *= 10
+                continue
+            t2, l2 = apply_step(theta, locs, step, th_idx, fl, nloc)
+            f2 = objective(t2, l2)
+            if np.isfinite(f2) and f2 <= f:
+                if gain_stop is not None:
+                    t2, l2, f2 = parabola_step(objective, theta, locs, step, th_idx, fl, f, t2, l2, f2)
+                theta, locs, f = t2, l2, f2
+                hist.append(f)
+                mu = max(mu / 3, 1e-6)
+                accepted = True
+                break
+            mu *= 10
+        if not accepted:                     # no ascent step: converged only if the gain left is negligible
+            conv = decrement < 100 * tol
+            break
+    return theta, locs, info, -f, it, conv
+
+
+__all__ = ["fisher_scoring", "apply_step", "parabola_step"]
