@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from shipid.cli import cli
 
-from shipid.methods.masscm import refine
+from shipid.methods.masscm import plausibility, refine
 from shipid.methods.masscm.assemble import estimate_mass_cm as algorithm1
 from shipid.methods.masscm.coverage import REGIMES, run_one
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
@@ -119,13 +119,17 @@ def test_plausibility_is_judged_again_on_the_refined_estimate():
 
     r = _alg1(_data("both"))
     assert not r.diagnostics["implausible"]
-    # a stale Algorithm-1 line goes when the (here: unchanged, physical) estimate is judged again
-    r.diagnostics["warnings"].append("nuisance coefficients outside their physical range (A_x <= 0): stale")
+    # Algorithm 1's judgement (here made stale: a nuisance split it did not have) and its line go when the
+    # (here: unchanged, physical) estimate is judged again
+    stale = plausibility.Judgement([], ["A_x <= 0"])
+    r.diagnostics.update(stale.diagnostics())
+    r.diagnostics["warnings"] += stale.warnings()
+    kept = list(r.diagnostics["warnings"][:-1])
     r.diagnostics["refine"] = {"applied": True}
     refine.rejudge(r, KNOWN, ZF)
-    assert not any("stale" in w for w in r.diagnostics["warnings"])
+    assert r.diagnostics["warnings"] == kept
     assert r.diagnostics["nuisance_outside_physical"] == []
-    assert r.diagnostics["refine"]["algorithm1_plausibility"]["implausible"] is False
+    assert r.diagnostics["refine"]["algorithm1_plausibility"]["nuisance_outside_physical"] == ["A_x <= 0"]
     # a refined m that is not a load (far below zero beyond its std) is flagged, with the entry relabelled
     r.estimates["m"] = replace(r.estimates["m"], value=-1.0, std=0.01)
     refine.rejudge(r, KNOWN, ZF)

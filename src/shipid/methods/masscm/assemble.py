@@ -26,7 +26,7 @@ from shipid.methods.masscm.iteration import iterate
 from shipid.methods.masscm.moments import transient_length
 from shipid.methods.masscm.noise_bj import ma_structure
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, MassCMOptions
-from shipid.methods.masscm.plausibility import dm_dzf, implausible_identifiable, implausible_reasons, rho_of
+from shipid.methods.masscm.plausibility import dm_dzf, judge, rho_of
 from shipid.models.roll_reduced import THETA_NAMES, THETA_UNITS, KnownParams, discrete_coeffs, from_moment
 from shipid.result import Estimate, Result
 
@@ -245,13 +245,8 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
     est["dm_dzf"] = Estimate(float(slope), float("nan"), "kg/m", "derived",
                              "slope of the exact-fit family m(z_f) = rho m_c (zc_bar+z_f)/(zm_bar+z_f)")
     conds = [ds.condition for ds in prep]
-    reasons = implausible_identifiable(theta, known, conds, {"m": std.get("m", 0.0), "zm_bar": std.get("zm_bar", 0.0)})
-    nuisance = [w for w in implausible_reasons(theta, known, conds) if w not in ("non-finite estimate",)]
-    if reasons:  # an implausible solution is not an estimate of the load: say so in each entry, not only in a warning
-        why = "implausible solution (" + ", ".join(reasons) + "): not an estimate of the load"
-        for n in ("m", "zm_bar", "rho"):
-            e = est[n]
-            est[n] = replace(e, status="not determined", note=f"{why}; {e.note}" if e.note else why)
+    verdict = judge(theta, known, conds, {"m": std.get("m", 0.0), "zm_bar": std.get("zm_bar", 0.0)})
+    est = verdict.mark(est)  # an implausible solution is not an estimate of the load: said in each entry too
     warn = list(core["warnings"])
     if not core["converged"]:
         warn.append(f"not converged after {core['iterations']} iterations (tol {options.tol:g} on g)")
@@ -261,12 +256,7 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
                     "record longer or excite more")
     if zf_mode == "free":
         warn.append("z_f not given: m is not identifiable from the three datasets (only zm_bar and rho are)")
-    if reasons:
-        warn.append("implausible solution: " + ", ".join(reasons))
-    elif nuisance:
-        warn.append("nuisance coefficients outside their physical range (" + ", ".join(nuisance) + "): "
-                    "K_vdot, K_r, K_delta carry a finite-sample IV bias under sensor noise (module docstring, "
-                    "'Known limitations'); m, zm_bar and rho are judged on their own and not flagged")
+    warn += verdict.warnings()
     st = core["state"]
     for i, mo in enumerate(st.moments):
         if not mo.rank_ok:
@@ -298,9 +288,9 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         covariance=cov, covariance_names=names,
         diagnostics={"converged": bool(core["converged"]), "iterations": int(core["iterations"]),
                      "z_f_mode": zf_mode, "covariance_conditional_on_z_f": conditional,
-                     "implausible": bool(reasons), "implausible_reasons": reasons,
+                     "implausible": verdict.implausible, "implausible_reasons": verdict.reasons,
                      "implausible_rule": "judged on the identifiable quantities (implausible_identifiable)",
-                     "nuisance_outside_physical": nuisance,
+                     "nuisance_outside_physical": verdict.nuisance,
                      "identifiability": ("zm_bar and rho are identifiable from nominal+calibration+loaded data; "
                                          "z_f is not, and m = rho m_c (zc_bar+z_f)/(zm_bar+z_f) follows only "
                                          "once z_f is pinned (shipid.methods.masscm.identifiability)"),

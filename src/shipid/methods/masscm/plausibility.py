@@ -2,16 +2,26 @@
 
 :func:`implausible_reasons` is the physical rule of the Table-3 study; :func:`implausible_identifiable` judges
 what the data determine (m, zm_bar with their standard errors, the identified roll mode (18) of every dataset).
+:func:`judge` applies both to an estimate (the flag, the relabelled entries and the warning lines of a result; used by
+:mod:`shipid.methods.masscm.assemble` for Algorithm 1 and by :mod:`shipid.methods.masscm.refine` after a refinement).
 :func:`rho_of` is the identifiable moment ratio ``rho = m z_m / (m_c z_c)`` and :func:`dm_dzf` the slope of the
 exact-fit family ``m(z_f)`` (:mod:`shipid.methods.masscm.identifiability`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field, replace
+
 import numpy as np
 
 from shipid.methods.masscm.options import I_M, I_ZF, I_ZM
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, KnownParams, roll_terms
+
+#: what the nuisance line says the out-of-range split comes from: Algorithm 1's estimate, or a refined one
+_NUISANCE_TAIL = {False: ("): K_vdot, K_r, K_delta carry a finite-sample IV bias under sensor noise (module docstring, "
+                          "'Known limitations'); m, zm_bar and rho are judged on their own and not flagged"),
+                  True: ") after the refinement; m, zm_bar and rho are judged on their own and not flagged"}
+
 
 def implausible_reasons(theta: np.ndarray, known: KnownParams, conds=(NOMINAL, CALIBRATION, LOADED)) -> list[str]:
     """The documented rule for an implausible (physically impossible) solution.
@@ -88,6 +98,59 @@ def implausible_identifiable(theta: np.ndarray, known: KnownParams, conds=(NOMIN
     return why
 
 
+@dataclass(frozen=True)
+class Judgement:
+    """The plausibility of one estimate (:func:`judge`).
+
+    ``reasons``: why it is implausible (:func:`implausible_identifiable`; empty: plausible); ``nuisance``: the
+    physical conditions of :func:`implausible_reasons` that the nuisance split violates (reported, not a flag);
+    ``refined``: the estimate is a refinement's (the nuisance line says so) rather than Algorithm 1's.
+    """
+
+    reasons: list = field(default_factory=list)
+    nuisance: list = field(default_factory=list)
+    refined: bool = False
+
+    @property
+    def implausible(self) -> bool:
+        return bool(self.reasons)
+
+    def warnings(self) -> list[str]:
+        """The warning lines of this judgement (none, or one: the flag, else the nuisance split)."""
+        if self.reasons:
+            return ["implausible solution: " + ", ".join(self.reasons)]
+        if self.nuisance:
+            return ["nuisance coefficients outside their physical range (" + ", ".join(self.nuisance)
+                    + _NUISANCE_TAIL[self.refined]]
+        return []
+
+    def diagnostics(self) -> dict:
+        """``implausible``, ``implausible_reasons``, ``nuisance_outside_physical`` of a result's diagnostics."""
+        return {"implausible": self.implausible, "implausible_reasons": list(self.reasons),
+                "nuisance_outside_physical": list(self.nuisance)}
+
+    def mark(self, estimates: dict) -> dict:
+        """``estimates`` (name -> :class:`~shipid.result.Estimate`) with ``m, zm_bar, rho`` labelled "not
+        determined" (the reasons first in their notes) when implausible: an implausible solution is not an
+        estimate of the load. A copy; unchanged when plausible."""
+        est = dict(estimates)
+        if self.reasons:
+            why = "implausible solution (" + ", ".join(self.reasons) + "): not an estimate of the load"
+            for n in ("m", "zm_bar", "rho"):
+                e = est[n]
+                est[n] = replace(e, status="not determined", note=f"{why}; {e.note}" if e.note else why)
+        return est
+
+
+def judge(theta: np.ndarray, known: KnownParams, conds, std: dict, *, refined: bool = False) -> Judgement:
+    """Judge the estimate ``theta`` of (30) (all nine, ``z_f`` included) of the datasets ``conds``:
+    :func:`implausible_identifiable` with the standard errors ``std`` (``m``, ``zm_bar``) for the flag and
+    :func:`implausible_reasons` (less "non-finite estimate", which the flag already says) for the nuisance split."""
+    reasons = implausible_identifiable(theta, known, conds, std)
+    nuisance = [w for w in implausible_reasons(theta, known, conds) if w != "non-finite estimate"]
+    return Judgement(reasons, nuisance, refined)
+
+
 def rho_of(theta: np.ndarray, known: KnownParams) -> float:
     """Moment ratio ``rho = m z_m / (m_c z_c)`` with z measured from the centre of rotation (24)."""
     z_f, m, zm = theta[I_ZF], theta[I_M], theta[I_ZM]
@@ -101,4 +164,4 @@ def dm_dzf(theta: np.ndarray, known: KnownParams) -> float:
     return rho * known.m_c * (zm - known.zc_bar) / (zm + z_f) ** 2
 
 
-__all__ = ["implausible_reasons", "implausible_identifiable", "rho_of", "dm_dzf"]
+__all__ = ["implausible_reasons", "implausible_identifiable", "Judgement", "judge", "rho_of", "dm_dzf"]

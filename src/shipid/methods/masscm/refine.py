@@ -59,14 +59,12 @@ the gyro signal counts as none (Algorithm 1 is kept).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from shipid.methods.masscm.pem_result import refine_result as _pem
 from shipid.methods.masscm.pem_result import refine_result_floor as _pem_floor
 from shipid.methods.masscm.whittle_result import refine_result as _whittle
-from shipid.methods.masscm.plausibility import implausible_identifiable, implausible_reasons
+from shipid.methods.masscm.plausibility import Judgement, judge
 from shipid.models.roll_reduced import THETA_NAMES
 
 #: The values of ``MassCMOptions.refine``: ``"auto"`` the rule of this module, ``"none"`` Algorithm 1 alone, or an
@@ -265,41 +263,30 @@ def apply(result, datasets, known, z_f, mode: str = "auto"):
     return out
 
 
-#: the warning lines :func:`shipid.methods.masscm.assemble.to_result` writes from its plausibility judgement
-_PLAUSIBILITY_LINES = ("implausible solution: ", "nuisance coefficients outside their physical range (")
-
-
 def rejudge(result, known, z_f: float) -> None:
     """Judge plausibility again on the refined estimate, in place.
 
-    Algorithm 1's result carries ``implausible``, ``implausible_reasons``, ``nuisance_outside_physical`` and their
-    warning lines for Algorithm 1's ``theta``; after a refinement the estimates are the refinement's, so the same
-    rules (:func:`~shipid.methods.masscm.plausibility.implausible_identifiable` on m, zm_bar with their refined
-    standard errors, :func:`~shipid.methods.masscm.plausibility.implausible_reasons` for the nuisance split) are
-    applied to them and the lines replaced; Algorithm 1's judgement is kept in ``diagnostics["refine"]
-    ["algorithm1_plausibility"]``.
+    Algorithm 1's result carries the :func:`~shipid.methods.masscm.plausibility.judge` of Algorithm 1's ``theta``
+    (``implausible``, ``implausible_reasons``, ``nuisance_outside_physical`` and its warning line); after a
+    refinement the estimates are the refinement's, so they are judged by the same function (m, zm_bar with their
+    refined standard errors), the previous judgement's warning lines (those it writes, from the stored reasons) are
+    replaced by the new one's and the entries of an implausible estimate relabelled; Algorithm 1's judgement is kept
+    in ``diagnostics["refine"]["algorithm1_plausibility"]``. Judging twice replaces the first refined judgement.
     """
     d, est = result.diagnostics, result.estimates
     theta = np.array([float(z_f) if n == "z_f" else est[n].value for n in THETA_NAMES])
     conds = list(result.model.get("conditions") or [])
-    std = {"m": est["m"].std, "zm_bar": est["zm_bar"].std}
-    reasons = implausible_identifiable(theta, known, conds, std)
-    nuisance = [w for w in implausible_reasons(theta, known, conds) if w != "non-finite estimate"]
-    d["refine"]["algorithm1_plausibility"] = {"implausible": d.get("implausible"),
-                                              "implausible_reasons": d.get("implausible_reasons"),
-                                              "nuisance_outside_physical": d.get("nuisance_outside_physical")}
-    warn = [w for w in d.get("warnings", []) if not w.startswith(_PLAUSIBILITY_LINES)]
-    if reasons:
-        why = "implausible solution (" + ", ".join(reasons) + "): not an estimate of the load"
-        for n in ("m", "zm_bar", "rho"):
-            e = est[n]
-            est[n] = replace(e, status="not determined", note=why)
-        warn.append("implausible solution: " + ", ".join(reasons))
-    elif nuisance:
-        warn.append("nuisance coefficients outside their physical range (" + ", ".join(nuisance) + ") after "
-                    "the refinement; m, zm_bar and rho are judged on their own and not flagged")
-    d.update({"implausible": bool(reasons), "implausible_reasons": reasons, "nuisance_outside_physical": nuisance,
-              "warnings": warn})
+    verdict = judge(theta, known, conds, {"m": est["m"].std, "zm_bar": est["zm_bar"].std}, refined=True)
+    previous = Judgement(list(d.get("implausible_reasons") or []), list(d.get("nuisance_outside_physical") or []),
+                         refined="algorithm1_plausibility" in d["refine"])
+    d["refine"].setdefault("algorithm1_plausibility", {k: d.get(k) for k in ("implausible", "implausible_reasons",
+                                                                             "nuisance_outside_physical")})
+    warn = list(d.get("warnings", []))
+    for w in previous.warnings():
+        if w in warn:
+            warn.remove(w)
+    result.estimates.update(verdict.mark(est))
+    d.update({**verdict.diagnostics(), "warnings": warn + verdict.warnings()})
 
 
 __all__ = ["REFINE_MODES", "ENGINES", "apply", "rejudge", "AUTO_ENGINES", "EXACT_MAX_SAMPLES", "auto_engine", "PREDICTION_LAGS", "SENSOR_NOISE_MIN", "prediction_residual", "sensor_noise_level",
