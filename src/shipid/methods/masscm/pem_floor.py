@@ -1,10 +1,10 @@
 """Monte Carlo of the floor-regularised maximum-likelihood refinement in wave roll with noise-free sensors.
 
 Beyond Linder et al. (2015, seed 000): the ``waves`` regime of :mod:`shipid.methods.masscm.coverage` (0.5 deg wave
-roll, noise-free sensors, 300-s records), Algorithm 1 (default options, z_f known) and then
-:func:`shipid.methods.masscm.pem_result.refine_result_floor` (``PEMOptions(sensor_floor=floor)``), the maximum-
-likelihood estimator of the model whose Cramér–Rao bound :func:`~shipid.methods.masscm.crlb_kf.crlb_kf` reports
-with the same ``floor``. A run whose refinement fails keeps Algorithm 1's estimate (``pem_ok`` False) and is
+roll, noise-free sensors, 300-s records), Algorithm 1 alone (default options with ``refine="none"``, z_f known) and
+then :func:`shipid.methods.masscm.pem_result.refine_result_floor` (``PEMOptions(sensor_floor=floor)``), the
+maximum-likelihood estimator of the model whose Cramér–Rao bound :func:`~shipid.methods.masscm.crlb_kf.crlb_kf`
+reports with the same ``floor``. A run whose refinement fails keeps Algorithm 1's estimate (``pem_ok`` False) and is
 counted. :func:`summary` is :func:`shipid.methods.masscm.coverage.summarise` against the bound at that floor.
 
 Measured (``run_one_floor(i, 9601)``, i = 0..45, floor 1e-3, one worker; tuned on ``SeedSequence([100, 0])``
@@ -41,7 +41,9 @@ from shipid.vessels import load_vessel
 
 def run_one_floor(i: int, seed: int, *, floor: float = 1e-3, duration: float = 300.0,
                   vessel: str = "fishing-vessel") -> dict:
-    """One ``waves`` realisation (``SeedSequence([seed, i])``): Algorithm 1, then the floor refinement.
+    """One ``waves`` realisation (``SeedSequence([seed, i])``): Algorithm 1 alone (``refine="none"``: the start and
+    the ``iv_*`` baseline are Algorithm 1's, whatever the ``refine="auto"`` rule would decide), then the floor
+    refinement.
 
     Returns the keys of :func:`shipid.methods.masscm.coverage.run_one` with ``refine="pem"`` (``m, m_std, ...``,
     ``iv_m, iv_m_std, ...``, ``pem_ok``, ``pem_reason``, ``pem_iterations``) plus ``seconds_algorithm1`` and
@@ -55,7 +57,7 @@ def run_one_floor(i: int, seed: int, *, floor: float = 1e-3, duration: float = 3
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,
-                             options=MassCMOptions(compute="fast"))
+                             options=MassCMOptions(compute="fast", refine="none"))
     t1 = time.perf_counter()
     rr = refine_result_floor(r, list(d.items()), known, z_f, floor)
     t2 = time.perf_counter()
