@@ -66,7 +66,7 @@ from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
-from shipid.methods.masscm.refine_start import initial_rows
+from shipid.methods.masscm.refine_start import initial_local
 from shipid.methods.masscm.scoring import fisher_scoring
 from shipid.models.roll_reduced import KnownParams
 
@@ -301,20 +301,6 @@ def _closed_form_variances(s, theta, loc):
     return loc
 
 
-def _initial_local(s: _Set, theta, known: KnownParams) -> np.ndarray:
-    loc = np.zeros(N_LOC)
-    loc[:12] = initial_rows(s, theta, known)
-    loc[12:15] = np.log([2 * np.pi / 1.0, 0.1, 1e-3])
-    d2 = np.diff(s.y, n=2, axis=0)
-    loc[15:18] = np.log(np.maximum(np.var(d2, axis=0) / 6, 1e-12))
-    loc[18:21] = s.y.mean(axis=0)
-    for _ in range(30):              # a start must be a stable ship: more sway damping until it is (v is the
-        if s.innov(theta, loc, False) is not None:      # state the reconstruction determines worst)
-            break
-        loc[1] -= 0.05
-    return loc
-
-
 def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
     """Wave filter start from the no-wave fit's roll-rate innovations: spectral peak, sigma from their variance."""
     r = s.innov(theta, loc, False)
@@ -326,12 +312,19 @@ def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
     f, P = welch(eps, fs=1.0 / s.T, nperseg=min(2048, s.n))
     w = 2 * np.pi * f[1 + int(np.argmax(P[1:]))]
     loc[12:15] = np.log([w, 0.1, 1.0])
-    p = model_vector(theta, loc)
-    _, (F, G, H, J, _R) = noise_matrices(p, known, s.z_f, s.cond, s.T, True)
-    var_unit = float(H[0] @ solve_discrete_lyapunov(F, np.outer(G, G)) @ H[0] + J[0] ** 2)
-    excess = max(np.var(eps) - np.exp(loc[15]), 0.1 * np.var(eps))
-    loc[14] = 0.5 * np.log(excess / var_unit)
+    loc[14] = wave_log_sigma(s, theta, loc, known, np.var(eps))
     return loc
+
+
+def wave_log_sigma(s, theta, loc, known: KnownParams, var: float) -> float:
+    """Start of the wave filter's ``log sigma`` for dataset ``s``: the roll-rate variance of the wave filter
+    ``loc[12:14]`` at unit ``sigma`` (stationary, from the discrete Lyapunov equation) scaled to the excess of the
+    residual roll-rate variance ``var`` over the sensor variance ``exp(loc[15])`` (at least a tenth of ``var``);
+    shared by this module and :mod:`shipid.methods.masscm.whittle`."""
+    _, (F, G, H, J, _R) = noise_matrices(model_vector(theta, loc), known, s.z_f, s.cond, s.T, True)
+    var_unit = float(H[0] @ solve_discrete_lyapunov(F, np.outer(G, G)) @ H[0] + J[0] ** 2)
+    excess = max(var - np.exp(loc[15]), 0.1 * var)
+    return 0.5 * np.log(excess / var_unit)
 
 
 def floor_schedule(floor: float) -> list:
@@ -369,23 +362,33 @@ def _floor_fit(sets, theta, locs, known: KnownParams, options: PEMOptions):
 
 
 def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
-    """Empty when the innovations of the model without waves are white, else which are not.
+    """Empty when the innovations of the model without waves are white, else which are not: :func:`ljung_box_reason`
+    of the mean-removed innovations (with coloured noise, e.g. waves and noise-free sensors, the white-noise model
+    is wrong and its standard errors are not valid)."""
+    def centred(s, loc):
+        eps = s.innov(theta, loc, False)[0]
+        return eps - eps.mean(axis=0)
+    return ljung_box_reason(sets, locs, centred, "innovations", lags, p)
+
+
+def ljung_box_reason(sets, locs, residuals, what: str, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
+    """Empty when the residuals ``residuals(s, loc)`` (N, 3; mean zero) of every dataset are white, else the first
+    dataset and channel that is not (named ``what`` in the message).
 
     Ljung-Box ``Q = N (N + 2) sum_{l <= lags} r_l^2 / (N - l)`` per dataset and channel against the chi-square
-    ``1 - p`` quantile with ``lags`` degrees of freedom: with coloured noise (waves and noise-free sensors) the
-    white-noise model is wrong and its standard errors are not valid.
+    ``1 - p`` quantile with ``lags`` degrees of freedom; shared by this module and
+    :mod:`shipid.methods.masscm.whittle`.
     """
     crit = float(chi2.ppf(1 - p, lags))
     for s, loc in zip(sets, locs):
-        eps = s.innov(theta, loc, False)[0]
-        e = eps - eps.mean(axis=0)
+        e = residuals(s, loc)
         n = e.shape[0]
         c0 = np.sum(e * e, axis=0)
         r = np.array([np.sum(e[l:] * e[:-l], axis=0) / c0 for l in range(1, lags + 1)])
         Q = n * (n + 2) * np.sum(r ** 2 / (n - np.arange(1, lags + 1))[:, None], axis=0)
         for ch, q in zip(("p", "a_s", "r"), Q):
             if q > crit:
-                return (f"innovations of {s.cond} {ch} not white (Ljung-Box Q = {q:.3g} > {crit:.3g}, {lags} lags): "
+                return (f"{what} of {s.cond} {ch} not white (Ljung-Box Q = {q:.3g} > {crit:.3g}, {lags} lags): "
                         "the model without waves does not fit")
     return ""
 
@@ -426,7 +429,8 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
         s.fit_initial = options.sensor_floor is not None
     theta = np.asarray(theta_free, dtype=float).copy()
     with np.errstate(all="ignore"), one_blas_thread():
-        locs = [_initial_local(s, theta, known) for s in sets]
+        locs = [initial_local(s, theta, known, lambda l, s=s: s.innov(theta, l, False) is not None)
+                for s in sets]
         quick = PEMOptions(max_iter=options.start_iter, tol=options.tol, rel_step=options.rel_step)
         # (1) the rudder response (sway/yaw rows, biases) with theta and the sensor weights held
         _, lo0, _, _, _, _ = _scoring(sets, theta, locs, False, quick, fix_theta=True, only=MEAN_LOCAL)
@@ -477,4 +481,4 @@ def finish(fit, sets, known: KnownParams, z_f: float, physical, whiteness) -> PE
 
 
 __all__ = ["PEMOptions", "PEMFit", "refine", "finish", "noise_matrices", "model_vector", "rho_of",
-           "physical_reason", "WAVE_LR"]
+           "physical_reason", "WAVE_LR", "ljung_box_reason", "wave_log_sigma", "WHITE_LAGS", "WHITE_P"]

@@ -78,24 +78,21 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from scipy.linalg import solve_discrete_lyapunov
-from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
-from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship, noise_matrices
+from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
-from shipid.methods.masscm.pem import FREE, PEMFit, PEMOptions, WAVE_LR, finish, model_vector
+from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, WHITE_LAGS, WHITE_P, finish,
+                                      ljung_box_reason, model_vector, wave_log_sigma)
 from shipid.methods.masscm.pem import physical_reason as _pem_physical
-from shipid.methods.masscm.refine_start import initial_rows
+from shipid.methods.masscm.refine_start import initial_local
 from shipid.methods.masscm.scoring import fisher_scoring
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
-N_LOC = 21        # as pem: c_v (6) | c_r (6) | log w, log zeta, log sigma | log var (3) | bias (3)
 I_M, I_ZM = FREE.index("m"), FREE.index("zm_bar")
 MEAN_LOCAL = list(range(12))
 NOISE_LOCAL = list(range(12, 18))
-WHITE_LAGS, WHITE_P = 20, 1e-4
 GRID = 4000       # frequencies of the band design grid
 RESIDUAL_CHUNK = 4096  # bins per model evaluation in time_residuals
 MODEL_COLS = [3, 4, 8, 9]   # the columns of At that depend on the parameters (the rest: [I, 0])
@@ -390,22 +387,6 @@ def _white_variances(s: _FSet, theta, loc):
     return loc
 
 
-def _initial_local(s: _FSet, theta, known: KnownParams) -> np.ndarray:
-    """pem's start: rows from :func:`~shipid.methods.masscm.refine_start.initial_rows`, sensor variances from second
-    differences (here their spectral form ``sum |2 sin(w/2)|^4 P(w) / 6``), biases from the means."""
-    loc = np.zeros(N_LOC)
-    loc[:12] = initial_rows(s, theta, known)
-    loc[12:15] = np.log([2 * np.pi / 1.0, 0.1, 1e-3])
-    d2 = np.diff(s.y, n=2, axis=0)
-    loc[15:18] = np.log(np.maximum(np.var(d2, axis=0) / 6, 1e-12))
-    loc[18:21] = s.y.mean(axis=0)
-    for _ in range(30):
-        if s.matrices(theta, loc, False, z=np.exp(1j * s.w[:1]), with_tail=False) is not None:
-            break
-        loc[1] -= 0.05
-    return loc
-
-
 def _wave_start(s: _FSet, theta, loc, known: KnownParams) -> np.ndarray:
     """Wave filter start from the no-wave fit's residual roll-rate band periodogram (peak, variance)."""
     m = s.matrices(theta, loc, False)
@@ -416,11 +397,7 @@ def _wave_start(s: _FSet, theta, loc, known: KnownParams) -> np.ndarray:
     ntot = s.nb.sum()
     loc[15:18] = np.log(np.maximum((np.abs(2 * np.sin(s.wb / 2)) ** 4) @ RM / (6 * ntot), 1e-12))
     loc[12:15] = np.log([s.wb[int(np.argmax(RM[:, 0] / s.nb))] / s.T, 0.1, 1.0])
-    _, (F, G, H, J, _R) = noise_matrices(model_vector(theta, loc), known, s.z_f, s.cond, s.T, True)
-    var_unit = float(H[0] @ solve_discrete_lyapunov(F, np.outer(G, G)) @ H[0] + J[0] ** 2)
-    var = RM[:, 0].sum() / ntot
-    excess = max(var - np.exp(loc[15]), 0.1 * var)
-    loc[14] = 0.5 * np.log(excess / var_unit)
+    loc[14] = wave_log_sigma(s, theta, loc, known, RM[:, 0].sum() / ntot)
     return loc
 
 
@@ -436,19 +413,9 @@ def time_residuals(s: _FSet, theta, loc) -> np.ndarray:
 
 
 def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
-    """Ljung-Box test of the residuals of the model without waves (as pem's); empty when white."""
-    crit = float(chi2.ppf(1 - p, lags))
-    for s, loc in zip(sets, locs):
-        e = time_residuals(s, theta, loc)
-        n = e.shape[0]
-        c0 = np.sum(e * e, axis=0)
-        r = np.array([np.sum(e[l:] * e[:-l], axis=0) / c0 for l in range(1, lags + 1)])
-        Q = n * (n + 2) * np.sum(r ** 2 / (n - np.arange(1, lags + 1))[:, None], axis=0)
-        for ch, q in zip(("p", "a_s", "r"), Q):
-            if q > crit:
-                return (f"residuals of {s.cond} {ch} not white (Ljung-Box Q = {q:.3g} > {crit:.3g}, {lags} lags): "
-                        "the model without waves does not fit")
-    return ""
+    """Ljung-Box test (:func:`~shipid.methods.masscm.pem.ljung_box_reason`) of the residuals of the model without
+    waves (:func:`time_residuals`, mean zero); empty when white."""
+    return ljung_box_reason(sets, locs, lambda s, loc: time_residuals(s, theta, loc), "residuals", lags, p)
 
 
 def physical_reason(theta, sets, locs, waves) -> str:
@@ -467,7 +434,10 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free,
         for c, tr in datasets:    # one dataset at a time: the start in the time domain, then the DFTs (less memory)
             s = _FSet(c, tr, known, z_f)
             sets.append(s)
-            locs.append(_initial_local(s, theta, known))
+            one_bin = np.exp(1j * s.w[:1])      # a stable ship: the model admissible at one frequency
+            locs.append(initial_local(s, theta, known,
+                                      lambda l, s=s, z=one_bin: s.matrices(theta, l, False, z=z, with_tail=False)
+                                      is not None))
             s.transform()
             s.design_bands(theta, locs[-1], False, o)
         quick = PEMOptions(max_iter=o.start_iter, tol=o.tol, rel_step=o.rel_step)
