@@ -67,7 +67,7 @@ from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
 from shipid.methods.masscm.refine_start import initial_local
-from shipid.methods.masscm.scoring import fisher_scoring
+from shipid.methods.masscm.scoring import fisher_scoring, perturbed
 from shipid.models.roll_reduced import KnownParams
 
 #: 2 x the log-likelihood gain per dataset above which the wave structure is kept (chi-square, 3 dof: ~1e-5)
@@ -252,15 +252,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         psi = np.empty((s.n, 3, len(cols)))
         dL = np.empty((len(cols), 3, 3))
         for c, (kind, i) in enumerate(cols):
-            t2, l2 = theta.copy(), loc.copy()
-            vec = t2 if kind == "t" else l2
-            h = rel_step * max(abs(vec[i]), 0.1)
-            vec[i] += h
-            r = s.innov(t2, l2, waves)
-            if r is None:
-                vec[i] -= 2 * h
-                r = s.innov(t2, l2, waves)
-                h = -h
+            r, h = perturbed(lambda t, l: s.innov(t, l, waves), theta, loc, kind, i, rel_step)
             if r is None:
                 psi[:, :, c], dL[c] = 0.0, 0.0
                 continue

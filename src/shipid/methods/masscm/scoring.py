@@ -25,6 +25,22 @@ from __future__ import annotations
 import numpy as np
 
 
+def perturbed(evaluate, theta, loc, kind: str, i: int, rel_step: float):
+    """``(evaluate(theta', loc'), h)`` for the forward difference of entry ``i`` of ``theta`` (``kind == "t"``) or of
+    ``loc`` (``"l"``) with step ``h = rel_step max(|p_i|, 0.1)``; where the model is not admissible there
+    (``evaluate`` returns ``None``) the step is ``-h``, and ``(None, -h)`` when neither side is."""
+    t2, l2 = theta.copy(), loc.copy()
+    vec = t2 if kind == "t" else l2
+    h = rel_step * max(abs(vec[i]), 0.1)
+    vec[i] += h
+    r = evaluate(t2, l2)
+    if r is None:
+        vec[i] -= 2 * h
+        r = evaluate(t2, l2)
+        h = -h
+    return r, h
+
+
 def apply_step(theta, locs, step, th_idx, fl, nloc):
     """``theta`` and the local vectors ``locs`` moved by ``step`` (layout of the module docstring); copies."""
     t2 = theta.copy()
@@ -130,4 +146,4 @@ def fisher_scoring(objective, score_information, theta, locs, free_local, n_thet
     return theta, locs, info, -f, it, conv
 
 
-__all__ = ["fisher_scoring", "apply_step", "parabola_step"]
+__all__ = ["fisher_scoring", "apply_step", "parabola_step", "perturbed"]

@@ -44,12 +44,12 @@ of 0.2 visible (the no-wave log-likelihood 380 below that at 0.05, and the wave 
 **Noise-state transient.** The noise states do not start stationary (the simulator starts waves and ship at rest);
 their DFT carries ``z H (zI - F)^-1 (s_0 - s_N) / sqrt(N)`` (as the rudder path's), large at low frequency where the
 slow sway and yaw poles amplify it and the wave spectrum has its zero. Its real 6-vector is profiled out in closed
-form (generalised least squares over the bands, :func:`~shipid.methods.masscm.whittle_kernels.transient_normal`); ignored, the likelihood of a
-300-s "both" record (``SeedSequence([100, 0])``) peaked at m = 2.99 where pem's is at 0.44 +- 0.03. The model
-without waves gets the same over the ship states (an initial state not at rest), so that the likelihood-ratio test
-of the wave structure compares like with like: with the transient in the wave model only, the wave structure was
-chosen (and then did not converge) in 30 of 30 sensor-noise runs at seed 9401. The Ljung-Box residuals of the model
-without waves leave this transient out (it decays within the ship's memory).
+form (generalised least squares over the bands, :func:`~shipid.methods.masscm.whittle_kernels.transient_normal`);
+ignored, the likelihood of a 300-s "both" record (``SeedSequence([100, 0])``) peaked at m = 2.99 where pem's is at
+0.44 +- 0.03. The model without waves gets the same over the ship states (an initial state not at rest), so that the
+likelihood-ratio test of the wave structure compares like with like: with the transient in the wave model only, the
+wave structure was chosen (and then did not converge) in 30 of 30 sensor-noise runs at seed 9401. The Ljung-Box
+residuals of the model without waves leave this transient out (it decays within the ship's memory).
 
 **Search, errors, failure.** Fisher scoring with Levenberg damping as :mod:`~shipid.methods.masscm.pem`: the
 Whittle expected information ``sum_b 2 Re tr(dAt_a^H W dAt_b Mt_b) + n_b tr(W dS_a W dS_b)`` (``W = S_b^-1``;
@@ -86,7 +86,7 @@ from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, WHITE_
                                       ljung_box_reason, model_vector, wave_log_sigma)
 from shipid.methods.masscm.pem import physical_reason as _pem_physical
 from shipid.methods.masscm.refine_start import initial_local
-from shipid.methods.masscm.scoring import fisher_scoring
+from shipid.methods.masscm.scoring import fisher_scoring, perturbed
 from shipid.models.roll_reduced import KnownParams
 
 N_TH = len(FREE)
@@ -338,16 +338,7 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         dS = np.zeros((nc,) + S.shape, dtype=complex)
         order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
         for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
-            kind, i = cols[c]
-            t2, l2 = theta.copy(), loc.copy()
-            vec = t2 if kind == "t" else l2
-            h = rel_step * max(abs(vec[i]), 0.1)
-            vec[i] += h
-            r = s.matrices(t2, l2, waves)
-            if r is None:
-                vec[i] -= 2 * h
-                r = s.matrices(t2, l2, waves)
-                h = -h
+            r, h = perturbed(lambda t, l: s.matrices(t, l, waves), theta, loc, *cols[c], rel_step)
             if r is None:
                 continue
             dA[c] = (r[0][:, :, MODEL_COLS] - A[:, :, MODEL_COLS]) / h
