@@ -112,38 +112,55 @@ _CHANNELS = ("p", "a_s", "r", "delta")
 _TESTED = ("p", "r")
 
 
+def _lagged(x: dict, chans, lags: int) -> np.ndarray:
+    """Regressors of a one-step prediction: a constant and lags ``1..lags`` of each channel of ``chans``
+    (``x[k]`` equal-length arrays), rows ``k = lags .. N-1``."""
+    N = x[chans[0]].size
+    X = np.empty((N - lags, len(chans) * lags + 1))
+    X[:, 0] = 1.0
+    c = 1
+    for k in chans:
+        for j in range(1, lags + 1):
+            X[:, c] = x[k][lags - j:N - j]
+            c += 1
+    return X
+
+
+def _ls_residual(X: np.ndarray, Gs: np.ndarray, d: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``y - X beta`` of the least-squares ``beta``, from the normal equations scaled to unit diagonal (``Gs = X^T
+    X / (d d^T)``, ``d = sqrt(diag X^T X)``; least squares on ``X`` if singular)."""
+    try:
+        beta = np.linalg.solve(Gs, (X.T @ y) / d) / d
+    except np.linalg.LinAlgError:
+        beta = np.linalg.lstsq(X, y, rcond=None)[0]
+    return y - X @ beta
+
+
+def _scaled_normal(X: np.ndarray):
+    """``(X^T X / (d d^T), d)`` with ``d = sqrt(diag X^T X)``: the normal matrix of :func:`_ls_residual`."""
+    G = X.T @ X
+    d = np.sqrt(np.maximum(np.diag(G), 1e-300))
+    return G / np.outer(d, d), d
+
+
 def prediction_residual(sig: dict, lags: int = PREDICTION_LAGS) -> dict:
     """Relative RMS residual of the one-step linear prediction of each gyro channel (test (a) of the module
     docstring) for one dataset: ``{"p": s_p, "r": s_r}``. ``sig`` maps ``p, a_s, r, delta`` to equal-length
     arrays. The normal equations are solved after scaling to unit diagonal (float64; the regressors are
     well conditioned at the sample rates used); a constant column absorbs the sensor biases."""
-    n = lags
     x = {k: np.asarray(sig[k], dtype=float) for k in _CHANNELS}
-    N = x["p"].size
-    if N <= 4 * (len(_CHANNELS) * n + 1):
+    if x["p"].size <= 4 * (len(_CHANNELS) * lags + 1):
         return {k: float("nan") for k in _TESTED}
-    X = np.empty((N - n, len(_CHANNELS) * n + 1))
-    X[:, 0] = 1.0
-    c = 1
-    for k in _CHANNELS:
-        for j in range(1, n + 1):
-            X[:, c] = x[k][n - j:N - j]
-            c += 1
-    G = X.T @ X
-    d = np.sqrt(np.maximum(np.diag(G), 1e-300))
-    Gs = G / np.outer(d, d)
+    X = _lagged(x, _CHANNELS, lags)
+    Gs, d = _scaled_normal(X)
     out = {}
     for k in _TESTED:
-        y = x[k][n:]
+        y = x[k][lags:]
         sd = float(np.std(y))
         if not sd > 0:
             out[k] = float("nan")
             continue
-        try:
-            beta = np.linalg.solve(Gs, (X.T @ y) / d) / d
-        except np.linalg.LinAlgError:
-            beta = np.linalg.lstsq(X, y, rcond=None)[0]
-        e = y - X @ beta
+        e = _ls_residual(X, Gs, d, y)
         out[k] = float(np.sqrt(np.mean(e * e)) / sd)
     return out
 
@@ -163,22 +180,8 @@ def sensor_noise_level(datasets) -> dict:
 def _residual_p(x: dict, chans, lags: int) -> np.ndarray:
     """Residual of the least-squares one-step prediction of ``p`` from lags ``1..lags`` of ``chans`` and a
     constant (normal equations scaled to unit diagonal)."""
-    N = x["p"].size
-    X = np.empty((N - lags, len(chans) * lags + 1))
-    X[:, 0] = 1.0
-    c = 1
-    for k in chans:
-        for j in range(1, lags + 1):
-            X[:, c] = x[k][lags - j:N - j]
-            c += 1
-    y = x["p"][lags:]
-    G = X.T @ X
-    d = np.sqrt(np.maximum(np.diag(G), 1e-300))
-    try:
-        beta = np.linalg.solve(G / np.outer(d, d), (X.T @ y) / d) / d
-    except np.linalg.LinAlgError:
-        beta = np.linalg.lstsq(X, y, rcond=None)[0]
-    return y - X @ beta
+    X = _lagged(x, chans, lags)
+    return _ls_residual(X, *_scaled_normal(X), x["p"][lags:])
 
 
 def portmanteau_z(e: np.ndarray, lo: int, hi: int) -> float:
@@ -289,5 +292,6 @@ def rejudge(result, known, z_f: float) -> None:
     d.update({**verdict.diagnostics(), "warnings": warn + verdict.warnings()})
 
 
-__all__ = ["REFINE_MODES", "ENGINES", "apply", "rejudge", "AUTO_ENGINES", "EXACT_MAX_SAMPLES", "auto_engine", "PREDICTION_LAGS", "SENSOR_NOISE_MIN", "prediction_residual", "sensor_noise_level",
-           "WAVE_LAGS", "WAVE_LAG_WINDOW", "WAVE_Z_MIN", "portmanteau_z", "wave_colour", "choose"]
+__all__ = ["REFINE_MODES", "ENGINES", "apply", "rejudge", "AUTO_ENGINES", "EXACT_MAX_SAMPLES", "auto_engine",
+           "PREDICTION_LAGS", "SENSOR_NOISE_MIN", "prediction_residual", "sensor_noise_level", "WAVE_LAGS",
+           "WAVE_LAG_WINDOW", "WAVE_Z_MIN", "portmanteau_z", "wave_colour", "choose"]
