@@ -51,5 +51,9 @@ def test_an_implausible_estimate_is_flagged_and_its_load_entries_relabelled():
     est = v.mark(_estimates())
     assert [est[n].status for n in ("m", "zm_bar", "rho", "k")] == ["not determined"] * 3 + ["estimated"]
     assert est["m"].note.startswith("implausible solution (") and est["m"].note.endswith("; a note")
+    back = v.unmark(est)
+    assert [back[n].status for n in ("m", "zm_bar", "rho")] == ["estimated", "estimated", "derived"]
+    assert back["m"].note == "a note" and back["zm_bar"].note == "" and back["k"] == est["k"]
+    assert Judgement().unmark(est) == est              # a plausible judgement labelled nothing
     assert not judge(th, KNOWN, CONDS, {"m": 1.0}).implausible      # within 2 std of zero: not flagged
     assert Judgement(["x"]).implausible and not Judgement().implausible

@@ -135,6 +135,14 @@ def test_plausibility_is_judged_again_on_the_refined_estimate():
     refine.rejudge(r, KNOWN, ZF)
     assert r.diagnostics["implausible"] and r.estimates["m"].status == "not determined"
     assert sum(w.startswith("implausible solution: ") for w in r.diagnostics["warnings"]) == 1
+    # ... and an estimate that the next judgement finds plausible is an estimate again, with its own note
+    good = dict(r.estimates)
+    r.estimates["m"] = replace(r.estimates["m"], value=0.4, std=0.02)
+    refine.rejudge(r, KNOWN, ZF)
+    assert not r.diagnostics["implausible"]
+    assert [r.estimates[n].status for n in ("m", "zm_bar", "rho")] == ["estimated", "estimated", "derived"]
+    assert not any(r.estimates[n].note.startswith("implausible") for n in ("m", "zm_bar", "rho"))
+    assert r.estimates["k"] == good["k"]
 
 
 def test_auto_engine_is_the_exact_likelihood_on_short_records_and_whittle_on_long_ones():

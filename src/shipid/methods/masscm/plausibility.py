@@ -98,6 +98,9 @@ def implausible_identifiable(theta: np.ndarray, known: KnownParams, conds=(NOMIN
     return why
 
 
+_MARKED = {"m": "estimated", "zm_bar": "estimated", "rho": "derived"}   # status before mark
+
+
 @dataclass(frozen=True)
 class Judgement:
     """The plausibility of one estimate (:func:`judge`).
@@ -129,16 +132,32 @@ class Judgement:
         return {"implausible": self.implausible, "implausible_reasons": list(self.reasons),
                 "nuisance_outside_physical": list(self.nuisance)}
 
+    def _why(self) -> str:
+        return "implausible solution (" + ", ".join(self.reasons) + "): not an estimate of the load"
+
     def mark(self, estimates: dict) -> dict:
         """``estimates`` (name -> :class:`~shipid.result.Estimate`) with ``m, zm_bar, rho`` labelled "not
         determined" (the reasons first in their notes) when implausible: an implausible solution is not an
         estimate of the load. A copy; unchanged when plausible."""
         est = dict(estimates)
         if self.reasons:
-            why = "implausible solution (" + ", ".join(self.reasons) + "): not an estimate of the load"
-            for n in ("m", "zm_bar", "rho"):
+            why = self._why()
+            for n in _MARKED:
                 e = est[n]
                 est[n] = replace(e, status="not determined", note=f"{why}; {e.note}" if e.note else why)
+        return est
+
+    def unmark(self, estimates: dict) -> dict:
+        """The inverse of :meth:`mark`: ``m, zm_bar, rho`` that this judgement labelled get back the status
+        :func:`~shipid.methods.masscm.assemble.to_result` gives them (``m, zm_bar`` estimated, ``rho`` derived)
+        and their notes without the reasons. A copy; entries this judgement did not label are unchanged."""
+        est = dict(estimates)
+        if self.reasons:
+            why = self._why()
+            for n, status in _MARKED.items():
+                e = est[n]
+                if e.status == "not determined" and e.note.startswith(why):
+                    est[n] = replace(e, status=status, note=e.note[len(why):].removeprefix("; "))
         return est
 
 

@@ -272,8 +272,9 @@ def rejudge(result, known, z_f: float) -> None:
     Algorithm 1's result carries the :func:`~shipid.methods.masscm.plausibility.judge` of Algorithm 1's ``theta``
     (``implausible``, ``implausible_reasons``, ``nuisance_outside_physical`` and its warning line); after a
     refinement the estimates are the refinement's, so they are judged by the same function (m, zm_bar with their
-    refined standard errors), the previous judgement's warning lines (those it writes, from the stored reasons) are
-    replaced by the new one's and the entries of an implausible estimate relabelled; Algorithm 1's judgement is kept
+    refined standard errors), the previous judgement's warning lines (those it writes, from the stored reasons) and labels are
+    replaced by the new one's (an estimate Algorithm 1 left implausible but the refinement makes plausible is an
+    estimate again); Algorithm 1's judgement is kept
     in ``diagnostics["refine"]["algorithm1_plausibility"]``. Judging twice replaces the first refined judgement.
     """
     d, est = result.diagnostics, result.estimates
@@ -288,7 +289,7 @@ def rejudge(result, known, z_f: float) -> None:
     for w in previous.warnings():
         if w in warn:
             warn.remove(w)
-    result.estimates.update(verdict.mark(est))
+    result.estimates.update(verdict.mark(previous.unmark(est)))
     d.update({**verdict.diagnostics(), "warnings": warn + verdict.warnings()})
 
 
