@@ -218,11 +218,12 @@ def _truth(vessel: str) -> dict:
 
 
 def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, vessel: str = "fishing-vessel",
-            noise_model: str = "ar", compute: str = "fast", refine: str = "auto") -> dict:
+            noise_model: str | None = None, compute: str = "fast", refine: str = "auto") -> dict:
     """One realisation: datasets from ``SeedSequence([seed, i])`` in ``regime``, then Algorithm 1 (z_f known).
 
     Returns ``m, zm_bar, rho`` and their standard errors, ``K_vdot, K_r, K_delta``, ``converged``,
     ``implausible`` (with ``implausible_reasons``), ``nuisance_outside_physical``, ``iterations``.
+    ``noise_model`` is Algorithm 1's (``None``: the estimator's default, as ``study mass-cm-coverage`` runs it).
     ``compute`` is how Algorithm 1 is computed, not what (:class:`~shipid.methods.masscm.estimator.MassCMOptions`).
     ``refine`` (:data:`shipid.methods.masscm.refine.REFINE_MODES`): ``"auto"`` (the estimator's default) refines
     where the rule of :mod:`shipid.methods.masscm.refine` says so, ``"pem"`` always by
@@ -234,6 +235,7 @@ def run_one(i: int, seed=0, *, regime: str = "both", duration: float = 300.0, ve
         raise ValueError(f"regime must be one of {', '.join(REGIMES)}")
     if refine not in REFINE_MODES:
         raise ValueError(f"refine must be one of {', '.join(REFINE_MODES)}")
+    noise_model = MassCMOptions().noise_model if noise_model is None else noise_model
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     d = simulate_datasets(vessel, seed=ss, duration=duration, noise=REGIMES[regime])
     known = KnownParams.from_vessel(vessel)
