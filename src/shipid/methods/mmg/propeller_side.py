@@ -1,0 +1,259 @@
+"""Port/starboard yaw balance of the KVLCC2: neutral rudder angle and propeller side force, chosen by the forward angle CV.
+
+Question: the rudder-angle selection of :mod:`shipid.methods.mmg.rudder_angle` (``cf/crossflow-side``)
+drifts to port over the whole 20°/25° zig-zags (heading RMS 2° → 13–14°) while its default drifts to
+starboard at 30°/35°. Does a small separate asymmetry term of a single-screw ship, set on the
+training runs, keep the yaw balance right at the larger angles? The terms are those of
+:mod:`shipid.models.mmg_prop_side` (the HSVA report gives the propeller's rotation: right-handed):
+
+* ``rudder_neutral_angle`` ``δ_0``: the slipstream-swirl offset of the rudder inflow angle
+  (physics expects ``δ_0 > 0`` for a right-handed propeller; the grid :data:`NEUTRAL_GRID` spans
+  both signs, so that a value of the other sign shows a compensation, not the swirl);
+* ``prop_side_thrust`` ``c``: the propeller side force ``Y_P = c T`` at the propeller, ``N_P = x_P L Y_P``,
+  sign fixed by the rotation (``c ≥ 0``, grid :data:`PROP_SIDE_GRID`).
+
+Candidates (:func:`candidates`, fixed a priori), on the frozen base of :mod:`~shipid.methods.mmg.rudder_angle`:
+
+* ``default``, ``cf/crossflow-side`` — the two of that study (the rule's references);
+* ``neutral-angle``, ``cf/crossflow-side/neutral-angle`` — each with ``δ_0`` calibrated;
+* ``prop-side``, ``cf/crossflow-side/prop-side`` — each with ``c`` calibrated.
+
+Calibration, on the fold's TRAINING runs only: the candidate's own calibrated particular first (the
+cross-flow side ``b`` by the peak criterion of :func:`shipid.methods.mmg.turning_selection.calibrate_folds`,
+as in that study), then the new term with ``b`` held, on its grid refined by a parabola's vertex (kept if
+it scores lower), by the fold score evaluated on the training runs (:func:`training_score`: RMS over the
+training runs with switch ≥ 5° and both sides of the open-loop peak-yaw-rate error, % + RMS over ALL
+training runs, the 1°-switch ones included, of the whole-run heading RMS, deg; the heading part is what
+measures the yaw balance). A calibrated value at its grid's end is labelled "not determined" (the
+training runs do not bound it). Calibrated values are held fixed in the regression: their uncertainty
+is not in the covariance (nor in bands drawn from it).
+
+Cross-validation: the forward folds and fold score of :mod:`shipid.methods.mmg.rudder_angle`
+(:data:`~shipid.methods.mmg.rudder_angle.FOLDS`: 10–15 → 20–35, 10–20 → 25–35, 10–25 → 30–35).
+
+Decision rule (written before any score was computed): the candidate with the lowest mean fold score
+replaces the current choice ``cf/crossflow-side`` only if it is one of the new candidates, its mean fold
+score is lower than that of ``cf/crossflow-side`` and its fold score is lower than that of
+``cf/crossflow-side`` in at least :data:`MIN_FOLDS_BETTER` of the three folds; otherwise
+``cf/crossflow-side`` stays. The fold spread (standard deviation over the folds) is reported with each mean.
+
+A check of what the data determine (:func:`yaw_balance`; a diagnostic, not a selection): per training
+zig-zag, the first-order Nomoto fit ``ṙ = a δ + b r + c`` by least squares gives the rudder angle at which
+the yaw rate settles to zero, ``δ_n = −c / a``, with its standard error (delta method; the residuals are
+autocorrelated, so the SE is optimistic).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.basins import read_kvlcc2
+from shipid.errors import ShipidError
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import rudder_angle as RA
+from shipid.methods.mmg import turning_selection as TS
+from shipid.methods.mmg import validate as V
+from shipid.methods.mmg.side_calibration import fit_candidate, refine_minimum, with_asymmetry
+from shipid.methods.mmg.zigzag import execute_index
+from shipid.models import mmg
+
+#: Key of a candidate: the asymmetry particular calibrated after the candidate's own (module docstring).
+SECOND = "calibrate_second"
+#: Neutral rudder angles tried (rad): −2° … 2° by 0.5°.
+NEUTRAL_GRID = tuple(np.deg2rad(np.arange(-2.0, 2.01, 0.5)).tolist())
+#: Propeller side-force fractions of the thrust tried (sign fixed by the right-handed rotation).
+PROP_SIDE_GRID = (0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3)
+GRIDS = {"rudder_neutral_angle": NEUTRAL_GRID, "prop_side_thrust": PROP_SIDE_GRID}
+#: Decision rule: least number of folds in which the winner must beat ``cf/crossflow-side``.
+MIN_FOLDS_BETTER = 2
+#: The current choice (:data:`shipid.methods.mmg.rudder_angle.CHOSEN`), the rule's reference.
+CURRENT = RA.CHOSEN
+
+
+def candidates() -> dict[str, dict]:
+    """The six candidates of the module docstring."""
+    base = RA.candidates()
+    d, cs = base["default"], base[CURRENT]
+    return {"default": d, CURRENT: cs,
+            "neutral-angle": dict(d, **{SECOND: "rudder_neutral_angle"}),
+            CURRENT + "/neutral-angle": dict(cs, **{SECOND: "rudder_neutral_angle"}),
+            "prop-side": dict(d, **{SECOND: "prop_side_thrust"}),
+            CURRENT + "/prop-side": dict(cs, **{SECOND: "prop_side_thrust"})}
+
+
+def training_score(rep: Sequence[Mapping], use: Sequence[bool]) -> float:
+    """RMS over the runs with ``use`` and both sides of the peak-yaw-rate error (%) + RMS over all runs of
+    the whole-run heading RMS (deg) of the replays ``rep``."""
+    pk = np.array([[r["r_peak_stbd_err_pct"], r["r_peak_port_err_pct"]] for r, u in zip(rep, use) if u], float)
+    psi = np.array([r["psi_rms"] for r in rep], float)
+    s = (float(np.sqrt(np.mean(pk ** 2))) if pk.size else 0.0) + float(np.sqrt(np.mean(psi ** 2)))
+    return s if np.isfinite(s) else float("inf")
+
+
+def _scores(cand, par, values, runs, data, use, prior, train) -> dict[float, float]:
+    rows, owner, out = [], [], {}
+    for a in values:
+        try:
+            m = fit_candidate([runs[i] for i in train], prior, with_asymmetry(cand, a, par))
+        except (ShipidError, ValueError, np.linalg.LinAlgError):
+            out[float(a)] = float("inf")
+            continue
+        rows += [(m, i) for i in train]
+        owner += [float(a)] * len(train)
+    rep = TS.batch_replay(rows, data) if rows else []
+    for a in set(owner):
+        idx = [j for j, o in enumerate(owner) if o == a]
+        out[a] = training_score([rep[j] for j in idx], [use[rows[j][1]] for j in idx])
+    return out
+
+
+def calibrate_second(cand: Mapping, par: str, runs, data, use, prior, train: Sequence[int]
+                     ) -> tuple[float, dict[float, float], str]:
+    """``par`` on its grid (:data:`GRIDS`) by :func:`training_score` on the runs ``train``, the grid's best
+    refined by the parabola's vertex (kept if lower). Returns the value, the table and its status
+    (``"calibrated"``, or ``"not determined"`` at the grid's end)."""
+    grid = GRIDS[par]
+    table = _scores(cand, par, grid, runs, data, use, prior, train)
+    best = min(table, key=lambda a: table[a])
+    g = sorted(table)
+    i = g.index(best)
+    status = "calibrated"
+    if 0 < i < len(g) - 1 and all(np.isfinite(table[g[j]]) for j in (i - 1, i, i + 1)):
+        a = refine_minimum(g[i - 1:i + 2], [table[g[j]] for j in (i - 1, i, i + 1)])
+        table.update(_scores(cand, par, [a], runs, data, use, prior, train))
+        if table[a] < table[best]:
+            best = a
+    elif i in (0, len(g) - 1):
+        status = "not determined"
+    return float(best), table, status
+
+
+def calibrated(cand: Mapping, runs, data, use, prior, train: Sequence[int]) -> tuple[dict, dict[str, Any]]:
+    """``cand`` with its own calibrated particular (:func:`shipid.methods.mmg.rudder_angle.calibrated`) and then
+    its :data:`SECOND` one set on the runs ``train``, and what was calibrated."""
+    par2 = cand.get(SECOND)
+    c, a = RA.calibrated({k: v for k, v in cand.items() if k != SECOND}, runs, data, use, prior, train)
+    info: dict[str, Any] = {"calibrated": a}
+    if par2:
+        v, table, status = calibrate_second(c, par2, runs, data, use, prior, train)
+        c = with_asymmetry(c, v, par2)
+        info.update(second=par2, second_value=v, second_status=status,
+                    second_table={f"{k:.6g}": t for k, t in sorted(table.items())})
+    return c, info
+
+
+def cross_validate(cands: Mapping[str, Mapping] | None = None, *, names: Sequence[str] = RA.RUNS,
+                   root: Path | None = None, progress=None) -> dict[str, Any]:
+    """The forward-fold CV of the module docstring: per fold and candidate what was calibrated, the
+    :func:`shipid.methods.mmg.rudder_angle.score_rows` numbers and the per-run replays; :func:`decide`; and
+    :func:`yaw_balance` of every run."""
+    cands = candidates() if cands is None else cands
+    prior = mmg.load_published("kvlcc2_hsva", root)
+    trials = [read_kvlcc2(f, root) for f in names]
+    runs = [R.smooth_run(tr) for tr in trials]
+    data = [TS.replay_data(tr) for tr in trials]
+    use = TS.peak_runs(trials)
+    folds: dict[str, Any] = {}
+    for fold, train, test in RA.fold_sets(names):
+        row: dict[str, Any] = {"train": [names[i] for i in train], "scored": [names[i] for i in test]}
+        for cname, cand in cands.items():
+            c, info = calibrated(cand, runs, data, use, prior, train)
+            model = fit_candidate([runs[i] for i in train], prior, c)
+            rep = TS.batch_replay([(model, i) for i in test], data)
+            row[cname] = {**info, **RA.score_rows(rep), "runs": dict(zip(row["scored"], rep))}
+            if progress is not None:
+                progress(f"{fold}: {cname} {row[cname]['score']:.2f}")
+        folds[fold] = row
+    return {"folds": folds, "decision": decide(folds, list(cands)),
+            "yaw_balance": {n: yaw_balance(tr) for n, tr in zip(names, trials)}}
+
+
+def decide(folds: Mapping[str, Mapping], names: Sequence[str]) -> dict[str, Any]:
+    """The decision rule of the module docstring: mean and spread of the fold score per candidate, folds
+    better than :data:`CURRENT`, and the choice."""
+    sc = {c: np.array([folds[f][c]["score"] for f in folds], float) for c in names}
+    mean = {c: float(v.mean()) for c, v in sc.items()}
+    spread = {c: float(v.std(ddof=1)) if v.size > 1 else 0.0 for c, v in sc.items()}
+    better = {c: int(np.sum(sc[c] < sc[CURRENT])) for c in names}
+    best = min(names, key=lambda c: mean[c])
+    new = best not in ("default", CURRENT)
+    wins = new and mean[best] < mean[CURRENT] and better[best] >= MIN_FOLDS_BETTER
+    return {"mean_score": mean, "fold_spread": spread, "folds_better_than_current": better,
+            "best_mean": best, "chosen": best if wins else CURRENT}
+
+
+def yaw_balance(trial) -> dict[str, float]:
+    """First-order Nomoto fit ``ṙ = a δ + b r + c`` from execute (least squares, ``ṙ`` by central differences):
+    the neutral rudder angle ``δ_n = −c/a`` (deg) with its standard error (delta method), the mean yaw rate
+    (deg/s) and the mean rudder (deg) over the run. The SE is optimistic (autocorrelated residuals)."""
+    k0 = execute_index(trial["delta"])
+    t = np.asarray(trial.t[k0:], float)
+    r = V.measured_states(trial)[k0:, 5]
+    d = V.trial_inputs(trial)[k0:, 0]
+    rd = np.gradient(r, t)
+    A = np.stack([d, r, np.ones_like(d)], axis=-1)
+    coef, *_ = np.linalg.lstsq(A, rd, rcond=None)
+    res = rd - A @ coef
+    dof = max(A.shape[0] - 3, 1)
+    C = np.linalg.inv(A.T @ A) * float(res @ res) / dof
+    a, _, c = coef
+    g = np.array([c / a ** 2, 0.0, -1.0 / a])
+    se = float(np.sqrt(max(g @ C @ g, 0.0)))
+    return {"delta_n_deg": float(np.degrees(-c / a)), "delta_n_se_deg": float(np.degrees(se)),
+            "r_mean_deg_s": float(np.degrees(r.mean())), "delta_mean_deg": float(np.degrees(d.mean()))}
+
+
+def heading_by_run(res: Mapping[str, Any]) -> dict[str, dict[str, float]]:
+    """Whole-run heading RMS (deg) per candidate and scored run, from the first fold that scores the run."""
+    out: dict[str, dict[str, float]] = {}
+    for row in res["folds"].values():
+        for c, r in row.items():
+            if c in ("train", "scored"):
+                continue
+            for n, x in r["runs"].items():
+                out.setdefault(c, {}).setdefault(n, float(x["psi_rms"]))
+    return out
+
+
+def format_cv(res: Mapping[str, Any]) -> str:
+    """Per fold and candidate: calibrated values, score and parts; per candidate the mean and the spread over
+    folds; whole-run heading RMS per run (fold 10-15 models; larger folds for runs it does not score); the
+    yaw balance of the runs; the decision."""
+    lines = [f"  {'fold':<6} {'candidate':<32} {'b':>8} {'second':>10} {'score':>7} {'r_pk%':>6} {'stbd%':>7} "
+             f"{'port%':>7} {'psi°':>6}"]
+    for f, row in res["folds"].items():
+        for c, r in row.items():
+            if c in ("train", "scored"):
+                continue
+            b = "" if r["calibrated"] is None else f"{r['calibrated']:.4g}"
+            s = ""
+            if r.get("second"):
+                v = r["second_value"]
+                s = f"{np.degrees(v):.3g}deg" if r["second"] == "rudder_neutral_angle" else f"{v:.3g}"
+                s += "?" if r["second_status"] != "calibrated" else ""
+            lines.append(f"  {f:<6} {c:<32} {b:>8} {s:>10} {r['score']:7.2f} {r['r_peak_rms_pct']:6.2f} "
+                         f"{r['r_peak_stbd_mean_pct']:+7.2f} {r['r_peak_port_mean_pct']:+7.2f} {r['psi_rms_deg']:6.2f}")
+    lines.append("  ('?': not determined, at the grid's end)")
+    d = res["decision"]
+    lines.append("  mean fold score +- spread (folds better than " + CURRENT + "):")
+    for c, v in d["mean_score"].items():
+        lines.append(f"    {c:<32} {v:6.2f} +- {d['fold_spread'][c]:5.2f} ({d['folds_better_than_current'][c]})")
+    hb = heading_by_run(res)
+    runs = list(next(iter(hb.values())))
+    lines.append("  whole-run heading RMS deg per scored run: " + " ".join(n.split("_Z_")[1][:-4] for n in runs))
+    for c, per in hb.items():
+        lines.append(f"    {c:<32} " + " ".join(f"{per[n]:6.2f}" for n in runs))
+    lines.append("  yaw balance of each run (Nomoto fit): delta_n deg +- SE; mean r deg/s; mean delta deg")
+    for n, y in res["yaw_balance"].items():
+        lines.append(f"    {n.split('_Z_')[1][:-4]:<8} {y['delta_n_deg']:+6.2f} +- {y['delta_n_se_deg']:.2f}; "
+                     f"{y['r_mean_deg_s']:+.3f}; {y['delta_mean_deg']:+.3f}")
+    lines.append(f"  decision rule: lowest mean '{d['best_mean']}'; chosen '{d['chosen']}'")
+    return "\n".join(lines)
+
+
+__all__ = ["SECOND", "NEUTRAL_GRID", "PROP_SIDE_GRID", "GRIDS", "MIN_FOLDS_BETTER", "CURRENT", "candidates",
+           "training_score", "calibrate_second", "calibrated", "cross_validate", "decide", "yaw_balance",
+           "heading_by_run", "format_cv"]
