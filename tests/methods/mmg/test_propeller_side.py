@@ -66,3 +66,19 @@ def test_candidates_add_one_term_each_to_the_two_references():
     for name, cand in c.items():
         assert cand.get(PS.SECOND) in (None, *PS.GRIDS)
     assert min(PS.PROP_SIDE_GRID) == 0.0                 # the right-handed rotation fixes the sign
+
+
+def synthetic_replays(centres, grid=(-2.0, -1.0, 0.0, 1.0, 2.0)):
+    """Per grid value, one replay per run whose heading RMS is smallest at that run's centre."""
+    return {a: [{"r_peak_stbd_err_pct": 0.0, "r_peak_port_err_pct": 0.0, "psi_rms": 1.0 + (a - c) ** 2}
+                for c in centres] for a in grid}
+
+
+def test_bootstrap_se_is_zero_when_every_run_agrees_and_grows_with_their_disagreement():
+    use = [True] * 8
+    assert PS.bootstrap_se(synthetic_replays([0.3] * 8), use, resamples=50) == 0.0
+    narrow = PS.bootstrap_se(synthetic_replays(0.3 + 0.1 * np.linspace(-1, 1, 8)), use, resamples=200)
+    wide = PS.bootstrap_se(synthetic_replays(0.3 + 0.6 * np.linspace(-1, 1, 8)), use, resamples=200)
+    assert 0.0 < narrow < wide
+    again = PS.bootstrap_se(synthetic_replays(0.3 + 0.6 * np.linspace(-1, 1, 8)), use, resamples=200)
+    assert again == wide                                  # seeded: same draws, same SE

@@ -119,6 +119,8 @@ NEUTRAL_GRID = tuple(np.deg2rad(np.arange(-2.0, 2.01, 0.5)).tolist())
 #: Propeller side-force fractions of the thrust tried (sign fixed by the right-handed rotation).
 PROP_SIDE_GRID = (0.0, 0.025, 0.05, 0.1, 0.15, 0.2, 0.3)
 GRIDS = {"rudder_neutral_angle": NEUTRAL_GRID, "prop_side_thrust": PROP_SIDE_GRID}
+#: Resamples of :func:`bootstrap_se`.
+BOOTSTRAP = 200
 #: Decision rule: least number of folds in which the winner must beat ``cf/crossflow-side``.
 MIN_FOLDS_BETTER = 2
 #: The current choice (:data:`shipid.methods.mmg.rudder_angle.CHOSEN`), the rule's reference.
@@ -145,42 +147,87 @@ def training_score(rep: Sequence[Mapping], use: Sequence[bool]) -> float:
     return s if np.isfinite(s) else float("inf")
 
 
-def _scores(cand, par, values, runs, data, use, prior, train) -> dict[float, float]:
+def _replays(cand, par, values, runs, data, prior, train) -> dict[float, list | None]:
+    """Per value of ``par``: the replays of the runs ``train`` by the model fitted on them (None: the fit failed)."""
     rows, owner, out = [], [], {}
     for a in values:
         try:
             m = fit_candidate([runs[i] for i in train], prior, with_asymmetry(cand, a, par))
         except (ShipidError, ValueError, np.linalg.LinAlgError):
-            out[float(a)] = float("inf")
+            out[float(a)] = None
             continue
         rows += [(m, i) for i in train]
         owner += [float(a)] * len(train)
     rep = TS.batch_replay(rows, data) if rows else []
-    for a in set(owner):
-        idx = [j for j, o in enumerate(owner) if o == a]
-        out[a] = training_score([rep[j] for j in idx], [use[rows[j][1]] for j in idx])
+    for a in dict.fromkeys(owner):
+        out[a] = [rep[j] for j, o in enumerate(owner) if o == a]
     return out
 
 
-def calibrate_second(cand: Mapping, par: str, runs, data, use, prior, train: Sequence[int]
-                     ) -> tuple[float, dict[float, float], str]:
-    """``par`` on its grid (:data:`GRIDS`) by :func:`training_score` on the runs ``train``, the grid's best
-    refined by the parabola's vertex (kept if lower). Returns the value, the table and its status
-    (``"calibrated"``, or ``"not determined"`` at the grid's end)."""
-    grid = GRIDS[par]
-    table = _scores(cand, par, grid, runs, data, use, prior, train)
-    best = min(table, key=lambda a: table[a])
+def _table(per: Mapping[float, list | None], use_t: Sequence[bool], idx=None) -> dict[float, float]:
+    out = {}
+    for a, rep in per.items():
+        if rep is None:
+            out[a] = float("inf")
+            continue
+        k = range(len(rep)) if idx is None else idx
+        out[a] = training_score([rep[i] for i in k], [use_t[i] for i in k])
+    return out
+
+
+def _argmin(table: Mapping[float, float]) -> tuple[float, int, list[float]]:
+    """Grid minimum, its index, the sorted grid; the first on a tie."""
     g = sorted(table)
-    i = g.index(best)
-    status = "calibrated"
+    best = min(g, key=lambda a: table[a])
+    return best, g.index(best), g
+
+
+def _vertex(table: Mapping[float, float]) -> float | None:
+    """The parabola's vertex through the grid minimum and its neighbours, or None at the grid's end."""
+    best, i, g = _argmin(table)
     if 0 < i < len(g) - 1 and all(np.isfinite(table[g[j]]) for j in (i - 1, i, i + 1)):
-        a = refine_minimum(g[i - 1:i + 2], [table[g[j]] for j in (i - 1, i, i + 1)])
-        table.update(_scores(cand, par, [a], runs, data, use, prior, train))
+        return refine_minimum(g[i - 1:i + 2], [table[g[j]] for j in (i - 1, i, i + 1)])
+    return None
+
+
+def bootstrap_se(per: Mapping[float, list | None], use_t: Sequence[bool], *, resamples: int = BOOTSTRAP,
+                 seed: int = 0) -> float:
+    """Run-bootstrap standard error of the calibrated value: the training runs resampled with replacement
+    (``resamples`` draws, seeded), the grid's scores recomputed from the replays of the models fitted on all
+    of them (held: the refits are not repeated) and the minimum refined by the parabola's vertex each time.
+    The standard deviation of those minima; ``inf`` with fewer than two finite grid values."""
+    grid = [a for a, r in per.items() if r is not None]
+    if len(grid) < 2:
+        return float("inf")
+    n = len(next(r for r in per.values() if r is not None))
+    rng = np.random.default_rng(seed)
+    mins = []
+    for _ in range(resamples):
+        idx = rng.integers(0, n, n)
+        t = _table(per, use_t, idx)
+        v = _vertex(t)
+        mins.append(_argmin(t)[0] if v is None else v)
+    return float(np.std(mins, ddof=1))
+
+
+def calibrate_second(cand: Mapping, par: str, runs, data, use, prior, train: Sequence[int]
+                     ) -> tuple[float, dict[float, float], str, float]:
+    """``par`` on its grid (:data:`GRIDS`) by :func:`training_score` on the runs ``train``, the grid's best
+    refined by the parabola's vertex (kept if lower). Returns the value, the table, its status and its
+    :func:`bootstrap_se`: ``"not determined"`` at the grid's end or when the SE is not below the value's
+    magnitude (the rule of the covariance machinery), else ``"calibrated"``."""
+    use_t = [use[i] for i in train]
+    per = _replays(cand, par, GRIDS[par], runs, data, prior, train)
+    table = _table(per, use_t)
+    best, i, g = _argmin(table)
+    a = _vertex(table)
+    if a is not None:
+        table.update(_table(_replays(cand, par, [a], runs, data, prior, train), use_t))
         if table[a] < table[best]:
             best = a
-    elif i in (0, len(g) - 1):
-        status = "not determined"
-    return float(best), table, status
+    se = bootstrap_se(per, use_t)
+    determined = 0 < i < len(g) - 1 and se < abs(best)
+    return float(best), table, "calibrated" if determined else "not determined", se
 
 
 def calibrated(cand: Mapping, runs, data, use, prior, train: Sequence[int]) -> tuple[dict, dict[str, Any]]:
@@ -190,9 +237,9 @@ def calibrated(cand: Mapping, runs, data, use, prior, train: Sequence[int]) -> t
     c, a = RA.calibrated({k: v for k, v in cand.items() if k != SECOND}, runs, data, use, prior, train)
     info: dict[str, Any] = {"calibrated": a}
     if par2:
-        v, table, status = calibrate_second(c, par2, runs, data, use, prior, train)
+        v, table, status, se = calibrate_second(c, par2, runs, data, use, prior, train)
         c = with_asymmetry(c, v, par2)
-        info.update(second=par2, second_value=v, second_status=status,
+        info.update(second=par2, second_value=v, second_status=status, second_se=se,
                     second_table={f"{k:.6g}": t for k, t in sorted(table.items())})
     return c, info
 
@@ -206,9 +253,9 @@ def resolve(trials, runs, prior: mmg.MmgModel, cand: Mapping, config: R.FitConfi
     if not par2:
         return c, info
     data = [TS.replay_data(tr) for tr in trials]
-    v, table, status = calibrate_second(c, par2, runs, data, TS.peak_runs(trials), prior, list(range(len(runs))))
+    v, table, status, se = calibrate_second(c, par2, runs, data, TS.peak_runs(trials), prior, list(range(len(runs))))
     out = dict(info or {})
-    out["second"] = {"parameter": par2, "value": v, "status": status,
+    out["second"] = {"parameter": par2, "value": v, "status": status, "se": se,
                      "training_score": {f"{k:.6g}": t for k, t in sorted(table.items())},
                      "criterion": "RMS peak-yaw-rate error (%, switch >= 5 deg) + RMS whole-run heading RMS (deg, "
                                   "all runs) of the open-loop replays of the given runs",
@@ -293,7 +340,7 @@ def format_cv(res: Mapping[str, Any]) -> str:
     """Per fold and candidate: calibrated values, score and parts; per candidate the mean and the spread over
     folds; whole-run heading RMS per run (fold 10-15 models; larger folds for runs it does not score); the
     yaw balance of the runs; the decision."""
-    lines = [f"  {'fold':<6} {'candidate':<32} {'b':>8} {'second':>10} {'score':>7} {'r_pk%':>6} {'stbd%':>7} "
+    lines = [f"  {'fold':<6} {'candidate':<32} {'b':>8} {'second':>16} {'score':>7} {'r_pk%':>6} {'stbd%':>7} "
              f"{'port%':>7} {'psi°':>6}"]
     for f, row in res["folds"].items():
         for c, r in row.items():
@@ -303,11 +350,13 @@ def format_cv(res: Mapping[str, Any]) -> str:
             s = ""
             if r.get("second"):
                 v = r["second_value"]
-                s = f"{np.degrees(v):.3g}deg" if r["second"] == "rudder_neutral_angle" else f"{v:.3g}"
+                deg = r["second"] == "rudder_neutral_angle"
+                se = r["second_se"]
+                s = (f"{np.degrees(v):.3g}+-{np.degrees(se):.2g}deg" if deg else f"{v:.3g}+-{se:.2g}")
                 s += "?" if r["second_status"] != "calibrated" else ""
-            lines.append(f"  {f:<6} {c:<32} {b:>8} {s:>10} {r['score']:7.2f} {r['r_peak_rms_pct']:6.2f} "
+            lines.append(f"  {f:<6} {c:<32} {b:>8} {s:>16} {r['score']:7.2f} {r['r_peak_rms_pct']:6.2f} "
                          f"{r['r_peak_stbd_mean_pct']:+7.2f} {r['r_peak_port_mean_pct']:+7.2f} {r['psi_rms_deg']:6.2f}")
-    lines.append("  ('?': not determined, at the grid's end)")
+    lines.append("  (second: value +- run-bootstrap SE; '?': not determined, at the grid's end or SE >= |value|)")
     d = res["decision"]
     lines.append("  mean fold score +- spread (folds better than " + CURRENT + "):")
     for c, v in d["mean_score"].items():
@@ -326,5 +375,5 @@ def format_cv(res: Mapping[str, Any]) -> str:
 
 
 __all__ = ["SECOND", "NEUTRAL_GRID", "PROP_SIDE_GRID", "GRIDS", "MIN_FOLDS_BETTER", "CURRENT", "candidates",
-           "training_score", "calibrate_second", "calibrated", "resolve", "cross_validate", "decide", "yaw_balance",
+           "BOOTSTRAP", "training_score", "bootstrap_se", "calibrate_second", "calibrated", "resolve", "cross_validate", "decide", "yaw_balance",
            "heading_by_run", "format_cv"]
