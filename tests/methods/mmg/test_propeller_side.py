@@ -82,3 +82,21 @@ def test_bootstrap_se_is_zero_when_every_run_agrees_and_grows_with_their_disagre
     assert 0.0 < narrow < wide
     again = PS.bootstrap_se(synthetic_replays(0.3 + 0.6 * np.linspace(-1, 1, 8)), use, resamples=200)
     assert again == wide                                  # seeded: same draws, same SE
+
+
+def test_hsva_neutral_angle_is_small_up_to_25_deg_and_moves_to_starboard_at_30_and_35():
+    from shipid.data import data_root
+    from shipid.data.basins import read_kvlcc2
+    from shipid.methods.mmg.rudder_angle import RUNS, rudder_angles
+
+    root = data_root()
+    if root is None or not (root / "kvlcc2_hsva").is_dir():
+        pytest.skip("shared data (kvlcc2_hsva/) not found (set SHIPID_DATA)")
+    bal = {n: PS.yaw_balance(read_kvlcc2(n)) for n in RUNS}
+    for n, a in zip(RUNS, rudder_angles(RUNS)):
+        y = bal[n]
+        assert np.isfinite(y["delta_n_se_deg"]) and y["delta_n_se_deg"] < 0.2
+        if a <= 25.0:
+            assert abs(y["delta_n_deg"]) < 0.7
+        else:
+            assert y["delta_n_deg"] > 0.5
