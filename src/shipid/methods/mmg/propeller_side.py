@@ -42,30 +42,30 @@ zig-zag, the first-order Nomoto fit ``ṙ = a δ + b r + c`` by least squares gi
 the yaw rate settles to zero, ``δ_n = −c / a``, with its standard error (delta method; the residuals are
 autocorrelated, so the SE is optimistic).
 
-Result (``shipid study kvlcc2-prop-side``, about 5 min on 2 shared cores; ``b``: the cross-flow side
-calibrated by the peaks; second: ``δ_0`` deg or ``c``, ``?`` not determined; mean peak yaw-rate error per
-side %, heading RMS deg; the ``default`` and ``cf/crossflow-side`` rows reproduce the
-:mod:`~shipid.methods.mmg.rudder_angle` table)::
+Result (``shipid study kvlcc2-prop-side``, 5–7 min on 2 shared cores; ``b``: the cross-flow side
+calibrated by the peaks; second: ``δ_0`` deg or ``c`` ± run-bootstrap SE (:func:`bootstrap_se`), ``?`` not
+determined; mean peak yaw-rate error per side %, heading RMS deg; the ``default`` and ``cf/crossflow-side``
+rows reproduce the :mod:`~shipid.methods.mmg.rudder_angle` table)::
 
-    fold   candidate                              b    second  score  r_pk%  stbd%   port%   psi°
-    10-15  default                                              18.91   6.56  +2.79   -7.35  12.35
-    10-15  cf/crossflow-side                -0.2116             13.72   3.75  +2.34   -3.15   9.97
-    10-15  neutral-angle                             -0.265deg  24.32   7.77  +4.76   -8.73  16.55
-    10-15  cf/crossflow-side/neutral-angle  -0.2116    -0.5deg  13.79   6.19  +6.04   -5.53   7.60
-    10-15  prop-side                                        0?  18.91   6.56  +2.79   -7.35  12.35
-    10-15  cf/crossflow-side/prop-side      -0.2116         0?  13.72   3.75  +2.34   -3.15   9.97
-    10-20  default                                              24.27   7.79  +1.26  -10.64  16.47
-    10-20  cf/crossflow-side                -0.2931             14.81   4.26  -0.94   -5.44  10.55
-    10-20  neutral-angle                              -0.18deg  27.93   8.40  +2.29  -11.41  19.53
-    10-20  cf/crossflow-side/neutral-angle  -0.2931    -0.5deg  11.84   5.48  +2.15   -7.27   6.36
-    10-20  prop-side                                        0?  24.27   7.79  +1.26  -10.64  16.47
-    10-20  cf/crossflow-side/prop-side      -0.2931         0?  14.81   4.26  -0.94   -5.44  10.55
-    10-25  default                                              28.38   8.30  +2.62  -11.30  20.07
-    10-25  cf/crossflow-side                -0.2755              9.03   4.52  +0.89   -6.19   4.50
-    10-25  neutral-angle                             -0.152deg  31.68   8.80  +3.31  -11.86  22.88
-    10-25  cf/crossflow-side/neutral-angle  -0.2755    -0.5deg  14.49   6.03  +3.34   -7.76   8.46
-    10-25  prop-side                                        0?  28.38   8.30  +2.62  -11.30  20.07
-    10-25  cf/crossflow-side/prop-side      -0.2755         0?   9.03   4.52  +0.89   -6.19   4.50
+    fold   candidate                              b          second  score  r_pk%  stbd%   port%   psi°
+    10-15  default                                                    18.91   6.56  +2.79   -7.35  12.35
+    10-15  cf/crossflow-side                -0.2116                   13.72   3.75  +2.34   -3.15   9.97
+    10-15  neutral-angle                             -0.265±0.16deg   24.32   7.77  +4.76   -8.73  16.55
+    10-15  cf/crossflow-side/neutral-angle  -0.2116    -0.5±0.12deg   13.79   6.19  +6.04   -5.53   7.60
+    10-15  prop-side                                           0±0?   18.91   6.56  +2.79   -7.35  12.35
+    10-15  cf/crossflow-side/prop-side      -0.2116            0±0?   13.72   3.75  +2.34   -3.15   9.97
+    10-20  default                                                    24.27   7.79  +1.26  -10.64  16.47
+    10-20  cf/crossflow-side                -0.2931                   14.81   4.26  -0.94   -5.44  10.55
+    10-20  neutral-angle                              -0.18±0.15deg   27.93   8.40  +2.29  -11.41  19.53
+    10-20  cf/crossflow-side/neutral-angle  -0.2931   -0.5±0.093deg   11.84   5.48  +2.15   -7.27   6.36
+    10-20  prop-side                                           0±0?   24.27   7.79  +1.26  -10.64  16.47
+    10-20  cf/crossflow-side/prop-side      -0.2931            0±0?   14.81   4.26  -0.94   -5.44  10.55
+    10-25  default                                                    28.38   8.30  +2.62  -11.30  20.07
+    10-25  cf/crossflow-side                -0.2755                    9.03   4.52  +0.89   -6.19   4.50
+    10-25  neutral-angle                             -0.152±0.15deg   31.68   8.80  +3.31  -11.86  22.88
+    10-25  cf/crossflow-side/neutral-angle  -0.2755   -0.5±0.088deg   14.49   6.03  +3.34   -7.76   8.46
+    10-25  prop-side                                           0±0?   28.38   8.30  +2.62  -11.30  20.07
+    10-25  cf/crossflow-side/prop-side      -0.2755            0±0?    9.03   4.52  +0.89   -6.19   4.50
 
     mean fold score ± spread (sd over the 3 folds) (folds better than cf/crossflow-side):
     default 23.85 ± 4.75 (0); cf/crossflow-side 12.52 ± 3.07; neutral-angle 27.98 ± 3.68 (0);
@@ -93,6 +93,19 @@ mean does not. The data check says why no term set on the training runs can do b
 zig-zags' own neutral rudder angle is between −0.6° and +0.3° (mean near −0.2°, no right-handed swirl
 offset visible), at 30° and 35° it jumps to +0.75° and +1.11° (the starboard rudder less effective than the
 port one there): the yaw balance changes between 25° and 30°, above every training fold's largest angle.
+
+A check made after the choice (a diagnostic, not a selection): fitted on all 13 HSVA zig-zags as
+``shipid identify mmg --selection rudder-angle`` fits (``b = −0.360``), the neutral angle calibrated on
+them by :func:`calibrate_second` is ``δ_0 = −0.50°`` (training score 27.98 at ``δ_0 = 0``, 13.86 at −0.5°).
+In-sample whole-run heading RMS, deg (the replays of all 13 runs; not a prediction)::
+
+    model                 5/1   10/1  10/5  10/10P 10/10S 15/1  15/5  20/5  20/10P 20/10S 25/5  30/5  35/5
+    cf/crossflow-side    47.7  55.9   7.9   2.3    6.7   30.9  15.6  17.7  11.1   14.5   19.4  10.1   6.0
+    ... /neutral-angle    9.2  18.4  14.6   4.3    2.9    2.0   3.0   4.0   2.2    4.1    7.8   2.8   4.9
+
+and ``shipid imo MODEL.json --samples 100`` gives for the 35° circles advance / tactical diameter (L, ±2 std
+from the parameter covariance only) 3.05 / 3.11 (±0.04 / ±0.06) starboard and 3.27 / 3.40 (±0.04 / ±0.07)
+port, against 3.11 / 3.15 and 3.23 / 3.38 for ``cf/crossflow-side``.
 """
 
 from __future__ import annotations
