@@ -100,3 +100,30 @@ def test_hsva_neutral_angle_is_small_up_to_25_deg_and_moves_to_starboard_at_30_a
             assert abs(y["delta_n_deg"]) < 0.7
         else:
             assert y["delta_n_deg"] > 0.5
+
+
+@pytest.mark.slow
+def test_resolve_sets_both_calibrated_particulars_on_the_given_runs():
+    from shipid.data import data_root
+    from shipid.data.basins import read_kvlcc2
+    from shipid.methods.mmg import estimator as R
+    from shipid.models import mmg
+
+    root = data_root()
+    if root is None or not (root / "kvlcc2_hsva").is_dir():
+        pytest.skip("shared data (kvlcc2_hsva/) not found (set SHIPID_DATA)")
+    names = ["HSVA_CPMC_KVLCC2_Z_10_01.dat", "HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat",
+             "HSVA_CPMC_KVLCC2_Z_20_05.dat"]
+    trials = [read_kvlcc2(n) for n in names]
+    runs = [R.smooth_run(tr) for tr in trials]
+    cand = PS.candidates()[PS.CURRENT + "/neutral-angle"]
+    c, info = PS.resolve(trials, runs, mmg.load_published("kvlcc2_hsva"), cand)
+    part = c["particulars"]
+    assert part["rudder_crossflow_side"] == info["value"]
+    sec = info["second"]
+    assert sec["parameter"] == "rudder_neutral_angle" and part["rudder_neutral_angle"] == sec["value"]
+    assert min(PS.NEUTRAL_GRID) <= sec["value"] <= max(PS.NEUTRAL_GRID)
+    assert sec["status"] in ("calibrated", "not determined") and np.isfinite(sec["se"]) and sec["se"] >= 0
+    assert PS.SECOND not in c and "calibrate" not in c
+    assert min(sec["training_score"].values()) == pytest.approx(
+        sec["training_score"][f"{sec['value']:.6g}"])
