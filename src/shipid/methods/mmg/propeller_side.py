@@ -302,6 +302,32 @@ def cross_validate(cands: Mapping[str, Mapping] | None = None, *, names: Sequenc
             "yaw_balance": {n: yaw_balance(tr) for n, tr in zip(names, trials)}}
 
 
+def leave_one_out(cand_names: Sequence[str] = (CURRENT, CURRENT + "/neutral-angle"), *,
+                  names: Sequence[str] = RA.RUNS, root: Path | None = None, progress=None) -> dict[str, Any]:
+    """A diagnostic, not a selection: each run left out in turn, the candidates calibrated (:func:`calibrated`)
+    and fitted on the other runs, the left-out run replayed; per candidate the per-run numbers and
+    :func:`shipid.methods.mmg.rudder_angle.score_rows` over all left-out runs. This interpolates in angle
+    (the final model is fitted on every angle), where the forward folds extrapolate."""
+    cands = candidates()
+    prior = mmg.load_published("kvlcc2_hsva", root)
+    trials = [read_kvlcc2(f, root) for f in names]
+    runs = [R.smooth_run(tr) for tr in trials]
+    data = [TS.replay_data(tr) for tr in trials]
+    use = TS.peak_runs(trials)
+    per: dict[str, dict[str, Any]] = {c: {} for c in cand_names}
+    for i, n in enumerate(names):
+        train = [j for j in range(len(names)) if j != i]
+        for cname in cand_names:
+            c, info = calibrated(cands[cname], runs, data, use, prior, train)
+            model = fit_candidate([runs[j] for j in train], prior, c)
+            per[cname][n] = {**TS.batch_replay([(model, i)], data)[0], **{k: v for k, v in info.items()
+                                                                         if k != "second_table"}}
+            if progress is not None:
+                progress(f"left out {n}: {cname} psi {per[cname][n]['psi_rms']:.2f}")
+    return {c: {"runs": per[c], **RA.score_rows([per[c][n] for n in names if use[names.index(n)]])}
+            for c in cand_names}
+
+
 def decide(folds: Mapping[str, Mapping], names: Sequence[str]) -> dict[str, Any]:
     """The decision rule of the module docstring: mean and spread of the fold score per candidate, folds
     better than :data:`CURRENT`, and the choice."""
@@ -388,5 +414,5 @@ def format_cv(res: Mapping[str, Any]) -> str:
 
 
 __all__ = ["SECOND", "NEUTRAL_GRID", "PROP_SIDE_GRID", "GRIDS", "MIN_FOLDS_BETTER", "CURRENT", "candidates",
-           "BOOTSTRAP", "training_score", "bootstrap_se", "calibrate_second", "calibrated", "resolve", "cross_validate", "decide", "yaw_balance",
+           "BOOTSTRAP", "training_score", "bootstrap_se", "calibrate_second", "calibrated", "resolve", "cross_validate", "leave_one_out", "decide", "yaw_balance",
            "heading_by_run", "format_cv"]
