@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'da1123e7faa0aa78'
+SOURCES = 'acb13674036ed3ae'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -59,6 +59,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.mmg.cli', "KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the kvlcc2-zigzag study's held-out runs.", False),
     ('study', 'kvlcc2-nested'):
         ('shipid.methods.mmg.cli_turning_nested', 'KVLCC2 HSVA: default, turning and automatic selection, leave-one-rudder-angle-out (nested CV).', False),
+    ('study', 'kvlcc2-prop-side'):
+        ('shipid.methods.mmg.cli_prop_side', 'KVLCC2 HSVA: neutral rudder angle and propeller side force, trained on smaller and scored on larger angles.', False),
     ('study', 'kvlcc2-rudder-angle'):
         ('shipid.methods.mmg.cli_rudder_angle', 'KVLCC2 HSVA: angle-dependent rudder terms, trained on smaller and scored on larger rudder angles.', False),
     ('study', 'kvlcc2-sides'):

@@ -110,7 +110,9 @@ A zero-rudder yaw moment does not rescue the balance: with the propeller side fo
 free in the regression (structure ``yasukawa2015-asym``, ``YP_T``, ``NP_T``; candidates built ad hoc and
 passed to :func:`cross_validate`, after the table), the mean fold scores are default 26.51,
 cf/side-gain 32.31, cf/crossflow-side 37.43 (against 23.85, 13.42, 12.52 without): worse in every fold,
-as the free asymmetry terms of :mod:`shipid.methods.mmg.extrapolation` were.
+as the free asymmetry terms of :mod:`shipid.methods.mmg.extrapolation` were. Calibrated rather than
+regressed (a neutral rudder angle, a propeller side force of the right-handed sign), they do not win the
+same forward CV either (:mod:`shipid.methods.mmg.propeller_side`, ``shipid study kvlcc2-prop-side``).
 
 Runs read: the twelve HSVA zig-zags of :data:`RUNS` (the HSVA basin only; no run of another basin).
 The 20°/10° and 35°/5° runs are the held-out runs of the frozen overshoot study
