@@ -213,18 +213,20 @@ def _summarise(rows: Sequence[dict[str, float]]) -> dict[str, float]:
 def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel,
                   candidates: Sequence[str], *, folds: int = 4, decimate: int = 2,
                   oe_config: OE.OEConfig = OE.OEConfig(), pool: Mapping[str, Mapping] | None = None,
-                  progress: Callable[[str], None] | None = None) -> dict[str, dict[str, Any]]:
+                  progress: Callable[[str], None] | None = None, per_fold: bool = False) -> dict[str, dict[str, Any]]:
     """``folds``-fold CV over the TRAINING runs of each candidate, regression vs regression + output error.
 
     Returns ``{candidate + "/regression" | "/output-error": summary}`` with the pooled RMS
     (``psi_rms`` deg, ``pos_rms`` m), the CV ``score`` and the mean over left-out runs of
     their per-run RMS (``*_mean_of_runs``). ``pool``: where the candidate names are looked up
     (default :data:`shipid.methods.mmg.candidates.CANDIDATES` of the prior's structure).
+    ``per_fold``: each summary also has ``"fold_scores"``, the score of each fold's left-out runs pooled.
     """
     say = progress or (lambda s: None)
     cands = R.CANDIDATES[prior.structure] if pool is None else pool
     groups = R.fold_groups(len(runs), folds)
     rows: dict[str, list] = {}
+    fold_rows: dict[str, list] = {}
     for cname in candidates:
         cprior, free = R.apply_candidate(prior, cands[cname])
         cfg = R.candidate_config(R.FitConfig(), cands[cname])
@@ -232,12 +234,18 @@ def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior:
             tr_idx = [i for i in range(len(runs)) if i not in g]
             f = R.fit([runs[i] for i in tr_idx], cprior, free, cfg)
             test = [trials[i] for i in g]
-            rows.setdefault(cname + "/regression", []).extend(_scores(f.model, test, decimate))
             f2, oe = OE.refined_fit(f, [trials[i] for i in tr_idx], oe_config)
-            rows.setdefault(cname + "/output-error", []).extend(_scores(f2.model, test, decimate))
+            for key, model in ((cname + "/regression", f.model), (cname + "/output-error", f2.model)):
+                sc = _scores(model, test, decimate)
+                rows.setdefault(key, []).extend(sc)
+                fold_rows.setdefault(key, []).append(sc)
             say(f"cv {cname} fold {gi + 1}/{len(groups)}: output-error cost {oe.cost0:.4g} -> {oe.cost:.4g} "
                 f"in {oe.iterations} iterations")
-    return {k: _summarise(v) for k, v in rows.items()}
+    out = {k: _summarise(v) for k, v in rows.items()}
+    if per_fold:
+        for k, v in fold_rows.items():
+            out[k]["fold_scores"] = [_summarise(fr)["score"] for fr in v]
+    return out
 
 
 def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int = 4, refine_candidates: int = 2,
