@@ -38,6 +38,13 @@ The base is recomputed by the same code. A variant replaces the base only if all
 3. the mean paired fold difference ``d̄ = mean_f (s_f(variant) − s_f(base))`` is below minus
    its standard error ``sd(d) / √4``.
 
+The timing repair (:mod:`shipid.methods.mmg.timing`, added to the plan after the base CV and
+before any other score): the base candidate fitted and scored on the training runs re-timed by
+the offsets :func:`~shipid.methods.mmg.timing.estimate_lags` finds on each fold's own training
+runs. Its heading error is then measured against the raw heading samples ``τ_ψ`` later (the
+re-timed heading), its position error against the same raw position samples. It is kept only if
+it passes rules 1–3 AND its pooled position RMS is not above the base's.
+
 Among the variants that pass, the lowest ``S``. If two single variants pass, their union is
 scored once and taken only if it passes the same rule against the best single. At most these
 three singles and one union are scored (four CVs besides the base); every score is reported.
