@@ -210,6 +210,11 @@ def _summarise(rows: Sequence[dict[str, float]]) -> dict[str, float]:
     return out
 
 
+#: Per-run horizon counts and RMS of a model on runs, and their pooled summary (public names of the two helpers).
+horizon_rows = _scores
+summarise_rows = _summarise
+
+
 def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel,
                   candidates: Sequence[str], *, folds: int = 4, decimate: int = 2,
                   oe_config: OE.OEConfig = OE.OEConfig(), pool: Mapping[str, Mapping] | None = None,
@@ -348,5 +353,5 @@ def format_heldout9_test(st: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["RANDOM_SEED", "NINTH", "heldout9_split", "cv_refinement", "heldout9_train", "heldout9_evaluate",
-           "format_heldout9", "format_heldout9_test"]
+__all__ = ["RANDOM_SEED", "NINTH", "heldout9_split", "horizon_rows", "summarise_rows", "cv_refinement",
+           "heldout9_train", "heldout9_evaluate", "format_heldout9", "format_heldout9_test"]
