@@ -256,7 +256,7 @@ def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior:
 
 def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int = 4, refine_candidates: int = 2,
                    oe_config: OE.OEConfig = OE.OEConfig(), asymmetry: bool = True, surge: bool = True,
-                   retime: bool = False, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                   retime: bool = True, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Training side (module docstring, steps 1–3). Reads no test run.
 
     ``refine_candidates``: how many of the best regression candidates :func:`cv_refinement` compares.
