@@ -48,6 +48,13 @@ it passes rules 1–3 AND its pooled position RMS is not above the base's.
 Among the variants that pass, the lowest ``S``. If two single variants pass, their union is
 scored once and taken only if it passes the same rule against the best single. At most these
 three singles and one union are scored (four CVs besides the base); every score is reported.
+
+Result (:mod:`shipid.methods.mmg.study_ext2`; ``S``, then gain / folds better / mean fold
+difference / its SE): base 1.345 (folds 0.966, 1.502, 1.403, 1.370); ``rudder-yaw-inflow``
+1.342 (0.002 / 2 / −0.002 / 0.006), ``prop-walk-J`` 1.357 (−0.012 / 1 / +0.014 / 0.010),
+``wind-arm`` 1.344 (0.000 / 2 / +0.000 / 0.006): none passes, no union scored; the timing
+repair 1.288 (0.057 / 4 / −0.060 / 0.008): passes, kept (``retime=True`` in
+:func:`shipid.methods.mmg.study_oe.heldout9_train`). Four variants tried in all.
 """
 
 from __future__ import annotations
