@@ -1,0 +1,19 @@
+"""Decision rule of the heldout9 follow-up variants (shipid.methods.mmg.study_ext2.decide)."""
+
+from shipid.methods.mmg import study_ext2 as X
+
+
+def _s(score, folds):
+    return {"score": score, "fold_scores": folds}
+
+
+def test_a_variant_must_gain_in_pool_and_in_most_folds_beyond_the_fold_spread():
+    base = _s(1.345, [0.97, 1.50, 1.40, 1.37])
+    ok = X.decide(base, _s(1.288, [0.93, 1.43, 1.33, 1.31]))
+    assert ok["passes"] and ok["folds_better"] == 4 and ok["gain"] > X.MIN_GAIN
+    small = X.decide(base, _s(1.335, [0.96, 1.49, 1.39, 1.36]))       # every fold better, pooled gain 0.010
+    assert not small["passes"] and small["folds_better"] == 4
+    two = X.decide(base, _s(1.30, [0.80, 1.30, 1.45, 1.42]))            # large gain from two folds only
+    assert not two["passes"] and two["folds_better"] == 2
+    noisy = X.decide(base, _s(1.32, [0.50, 1.49, 1.39, 1.90]))          # 3 of 4 better but mean difference +
+    assert not noisy["passes"] and noisy["folds_better"] == 3 and noisy["mean_fold_difference"] > 0
