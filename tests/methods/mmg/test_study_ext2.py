@@ -17,3 +17,23 @@ def test_a_variant_must_gain_in_pool_and_in_most_folds_beyond_the_fold_spread():
     assert not two["passes"] and two["folds_better"] == 2
     noisy = X.decide(base, _s(1.32, [0.50, 1.49, 1.39, 1.90]))          # 3 of 4 better but mean difference +
     assert not noisy["passes"] and noisy["folds_better"] == 3 and noisy["mean_fold_difference"] > 0
+
+
+def test_retimed_cv_of_runs_without_offsets_is_the_plain_cv(esso_published, own_run):
+    """On runs a model made itself (no channel offsets) the offsets come out 0 in every fold and the CV on
+    re-timed runs repeats study_oe.cv_refinement's output-error scores, fold by fold."""
+    import numpy as np
+    import pytest
+
+    from shipid.methods.mmg import candidates_ext2 as E2
+    from shipid.methods.mmg import output_error as OE
+
+    trials = [own_run(esso_published, 130.0, rudder_deg=a, period=p) for a, p in ((15.0, 40.0), (25.0, 60.0))]
+    cand = {E2.BASE_NAME: E2.base_candidate()}
+    cfg = OE.OEConfig(max_iter=1)
+    plain = X.cv_variants(trials, [E2.BASE_NAME], cand, folds=2, oe_config=cfg)[E2.BASE_NAME]
+    moved = X.cv_retimed(trials, E2.BASE_NAME, cand[E2.BASE_NAME], folds=2, oe_config=cfg)
+    assert all((lg["psi"], lg["uv"], lg["r"]) == (0.0, 0.0, 0.0) for lg in moved["lags"])
+    assert len(plain["fold_scores"]) == 2 and np.all(np.isfinite(plain["fold_scores"]))
+    assert moved["fold_scores"] == pytest.approx(plain["fold_scores"], rel=1e-6)
+    assert moved["score"] == pytest.approx(plain["score"], rel=1e-6)
