@@ -17,7 +17,7 @@ training runs, ``hull+rudder+thrust/nondimensional+prop-side+wind-gain`` with ou
     ``NW_y``: the air side force's centre of effort shifted, ``N = NW_y L Y_A`` (Fujiwara's
     moment has a fixed shape in the relative wind direction; the gains of the base scale it).
 
-Training-run diagnosis that is not a model term (``shipid.methods.mmg.study_ext2.timing_diagnosis``):
+Training-run diagnosis that is not a model term (:func:`shipid.methods.mmg.timing.estimate_lags`):
 the brief's "lever arm" between the body velocities and the position derivative is not a
 lever arm: per run the slope of ``v_meas − v_pos`` on ``r`` grows with the speed (−0.03 m in
 the slowest runs to −0.32 m in the fastest zig-zags; pooled ``v_meas − v_pos = −0.027 r −
