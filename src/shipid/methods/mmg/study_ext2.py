@@ -1,0 +1,95 @@
+"""Training-run CV of the follow-up variants of the Esso heldout9 choice (:mod:`shipid.methods.mmg.candidates_ext2`).
+
+:func:`cv_variants` scores the base and its ``esso-lowspeed-ext2`` variants by the 4-fold
+output-error CV of :func:`shipid.methods.mmg.study_oe.cv_refinement` with the per-fold scores;
+:func:`cv_retimed` scores the base on runs re-timed by :mod:`shipid.methods.mmg.timing`, the
+offsets estimated on each fold's own training runs; :func:`decide` applies the decision rule
+of :mod:`shipid.methods.mmg.candidates_ext2`. Only the 32 training runs of the 9-run split are
+read (:func:`training_runs`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from shipid.data.basins import read_esso
+from shipid.data.trial import Trial
+from shipid.methods.mmg import candidates_ext2 as E2
+from shipid.methods.mmg import estimator as R
+from shipid.methods.mmg import output_error as OE
+from shipid.methods.mmg import study_oe as S
+from shipid.methods.mmg import timing as T
+from shipid.models import mmg
+
+#: Decision rule (candidates_ext2 docstring): least pooled gain, folds that must improve.
+MIN_GAIN = 0.02
+MIN_FOLDS_BETTER = 3
+
+
+def training_runs(root: Path | None = None, ninth: str = "issue") -> list[Trial]:
+    """The 32 training runs of :func:`shipid.methods.mmg.study_oe.heldout9_split` (no test run is read)."""
+    return [read_esso(f, root) for f in S.heldout9_split(root, ninth)["train"]]
+
+
+def pool() -> dict[str, dict]:
+    """The base and its single variants, by name."""
+    out = {E2.BASE_NAME: E2.base_candidate()}
+    out.update(E2.ext2_variants())
+    return out
+
+
+def cv_variants(trials: Sequence[Trial], names: Sequence[str], candidates: Mapping[str, Mapping], *,
+                folds: int = 4, oe_config: OE.OEConfig = OE.OEConfig(),
+                progress: Callable[[str], None] | None = None) -> dict[str, dict[str, Any]]:
+    """Output-error CV summaries (with ``fold_scores``) of ``names`` from ``candidates``."""
+    prior = mmg.load_published("esso_osaka_3m")
+    runs = [R.smooth_run(tr) for tr in trials]
+    res = S.cv_refinement(trials, runs, prior, list(names), folds=folds, oe_config=oe_config, pool=candidates,
+                          progress=progress, per_fold=True)
+    return {k.rsplit("/", 1)[0]: v for k, v in res.items() if k.endswith("/output-error")}
+
+
+def cv_retimed(trials: Sequence[Trial], name: str, cand: Mapping, *, folds: int = 4, decimate: int = 2,
+               oe_config: OE.OEConfig = OE.OEConfig(),
+               progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """The output-error CV of ``cand`` on re-timed runs; per fold the offsets come from its training runs."""
+    say = progress or (lambda s: None)
+    prior = mmg.load_published("esso_osaka_3m")
+    cprior, free = R.apply_candidate(prior, cand)
+    cfg = R.candidate_config(R.FitConfig(), cand)
+    groups = R.fold_groups(len(trials), folds)
+    rows, fold_scores, lags = [], [], []
+    for gi, g in enumerate(groups):
+        tr_idx = [i for i in range(len(trials)) if i not in g]
+        lag = T.estimate_lags([trials[i] for i in tr_idx])
+        moved = {i: T.retime(trials[i], lag) for i in range(len(trials))}
+        train = [moved[i] for i in tr_idx]
+        f = R.fit([R.smooth_run(tr) for tr in train], cprior, free, cfg)
+        f2, oe = OE.refined_fit(f, train, oe_config)
+        sc = S.horizon_rows(f2.model, [moved[i] for i in g], decimate)
+        rows.extend(sc)
+        fold_scores.append(S.summarise_rows(sc)["score"])
+        lags.append(lag.to_dict())
+        say(f"cv retimed {name} fold {gi + 1}/{len(groups)}: offsets psi {lag.psi:.1f} s, uv {lag.uv:.1f} s, "
+            f"r {lag.r:.1f} s; output-error cost {oe.cost0:.4g} -> {oe.cost:.4g}")
+    out = S.summarise_rows(rows)
+    out["fold_scores"] = fold_scores
+    out["lags"] = lags
+    return out
+
+
+def decide(base: Mapping[str, Any], variant: Mapping[str, Any]) -> dict[str, Any]:
+    """Rules 1–3 of :mod:`shipid.methods.mmg.candidates_ext2` for ``variant`` against ``base`` (CV summaries)."""
+    d = np.asarray(variant["fold_scores"], float) - np.asarray(base["fold_scores"], float)
+    se = float(np.std(d, ddof=1) / np.sqrt(d.size)) if d.size > 1 else float("inf")
+    gain = float(base["score"] - variant["score"])
+    better = int(np.sum(d < 0))
+    ok = gain >= MIN_GAIN and better >= MIN_FOLDS_BETTER and float(np.mean(d)) < -se
+    return {"gain": gain, "folds_better": better, "mean_fold_difference": float(np.mean(d)), "se": se,
+            "passes": bool(ok)}
+
+
+__all__ = ["MIN_GAIN", "MIN_FOLDS_BETTER", "training_runs", "pool", "cv_variants", "cv_retimed", "decide"]
