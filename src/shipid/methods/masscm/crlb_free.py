@@ -45,11 +45,12 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.signal import lfilter
 
 from shipid.methods.masscm.crlb_kf import (CONDS, FREE, continuous_model, theta_covariance, true_free_theta,
                                             true_nuisance)
 from shipid.models.roll import params_from_vessel, simulate_zoh
-from shipid.models.roll_reduced import KnownParams, bilinear_tf, jacobian_complex_step, roll_terms
+from shipid.models.roll_reduced import KnownParams, jacobian_complex_step, roll_terms
 from shipid.models.roll_sim import NoiseSpec, rudder_prbs, wave_moment
 from shipid.vessels import load_vessel
 
@@ -147,11 +148,14 @@ def wave_den(w, zeta, T):
     return np.array([1.0 + 0 * a0, (-2 * c * c + 2 * w * w) / a0, (c * c - 2 * zeta * w * c + w * w) / a0])
 
 
-def whiten(Y, a):
+def whiten(Y, a, c=None):
     """``S_k`` of the module docstring for the columns of ``Y`` (N, P) or (N,): ``a(q)``, then sums of every other
-    sample, from ``k = 2`` on (N - 2 rows)."""
+    sample, from ``k = 2`` on (N - 2 rows). With ``c`` (``|c| < 1``) the Nyquist factor is ``1 + c q^-1`` instead of
+    ``1 + q^-1``: ``a(q)``, then ``1 / (1 + c q^-1)`` (from rest), then a plain cumulative sum."""
     Y = np.asarray(Y)
     z = a[0] * Y[2:] + a[1] * Y[1:-1] + a[2] * Y[:-2]
+    if c is not None:
+        return np.cumsum(lfilter(np.array([1.0 + 0 * c]), np.array([1.0 + 0 * c, c]), z, axis=0), axis=0)
     S = np.empty_like(z)
     S[0::2] = np.cumsum(z[0::2], axis=0)
     S[1::2] = np.cumsum(z[1::2], axis=0)
@@ -183,26 +187,37 @@ def _project(Q, A):
 
 
 class Equation:
-    """The transformed roll row of one dataset: residual and Jacobian in ``(theta, w, zeta)``."""
+    """The transformed roll row of one dataset: residual and Jacobian in ``(theta, eta)``.
 
-    def __init__(self, y, X, T, known, z_f, cond, kap, lam):
+    ``eta = (w, zeta)`` with the exact zeros at ``+-1`` (``nyquist="exact"``) or ``(w, zeta, c)`` with the Nyquist
+    factor ``1 + c q^-1`` free (``"free"``; for regressors whose error does not vanish at the Nyquist frequency).
+    """
+
+    def __init__(self, y, X, T, known, z_f, cond, kap, lam, nyquist: str = "exact"):
+        if nyquist not in ("exact", "free"):
+            raise ValueError("nyquist must be 'exact' or 'free'")
         self.y, self.X, self.T = y, X, T
         self.known, self.z_f, self.cond, self.kap, self.lam = known, z_f, cond, kap, lam
         self.N = _nuisance_cols(y.size, T)
+        self.n_eta = 2 if nyquist == "exact" else 3
 
-    def _basis(self, a):
-        return _projector(np.column_stack([whiten(self.N, a.real), _parity(self.y.size - 2)]))
+    def _w(self, Y, eta):
+        a = wave_den(eta[0], eta[1], self.T)
+        return whiten(Y, a, None if self.n_eta == 2 else eta[2])
 
-    def residual(self, theta, w, zeta):
-        a = wave_den(w, zeta, self.T)
+    def _basis(self, eta):
+        eta = np.real(np.asarray(eta))
+        m = self.y.size - 2
+        const = _parity(m) if self.n_eta == 2 else np.ones((m, 1))
+        return _projector(np.column_stack([self._w(self.N, eta), const]))
+
+    def residual(self, theta, eta):
         c = coefficients(theta, self.known, self.z_f, self.cond, self.kap, self.lam)
-        e = whiten(self.y - self.X @ c, a)
-        return _project(self._basis(a), e)
+        return _project(self._basis(eta), self._w(self.y - self.X @ c, eta))
 
-    def jacobian(self, theta, w, zeta):
-        """``(e, J)``: residual and its derivatives (N - 2, 10) w.r.t. ``theta (8), w, zeta`` (complex step)."""
-        a = wave_den(w, zeta, self.T)
-        Q = self._basis(a)
+    def jacobian(self, theta, eta):
+        """``(e, J)``: residual and its derivatives (N - 2, 8 + len(eta)) w.r.t. ``theta (8), eta`` (complex step)."""
+        Q = self._basis(eta)
         c = coefficients(theta, self.known, self.z_f, self.cond, self.kap, self.lam)
         n = self.y - self.X @ c
         cols = []
@@ -210,23 +225,22 @@ class Equation:
             tc = theta.astype(complex)
             tc[j] += 1j * H_CS
             dc = np.imag(coefficients(tc, self.known, self.z_f, self.cond, self.kap, self.lam)) / H_CS
-            cols.append(-whiten(self.X @ dc, a))
-        for j in range(2):
-            wz = [complex(w), complex(zeta)]
-            wz[j] += 1j * H_CS
-            da = np.imag(wave_den(wz[0], wz[1], self.T)) / H_CS
-            cols.append(whiten(n, da))       # the basis moves too; its effect on e is second order at e ~ white
+            cols.append(-self._w(self.X @ dc, eta))
+        for j in range(self.n_eta):
+            ec = np.asarray(eta, dtype=complex)
+            ec[j] += 1j * H_CS
+            cols.append(np.imag(self._w(n.astype(complex), ec)) / H_CS)   # the basis moves too: second order
         J = _project(Q, np.column_stack(cols))
-        return _project(Q, whiten(n, a)), J
+        return _project(Q, self._w(n, eta)), J
 
 
-def _setup(data, vessel, known, z_f, how, kappas):
+def _setup(data, vessel, known, z_f, how, kappas, nyquist="exact"):
     eqs = []
     for c in CONDS:
         d = data[c]
         y, X = regressors(d, known, how)
         kap, lam = kappas[c] if kappas is not None else estimate_sway_constants(d, known, how)
-        eqs.append(Equation(y, X, d["t"][1] - d["t"][0], known, z_f, c, kap, lam))
+        eqs.append(Equation(y, X, d["t"][1] - d["t"][0], known, z_f, c, kap, lam, nyquist))
     return eqs
 
 
@@ -244,7 +258,7 @@ def free_information(vessel="fishing-vessel", *, duration=300.0, fs=50.0, noise:
     for ss in np.random.SeedSequence([int(seed), 170]).spawn(n_rudder):
         data = realisation(vessel, seed=ss, duration=duration, fs=fs, noise=noise)
         for ci, eq in enumerate(_setup(data, vessel, known, z_f, how, kap)):
-            e, J = eq.jacobian(th, w0, noise.wave_damping)
+            e, J = eq.jacobian(th, (w0, noise.wave_damping))
             s2 = float(e @ e) / (e.size - 2 - N_BIAS)
             g = list(range(8)) + [8 + 2 * ci, 9 + 2 * ci]
             info[np.ix_(g, g)] += J.T @ J / s2 / n_rudder
@@ -282,7 +296,7 @@ def crlb_free(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 5
 
 
 def estimate_free(data: dict, vessel="fishing-vessel", *, theta0=None, how: str = "exact", wave0=(2 * np.pi, 0.1),
-                  max_passes: int = 4) -> dict:
+                  nyquist: str = "exact", max_passes: int = 4) -> dict:
     """Maximum-likelihood ``theta`` (``z_f`` known) of the normalised roll row of each dataset of ``data``.
 
     ``theta0`` (:data:`FREE` order) is the start (e.g. Algorithm 1's estimate); ``wave0`` the start of ``w, zeta``.
@@ -292,27 +306,29 @@ def estimate_free(data: dict, vessel="fishing-vessel", *, theta0=None, how: str 
     """
     known = KnownParams.from_vessel(vessel)
     z_f = float(load_vessel(vessel).value("general", "z_f"))
-    eqs = _setup(data, vessel, known, z_f, how, None)
+    eqs = _setup(data, vessel, known, z_f, how, None, nyquist)
     th0 = true_free_theta(vessel) if theta0 is None else np.asarray(theta0, float)
     scale = np.abs(th0) + 1e-3
-    x0 = np.concatenate([th0 / scale, np.tile(wave0, len(eqs))])
+    L = eqs[0].n_eta
+    eta0 = tuple(wave0) + (() if L == 2 else (0.9,))
+    x0 = np.concatenate([th0 / scale, np.tile(eta0, len(eqs))])
     wts = np.ones(len(eqs))
 
     def unpack(x):
-        return x[:8] * scale, x[8:].reshape(-1, 2)
+        return x[:8] * scale, x[8:].reshape(-1, L)
 
     def fun(x):
         th, wv = unpack(x)
-        return np.concatenate([eq.residual(th, *wv[i]) * wts[i] for i, eq in enumerate(eqs)])
+        return np.concatenate([eq.residual(th, wv[i]) * wts[i] for i, eq in enumerate(eqs)])
 
     def jac(x):
         th, wv = unpack(x)
         blocks = []
         for i, eq in enumerate(eqs):
-            _, J = eq.jacobian(th, *wv[i])
+            _, J = eq.jacobian(th, wv[i])
             Jf = np.zeros((J.shape[0], x.size))
             Jf[:, :8] = J[:, :8] * scale
-            Jf[:, 8 + 2 * i: 10 + 2 * i] = J[:, 8:]
+            Jf[:, 8 + L * i: 8 + L * (i + 1)] = J[:, 8:]
             blocks.append(Jf * wts[i])
         return np.vstack(blocks)
 
@@ -320,18 +336,18 @@ def estimate_free(data: dict, vessel="fishing-vessel", *, theta0=None, how: str 
     for _ in range(max_passes):
         sol = least_squares(fun, x0, jac=jac, method="lm", xtol=1e-12, ftol=1e-14, max_nfev=200)
         th, wv = unpack(sol.x)
-        s2 = np.array([np.mean(eq.residual(th, *wv[i]) ** 2) for i, eq in enumerate(eqs)])
+        s2 = np.array([np.mean(eq.residual(th, wv[i]) ** 2) for i, eq in enumerate(eqs)])
         new = 1.0 / np.sqrt(s2)
         done = np.allclose(new * s2.max() ** 0.5, wts * s2.max() ** 0.5, rtol=1e-3) if _ else False
         wts, x0 = new, sol.x
         if done:
             break
     th, wv = unpack(sol.x)
-    info = np.zeros((8 + 2 * len(eqs),) * 2)
+    info = np.zeros((8 + L * len(eqs),) * 2)
     for i, eq in enumerate(eqs):
-        e, J = eq.jacobian(th, *wv[i])
+        e, J = eq.jacobian(th, wv[i])
         s2 = float(e @ e) / (e.size - 2 - N_BIAS)
-        g = list(range(8)) + [8 + 2 * i, 9 + 2 * i]
+        g = list(range(8)) + list(range(8 + L * i, 8 + L * (i + 1)))
         info[np.ix_(g, g)] += J.T @ J / s2
     try:
         cov = theta_covariance(0.5 * (info + info.T), list(range(8)), list(range(8, info.shape[0])))

@@ -24,7 +24,7 @@ from shipid.vessels import load_vessel
 
 
 def run_free_one(i: int, seed=0, *, duration: float = 300.0, how: str = "exact", vessel: str = "fishing-vessel",
-                 start: str = "algorithm1") -> dict:
+                 start: str = "algorithm1", nyquist: str = "exact") -> dict:
     """One waves-regime realisation: Algorithm 1, then the noise-free ML; ``m, zm_bar, rho`` and standard errors
     of the latter (``iv_<name>``: Algorithm 1's), ``converged``, ``seconds`` (of the noise-free ML alone)."""
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
@@ -45,20 +45,20 @@ def run_free_one(i: int, seed=0, *, duration: float = 300.0, how: str = "exact",
         ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     data = realisation(vessel, seed=ss, duration=duration, noise=noise)
     t0 = time.process_time()
-    f = estimate_free(data, vessel, theta0=th0, how=how)
+    f = estimate_free(data, vessel, theta0=th0, how=how, nyquist=nyquist)
     out["seconds"] = time.process_time() - t0
     for k in QUANTITIES:
         out[k], out[f"{k}_std"] = f[k]["value"], f[k]["std"]
     out.update({"converged": bool(f["success"]), "implausible": False, "nuisance_outside_physical": False,
-                "nfev": f["nfev"], "wave_w": f["wave"][:, 0].tolist(), "wave_zeta": f["wave"][:, 1].tolist()})
+                "nfev": f["nfev"], "wave": f["wave"].tolist()})
     return out
 
 
 def free_study(runs: int, seed: int, *, duration: float = 300.0, how: str = "exact", workers: int = 1,
-               n_rudder: int = 8, store=None) -> dict:
+               n_rudder: int = 8, store=None, nyquist: str = "exact") -> dict:
     """Summary of ``runs`` realisations (see the module docstring), with the bound of ``n_rudder`` realisations."""
-    res = run_campaign(run_free_one, runs, seed, kwargs={"duration": duration, "how": how}, workers=workers,
-                       store=store, progress=False, name=f"free-{how}-{duration:g}")
+    res = run_campaign(run_free_one, runs, seed, kwargs={"duration": duration, "how": how, "nyquist": nyquist},
+                       workers=workers, store=store, progress=False, name=f"free-{how}-{nyquist}-{duration:g}")
     b = crlb_free(duration=duration, n_rudder=n_rudder, how=how, seed=seed)
     bound = {k: b["bounds"][k] for k in QUANTITIES}
     bound["definition"] = b["definition"]
@@ -68,7 +68,7 @@ def free_study(runs: int, seed: int, *, duration: float = 300.0, how: str = "exa
     s["seconds_per_estimate"] = float(np.median([o["seconds"] for o in ok])) if ok else float("nan")
     if ok and "iv_m" in ok[0]:
         s["algorithm1_spread"] = {k: float(np.std([o[f"iv_{k}"] for o in ok], ddof=1)) for k in QUANTITIES}
-    s["estimator"] = f"crlb_free.estimate_free(how={how!r})"
+    s["estimator"] = f"crlb_free.estimate_free(how={how!r}, nyquist={nyquist!r})"
     return s
 
 
