@@ -200,16 +200,6 @@ def _parity(m):
     return P
 
 
-def _projector(Z):
-    """Orthonormal basis of the columns of ``Z`` (real)."""
-    q, _ = np.linalg.qr(Z)
-    return q
-
-
-def _project(Q, A):
-    return A - Q @ (Q.T @ A)
-
-
 class Equation:
     """The transformed roll row of one dataset: residual and Jacobian in ``(theta, eta)``.
 
@@ -229,33 +219,42 @@ class Equation:
         a = wave_den(eta[0], eta[1], self.T)
         return whiten(Y, a, None if self.n_eta == 2 else eta[2])
 
-    def _basis(self, eta):
-        eta = np.real(np.asarray(eta))
+    def _nuisance(self, eta):
+        """Transformed bias columns and the constants of the summed noise (``(N - 2, q)``, columns scaled to unit
+        norm at the real part; complex ``eta`` for complex-step derivatives)."""
         m = self.y.size - 2
         const = _parity(m) if self.n_eta == 2 else np.ones((m, 1))
-        return _projector(np.column_stack([self._w(self.N, eta), const]))
+        Z = np.column_stack([self._w(self.N.astype(np.result_type(self.N, np.asarray(eta))), eta), const])
+        return Z / np.linalg.norm(Z.real, axis=0)
+
+    def _residual(self, theta, eta):
+        c = coefficients(theta, self.known, self.z_f, self.cond, self.kap, self.lam)
+        e = self._w(self.y - self.X @ c, eta)
+        Z = self._nuisance(eta)
+        return e - Z @ np.linalg.solve(Z.T @ Z, Z.T @ e)       # analytic in eta: no conjugate
 
     def residual(self, theta, eta):
-        c = coefficients(theta, self.known, self.z_f, self.cond, self.kap, self.lam)
-        return _project(self._basis(eta), self._w(self.y - self.X @ c, eta))
+        """Transformed residual with the nuisance columns projected out (their least-squares fit removed)."""
+        return self._residual(np.asarray(theta, float), np.asarray(eta, float))
 
     def jacobian(self, theta, eta):
-        """``(e, J)``: residual and its derivatives (N - 2, 8 + len(eta)) w.r.t. ``theta (8), eta`` (complex step)."""
-        Q = self._basis(eta)
-        c = coefficients(theta, self.known, self.z_f, self.cond, self.kap, self.lam)
-        n = self.y - self.X @ c
-        cols = []
+        """``(e, J)``: residual and its derivatives (N - 2, 8 + len(eta)) w.r.t. ``theta (8), eta`` (complex step,
+        through the projection)."""
+        theta, eta = np.asarray(theta, float), np.asarray(eta, float)
+        dc = np.empty((5, theta.size))
         for j in range(theta.size):
             tc = theta.astype(complex)
             tc[j] += 1j * H_CS
-            dc = np.imag(coefficients(tc, self.known, self.z_f, self.cond, self.kap, self.lam)) / H_CS
-            cols.append(-self._w(self.X @ dc, eta))
-        for j in range(self.n_eta):
-            ec = np.asarray(eta, dtype=complex)
+            dc[:, j] = np.imag(coefficients(tc, self.known, self.z_f, self.cond, self.kap, self.lam)) / H_CS
+        Z = self._nuisance(eta)
+        Jt = -self._w(self.X @ dc, eta)                           # the projection does not depend on theta
+        Jt = Jt - Z @ np.linalg.solve(Z.T @ Z, Z.T @ Jt)
+        cols = []
+        for j in range(eta.size):
+            ec = eta.astype(complex)
             ec[j] += 1j * H_CS
-            cols.append(np.imag(self._w(n.astype(complex), ec)) / H_CS)   # the basis moves too: second order
-        J = _project(Q, np.column_stack(cols))
-        return _project(Q, self._w(n, eta)), J
+            cols.append(np.imag(self._residual(theta.astype(complex), ec)) / H_CS)
+        return self._residual(theta, eta), np.column_stack([Jt] + cols)
 
 
 def _setup(data, vessel, known, z_f, how, kappas, nyquist="exact", n_bias=N_BIAS):
