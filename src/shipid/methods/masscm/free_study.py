@@ -28,13 +28,14 @@ def run_free_one(i: int, seed=0, *, duration: float = 300.0, how: str = "exact",
     """One waves-regime realisation: Algorithm 1, then the noise-free ML; ``m, zm_bar, rho`` and standard errors
     of the latter (``iv_<name>``: Algorithm 1's), ``converged``, ``seconds`` (of the noise-free ML alone)."""
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
+    fresh = lambda: np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key)   # noqa: E731 (spawn() mutates)
     noise = REGIMES["waves"]
     known = KnownParams.from_vessel(vessel)
     z_f = float(load_vessel(vessel).value("general", "z_f"))
     out = {}
     th0 = None
     if start == "algorithm1":
-        d = simulate_datasets(vessel, seed=ss, duration=duration, noise=noise)
+        d = simulate_datasets(vessel, seed=fresh(), duration=duration, noise=noise)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             r = estimate_mass_cm(list(d.items()), known, z_f=z_f, noise_check=False,
@@ -42,8 +43,7 @@ def run_free_one(i: int, seed=0, *, duration: float = 300.0, how: str = "exact",
         th0 = np.array([r.value(n) for n in FREE])
         for k in QUANTITIES:
             out[f"iv_{k}"], out[f"iv_{k}_std"] = float(r.value(k)), float(r.std(k))
-        ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
-    data = realisation(vessel, seed=ss, duration=duration, noise=noise)
+    data = realisation(vessel, seed=fresh(), duration=duration, noise=noise)
     t0 = time.process_time()
     f = estimate_free(data, vessel, theta0=th0, how=how, nyquist=nyquist)
     out["seconds"] = time.process_time() - t0
