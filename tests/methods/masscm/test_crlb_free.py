@@ -70,7 +70,6 @@ def test_estimator_recovers_theta_within_its_standard_errors_from_a_perturbed_st
     assert abs(f["m"]["value"] - 0.4) < 4 * f["m"]["std"]
 
 
-@pytest.mark.slow
 def test_noise_free_bound_falls_faster_than_one_over_root_n():
     """The wave spectrum vanishes at w = 0, the rudder-driven regressors do not: information ~ N^2 on part of theta.
 
