@@ -64,6 +64,11 @@ bound [chi-square 95 %], coverage of ±2 std, bias in standard errors of the mea
 Super-efficiency (``crlb_free(duration=D, n_rudder=4)``, m / zm_bar / rho / d): 150 s 0.00630 / 0.00321 / 0.00619 /
 0.00200; 300 s 0.00307 / 0.00155 / 0.00355 / 0.00137; 600 s 0.00208 / 0.00108 / 0.00176 / 0.00095; 1200 s 0.00098 /
 0.00050 / 0.00084 / 0.00065: the roll damping ``d`` falls as ``1/sqrt(N)``, m, zm_bar and rho about as ``1/N``.
+With ``n_bias=1`` (biases as output constants, as in :mod:`~shipid.methods.masscm.crlb_kf`) m / zm_bar / rho are
+0.00619 / 0.00321 / 0.00402 at 150 s, 0.00298 / 0.00154 / 0.00209 at 300 s, 0.00206 / 0.00107 / 0.00123 at 600 s;
+``crlb_kf(noise=REGIMES["waves"], floor=1e-3)`` (seed 0) gives 0.0240 / 0.0126 / 0.0055, 0.0174 / 0.0091 / 0.0031 and
+0.0122 / 0.0064 / 0.0018: a white floor of 1e-3 of each signal removes most of the information on m and zm_bar (their
+kf bound falls as ``1/sqrt(N)``), whose noise-free part comes from the frequencies where the wave spectrum vanishes.
 """
 
 from __future__ import annotations
