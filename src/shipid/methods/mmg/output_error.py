@@ -118,13 +118,17 @@ def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int
                     run=np.asarray(run, int))
 
 
-def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons) -> np.ndarray:
-    """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p)."""
+def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons,
+             compiled: bool = True) -> np.ndarray:
+    """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p).
+
+    ``compiled``: as :func:`shipid.methods.mmg.cv_fast.simulate_rows` (False: the reference integration)."""
     values = np.atleast_2d(values)
     K, B, L = values.shape[0], H.count, H.U.shape[1]
     Th = MM.theta_rows(model, names, values)
     Th = {m: np.repeat(T, B, axis=0) for m, T in Th.items()}          # row = k * B + b
-    out = simulate_rows(model, Th, np.tile(H.x0, (K, 1)), np.tile(H.U, (K, 1, 1)), np.tile(H.h, (K, 1)))
+    out = simulate_rows(model, Th, np.tile(H.x0, (K, 1)), np.tile(H.U, (K, 1, 1)), np.tile(H.h, (K, 1)),
+                        compiled=compiled)
     return out.reshape(K, B, L, 6)
 
 
@@ -155,7 +159,7 @@ class OEFit:
 
 
 def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], se0: Mapping[str, float] | None = None,
-           config: OEConfig = OEConfig(), H: Horizons | None = None) -> OEFit:
+           config: OEConfig = OEConfig(), H: Horizons | None = None, compiled: bool = True) -> OEFit:
     """Levenberg–Marquardt on the restarted-horizon output error from ``model``'s values of ``names``.
 
     Parameters
@@ -170,6 +174,9 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         Standard errors of the starting values, used in the scaling ``S``.
     H : Horizons, optional
         :func:`stack_horizons` of ``trials`` if the caller has it.
+    compiled : bool
+        Simulate with the compiled force model (:func:`simulate`); False: the reference integration
+        (the same numbers to round-off, ``tests/methods/mmg/test_output_error_compiled.py``).
     """
     names = tuple(c for c in names if not c.startswith(config.exclude_prefixes))
     H = stack_horizons(trials, config.horizon, config.decimate) if H is None else H
@@ -191,7 +198,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         return float(np.sum(r * r))
 
     def res_of(values):
-        return residuals(simulate(model, names, values, H), H) * wh
+        return residuals(simulate(model, names, values, H, compiled), H) * wh
 
     def fd_jacobian(z):
         R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
@@ -261,7 +268,8 @@ def refinable(f, config: OEConfig = OEConfig()) -> tuple[str, ...]:
     return tuple(c for m in mmg.MODES for c in f.free.get(m, ()) if not c.startswith(config.exclude_prefixes))
 
 
-def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None):
+def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None,
+                compiled: bool = True):
     """An :class:`~shipid.methods.mmg.estimator.MmgFit` with its free coefficients refined by :func:`refine`.
 
     The refined coefficients' ``theta``, ``se`` and covariance block in each mode's fit
@@ -270,7 +278,7 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Ho
     """
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
     se0 = {c: float(f.fits[m].se[f.free[m].index(c)]) for m in mmg.MODES for c in f.free.get(m, ())}
-    oe = refine(f.model, names, trials, se0, config, H=H)
+    oe = refine(f.model, names, trials, se0, config, H=H, compiled=compiled)
     fits = dict(f.fits)
     for m in mmg.MODES:
         if m not in fits:
