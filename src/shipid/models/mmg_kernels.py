@@ -126,13 +126,17 @@ def _pymod(a, b):
 
 
 @njit(**_JIT)
-def _deriv(x, delta, n, UT, gT, c, code, thX, thY, thN, out):
-    """The state derivative of one row (the reference functions of the module docstring) into ``out``."""
+def _deriv(x, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, out):
+    """The state derivative of one row (the reference functions of the module docstring) into ``out``.
+
+    ``cgT, sgT, sd, cd``: cos and sin of the true wind direction and of the rudder angle ``delta`` (held over
+    the step, so evaluated once per step).
+    """
     psi, u, v, r = x[2], x[3], x[4], x[5]
     L, qX, qN, D, rhoD4, omt = c[0], c[1], c[2], c[9], c[10], c[11]
     eps = 2.220446049250313e-16
     # apparent wind (apparent_wind)
-    wx, wy = -UT * math.cos(gT), -UT * math.sin(gT)
+    wx, wy = -UT * cgT, -UT * sgT
     cp, sp = math.cos(psi), math.sin(psi)
     au = cp * wx + sp * wy - u
     av = -sp * wx + cp * wy - v
@@ -223,7 +227,6 @@ def _deriv(x, delta, n, UT, gT, c, code, thX, thY, thN, out):
     aR = delta - math.atan2(vR, uR)
     f_alpha = c[30]
     FN = c[29] * UR2 * f_alpha * math.sin(aR)
-    sd, cd = math.sin(delta), math.cos(delta)
     fr_x = -FN * sd
     fr_y = -FN * cd
     bp, bn = _b(pos), _b(neg)
@@ -299,11 +302,12 @@ def _deriv(x, delta, n, UT, gT, c, code, thX, thY, thN, out):
 
 
 @njit(**_JIT)
-def rows_rk4_kernel(c, code, ThX, ThY, ThN, x0, U, h, out):
-    """RK4 of every row with its inputs ``U`` (B, L, 4) held over each step ``h`` (B, L − 1) into ``out`` (B, L, 6).
+def rows_rk4_kernel(c, code, ThX, ThY, ThN, x0, U, h, substeps, out):
+    """RK4 of every row with its inputs ``U`` (B, L, 4) held over each step into ``out`` (B, L, 6).
 
     The compiled twin of :func:`shipid.simulate.integrate.rk4_propagate` on
-    :func:`shipid.methods.mmg.manoeuvres.rows_dynamics` (one step per sample, then states beyond 1e6 → NaN).
+    :func:`shipid.methods.mmg.manoeuvres.rows_dynamics`: ``substeps`` RK4 steps of length ``h`` (B, L − 1)
+    per sample, then states beyond 1e6 → NaN (as :func:`shipid.models.mmg.simulate_batch`).
     """
     B, L = U.shape[0], U.shape[1]
     x = np.empty(6)
@@ -320,26 +324,30 @@ def rows_rk4_kernel(c, code, ThX, ThY, ThN, x0, U, h, out):
         for k in range(L - 1):
             delta, n, UT, gT = U[b, k, 0], U[b, k, 1], U[b, k, 2], U[b, k, 3]
             hs = h[b, k]
-            _deriv(x, delta, n, UT, gT, c, code, thX, thY, thN, k1)
+            cgT, sgT, sd, cd = math.cos(gT), math.sin(gT), math.sin(delta), math.cos(delta)
+            for _ in range(substeps):
+                _deriv(x, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, k1)
+                for i in range(6):
+                    xt[i] = x[i] + 0.5 * hs * k1[i]
+                _deriv(xt, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, k2)
+                for i in range(6):
+                    xt[i] = x[i] + 0.5 * hs * k2[i]
+                _deriv(xt, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, k3)
+                for i in range(6):
+                    xt[i] = x[i] + hs * k3[i]
+                _deriv(xt, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, k4)
+                for i in range(6):
+                    x[i] = x[i] + (hs / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
             for i in range(6):
-                xt[i] = x[i] + 0.5 * hs * k1[i]
-            _deriv(xt, delta, n, UT, gT, c, code, thX, thY, thN, k2)
-            for i in range(6):
-                xt[i] = x[i] + 0.5 * hs * k2[i]
-            _deriv(xt, delta, n, UT, gT, c, code, thX, thY, thN, k3)
-            for i in range(6):
-                xt[i] = x[i] + hs * k3[i]
-            _deriv(xt, delta, n, UT, gT, c, code, thX, thY, thN, k4)
-            for i in range(6):
-                xi = x[i] + (hs / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-                x[i] = xi if abs(xi) < 1e6 else np.nan
+                x[i] = x[i] if abs(x[i]) < 1e6 else np.nan
                 out[b, k + 1, i] = x[i]
 
 
 def simulate_rows(structure: str, particulars: Mapping[str, float], mass: tuple, Th: Mapping[str, np.ndarray],
-                  x0: np.ndarray, U: np.ndarray, h: np.ndarray) -> np.ndarray:
+                  x0: np.ndarray, U: np.ndarray, h: np.ndarray, substeps: int = 1) -> np.ndarray:
     """(B, L, 6) predictions of rows with coefficients ``Th[mode]`` (B, p), starts ``x0`` (B, 6), inputs
-    ``U`` (B, L, 4) (rudder, propeller, true wind speed and direction) and steps ``h`` (B, L − 1)."""
+    ``U`` (B, L, 4) (rudder, propeller, true wind speed and direction) and RK4 steps ``h`` (B, L − 1),
+    ``substeps`` of them per sample."""
     code, c = pack(particulars, structure, mass)
     x0 = np.ascontiguousarray(x0, dtype=float)
     U = np.ascontiguousarray(U, dtype=float)
@@ -348,7 +356,7 @@ def simulate_rows(structure: str, particulars: Mapping[str, float], mass: tuple,
     out = np.empty((B, L, 6))
     Tx, Ty, Tn = (np.ascontiguousarray(np.broadcast_to(Th[m], (B, np.shape(Th[m])[-1])), dtype=float)
                   for m in ("X", "Y", "N"))
-    rows_rk4_kernel(c, code, Tx, Ty, Tn, x0, U, h, out)
+    rows_rk4_kernel(c, code, Tx, Ty, Tn, x0, U, h, int(substeps), out)
     return out
 
 

@@ -200,8 +200,13 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     def res_of(values):
         return residuals(simulate(model, names, values, H, compiled), H) * wh
 
-    def fd_jacobian(z):
-        R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
+    def fd_jacobian(z, r_at_z=None):
+        if compiled and r_at_z is not None:
+            # each row's prediction does not depend on the batch it is in: the nominal residuals at z are
+            # those of the accepted step, as recomputing them would give, bit for bit
+            R = np.concatenate([r_at_z[None], res_of(th0 + (z + config.fd_step * np.eye(p)) * S)])
+        else:
+            R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
         return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
 
     if config.jacobian not in ("every", "broyden"):
@@ -213,7 +218,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     mu, it, converged = config.mu0, 0, False
     for it in range(1, config.max_iter + 1):
         if not exact and config.jacobian == "every":
-            r, J = fd_jacobian(z)
+            r, J = fd_jacobian(z, r)
             exact = True
         g = J.T @ r.ravel()
         A = J.T @ J
@@ -242,7 +247,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
             converged = True
             break
     if not exact:
-        r, J = fd_jacobian(z)
+        r, J = fd_jacobian(z, r)
     # sandwich covariance (clusters = horizons) with the finite-difference Jacobian at the final point
     Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
     rh = r.reshape(H.count, -1)
