@@ -14,12 +14,15 @@ nodes), here with the shooting nodes fixed at the measured states::
 the same weighting as the CV score :func:`shipid.methods.mmg.estimator.horizon_score`
 (10° of heading ~ 1 m of position). Each horizon starts at the measured state of its
 first sample and is integrated with the measured inputs held over each step
-(:func:`shipid.methods.mmg.manoeuvres.rows_rk4`), every ``decimate``-th sample.
+(:func:`shipid.methods.mmg.manoeuvres.rows_rk4`), every ``decimate``-th sample; for the Esso
+structures by its compiled copy :mod:`shipid.models.mmg_kernels` (``compiled=False``: the reference),
+which gives the same predictions to round-off.
 
 Minimisation: Levenberg–Marquardt (Marquardt 1963) in coordinates scaled by the
 starting values, ``θ = θ₀ + S z``, ``S = diag(max(|θ₀|, se₀))``; forward-difference
 Jacobian with every perturbed parameter vector simulated in the same batch as the
-nominal one. A diverging horizon (non-finite state) has its residuals set to a fixed
+nominal one (in the compiled path the nominal residuals of an accepted step are reused: each row's
+prediction does not depend on its batch). A diverging horizon (non-finite state) has its residuals set to a fixed
 cap, so a step into an unstable model is rejected.
 
 Standard errors: the horizon-cluster sandwich ``(JᵀJ)⁻¹ (Σ_h J_hᵀ r_h r_hᵀ J_h) (JᵀJ)⁻¹``
