@@ -29,9 +29,13 @@ the ninth held-out run; ``--runs`` takes fewer). Needs ``$SHIPID_DATA`` (or ../s
    final fit, the 9 held-out runs): wall and CPU time, chosen candidate and held-out means; with
    ``--heldout9-reference`` also with the reference simulation (about 1000 s CPU), the ratio and the
    largest relative differences of the CV scores and the fitted coefficients.
+6. With ``--oe-reference``: the 4-fold output-error CV of the candidate the 9-run study chooses
+   (``hull+rudder+thrust/nondimensional+prop-side+wind-gain``) and its final fit on the 32 training runs,
+   compiled and with the reference simulation: CPU time, ratio, largest relative differences (a cheaper
+   same-run check than 5's reference).
 
 Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--study] [--study-reference] [--heldout9]
-[--heldout9-reference] [--skip-cv]``
+[--heldout9-reference] [--oe-reference] [--skip-cv]``
 """
 
 from __future__ import annotations
@@ -126,6 +130,39 @@ def _max_rel(a, b):
     return max(abs(a[k] - b[k]) / max(abs(b[k]), 1e-300) for k in b)
 
 
+def _oe_chosen():
+    from shipid.data.basins import read_esso
+    from shipid.methods.mmg import estimator as R, pipeline as P, study_oe as SO
+    from shipid.methods.mmg.candidates_asym import asym_variants
+    from shipid.methods.mmg.candidates_surge import surge_variants
+    from shipid.models import mmg
+
+    sp = SO.heldout9_split()
+    trials = [read_esso(f) for f in sp["train"]]
+    prior = mmg.load_published("esso_osaka_3m")
+    runs = [R.smooth_run(tr) for tr in trials]
+    pool = dict(R.CANDIDATES[prior.structure])
+    base = "hull+rudder+thrust/nondimensional"
+    pool.update(asym_variants(base, pool[base]))
+    pool.update(surge_variants(base + "+prop-side", pool[base + "+prop-side"]))
+    chosen = base + "+prop-side+wind-gain"
+
+    def go():
+        cv = SO.cv_refinement(trials, runs, prior, [chosen], folds=4, pool=pool)
+        res = P.identify(trials, prior, structure=chosen, select=False, candidates=pool, refine="output-error")
+        return cv, {k: e.value for k, e in res.estimates.items()}, res.diagnostics["output_error"]["cost_end"]
+
+    new, c1, _ = _timed(go)
+    with reference_simulation():
+        ref, c0, _ = _timed(go)
+    q = ("score", "psi_rms", "pos_rms", "psi_mean_of_runs", "pos_mean_of_runs")
+    dcv = max(abs(new[0][k][x] / ref[0][k][x] - 1) for k in ref[0] for x in q)
+    print(f"6. output-error CV of '{chosen}' (4 folds) + its final fit: compiled {c1:.1f} s, reference "
+          f"{c0:.1f} s CPU, ratio {c0 / c1:.1f}x; output-error CV score {new[0][chosen + '/output-error']['score']:.4f}; "
+          f"largest relative differences: CV {dcv:.1e}, fitted coefficient {_max_rel(new[1], ref[1]):.1e}, "
+          f"horizon cost {abs(new[2] / ref[2] - 1):.1e}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=None)
@@ -134,6 +171,8 @@ def main() -> None:
     ap.add_argument("--study-reference", action="store_true", help="... and the previous path's study (slow).")
     ap.add_argument("--heldout9", action="store_true", help="Also time the 9-run held-out study (output-error CVs).")
     ap.add_argument("--heldout9-reference", action="store_true", help="... and with the reference simulation (slow).")
+    ap.add_argument("--oe-reference", action="store_true",
+                    help="The chosen candidate's output-error CV and final fit, compiled vs reference.")
     ap.add_argument("--skip-cv", action="store_true", help="Skip steps 1-3 (only the studies).")
     a = ap.parse_args()
 
@@ -204,6 +243,8 @@ def main() -> None:
                        and abs(out0[sp][2] - out[sp][2]) < 1e-6 for sp in out)
             print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall; "
                   f"same structures and held-out errors (to 1e-6): {same}")
+    if a.oe_reference:
+        _oe_chosen()
     if a.heldout9 or a.heldout9_reference:
         st, c9, w9 = _timed(_heldout9)
         ev = st["heldout"]["identified"]
