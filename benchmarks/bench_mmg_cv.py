@@ -211,7 +211,8 @@ def main() -> None:
         th0 = np.array([e.value for e in res0.estimates.values()])
         rel = float(np.max(np.abs(th - th0) / np.maximum(np.abs(th0), 1e-300)))
         print(f"3. identify (step 1 + CV over {len(cands)} candidates + fit): {w1:.1f} s wall ({c1:.1f} s CPU); "
-              f"previous path {w0:.1f} s wall ({c0:.1f} s CPU); ratio {w0 / w1:.1f}x wall; chosen "
+              f"previous path {w0:.1f} s wall ({c0:.1f} s CPU); ratio {w0 / w1:.1f}x wall, {c0 / c1:.1f}x CPU; "
+                  f"chosen "
               f"'{res.model['structure_candidate']}' (previous '{res0.model['structure_candidate']}'), largest "
               f"relative estimate difference {rel:.1e}")
         rp = "auto"
@@ -241,7 +242,7 @@ def main() -> None:
                 out0, cs0, ws0 = _timed(_study)
             same = all(out0[sp][0] == out[sp][0] and abs(out0[sp][1] - out[sp][1]) < 1e-6
                        and abs(out0[sp][2] - out[sp][2]) < 1e-6 for sp in out)
-            print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall; "
+            print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall, {cs0 / cs:.1f}x CPU; "
                   f"same structures and held-out errors (to 1e-6): {same}")
     if a.oe_reference:
         _oe_chosen()
