@@ -158,7 +158,8 @@ def _oe_chosen():
     q = ("score", "psi_rms", "pos_rms", "psi_mean_of_runs", "pos_mean_of_runs")
     dcv = max(abs(new[0][k][x] / ref[0][k][x] - 1) for k in ref[0] for x in q)
     print(f"6. output-error CV of '{chosen}' (4 folds) + its final fit: compiled {c1:.1f} s, reference "
-          f"{c0:.1f} s CPU, ratio {c0 / c1:.1f}x; output-error CV score {new[0][chosen + '/output-error']['score']:.4f}; "
+          f"{c0:.1f} s CPU, ratio {c0 / c1:.1f}x; output-error CV score "
+          f"{new[0][chosen + '/output-error']['score']:.4f}; "
           f"largest relative differences: CV {dcv:.1e}, fitted coefficient {_max_rel(new[1], ref[1]):.1e}, "
           f"horizon cost {abs(new[2] / ref[2] - 1):.1e}")
 
@@ -242,7 +243,8 @@ def main() -> None:
                 out0, cs0, ws0 = _timed(_study)
             same = all(out0[sp][0] == out[sp][0] and abs(out0[sp][1] - out[sp][1]) < 1e-6
                        and abs(out0[sp][2] - out[sp][2]) < 1e-6 for sp in out)
-            print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall, {cs0 / cs:.1f}x CPU; "
+            print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall, "
+                  f"{cs0 / cs:.1f}x CPU; "
                   f"same structures and held-out errors (to 1e-6): {same}")
     if a.oe_reference:
         _oe_chosen()

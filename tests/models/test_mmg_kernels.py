@@ -50,7 +50,8 @@ def _rows(seed, B=96, L=41):
     x0[:, 5] = rng.uniform(-0.1, 0.1, B)
     x0[:4, 3:] = 0.0                                          # at rest: U < 1e-5
     U = np.empty((B, L, 4))
-    U[..., 0] = np.deg2rad(rng.uniform(-35, 35, (B, 1))) * np.sign(np.sin(np.arange(L) / 7.0 + rng.uniform(0, 6, (B, 1))))
+    side = np.sign(np.sin(np.arange(L) / 7.0 + rng.uniform(0, 6, (B, 1))))
+    U[..., 0] = np.deg2rad(rng.uniform(-35, 35, (B, 1))) * side
     U[..., 1] = rng.uniform(-15, 15, (B, 1)) + 0.0 * U[..., 0]
     U[::9, :, 1] = 0.0                                        # propeller stopped
     U[..., 2] = rng.uniform(0, 3, (B, 1))
