@@ -53,6 +53,7 @@ from shipid.data.paths import data_root
 from shipid.errors import InputError
 from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa, crossflow_integrals, cubic_hull,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
+from shipid.models import mmg_kernels
 from shipid.models.mmg_esso_ext import EXT_COEFS, ext_columns
 from shipid.models.mmg_esso_ext2 import EXT2_COEFS, ext2_columns
 from shipid.simulate.integrate import rk4_step
@@ -281,7 +282,7 @@ def dynamics(t, x, u, model: MmgModel):
 
 
 def simulate_batch(model: MmgModel, t: np.ndarray, x0: np.ndarray, U: np.ndarray, *,
-                   substeps: int = 1) -> np.ndarray:
+                   substeps: int = 1, compiled: bool = True) -> np.ndarray:
     """RK4 simulation of many initial states at once with zero-order-hold inputs.
 
     Parameters
@@ -291,6 +292,11 @@ def simulate_batch(model: MmgModel, t: np.ndarray, x0: np.ndarray, U: np.ndarray
     x0 : ndarray (B, 6)
     U : ndarray (B, n, 4) or (n, 4)
         Inputs on the grid, held over each step (as :func:`shipid.simulate.integrate.simulate`).
+
+    compiled : bool
+        For the structures :func:`shipid.models.mmg_kernels.supported` names and inputs with the wind
+        columns, the compiled copy of this integration (:func:`shipid.models.mmg_kernels.simulate_rows`;
+        the same numbers to round-off, ``tests/models/test_mmg_kernels.py``); False: the loop below.
 
     Returns
     -------
@@ -302,6 +308,12 @@ def simulate_batch(model: MmgModel, t: np.ndarray, x0: np.ndarray, U: np.ndarray
     U = np.asarray(U, dtype=float)
     if U.ndim == 2:
         U = np.broadcast_to(U, (B,) + U.shape)
+    if compiled and mmg_kernels.supported(model.structure) and U.shape[-1] >= 4 and nt >= 1:
+        t = np.asarray(t, dtype=float)
+        h = np.broadcast_to((t[1:] - t[:-1]) / substeps, (B, nt - 1))
+        Th = {m: model.theta(m)[None] for m in MODES}
+        return mmg_kernels.simulate_rows(model.structure, model.particulars, mass_terms(model), Th, x, U[..., :4], h,
+                                         substeps)
     out = np.empty((B, nt, x.shape[1]))
     out[:, 0] = x
     with np.errstate(all="ignore"):

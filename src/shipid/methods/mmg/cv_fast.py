@@ -37,7 +37,7 @@ from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.moments import fit_from_moments, run_moments
-from shipid.models import mmg
+from shipid.models import mmg, mmg_kernels
 
 
 def run_horizons(trial: Trial, horizon: float, decimate: int) -> dict[str, Any] | None:
@@ -61,8 +61,15 @@ def run_horizons(trial: Trial, horizon: float, decimate: int) -> dict[str, Any] 
 
 
 def simulate_rows(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x0: np.ndarray, U: np.ndarray,
-                   h: np.ndarray) -> np.ndarray:
-    """(B, L, 6) predictions of rows with inputs ``U`` (B, L, 4) and steps ``h`` (B, L - 1)."""
+                  h: np.ndarray, compiled: bool = True) -> np.ndarray:
+    """(B, L, 6) predictions of rows with inputs ``U`` (B, L, 4) and steps ``h`` (B, L - 1).
+
+    ``compiled``: for the structures :func:`shipid.models.mmg_kernels.supported` names, the compiled
+    copy :func:`shipid.models.mmg_kernels.simulate_rows` (the same numbers to round-off); False, or any
+    other structure, integrates :func:`shipid.methods.mmg.manoeuvres.rows_rk4` step by step (the reference).
+    """
+    if compiled and mmg_kernels.supported(model.structure):
+        return mmg_kernels.simulate_rows(model.structure, model.particulars, mmg.mass_terms(model), Th, x0, U, h)
     B, L = U.shape[:2]
     out = np.empty((B, L, 6))
     x = np.array(x0, float)

@@ -14,12 +14,15 @@ nodes), here with the shooting nodes fixed at the measured states::
 the same weighting as the CV score :func:`shipid.methods.mmg.estimator.horizon_score`
 (10° of heading ~ 1 m of position). Each horizon starts at the measured state of its
 first sample and is integrated with the measured inputs held over each step
-(:func:`shipid.methods.mmg.manoeuvres.rows_rk4`), every ``decimate``-th sample.
+(:func:`shipid.methods.mmg.manoeuvres.rows_rk4`), every ``decimate``-th sample; for the Esso
+structures by its compiled copy :mod:`shipid.models.mmg_kernels` (``compiled=False``: the reference),
+which gives the same predictions to round-off.
 
 Minimisation: Levenberg–Marquardt (Marquardt 1963) in coordinates scaled by the
 starting values, ``θ = θ₀ + S z``, ``S = diag(max(|θ₀|, se₀))``; forward-difference
 Jacobian with every perturbed parameter vector simulated in the same batch as the
-nominal one. A diverging horizon (non-finite state) has its residuals set to a fixed
+nominal one (in the compiled path the nominal residuals of an accepted step are reused: each row's
+prediction does not depend on its batch). A diverging horizon (non-finite state) has its residuals set to a fixed
 cap, so a step into an unstable model is rejected.
 
 Standard errors: the horizon-cluster sandwich ``(JᵀJ)⁻¹ (Σ_h J_hᵀ r_h r_hᵀ J_h) (JᵀJ)⁻¹``
@@ -118,13 +121,17 @@ def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int
                     run=np.asarray(run, int))
 
 
-def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons) -> np.ndarray:
-    """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p)."""
+def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons,
+             compiled: bool = True) -> np.ndarray:
+    """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p).
+
+    ``compiled``: as :func:`shipid.methods.mmg.cv_fast.simulate_rows` (False: the reference integration)."""
     values = np.atleast_2d(values)
     K, B, L = values.shape[0], H.count, H.U.shape[1]
     Th = MM.theta_rows(model, names, values)
     Th = {m: np.repeat(T, B, axis=0) for m, T in Th.items()}          # row = k * B + b
-    out = simulate_rows(model, Th, np.tile(H.x0, (K, 1)), np.tile(H.U, (K, 1, 1)), np.tile(H.h, (K, 1)))
+    out = simulate_rows(model, Th, np.tile(H.x0, (K, 1)), np.tile(H.U, (K, 1, 1)), np.tile(H.h, (K, 1)),
+                        compiled=compiled)
     return out.reshape(K, B, L, 6)
 
 
@@ -155,7 +162,7 @@ class OEFit:
 
 
 def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], se0: Mapping[str, float] | None = None,
-           config: OEConfig = OEConfig(), H: Horizons | None = None) -> OEFit:
+           config: OEConfig = OEConfig(), H: Horizons | None = None, compiled: bool = True) -> OEFit:
     """Levenberg–Marquardt on the restarted-horizon output error from ``model``'s values of ``names``.
 
     Parameters
@@ -170,6 +177,9 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         Standard errors of the starting values, used in the scaling ``S``.
     H : Horizons, optional
         :func:`stack_horizons` of ``trials`` if the caller has it.
+    compiled : bool
+        Simulate with the compiled force model (:func:`simulate`); False: the reference integration
+        (the same numbers to round-off, ``tests/methods/mmg/test_output_error_compiled.py``).
     """
     names = tuple(c for c in names if not c.startswith(config.exclude_prefixes))
     H = stack_horizons(trials, config.horizon, config.decimate) if H is None else H
@@ -191,10 +201,15 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         return float(np.sum(r * r))
 
     def res_of(values):
-        return residuals(simulate(model, names, values, H), H) * wh
+        return residuals(simulate(model, names, values, H, compiled), H) * wh
 
-    def fd_jacobian(z):
-        R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
+    def fd_jacobian(z, r_at_z=None):
+        if compiled and r_at_z is not None:
+            # each row's prediction does not depend on the batch it is in: the nominal residuals at z are
+            # those of the accepted step, as recomputing them would give, bit for bit
+            R = np.concatenate([r_at_z[None], res_of(th0 + (z + config.fd_step * np.eye(p)) * S)])
+        else:
+            R = res_of(th0 + np.vstack([z, z + config.fd_step * np.eye(p)]) * S)
         return R[0], ((R[1:] - R[0][None]) / config.fd_step).reshape(p, -1).T     # (B, L, 3), (N, p)
 
     if config.jacobian not in ("every", "broyden"):
@@ -206,7 +221,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     mu, it, converged = config.mu0, 0, False
     for it in range(1, config.max_iter + 1):
         if not exact and config.jacobian == "every":
-            r, J = fd_jacobian(z)
+            r, J = fd_jacobian(z, r)
             exact = True
         g = J.T @ r.ravel()
         A = J.T @ J
@@ -235,7 +250,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
             converged = True
             break
     if not exact:
-        r, J = fd_jacobian(z)
+        r, J = fd_jacobian(z, r)
     # sandwich covariance (clusters = horizons) with the finite-difference Jacobian at the final point
     Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
     rh = r.reshape(H.count, -1)
@@ -261,7 +276,8 @@ def refinable(f, config: OEConfig = OEConfig()) -> tuple[str, ...]:
     return tuple(c for m in mmg.MODES for c in f.free.get(m, ()) if not c.startswith(config.exclude_prefixes))
 
 
-def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None):
+def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Horizons | None = None,
+                compiled: bool = True):
     """An :class:`~shipid.methods.mmg.estimator.MmgFit` with its free coefficients refined by :func:`refine`.
 
     The refined coefficients' ``theta``, ``se`` and covariance block in each mode's fit
@@ -270,7 +286,7 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Ho
     """
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
     se0 = {c: float(f.fits[m].se[f.free[m].index(c)]) for m in mmg.MODES for c in f.free.get(m, ())}
-    oe = refine(f.model, names, trials, se0, config, H=H)
+    oe = refine(f.model, names, trials, se0, config, H=H, compiled=compiled)
     fits = dict(f.fits)
     for m in mmg.MODES:
         if m not in fits:
