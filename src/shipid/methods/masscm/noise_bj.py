@@ -28,9 +28,9 @@ so likelihood, AIC and BIC rank them alike.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
+from shipid.estimate.iir_kernels import lfilter
 from shipid.methods.masscm.options import MassCMOptions
 
 #: The candidate MA structures ``(c, k)``: ``C(q) = (1 - c q^-2)^k``. ``(0, 0)`` is the plain AR model; the
