@@ -184,10 +184,11 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     ``scipy.signal.lfilter``), the four instrument signals into one array and the three measured differences
     of (37) and ``y`` into the array of the regressors; the two delayed-``y`` columns of (37) are the delayed
     filtered ``y`` (the filter commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag
-    structure (:func:`shipid.estimate.fir_kernels.lag_moments` when ``compute == "fast"``, else
-    :func:`lag_products`). Cost O(n n_z) per dataset and no n × n_z matrix (the largest arrays are these
-    4 + 6 filtered rows and a block of :data:`LAG_BLOCK` instruments), which is what keeps long records linear
-    in time and bounded in memory.
+    structure by the compiled :func:`shipid.estimate.fir_kernels.lag_moments` in either ``compute`` mode (the
+    products of the numpy blocks of :func:`lag_products` up to the order of the summation, at a third of their
+    cost; this function's reference is the explicit path, ``explicit_moments=True``). Cost O(n n_z) per
+    dataset and no n × n_z matrix (the largest arrays are these 4 + 6 filtered rows), which is what keeps
+    long records linear in time and bounded in memory.
     """
     s = first_row(options)
     n = ds.y.size
@@ -204,11 +205,8 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     T[0, 0], T[0, 1:] = 0.0, -T[5, :-1]     # the delayed-y columns: the filter commutes with the delay
     T[1, :2], T[1, 2:] = 0.0, -T[5, :-2]
     s2 = s + transient_length(L, n - s, options)
-    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
-    if options.compute == "fast":
-        ZtZ, ZtP = lag_moments(F, np.array(nls, dtype=np.int64), T, s2)
-    else:
-        ZtZ, ZtP = lag_products(F, nls, T[:, s2:], s2)
+    nls = np.array((options.n_y, options.n_as, options.n_r, options.n_delta), dtype=np.int64)
+    ZtZ, ZtP = lag_moments(F, nls, T, s2)
     return iv_compress_products(ZtZ, ZtP, n - s2)
 
 
