@@ -46,3 +46,35 @@ def test_lag_products_do_not_depend_on_the_block_size(monkeypatch):
     for b in (4, 16, 64):
         for x, y in zip(out[b], out[8]):
             assert np.allclose(x, y, rtol=1e-13, atol=1e-13 * np.abs(y).max())
+
+
+@pytest.mark.parametrize("compute", ["reference", "fast"])
+def test_iir_prefiltered_moments_equal_the_explicit_path(compute):
+    """:func:`~shipid.methods.masscm.moments.filtered_lag_moments` (compiled filter and lag products) against the
+    explicit instrument matrix, lfilter and :func:`~shipid.estimate.iv.iv_compress` (``explicit_moments=True``),
+    for a Box–Jenkins prefilter ``D(q)/(1 - c q^-2)^2`` on simulated data with sensor noise and waves."""
+    from shipid.estimate.arma import ARMA
+    from shipid.methods.masscm.data import prepare
+    from shipid.methods.masscm.moments import build_moments
+    from shipid.methods.masscm.noise_bj import ma_poly
+    from shipid.methods.masscm.options import MassCMOptions
+    from shipid.models.roll_sim import NoiseSpec, simulate_datasets
+
+    d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([23, 1]), duration=60.0,
+                          noise=NoiseSpec.issue3())
+    rng = np.random.default_rng(11)
+    opt = MassCMOptions(compute=compute)
+    prep = prepare(list(d.items()), opt)
+    L = [ARMA(np.concatenate([[1.0], 0.05 * rng.standard_normal(opt.ar_order)]), ma_poly(0.97, 2), 1.0)
+         for _ in prep]
+    y_hats = [ds.y_hat0 + 1e-3 * rng.standard_normal(ds.y.size) for ds in prep]
+    a_hats = [ds.a_hat0 for ds in prep]
+    new = build_moments(prep, L, y_hats, a_hats, opt)
+    ref = build_moments(prep, L, y_hats, a_hats, MassCMOptions(compute=compute, explicit_moments=True))
+    for a, b in zip(new, ref):
+        # R is unique up to the signs of its rows: compare R^T R, R^T r and the residual part; rss0 is the
+        # projected |y|^2 minus its fitted part r^T r (a difference), so it is compared on the scale of |y|^2
+        assert a.n == b.n and a.rank_ok == b.rank_ok
+        assert np.allclose(a.R.T @ a.R, b.R.T @ b.R, rtol=1e-10, atol=1e-12 * np.abs(b.R).max() ** 2)
+        assert np.allclose(a.R.T @ a.r, b.R.T @ b.r, rtol=1e-10, atol=1e-12 * np.abs(b.R.T @ b.r).max())
+        assert abs(a.rss0 - b.rss0) <= 1e-10 * (b.r @ b.r + b.rss0)

@@ -34,3 +34,13 @@ def test_double_unit_circle_factor_is_chosen_for_wave_equation_error_and_not_for
         zz = np.exp(-1j * np.linspace(0.01, np.pi - 0.01, 400))
         spec = m.lam * np.abs(np.polyval(m.c[::-1], zz) / np.polyval(m.a[::-1], zz)) ** 2
         assert np.all(np.abs(spec - 1.0) < 0.3), (seed, ma_structure(m), spec.min(), spec.max())
+
+
+def test_ar_polynomial_is_the_hannan_rissanen_ar_fit():
+    """noise_bj.ar_polynomial skips only the innovation-variance pass of hannan_rissanen(x, p, 0): the same A(q)."""
+    from shipid.estimate.arma import hannan_rissanen
+    from shipid.methods.masscm.noise_bj import ar_polynomial
+    for seed, p in ((1, 40), (2, 8), (3, 1), (4, 0)):
+        x = _wave_like(4000, 0.9, 2, seed) + 0.3
+        assert np.array_equal(ar_polynomial(x, p), hannan_rissanen(x, p, 0, n_long=p).a)
+    assert np.array_equal(ar_polynomial(np.full(100, 2.0), 5), np.ones(1))

@@ -136,6 +136,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
                       options=opts, init="given" if kn["theta0"] is not None else "linear")
     res = with_series(fit, cost_map=cost_map)     # the report series of the result it prints
+    del fit                                       # the prepared datasets: freed before the refinement prepares its own
     res = apply_refine(res, datasets, kn["known"], kn["z_f"], refine)
     res.provenance["known"] = known_path
     loud(res, trials=[tr for _, tr in datasets])

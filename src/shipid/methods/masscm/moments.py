@@ -12,9 +12,9 @@ as ``||R g - r||^2``). Three equivalent ways (tests compare them): the explicit 
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.estimate.fir_kernels import fir_filter, lag_moments
+from shipid.estimate.iir_kernels import lfilter, lfilter_into
 from shipid.estimate.iv import iv_compress, iv_compress_products, lag_gram_from, lag_matrix
 from shipid.methods.masscm.data import Dataset, diff2, first_row
 from shipid.methods.masscm.options import MassCMOptions
@@ -179,31 +179,34 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     """IV moments of one dataset for any prefilter ``L`` (or none), lag instruments, without forming ``Z``.
 
     The same quantities as the explicit path (:func:`instruments`, prefilter, transient drop
-    :func:`transient_length`, :func:`iv_compress`; tests compare them): the ten signals are prefiltered once
-    (``lfilter``, from rest), the two delayed-``y`` columns of (37) are the delayed filtered ``y`` (the filter
-    commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag structure
-    (:func:`shipid.estimate.fir_kernels.lag_moments` when ``compute == "fast"``, else
-    :func:`lag_products`). Cost O(n n_z) per dataset and no n × n_z matrix (the largest arrays are the
-    eight filtered signals and a block of :data:`LAG_BLOCK` instruments), which is what keeps long records
-    linear in time and bounded in memory.
+    :func:`transient_length`, :func:`iv_compress`; tests compare them): the eight distinct signals are
+    prefiltered once, from rest, by :func:`shipid.estimate.iir_kernels.lfilter_into` (the numbers of
+    ``scipy.signal.lfilter``), the four instrument signals into one array and the three measured differences
+    of (37) and ``y`` into the array of the regressors; the two delayed-``y`` columns of (37) are the delayed
+    filtered ``y`` (the filter commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag
+    structure by the compiled :func:`shipid.estimate.fir_kernels.lag_moments` in either ``compute`` mode (the
+    products of the numpy blocks of :func:`lag_products` up to the order of the summation, at a third of their
+    cost; this function's reference is the explicit path, ``explicit_moments=True``). Cost O(n n_z) per
+    dataset and no n × n_z matrix (the largest arrays are these 4 + 6 filtered rows), which is what keeps
+    long records linear in time and bounded in memory.
     """
     s = first_row(options)
     n = ds.y.size
     da = diff2(a_hat)
-    sig = (y_hat - y_hat.mean(), da - da.mean(), *input_differences(ds), *ds.Phi[:, 2:].T, ds.y)
-    F = np.empty((len(sig), n))             # the rows of work_arrays, prefiltered
-    for k, x in enumerate(sig):
-        F[k] = lfilter(L.a, L.c, x) if L is not None else x             # row by row: no 8 x n copy of the inputs
-    T = np.empty((6, n))
-    T[0, 0], T[0, 1:] = 0.0, -F[7, :-1]
-    T[1, :2], T[1, 2:] = 0.0, -F[7, :-2]
-    T[2:] = F[4:]
+    F = np.empty((4, n))                    # the instrument signals (rows 0-3 of work_arrays), prefiltered
+    T = np.empty((6, n))                    # Phi columns (37) then y, prefiltered
+    rows = ((F[0], y_hat - y_hat.mean()), (F[1], da - da.mean()), *zip(F[2:], input_differences(ds)),
+            *zip(T[2:5], ds.Phi[:, 2:].T), (T[5], ds.y))
+    for out, x in rows:                     # row by row: no 8 x n copy of the inputs
+        if L is not None:
+            lfilter_into(L.a, L.c, x, out)  # = scipy.signal.lfilter(L.a, L.c, x) (shipid.estimate.iir_kernels)
+        else:
+            out[:] = x
+    T[0, 0], T[0, 1:] = 0.0, -T[5, :-1]     # the delayed-y columns: the filter commutes with the delay
+    T[1, :2], T[1, 2:] = 0.0, -T[5, :-2]
     s2 = s + transient_length(L, n - s, options)
-    nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
-    if options.compute == "fast":
-        ZtZ, ZtP = lag_moments(np.ascontiguousarray(F[:4]), np.array(nls, dtype=np.int64), T, s2)
-    else:
-        ZtZ, ZtP = lag_products(F, nls, T[:, s2:], s2)
+    nls = np.array((options.n_y, options.n_as, options.n_r, options.n_delta), dtype=np.int64)
+    ZtZ, ZtP = lag_moments(F, nls, T, s2)
     return iv_compress_products(ZtZ, ZtP, n - s2)
 
 

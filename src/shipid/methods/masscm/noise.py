@@ -13,9 +13,9 @@ subset :data:`AUTO_C`, kept callable for comparison. The first iteration uses ``
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
+from shipid.estimate.iir_kernels import lfilter
 from shipid.methods.masscm.noise_bj import noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
 

@@ -28,9 +28,9 @@ so likelihood, AIC and BIC rank them alike.
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import lfilter
 
-from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
+from shipid.estimate.arma import ARMA, ar_gram, ar_solve_normal, fit_ar
+from shipid.estimate.iir_kernels import lfilter
 from shipid.methods.masscm.options import MassCMOptions
 
 #: The candidate MA structures ``(c, k)``: ``C(q) = (1 - c q^-2)^k``. ``(0, 0)`` is the plain AR model; the
@@ -83,13 +83,28 @@ def noise_model_bj(eps: np.ndarray, options: MassCMOptions, candidates: tuple = 
     for c, k in cands:
         den = ma_poly(c, k) if (c and k) else np.ones(1)
         e2 = lfilter([1.0], den, eps) if den.size > 1 else eps
-        m = (fit_ar(e2, options.ar_order) if options.compute == "fast"
-             else hannan_rissanen(e2, options.ar_order, 0, n_long=options.ar_order))
-        inn = lfilter(m.a, [1.0], e2 - e2.mean())[k0:]
+        a = fit_ar(e2, options.ar_order).a if options.compute == "fast" else ar_polynomial(e2, options.ar_order)
+        inn = lfilter(a, [1.0], e2 - e2.mean())[k0:]
         lam = float(np.mean((inn - inn.mean()) ** 2))
         if best is None or lam < best[0]:
-            best = (lam, ARMA(m.a, den, lam))
+            best = (lam, ARMA(a, den, lam))
     return best[1]
+
+
+def ar_polynomial(x: np.ndarray, p: int) -> np.ndarray:
+    """``A(q)`` of the AR(p) least-squares fit of ``x`` (mean removed): the ``a`` of
+    ``shipid.estimate.arma.hannan_rissanen(x, p, 0, n_long=p)``, the same numbers by the same steps (scaled
+    normal equations :func:`~shipid.estimate.arma.ar_gram`, ridge-regularised Cholesky
+    :func:`~shipid.estimate.arma.ar_solve_normal`), without the pass over the record that computes its
+    innovation variance (:func:`noise_model_bj` measures the innovations on its own window)."""
+    x = np.asarray(x, dtype=float)
+    x = x - x.mean()
+    scale = np.std(x)
+    if not np.isfinite(scale) or scale == 0.0 or not p:
+        return np.ones(1)
+    xs = x / scale
+    G, g = ar_gram(xs, p)
+    return np.concatenate([[1.0], -ar_solve_normal(G, g, xs, p)])
 
 
 #: (*) From iteration ``AUTO_HOLD + FREEZE_AFTER`` on the whole noise model (``D`` too) is kept: in wave roll without
@@ -106,4 +121,5 @@ def held_noise_model(eps: np.ndarray, options: MassCMOptions, L_prev) -> ARMA:
     return noise_model_bj(eps, options, (ma_structure(L_prev),))
 
 
-__all__ = ["BJ_CANDIDATES", "FREEZE_AFTER", "ma_poly", "ma_structure", "noise_model_bj", "held_noise_model"]
+__all__ = ["BJ_CANDIDATES", "FREEZE_AFTER", "ma_poly", "ma_structure", "noise_model_bj", "ar_polynomial",
+           "held_noise_model"]
