@@ -77,7 +77,10 @@ Known limitations (measured; reproduced by ``tests/methods/masscm/test_masscm_li
   [11, 0..9], checked on fresh seeds [11, 100..119]).
 
 Computation (``MassCMOptions.compute``; how, not what): ``"reference"`` (default) is the straightforward
-numpy/scipy path. ``"fast"`` (the Monte Carlo study's default) runs the same steps through numba kernels: steps
+numpy/scipy path, except two compiled pieces that both modes share: the prefilter
+(:func:`shipid.estimate.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s arithmetic, tested bit-identical) and the lag
+moments of an IIR-prefiltered dataset (:func:`shipid.estimate.fir_kernels.lag_moments`, tested against the explicit
+instrument matrix, ``explicit_moments=True``). ``"fast"`` (the Monte Carlo study's default) runs the same steps through numba kernels: steps
 (b)–(c) per dataset (:mod:`shipid.methods.masscm.step`, :mod:`shipid.estimate.fir_kernels`), the same
 eigen-decomposition and rank rule with a compiled projection/QR, and the search
 (:mod:`shipid.methods.masscm.search`: the same Gauss–Newton; the cold search by a bounded Levenberg–Marquardt to

@@ -51,7 +51,7 @@ class MassCMOptions:
     #                                 the last four iterates instead of two (damps period-4 cycles); 0 = never
     explicit_moments: bool = False  # how (not what): True forms the instrument matrix Z of an IIR prefilter
     #                                 explicitly (the reference of filtered_lag_moments; O(n n_z^2), n x n_z memory)
-    compute: str = "reference"      # how (not what): "reference" the straightforward numpy/scipy path; "fast"
+    compute: str = "reference"      # how (not what): "reference" the numpy/scipy path; "fast" numba kernels (estimator)
     refine: str = "auto"            # "auto": refine (engine masscm.refine.auto_engine) only where the data show sensor
     #                                 noise and a wave structure (the rule of masscm.refine); "pem": always the
     #                                 maximum-likelihood refinement on the state-space model; "whittle": the same in
