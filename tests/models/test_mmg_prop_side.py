@@ -5,42 +5,19 @@ and nothing else; the propeller side force is c T at the propeller's position, t
 KVLCC2 L7 set is read at run time from ``data_root()/params`` (never copied); skipped when absent.
 """
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
-from shipid.data import data_root
 from shipid.models import mmg
 from shipid.models import mmg_forces as F
 from shipid.models.mmg_prop_side import PROP_SIDE_TERMS
 
-ROOT = data_root()
+SEED = 20261203                       # the states of these tests (fixture mmg_states, conftest)
 
 
-def l7():
-    if ROOT is None or not (ROOT / "params").is_dir():
-        pytest.skip("shared data (params/) not found (set SHIPID_DATA)")
-    return mmg.load_published("kvlcc2_L7")
-
-
-def with_part(m, **kw):
-    return replace(m, particulars=dict(m.particulars, **kw))
-
-
-def states():
-    rng = np.random.default_rng(20261203)
-    k = 200
-    u = 1.179 * (1 + 0.1 * rng.standard_normal(k))
-    v = 0.1 * rng.standard_normal(k)
-    r = 0.05 * rng.standard_normal(k)
-    delta = np.deg2rad(rng.uniform(-35, 35, k))
-    return u, v, r, delta, np.full(k, 10.23)
-
-
-def test_terms_at_zero_leave_the_forces_unchanged_bit_for_bit():
-    m = l7()
-    args = states()
+def test_terms_at_zero_leave_the_forces_unchanged_bit_for_bit(kvlcc2_l7, mmg_states, with_part):
+    m = kvlcc2_l7
+    args = mmg_states(SEED)
     ref = mmg.forces(m, *args)
     got = mmg.forces(with_part(m, **{k: 0.0 for k in PROP_SIDE_TERMS}), *args)
     for a, b in zip(ref, got):
@@ -48,9 +25,9 @@ def test_terms_at_zero_leave_the_forces_unchanged_bit_for_bit():
     assert set(PROP_SIDE_TERMS) <= set(F.RUDDER_LARGE_ANGLE)        # may differ per row of a replay batch
 
 
-def test_neutral_angle_shifts_the_rudder_inflow_angle_only():
-    m = l7()
-    u, v, r, delta, n = states()
+def test_neutral_angle_shifts_the_rudder_inflow_angle_only(kvlcc2_l7, mmg_states, with_part):
+    m = kvlcc2_l7
+    u, v, r, delta, n = mmg_states(SEED)
     d0 = np.deg2rad(1.5)
     a = F.basis_yasukawa(with_part(m, rudder_neutral_angle=d0).particulars, u, v, r, delta, n)["aux"]
     b = F.basis_yasukawa(m.particulars, u, v, r, delta, n)["aux"]
@@ -64,9 +41,9 @@ def test_neutral_angle_shifts_the_rudder_inflow_angle_only():
     assert mmg.forces(m, *one)[2][0] == pytest.approx(0.0, abs=1e-9)
 
 
-def test_propeller_side_force_is_c_times_thrust_at_the_propeller():
-    m = l7()
-    args = states()
+def test_propeller_side_force_is_c_times_thrust_at_the_propeller(kvlcc2_l7, mmg_states, with_part):
+    m = kvlcc2_l7
+    args = mmg_states(SEED)
     c = 0.05
     X0, Y0, N0 = mmg.forces(m, *args)
     X1, Y1, N1 = mmg.forces(with_part(m, prop_side_thrust=c), *args)
@@ -78,9 +55,9 @@ def test_propeller_side_force_is_c_times_thrust_at_the_propeller():
     assert np.all(N1 - N0 < 0)                       # stern to starboard: bow to port (x_P < 0, T > 0)
 
 
-def test_per_row_values_act_per_row():
-    m = l7()
-    u, v, r, delta, n = (a[:3] for a in states())
+def test_per_row_values_act_per_row(kvlcc2_l7, mmg_states, with_part):
+    m = kvlcc2_l7
+    u, v, r, delta, n = (a[:3] for a in mmg_states(SEED))
     vals = np.array([0.0, 0.02, 0.04])
     _, _, Nrow = mmg.forces(with_part(m, rudder_neutral_angle=vals), u, v, r, delta, n)
     for i, x in enumerate(vals):

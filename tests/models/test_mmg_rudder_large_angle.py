@@ -5,42 +5,19 @@ monotone and saturating; each per-side term changes only its side. The KVLCC2 L7
 time from ``data_root()/params`` (never copied); those tests skip when the folder is absent.
 """
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
-from shipid.data import data_root
 from shipid.models import mmg
 from shipid.models import mmg_forces as F
 
-ROOT = data_root()
+SEED = 20261202                       # the states of these tests (fixture mmg_states, conftest)
 GRID = np.deg2rad(np.linspace(-40.0, 40.0, 33))
 
 
-def l7():
-    if ROOT is None or not (ROOT / "params").is_dir():
-        pytest.skip("shared data (params/) not found (set SHIPID_DATA)")
-    return mmg.load_published("kvlcc2_L7")
-
-
-def with_part(m, **kw):
-    return replace(m, particulars=dict(m.particulars, **kw))
-
-
-def states():
-    rng = np.random.default_rng(20261202)
-    k = 200
-    u = 1.179 * (1 + 0.1 * rng.standard_normal(k))
-    v = 0.1 * rng.standard_normal(k)
-    r = 0.05 * rng.standard_normal(k)
-    delta = np.deg2rad(rng.uniform(-35, 35, k))
-    return u, v, r, delta, np.full(k, 10.23)
-
-
-def test_terms_at_zero_leave_the_forces_unchanged_bit_for_bit():
-    m = l7()
-    args = states()
+def test_terms_at_zero_leave_the_forces_unchanged_bit_for_bit(kvlcc2_l7, mmg_states, with_part):
+    m = kvlcc2_l7
+    args = mmg_states(SEED)
     ref = mmg.forces(m, *args)
     off = with_part(m, **{k: 0.0 for k in F.RUDDER_LARGE_ANGLE})
     got = mmg.forces(off, *args)
@@ -70,10 +47,10 @@ def _rudder_moment(m, delta):
     return mmg.forces(m, u, z, z, delta, n)[2] - mmg.forces(m, u, z, z, z, n)[2]
 
 
-def test_stall_per_side_changes_only_its_side_and_keeps_the_normal_force_monotone():
+def test_stall_per_side_changes_only_its_side_and_keeps_the_normal_force_monotone(kvlcc2_l7, with_part):
     """Straight ahead (alpha_R = delta) the rudder's yaw moment is -(x_R + a_H x_H) F_N cos(delta), so
     N / cos(delta) is proportional to the normal force."""
-    m = l7()
+    m = kvlcc2_l7
     N0 = _rudder_moment(m, GRID)
     N1 = _rudder_moment(with_part(m, rudder_stall_plus=np.deg2rad(15.0)), GRID)
     pos, neg = GRID > 0, GRID < 0
@@ -85,8 +62,8 @@ def test_stall_per_side_changes_only_its_side_and_keeps_the_normal_force_monoton
     assert np.ptp(F1[big]) < 0.2 * np.ptp(F0[big])                  # flat past stall
 
 
-def test_crossflow_side_and_side_slope_strengthen_the_chosen_side_more_at_larger_angles():
-    m = with_part(l7(), rudder_crossflow=1.0)
+def test_crossflow_side_and_side_slope_strengthen_the_chosen_side_more_at_larger_angles(kvlcc2_l7, with_part):
+    m = with_part(kvlcc2_l7, rudder_crossflow=1.0)
     N0 = _rudder_moment(m, GRID)
     for kw in ({"rudder_crossflow_side": -0.5}, {"rudder_side_slope": -0.3}):
         N1 = _rudder_moment(with_part(m, **kw), GRID)

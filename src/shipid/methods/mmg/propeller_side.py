@@ -138,7 +138,6 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_kvlcc2
 from shipid.errors import ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import rudder_angle as RA
@@ -305,11 +304,7 @@ def cross_validate(cands: Mapping[str, Mapping] | None = None, *, names: Sequenc
     :func:`shipid.methods.mmg.rudder_angle.score_rows` numbers and the per-run replays; :func:`decide`; and
     :func:`yaw_balance` of every run."""
     cands = candidates() if cands is None else cands
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    trials = [read_kvlcc2(f, root) for f in names]
-    runs = [R.smooth_run(tr) for tr in trials]
-    data = [TS.replay_data(tr) for tr in trials]
-    use = TS.peak_runs(trials)
+    prior, trials, runs, data, use = RA.load_runs(names, root)
     folds: dict[str, Any] = {}
     for fold, train, test in RA.fold_sets(names):
         row: dict[str, Any] = {"train": [names[i] for i in train], "scored": [names[i] for i in test]}
@@ -332,11 +327,7 @@ def leave_one_out(cand_names: Sequence[str] = (CURRENT, CURRENT + "/neutral-angl
     :func:`shipid.methods.mmg.rudder_angle.score_rows` over all left-out runs. This interpolates in angle
     (the final model is fitted on every angle), where the forward folds extrapolate."""
     cands = candidates()
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    trials = [read_kvlcc2(f, root) for f in names]
-    runs = [R.smooth_run(tr) for tr in trials]
-    data = [TS.replay_data(tr) for tr in trials]
-    use = TS.peak_runs(trials)
+    prior, trials, runs, data, use = RA.load_runs(names, root)
     per: dict[str, dict[str, Any]] = {c: {} for c in cand_names}
     for i, n in enumerate(names):
         train = [j for j in range(len(names)) if j != i]

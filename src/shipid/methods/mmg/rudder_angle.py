@@ -211,16 +211,21 @@ def score_rows(rep: Sequence[Mapping]) -> dict[str, float]:
     return out
 
 
+def load_runs(names: Sequence[str] = RUNS, root: Path | None = None):
+    """What the forward-fold CVs read once: the HSVA prior, the trials ``names``, their smoothed runs
+    (:func:`shipid.methods.mmg.estimator.smooth_run`), replay data and the peak-scored subset
+    (:func:`shipid.methods.mmg.turning_selection.peak_runs`)."""
+    trials = [read_kvlcc2(f, root) for f in names]
+    return (mmg.load_published("kvlcc2_hsva", root), trials, [R.smooth_run(tr) for tr in trials],
+            [TS.replay_data(tr) for tr in trials], TS.peak_runs(trials))
+
+
 def cross_validate(cands: Mapping[str, Mapping] | None = None, *, names: Sequence[str] = RUNS,
                    root: Path | None = None, progress=None) -> dict[str, Any]:
     """The forward-fold CV of the module docstring. Returns per fold and candidate the calibrated value,
     the :func:`score_rows` numbers and the per-run replays; and :func:`decide`."""
     cands = candidates() if cands is None else cands
-    prior = mmg.load_published("kvlcc2_hsva", root)
-    trials = [read_kvlcc2(f, root) for f in names]
-    runs = [R.smooth_run(tr) for tr in trials]
-    data = [TS.replay_data(tr) for tr in trials]
-    use = TS.peak_runs(trials)
+    prior, trials, runs, data, use = load_runs(names, root)
     folds: dict[str, Any] = {}
     for fold, train, test in fold_sets(names):
         row: dict[str, Any] = {"train": [names[i] for i in train], "scored": [names[i] for i in test]}
@@ -284,5 +289,5 @@ def format_cv(res: Mapping[str, Any]) -> str:
 
 
 __all__ = ["RUNS", "FOLDS", "CHOSEN", "resolve", "MIN_FOLDS_BETTER", "BASE", "SLOPE_GRID", "CROSSFLOW_SIDE_GRID", "STALL_GRID", "GRIDS",
-           "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "cross_validate", "decide", "heading_drift",
+           "candidates", "rudder_angles", "fold_sets", "calibrated", "score_rows", "load_runs", "cross_validate", "decide", "heading_drift",
            "format_cv"]
