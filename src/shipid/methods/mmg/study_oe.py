@@ -138,7 +138,7 @@ side force and yaw moment too large for this model), XW_g not determined, NP_n =
 Held-out (read once, after this choice): mean over the 9 runs **7.12° / 0.556 m** (published
 12.20° / 0.842 m; before these terms 7.79° / 0.613 m). Target (≤ 6.5° / ≤ 0.55 m) NOT met.
 Rerun end to end with this rule (``shipid study esso-osaka-heldout9``): the same tables, choice and
-7.12° / 0.556 m; 17.6 CPU-min (12 output-error CVs), 39 min wall at a machine load of about 7.
+7.12° / 0.556 m; 17.6 CPU-min (12 output-error CVs) with the reference simulation.
 
 Bound on a per-run yaw-moment bias (training runs only, diagnosis, not part of the pipeline):
 with each left-out training run's own ``NP_n`` fitted by output error on that run's own horizons
@@ -190,7 +190,12 @@ pooled RMS ψ / pos; mean over left-out runs ψ / pos)::
 (on the runs as recorded the same steps chose ``+prop-side+wind-gain``, 1.345, 7.60 / 0.584,
 6.10 / 0.621; prop-side and rudder-offset are within 0.003 of each other in both). Fitted on
 the 32 re-timed runs: YW_g = −0.35 ± 0.06, NW_g = −0.51 ± 0.09, NR_0 = −0.011 ± 0.004; XW_g and
-YR_0 not determined. The held-out side was not run with this choice.
+YR_0 not determined. Held-out (read once, after this choice; ``shipid study esso-osaka-heldout9``, the
+default ``--retime``; the identified model scored on the test runs re-timed by the training offsets, the
+published model on the runs as recorded): mean over the 9 runs **7.09° / 0.527 m** (published 12.20° /
+0.842 m; as recorded, before the repair, 7.12° / 0.556 m). Position target (≤ 0.55 m) met, heading
+(≤ 6.5°) NOT met. 146 s user CPU, 2 min 13 s wall at a load of about 1, max RSS 392 MB (the compiled
+row simulation of :mod:`shipid.models.mmg_kernels`; 1047 s CPU with the reference simulation).
 Where the gain comes from (diagnosis after the choice, same folds): the base fitted and refined on
 the runs as recorded but scored on its fold's re-timed left-out runs gives 1.288 (7.58 / 0.530;
 5.92 / 0.566), as much as fitting on re-timed runs too: the gain is the consistent initial state
