@@ -38,3 +38,168 @@ AND its pooled position RMS is not above the base's. One variant is scored (all 
 input offsets together; no per-input subsets, no second grid), and its score is reported
 whether or not it passes.
 """
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from shipid.data.trial import Trial
+from shipid.methods.mmg.timing import SMOOTH
+
+#: Default grid of input offsets (s).
+GRID = np.round(np.arange(-1.0, 1.501, 0.1), 10)
+#: Samples kept clear of each end of a run (filter edges and the largest grid offset).
+_EDGE = 2 * SMOOTH + 16
+#: Input channels moved by each offset.
+CHANNELS = {"delta": ("delta",), "n": ("n",),
+            "wind": ("wind_speed_rel", "wind_dir_rel", "wind_speed", "wind_dir")}
+_ANGLES = ("wind_dir_rel", "wind_dir")
+
+
+@dataclass(frozen=True)
+class InputLags:
+    """Offsets (s) by which the rudder angle, propeller rate and wind lag the position clock.
+
+    ``*_median`` / ``*_se``: median and standard error (``sd / √runs``) of the per-run argmins;
+    ``runs``: runs used; ``wind`` is 0 when no run has the relative wind channels."""
+
+    delta: float
+    n: float
+    wind: float
+    delta_median: float = 0.0
+    delta_se: float = 0.0
+    n_median: float = 0.0
+    n_se: float = 0.0
+    wind_median: float = 0.0
+    wind_se: float = 0.0
+    runs: int = 0
+
+    def to_dict(self) -> dict[str, float]:
+        return dict(self.__dict__)
+
+    @property
+    def zero(self) -> bool:
+        return self.delta == 0.0 and self.n == 0.0 and self.wind == 0.0
+
+
+def _smooth(a: np.ndarray) -> np.ndarray:
+    return np.convolve(a, np.ones(SMOOTH) / SMOOTH, mode="same")
+
+
+def _run_arrays(tr: Trial) -> dict[str, np.ndarray] | None:
+    names = ["u", "v", "r", "n", "delta"]
+    wind = all(c in tr for c in ("wind_speed_rel", "wind_dir_rel"))
+    cols = names + (["wind_speed_rel", "wind_dir_rel"] if wind else [])
+    t = np.asarray(tr.t, float)
+    Z = np.stack([np.asarray(tr[c], float) for c in cols], axis=1)
+    ok = np.all(np.isfinite(Z), axis=1)
+    if ok.sum() < 2 * _EDGE + 6 * SMOOTH:
+        return None
+    out = {"t": t[ok]}
+    out.update({c: Z[ok, i] for i, c in enumerate(cols)})
+    if wind:
+        g = np.unwrap(out.pop("wind_dir_rel"))
+        va = out.pop("wind_speed_rel")
+        out["wx"], out["wy"] = va * np.cos(g), va * np.sin(g)
+    return out
+
+
+def _shift(d: dict, name: str, tau: float) -> np.ndarray:
+    return d[name] if tau == 0.0 else np.interp(d["t"] + tau, d["t"], d[name])
+
+
+def _wind_cols(d: dict, tau: float) -> list[np.ndarray]:
+    wx, wy = _shift(d, "wx", tau), _shift(d, "wy", tau)
+    va2, g = wx * wx + wy * wy, np.arctan2(wy, wx)
+    return [va2 * np.sin(g), va2 * np.sin(2 * g)]
+
+
+def _yaw_design(d: dict, tau_d: float, tau_w: float | None):
+    u, v, r, n = d["u"], d["v"], d["r"], d["n"]
+    dl = _shift(d, "delta", tau_d)
+    cols = [u * r, u * v, np.abs(r) * r, np.abs(v) * v, dl * u * u, dl * u * n, dl * n * n]
+    if tau_w is not None and "wx" in d:
+        cols += _wind_cols(d, tau_w)
+    return np.gradient(_smooth(r), d["t"]), cols
+
+
+def _surge_design(d: dict, tau_n: float):
+    u, v, r, dl = d["u"], d["v"], d["r"], d["delta"]
+    nn = _shift(d, "n", tau_n)
+    cols = [u * np.abs(u), v * r, dl * dl * u * u, nn * nn, u * nn]
+    return np.gradient(_smooth(u), d["t"]), cols
+
+
+def _block(y: np.ndarray, cols: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Smoothed, interior, de-meaned (a per-run constant) response and design."""
+    m = slice(_EDGE, -_EDGE)
+    X = np.stack([_smooth(c)[m] for c in cols], axis=1)
+    y = y[m]
+    return y - y.mean(), X - X.mean(axis=0)
+
+
+def _sse(blocks: list[tuple[np.ndarray, np.ndarray]]) -> float:
+    y = np.concatenate([b[0] for b in blocks])
+    X = np.concatenate([b[1] for b in blocks])
+    s = np.linalg.norm(X, axis=0)
+    s[s == 0] = 1.0
+    beta = np.linalg.lstsq(X / s, y, rcond=None)[0]
+    e = y - (X / s) @ beta
+    return float(e @ e)
+
+
+def _profile(data: list[dict], design, grid: np.ndarray) -> tuple[float, float, float]:
+    """Pooled argmin over ``grid``; median and SE of the per-run argmins."""
+    per = np.array([[_sse([_block(*design(d, tau))]) for tau in grid] for d in data])
+    per_pooled = [_sse([_block(*design(d, tau)) for d in data]) for tau in grid]
+    pooled = float(grid[int(np.argmin(per_pooled))])
+    run_min = grid[np.argmin(per, axis=1)]
+    se = float(np.std(run_min, ddof=1) / np.sqrt(run_min.size)) if run_min.size > 1 else float("inf")
+    return pooled, float(np.median(run_min)), se
+
+
+def estimate_input_lags(trials: Sequence[Trial], grid: np.ndarray | None = None, *,
+                        wind: bool = True) -> InputLags:
+    """Least-squares input offsets over ``trials`` (state channels already re-timed; module docstring)."""
+    grid = GRID if grid is None else np.asarray(grid, float)
+    data = [d for d in (_run_arrays(tr) for tr in trials) if d is not None]
+    td, tdm, tds = _profile(data, lambda d, tau: _yaw_design(d, tau, 0.0), grid)
+    tn, tnm, tns = _profile(data, _surge_design, grid)
+    wdata = [d for d in data if "wx" in d]
+    tw = twm = tws = 0.0
+    if wind and wdata:
+        tw, twm, tws = _profile(wdata, lambda d, tau: _yaw_design(d, td, tau), grid)
+    return InputLags(delta=td, n=tn, wind=tw, delta_median=tdm, delta_se=tds, n_median=tnm, n_se=tns,
+                     wind_median=twm, wind_se=tws, runs=len(data))
+
+
+def retime_inputs(trial: Trial, lags: InputLags) -> Trial:
+    """``trial`` with the input channels advanced by ``lags`` (module docstring); unchanged when all are zero."""
+    if lags.zero:
+        return trial
+    t = np.asarray(trial.t, float)
+    new = {}
+    for key, tau in (("delta", lags.delta), ("n", lags.n), ("wind", lags.wind)):
+        for name in CHANNELS[key]:
+            if tau == 0.0 or name not in trial:
+                continue
+            a = np.asarray(trial[name], float)
+            ok = np.isfinite(a)
+            src = np.unwrap(a[ok]) if name in _ANGLES else a[ok]
+            b = np.interp(t + tau, t[ok], src)
+            new[name] = np.angle(np.exp(1j * b)) if name in _ANGLES else b
+    taus = (lags.delta, lags.n, lags.wind)
+    lo, hi = t[0] - min(min(taus), 0.0), t[-1] - max(max(taus), 0.0)
+    out = trial.with_channels(**new).slice_time(lo - 1e-9, hi + 1e-9)
+    meta = dict(out.meta)
+    text = (f"rudder angle, propeller rate and wind re-timed onto the position clock (advanced by "
+            f"{lags.delta:.2f} s, {lags.n:.2f} s and {lags.wind:.2f} s, offsets estimated on the training runs); "
+            f"first {lo - t[0]:.2f} s and last {t[-1] - hi:.2f} s dropped")
+    meta["repairs"] = list(meta.get("repairs", []) or []) + [{"kind": "retimed-inputs", "text": text}]
+    return Trial(out.t, out.channels, out.units, meta)
+
+
+__all__ = ["GRID", "CHANNELS", "InputLags", "estimate_input_lags", "retime_inputs"]

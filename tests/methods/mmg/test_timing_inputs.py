@@ -1,0 +1,52 @@
+"""Input-channel offsets and re-timing (shipid.methods.mmg.timing_inputs)."""
+
+import numpy as np
+import pytest
+
+from shipid.data.trial import Trial
+from shipid.methods.mmg import timing_inputs as TI
+
+
+def _run(seed, lag_delta, lag_n, dur=300.0):
+    """Yaw and surge driven by rudder and propeller (fine Euler steps), then delta and n logged late."""
+    g = np.random.default_rng(seed)
+    dt = 0.002
+    tf = np.arange(0.0, dur + 4.0, dt)
+    w = g.uniform(0.1, 0.4, 3)
+    delta = sum(0.2 * np.sin(wi * tf + g.uniform(0, 6)) for wi in w)
+    n = 10.0 + 2.0 * np.sin(0.05 * tf + g.uniform(0, 6)) + 0.5 * np.sin(0.31 * tf)
+    u, r, v = np.empty(tf.size), np.empty(tf.size), np.zeros(tf.size)
+    u[0], r[0] = 0.3, 0.0
+    for k in range(tf.size - 1):
+        du = -0.3 * u[k] * abs(u[k]) + 0.002 * n[k] ** 2 - 0.01 * u[k] * n[k]
+        dr = -0.8 * u[k] * r[k] + 0.6 * delta[k] * u[k] ** 2 + 0.0008 * delta[k] * n[k] ** 2
+        u[k + 1], r[k + 1] = u[k] + dt * du, r[k] + dt * dr
+    t = np.arange(0.0, dur, 0.1) + 2.0
+    ch = {c: np.interp(t, tf, a) for c, a in (("u", u), ("v", v), ("r", r))}
+    ch["delta"] = np.interp(t - lag_delta, tf, delta)
+    ch["n"] = np.interp(t - lag_n, tf, n)
+    ch["x"] = ch["y"] = ch["psi"] = np.zeros(t.size)
+    return Trial(t - 2.0, ch, {}, {"source": f"synthetic-{seed}"})
+
+
+def test_estimate_input_lags_finds_the_offsets():
+    lag = TI.estimate_input_lags([_run(s, 0.4, -0.3) for s in range(3)], wind=False)
+    assert lag.delta == pytest.approx(0.4, abs=0.1001)
+    assert lag.n == pytest.approx(-0.3, abs=0.1001)
+    assert lag.wind == 0.0 and lag.runs == 3
+    assert abs(lag.delta_median - 0.4) <= 0.1001 and np.isfinite(lag.delta_se)
+
+
+def test_retime_inputs_undoes_the_delay_and_is_the_identity_at_zero():
+    lagged, clean = _run(5, 0.5, -0.3), _run(5, 0.0, 0.0)
+    out = TI.retime_inputs(lagged, TI.InputLags(delta=0.5, n=-0.3, wind=0.0))
+    assert out.t[0] >= lagged.t[0] + 0.3 - 1e-9 and out.t[-1] <= lagged.t[-1] - 0.5 + 1e-9
+    k0 = int(np.searchsorted(lagged.t, out.t[0] - 1e-9))
+    sl = slice(k0, k0 + out.t.size)
+    for c in ("delta", "n"):
+        np.testing.assert_allclose(out[c], clean[c][sl], atol=2e-4)
+    for c in ("u", "v", "r"):
+        np.testing.assert_array_equal(out[c], lagged[c][sl])
+    (rep,) = out.meta["repairs"]
+    assert rep["kind"] == "retimed-inputs" and "0.50 s" in rep["text"] and "\n" not in rep["text"]
+    assert TI.retime_inputs(lagged, TI.InputLags(delta=0.0, n=0.0, wind=0.0)) is lagged
