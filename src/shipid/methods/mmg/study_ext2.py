@@ -22,6 +22,7 @@ from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import output_error as OE
 from shipid.methods.mmg import study_oe as S
 from shipid.methods.mmg import timing as T
+from shipid.methods.mmg import timing_inputs as TI
 from shipid.models import mmg
 
 #: Decision rule (candidates_ext2 docstring): least pooled gain, folds that must improve.
@@ -53,19 +54,31 @@ def cv_variants(trials: Sequence[Trial], names: Sequence[str], candidates: Mappi
 
 
 def cv_retimed(trials: Sequence[Trial], name: str, cand: Mapping, *, folds: int = 4, decimate: int = 2,
-               oe_config: OE.OEConfig = OE.OEConfig(),
+               oe_config: OE.OEConfig = OE.OEConfig(), inputs: bool = False,
                progress: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """The output-error CV of ``cand`` on re-timed runs; per fold the offsets come from its training runs."""
+    """The output-error CV of ``cand`` on re-timed runs; per fold the offsets come from its training runs.
+
+    ``inputs``: the input channels are re-timed too, by the offsets
+    :func:`shipid.methods.mmg.timing_inputs.estimate_input_lags` finds on the fold's state-re-timed
+    training runs (returned per fold as ``"input_lags"``).
+    """
     say = progress or (lambda s: None)
     prior = mmg.load_published("esso_osaka_3m")
     cprior, free = R.apply_candidate(prior, cand)
     cfg = R.candidate_config(R.FitConfig(), cand)
     groups = R.fold_groups(len(trials), folds)
-    rows, fold_scores, lags = [], [], []
+    rows, fold_scores, lags, ilags = [], [], [], []
     for gi, g in enumerate(groups):
         tr_idx = [i for i in range(len(trials)) if i not in g]
         lag = T.estimate_lags([trials[i] for i in tr_idx])
         moved = {i: T.retime(trials[i], lag) for i in range(len(trials))}
+        if inputs:
+            il = TI.estimate_input_lags([moved[i] for i in tr_idx])
+            moved = {i: TI.retime_inputs(tr, il) for i, tr in moved.items()}
+            ilags.append(il.to_dict())
+            say(f"cv retimed {name} fold {gi + 1}/{len(groups)}: input offsets rudder {il.delta:.1f} s "
+                f"(runs: median {il.delta_median:.2f}, se {il.delta_se:.2f}), propeller {il.n:.1f} s "
+                f"({il.n_median:.2f}, {il.n_se:.2f}), wind {il.wind:.1f} s ({il.wind_median:.2f}, {il.wind_se:.2f})")
         train = [moved[i] for i in tr_idx]
         f = R.fit([R.smooth_run(tr) for tr in train], cprior, free, cfg)
         f2, oe = OE.refined_fit(f, train, oe_config)
@@ -78,6 +91,8 @@ def cv_retimed(trials: Sequence[Trial], name: str, cand: Mapping, *, folds: int 
     out = S.summarise_rows(rows)
     out["fold_scores"] = fold_scores
     out["lags"] = lags
+    if inputs:
+        out["input_lags"] = ilags
     return out
 
 
@@ -92,4 +107,16 @@ def decide(base: Mapping[str, Any], variant: Mapping[str, Any]) -> dict[str, Any
             "passes": bool(ok)}
 
 
-__all__ = ["MIN_GAIN", "MIN_FOLDS_BETTER", "training_runs", "pool", "cv_variants", "cv_retimed", "decide"]
+def cv_input_lags(trials: Sequence[Trial], *, folds: int = 4,
+                  progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """The rule of :mod:`shipid.methods.mmg.timing_inputs`: the base re-timed with and without the input offsets."""
+    cand = E2.base_candidate()
+    base = cv_retimed(trials, E2.BASE_NAME, cand, folds=folds, progress=progress)
+    var = cv_retimed(trials, E2.BASE_NAME + "+input-lags", cand, folds=folds, inputs=True, progress=progress)
+    dec = decide(base, var)
+    dec["passes"] = bool(dec["passes"] and var["pos_rms"] <= base["pos_rms"])
+    return {"base": base, "input_lags": var, "decision": dec}
+
+
+__all__ = ["MIN_GAIN", "MIN_FOLDS_BETTER", "training_runs", "pool", "cv_variants", "cv_retimed", "cv_input_lags",
+           "decide"]
