@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from shipid.data.trial import Trial
+from shipid.methods.mmg import timing as T
 from shipid.methods.mmg import timing_inputs as TI
 
 
@@ -37,16 +38,36 @@ def test_estimate_input_lags_finds_the_offsets():
     assert abs(lag.delta_median - 0.4) <= 0.1001 and np.isfinite(lag.delta_se)
 
 
-def test_retime_inputs_undoes_the_delay_and_is_the_identity_at_zero():
+def _lags(delta=0.0, n=0.0, wind=0.0):
+    return T.Lags(psi=0.0, uv=0.0, r=0.0, mismatch_before=0.0, mismatch_after=0.0, runs=1, delta=delta, n=n, wind=wind)
+
+
+def test_retime_moves_the_inputs_in_one_repair_line():
     lagged, clean = _run(5, 0.5, -0.3), _run(5, 0.0, 0.0)
-    out = TI.retime_inputs(lagged, TI.InputLags(delta=0.5, n=-0.3, wind=0.0))
+    out = T.retime(lagged, _lags(0.5, -0.3))
     assert out.t[0] >= lagged.t[0] + 0.3 - 1e-9 and out.t[-1] <= lagged.t[-1] - 0.5 + 1e-9
     k0 = int(np.searchsorted(lagged.t, out.t[0] - 1e-9))
     sl = slice(k0, k0 + out.t.size)
     for c in ("delta", "n"):
         np.testing.assert_allclose(out[c], clean[c][sl], atol=2e-4)
-    for c in ("u", "v", "r"):
+    for c in ("u", "v", "r", "x"):
         np.testing.assert_array_equal(out[c], lagged[c][sl])
     (rep,) = out.meta["repairs"]
-    assert rep["kind"] == "retimed-inputs" and "0.50 s" in rep["text"] and "\n" not in rep["text"]
-    assert TI.retime_inputs(lagged, TI.InputLags(delta=0.0, n=0.0, wind=0.0)) is lagged
+    assert rep["kind"] == "retimed" and "0.50 s" in rep["text"] and "rudder" in rep["text"] and "\n" not in rep["text"]
+
+
+def test_retime_with_zero_input_offsets_is_the_state_retiming_bit_for_bit():
+    tr = _run(6, 0.4, 0.2)
+    state = T.Lags(psi=0.9, uv=0.6, r=0.9, mismatch_before=0.0, mismatch_after=0.0, runs=1)
+    a = T.retime(tr, state)
+    b = T.retime(tr, TI.with_inputs(state, TI.InputLags(delta=0.0, n=0.0, wind=0.0)))
+    np.testing.assert_array_equal(a.t, b.t)
+    for c in a.channels:
+        np.testing.assert_array_equal(a[c], b[c])
+    assert a.meta["repairs"] == b.meta["repairs"] and "rudder" not in a.meta["repairs"][0]["text"]
+    np.testing.assert_array_equal(a["delta"], tr["delta"][: a.t.size])
+
+
+def test_an_offset_on_the_grid_end_is_named():
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=1.5)) == ["wind"]
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=0.2)) == []

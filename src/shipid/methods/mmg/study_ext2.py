@@ -71,14 +71,14 @@ def cv_retimed(trials: Sequence[Trial], name: str, cand: Mapping, *, folds: int 
     for gi, g in enumerate(groups):
         tr_idx = [i for i in range(len(trials)) if i not in g]
         lag = T.estimate_lags([trials[i] for i in tr_idx])
-        moved = {i: T.retime(trials[i], lag) for i in range(len(trials))}
         if inputs:
-            il = TI.estimate_input_lags([moved[i] for i in tr_idx])
-            moved = {i: TI.retime_inputs(tr, il) for i, tr in moved.items()}
+            il = TI.estimate_input_lags([T.retime(trials[i], lag) for i in tr_idx])
+            lag = TI.with_inputs(lag, il)
             ilags.append(il.to_dict())
             say(f"cv retimed {name} fold {gi + 1}/{len(groups)}: input offsets rudder {il.delta:.1f} s "
                 f"(runs: median {il.delta_median:.2f}, se {il.delta_se:.2f}), propeller {il.n:.1f} s "
                 f"({il.n_median:.2f}, {il.n_se:.2f}), wind {il.wind:.1f} s ({il.wind_median:.2f}, {il.wind_se:.2f})")
+        moved = {i: T.retime(trials[i], lag) for i in range(len(trials))}
         train = [moved[i] for i in tr_idx]
         f = R.fit([R.smooth_run(tr) for tr in train], cprior, free, cfg)
         f2, oe = OE.refined_fit(f, train, oe_config)

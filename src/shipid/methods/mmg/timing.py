@@ -15,7 +15,12 @@ by the same centred moving average, which delays neither), then the yaw rate ``�
 ``r`` agree with the derivative of the re-timed heading. :func:`retime` moves the channels onto
 the position's clock, ``ψ'(t) = ψ(t + τ_ψ)`` (and so on), drops the last ``max τ`` seconds that
 would need extrapolation and records the change as one repair line in ``meta["repairs"]``.
-Position, rudder, propeller and wind channels are not moved.
+With input offsets (``Lags.delta``, ``Lags.n``, ``Lags.wind``, estimated by
+:func:`shipid.methods.mmg.timing_inputs.estimate_input_lags` on the state-re-timed runs) it moves
+the rudder angle, propeller rate and wind channels onto the same clock, ``δ'(t) = δ(t + τ_δ)``,
+drops the samples that would need extrapolation at either end and names the input offsets in the
+same repair line; with them zero (the default) the inputs are not moved and the result is that of
+the state re-timing alone. The position channels are never moved.
 """
 
 from __future__ import annotations
@@ -34,7 +39,8 @@ SMOOTH = 11
 @dataclass(frozen=True)
 class Lags:
     """Offsets (s) by which each channel lags the position: heading, body velocities, yaw rate;
-    ``mismatch`` the RMS earth-velocity disagreement (m/s) before and after re-timing."""
+    ``mismatch`` the RMS earth-velocity disagreement (m/s) before and after re-timing; ``delta``,
+    ``n``, ``wind``: the input offsets (rudder angle, propeller rate, wind; 0 = not moved)."""
 
     psi: float
     uv: float
@@ -42,10 +48,14 @@ class Lags:
     mismatch_before: float
     mismatch_after: float
     runs: int
+    delta: float = 0.0
+    n: float = 0.0
+    wind: float = 0.0
 
     def to_dict(self) -> dict[str, float]:
         return {"psi": self.psi, "uv": self.uv, "r": self.r, "mismatch_before": self.mismatch_before,
-                "mismatch_after": self.mismatch_after, "runs": self.runs}
+                "mismatch_after": self.mismatch_after, "runs": self.runs, "delta": self.delta, "n": self.n,
+                "wind": self.wind}
 
 
 def _smooth(a: np.ndarray) -> np.ndarray:
@@ -100,25 +110,42 @@ def estimate_lags(trials: Sequence[Trial], grid: np.ndarray | None = None) -> La
                 mismatch_after=float(np.sqrt(table[i, j])), runs=len(data))
 
 
+#: Input channels moved by each input offset of :class:`Lags`, and the channels that are angles.
+INPUT_CHANNELS = {"delta": ("delta",), "n": ("n",),
+                  "wind": ("wind_speed_rel", "wind_dir_rel", "wind_speed", "wind_dir")}
+_ANGLES = ("psi", "wind_dir_rel", "wind_dir")
+
+
 def retime(trial: Trial, lags: Lags) -> Trial:
-    """``trial`` with ψ, u, v, r moved onto the position clock by ``lags`` (module docstring)."""
+    """``trial`` with ψ, u, v, r (and the inputs, where ``lags`` has input offsets) moved onto the
+    position clock by ``lags`` (module docstring)."""
     t = np.asarray(trial.t, float)
+    moves = [("psi", lags.psi), ("u", lags.uv), ("v", lags.uv), ("r", lags.r)]
+    inputs = (lags.delta, lags.n, lags.wind)
+    for key, tau in zip(("delta", "n", "wind"), inputs):
+        moves += [(name, tau) for name in INPUT_CHANNELS[key] if tau != 0.0 and name in trial]
     new = {}
-    for name, tau in (("psi", lags.psi), ("u", lags.uv), ("v", lags.uv), ("r", lags.r)):
+    for name, tau in moves:
         a = np.asarray(trial[name], float)
         ok = np.isfinite(a)
-        src = np.unwrap(a[ok]) if name == "psi" else a[ok]
+        src = np.unwrap(a[ok]) if name in _ANGLES else a[ok]
         b = np.interp(t + tau, t[ok], src)
-        new[name] = np.angle(np.exp(1j * b)) if name == "psi" else b
+        new[name] = np.angle(np.exp(1j * b)) if name in _ANGLES else b
     out = trial.with_channels(**new)
-    end = t[-1] - max(lags.psi, lags.uv, lags.r, 0.0)
-    out = out.slice_time(None, end + 1e-9)
+    end = t[-1] - max(lags.psi, lags.uv, lags.r, *inputs, 0.0)
+    start = t[0] - min(*inputs, 0.0)
+    out = out.slice_time(None if start == t[0] else start - 1e-9, end + 1e-9)
     meta = dict(out.meta)
     text = (f"heading, body velocities and yaw rate re-timed onto the position clock (advanced by "
             f"{lags.psi:.2f} s, {lags.uv:.2f} s and {lags.r:.2f} s, offsets estimated on the training runs); "
             f"last {t[-1] - end:.2f} s dropped")
+    if any(inputs):
+        text = (f"heading, body velocities and yaw rate (advanced by {lags.psi:.2f} s, {lags.uv:.2f} s and "
+                f"{lags.r:.2f} s) and rudder angle, propeller rate and wind (advanced by {lags.delta:.2f} s, "
+                f"{lags.n:.2f} s and {lags.wind:.2f} s) re-timed onto the position clock, offsets estimated on "
+                f"the training runs; first {start - t[0]:.2f} s and last {t[-1] - end:.2f} s dropped")
     meta["repairs"] = list(meta.get("repairs", []) or []) + [{"kind": "retimed", "text": text}]
     return Trial(out.t, out.channels, out.units, meta)
 
 
-__all__ = ["SMOOTH", "Lags", "estimate_lags", "retime"]
+__all__ = ["SMOOTH", "INPUT_CHANNELS", "Lags", "estimate_lags", "retime"]

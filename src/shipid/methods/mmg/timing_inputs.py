@@ -17,8 +17,10 @@ the surge acceleration ``u̇`` on a per-run constant, ``u|u|``, ``v r``, ``δ² 
 rudder at ``τ_δ`` and the air moment columns ``V_A² sin γ_A``, ``V_A² sin 2γ_A`` (Fujiwara et al.
 1998) lagged. How well determined: the per-run argmin of each lag, its median and the standard
 error ``sd / √runs`` across runs, reported with the pooled estimate.
-:func:`retime_inputs` advances the input channels by the offsets, ``δ'(t) = δ(t + τ_δ)``, drops
-the samples that would need extrapolation at either end, and adds one repair line.
+:func:`with_inputs` puts the offsets into a :class:`~shipid.methods.mmg.timing.Lags`, and
+:func:`shipid.methods.mmg.timing.retime` then advances the input channels too, ``δ'(t) = δ(t + τ_δ)``
+(one repair line for state and inputs); :func:`at_bound` names an offset on the end of the grid
+(not determined within it).
 
 Decision rule (written before any lag was estimated and before any CV score was computed)
 ----------------------------------------------------------------------------------------
@@ -41,22 +43,18 @@ whether or not it passes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
 
 from shipid.data.trial import Trial
-from shipid.methods.mmg.timing import SMOOTH
+from shipid.methods.mmg.timing import SMOOTH, Lags
 
 #: Default grid of input offsets (s).
 GRID = np.round(np.arange(-1.0, 1.501, 0.1), 10)
 #: Samples kept clear of each end of a run (filter edges and the largest grid offset).
 _EDGE = 2 * SMOOTH + 16
-#: Input channels moved by each offset.
-CHANNELS = {"delta": ("delta",), "n": ("n",),
-            "wind": ("wind_speed_rel", "wind_dir_rel", "wind_speed", "wind_dir")}
-_ANGLES = ("wind_dir_rel", "wind_dir")
 
 
 @dataclass(frozen=True)
@@ -176,30 +174,17 @@ def estimate_input_lags(trials: Sequence[Trial], grid: np.ndarray | None = None,
                      wind_median=twm, wind_se=tws, runs=len(data))
 
 
-def retime_inputs(trial: Trial, lags: InputLags) -> Trial:
-    """``trial`` with the input channels advanced by ``lags`` (module docstring); unchanged when all are zero."""
-    if lags.zero:
-        return trial
-    t = np.asarray(trial.t, float)
-    new = {}
-    for key, tau in (("delta", lags.delta), ("n", lags.n), ("wind", lags.wind)):
-        for name in CHANNELS[key]:
-            if tau == 0.0 or name not in trial:
-                continue
-            a = np.asarray(trial[name], float)
-            ok = np.isfinite(a)
-            src = np.unwrap(a[ok]) if name in _ANGLES else a[ok]
-            b = np.interp(t + tau, t[ok], src)
-            new[name] = np.angle(np.exp(1j * b)) if name in _ANGLES else b
-    taus = (lags.delta, lags.n, lags.wind)
-    lo, hi = t[0] - min(min(taus), 0.0), t[-1] - max(max(taus), 0.0)
-    out = trial.with_channels(**new).slice_time(lo - 1e-9, hi + 1e-9)
-    meta = dict(out.meta)
-    text = (f"rudder angle, propeller rate and wind re-timed onto the position clock (advanced by "
-            f"{lags.delta:.2f} s, {lags.n:.2f} s and {lags.wind:.2f} s, offsets estimated on the training runs); "
-            f"first {lo - t[0]:.2f} s and last {t[-1] - hi:.2f} s dropped")
-    meta["repairs"] = list(meta.get("repairs", []) or []) + [{"kind": "retimed-inputs", "text": text}]
-    return Trial(out.t, out.channels, out.units, meta)
+def with_inputs(lags: Lags, inputs: InputLags) -> Lags:
+    """``lags`` (state offsets) with the input offsets of ``inputs``, for :func:`shipid.methods.mmg.timing.retime`."""
+    return replace(lags, delta=inputs.delta, n=inputs.n, wind=inputs.wind)
 
 
-__all__ = ["GRID", "CHANNELS", "InputLags", "estimate_input_lags", "retime_inputs"]
+def at_bound(inputs: InputLags, grid: np.ndarray | None = None) -> list[str]:
+    """The input offsets that sit on an end of ``grid`` (not determined within it)."""
+    grid = GRID if grid is None else np.asarray(grid, float)
+    lo, hi = float(grid[0]), float(grid[-1])
+    names = {"delta": "rudder angle", "n": "propeller rate", "wind": "wind"}
+    return [names[k] for k in names if getattr(inputs, k) in (lo, hi)]
+
+
+__all__ = ["GRID", "InputLags", "estimate_input_lags", "with_inputs", "at_bound"]
