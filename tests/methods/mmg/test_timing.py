@@ -62,3 +62,4 @@ def test_heldout9_offers_the_retime_switch():
 
     out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
     assert "--retime / --no-retime" in out
+    assert "--input-lags / --no-input-lags" in out

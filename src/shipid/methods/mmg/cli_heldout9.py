@@ -1,11 +1,13 @@
-"""``shipid study esso-osaka-heldout9 [--folds K] [--train-only] [--no-retime] [--json] [-o R.json]``.
+"""``shipid study esso-osaka-heldout9 [--folds K] [--train-only] [--no-retime] [--no-input-lags] [--json] [-o R.json]``.
 
 The Esso Osaka 9-run held-out study of :mod:`shipid.methods.mmg.study_oe`: structure by
 regression CV and regression vs output-error refinement by CV, both on the 32 training
 runs; then, unless ``--train-only``, the 9 test runs are read once and the identified and
 published models compared (mean over runs of the 60-s restarted-horizon RMS). By default the
 runs are first re-timed onto the position clock (:mod:`shipid.methods.mmg.timing`; offsets
-estimated on the training runs), reported as one data-repair line; ``--no-retime`` leaves them.
+estimated on the training runs), and the rudder angle, propeller rate and wind with them
+(:mod:`shipid.methods.mmg.timing_inputs`), reported as one data-repair line; ``--no-input-lags``
+re-times the state channels only, ``--no-retime`` leaves all.
 """
 
 from __future__ import annotations
@@ -29,9 +31,13 @@ from shipid.cli._common import emit, loud_lines, out_options, strict_option
 @click.option("--retime/--no-retime", default=True, show_default=True,
               help="Re-time heading, velocities and yaw rate onto the position clock by offsets estimated on the "
                    "training runs (shipid.methods.mmg.timing); reported as one data-repair line.")
+@click.option("--input-lags/--no-input-lags", default=True, show_default=True,
+              help="With --retime, re-time the rudder angle, propeller rate and wind too, by offsets estimated on "
+                   "the training runs (shipid.methods.mmg.timing_inputs); in the same data-repair line.")
 @out_options(json_help="Print everything as JSON on stdout.")
 @strict_option
-def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, retime, as_json, out, force):
+def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, retime, input_lags, as_json, out,
+                 force):
     """Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on
     the other 32 (structure; regression vs output-error refinement; port/starboard terms; surge and
     slipstream-rudder terms), then the held-out table."""
@@ -39,7 +45,8 @@ def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, retim
 
     say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
     st = S.heldout9_train(ninth=ninth, folds=folds, asymmetry=not symmetric_only,
-                          surge=not no_surge_terms, retime=retime, progress=say)
+                          surge=not no_surge_terms, retime=retime, input_lags=input_lags,
+                          progress=say)
     if not as_json:
         click.echo(S.format_heldout9(st))
     if not train_only:
@@ -49,9 +56,17 @@ def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, retim
     lines = list(st["result"].get("diagnostics", {}).get("warnings", []))
     if st.get("retime"):
         lg = st["retime"]
-        lines.append(f"data repaired: heading, body velocities and yaw rate of every run re-timed onto the position "
-                     f"clock (advanced by {lg['psi']:.2f} s, {lg['uv']:.2f} s, {lg['r']:.2f} s; estimated on the "
-                     f"{lg['runs']} training runs)")
+        if any(lg.get(k, 0.0) for k in ("delta", "n", "wind")):
+            lines.append(f"data repaired: heading, body velocities and yaw rate (advanced by {lg['psi']:.2f} s, "
+                         f"{lg['uv']:.2f} s, {lg['r']:.2f} s) and rudder angle, propeller rate and wind (advanced by "
+                         f"{lg['delta']:.2f} s, {lg['n']:.2f} s, {lg['wind']:.2f} s) of every run re-timed onto the "
+                         f"position clock (estimated on the {lg['runs']} training runs)")
+        else:
+            lines.append(f"data repaired: heading, body velocities and yaw rate of every run re-timed onto the "
+                         f"position clock (advanced by {lg['psi']:.2f} s, {lg['uv']:.2f} s, {lg['r']:.2f} s; "
+                         f"estimated on the {lg['runs']} training runs)")
+        for name in (st.get("retime_inputs") or {}).get("not_determined", []):
+            lines.append(f"{name} offset on the end of the search grid: not determined within it (used as found)")
     warns = loud_lines(lines)
     if warns:
         st["warnings"] = warns

@@ -216,6 +216,7 @@ from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import output_error as OE
 from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import timing as TM
+from shipid.methods.mmg import timing_inputs as TI
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates_asym import asym_variants
 from shipid.methods.mmg.candidates_surge import BASE_STRUCTURES as SURGE_BASES
@@ -310,7 +311,8 @@ def cv_refinement(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior:
 
 def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int = 4, refine_candidates: int = 2,
                    oe_config: OE.OEConfig = OE.OEConfig(), asymmetry: bool = True, surge: bool = True,
-                   retime: bool = True, progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                   retime: bool = True, input_lags: bool = True,
+                   progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Training side (module docstring, steps 1–3). Reads no test run.
 
     ``refine_candidates``: how many of the best regression candidates :func:`cv_refinement` compares.
@@ -324,6 +326,10 @@ def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int
     are estimated on the training runs and every training run is re-timed by them
     (:func:`shipid.methods.mmg.timing.retime`); the offsets are returned as ``"retime"`` and
     :func:`heldout9_evaluate` re-times the test runs by the same offsets.
+    ``input_lags`` (with ``retime``): the offsets of the rudder angle, propeller rate and wind
+    (:func:`shipid.methods.mmg.timing_inputs.estimate_input_lags` on the state-re-timed training runs)
+    are added, and the inputs re-timed in the same step; the estimate with its per-run spread is
+    returned as ``"retime_inputs"``.
     """
     say = progress or (lambda s: None)
     sp = heldout9_split(root, ninth)
@@ -332,12 +338,19 @@ def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int
         raise ValueError(f"test runs in the training set: {sorted(leak)}")
     say(f"heldout9: reading {len(sp['train'])} training runs")
     trials = [read_esso(f, root) for f in sp["train"]]
-    lags = None
+    lags = ilags = None
     if retime:
         lags = TM.estimate_lags(trials)
         say(f"heldout9: channel offsets behind the position (training runs): heading {lags.psi:.2f} s, "
-            f"velocities {lags.uv:.2f} s, yaw rate {lags.r:.2f} s; runs re-timed")
+            f"velocities {lags.uv:.2f} s, yaw rate {lags.r:.2f} s")
+        if input_lags:
+            ilags = TI.estimate_input_lags([TM.retime(tr, lags) for tr in trials])
+            lags = TI.with_inputs(lags, ilags)
+            say(f"heldout9: input offsets (training runs; per-run median, se): rudder {ilags.delta:.2f} s "
+                f"({ilags.delta_median:.2f}, {ilags.delta_se:.2f}), propeller {ilags.n:.2f} s ({ilags.n_median:.2f}, "
+                f"{ilags.n_se:.2f}), wind {ilags.wind:.2f} s ({ilags.wind_median:.2f}, {ilags.wind_se:.2f})")
         trials = [TM.retime(tr, lags) for tr in trials]
+        say("heldout9: training runs re-timed")
     prior = mmg.load_published("esso_osaka_3m", root)
     runs = [R.smooth_run(tr) for tr in trials]
     best, table = P.select_structure(trials, runs, prior, folds=folds)
@@ -370,7 +383,9 @@ def heldout9_train(*, root: Path | None = None, ninth: str = "issue", folds: int
                      name="esso-osaka-3m-heldout9",
                      extra_provenance={"split": "heldout9", "test_runs_never_used": sp["test"]})
     return {"split": sp, "regression_cv": table, "refinement_cv": ref, "chosen": choice,
-            "result": res.to_dict(), "retime": None if lags is None else lags.to_dict()}
+            "result": res.to_dict(), "retime": None if lags is None else lags.to_dict(),
+            "retime_inputs": None if ilags is None else
+            dict(ilags.to_dict(), not_determined=TI.at_bound(ilags))}
 
 
 def heldout9_evaluate(trained: dict[str, Any], *, root: Path | None = None) -> dict[str, Any]:
