@@ -200,6 +200,19 @@ Where the gain comes from (diagnosis after the choice, same folds): the base fit
 the runs as recorded but scored on its fold's re-timed left-out runs gives 1.288 (7.58 / 0.530;
 5.92 / 0.566), as much as fitting on re-timed runs too: the gain is the consistent initial state
 of each restarted horizon (the position part is on the same samples), not a different fit.
+
+Input offsets (``input_lags=True``, the default since; :mod:`shipid.methods.mmg.timing_inputs`,
+rule and table there). On the state-re-timed training runs, least squares of the yaw and surge
+accelerations on the lagged inputs put the rudder angle 0.8 s behind the position clock
+(per-run median 0.75 s, SE 0.06), the propeller rate −0.4 s (median −0.20, SE 0.18: not well
+determined) and the wind at the 1.5-s end of the grid (not determined; the study prints a line).
+4-fold output-error CV of the base, offsets from each fold's training runs: 1.288 → 1.248
+(4 of 4 folds, pooled 7.60 / 0.528 → 7.30 / 0.518): kept. Training side end to end
+(``shipid study esso-osaka-heldout9 --train-only``; no test run read; 134 s user CPU, 2 min 18 s
+wall, max RSS 417 MB): the regression CV chose ``hull+rudder+4-quadrant-propeller/nondimensional``
+(1.859); the output-error CV chose ``hull+rudder+thrust/nondimensional+rudder-offset+wind-gain``
+again, 1.237 (pooled 7.22 / 0.515; mean over left-out runs 5.75 / 0.557), against 1.277 (7.46 /
+0.531; 5.86 / 0.569) with the state re-timing alone. Held-out not yet scored with the input offsets.
 """
 
 from __future__ import annotations
