@@ -46,6 +46,11 @@ cache) or in Python. Checked 2026-12-02 (load 1.6-2.8, two invocations of 3 roun
 in an invocation was not slower than the later ones (4.25 vs 4.00 / 4.22 s and 4.96 vs 5.01 / 4.73 s);
 ``NUMBA_DEBUG_CACHE=1`` shows the same six cached kernels loaded and none compiled or saved in a first and a
 later run, and no file under ``src/**/__pycache__`` changes during the parent's simulation or any child run.
+With scipy.signal / scipy.stats imported only by the functions that call them (2026-12-02, load 0.5-0.8, 3 rounds,
+peer 83c235a): this tree CPU 4.65 / 4.35 / 4.31 s (median 4.35 s; user 3.89 / 3.91 / 3.89 s, the first run's
+excess is system time, 0.76 against 0.43 s), max RSS 304.5-331.4 MiB (347.5 MB), JSON 1.020 MB; ``--refine none``
+3.33 / 2.58 / 2.47 s, 304 MiB; peer 10.9-13.3 s, 763 MiB; ratio this/peer CPU 0.36; against the target CPU 0.87,
+max RSS 0.87.
 
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2] [REFINE=none]
         (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, with ``--refine none``)
