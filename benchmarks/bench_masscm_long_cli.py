@@ -40,6 +40,18 @@ this tree CPU 5.37 / 4.35 / 4.42 s and 5.28 / 4.44 / 4.47 s (medians 4.42 / 4.47
 invocation is the slow one), max RSS 343.9-372.9 MB, JSON 1.020 MB; ``--refine none`` 3.81-4.36 s; peer 11.8-12.4 s,
 801 MB; ratio this/peer CPU 0.37 / 0.39; against the target CPU 0.88 / 0.89, max RSS 0.93.
 
+Per run the CPU time is also printed as user + sys with the child's major page faults, so that a run slower than
+the others shows whether it spent the time in the kernel (first touch of memory, reading files not in the page
+cache) or in Python. Checked 2026-12-02 (load 1.6-2.8, two invocations of 3 rounds): the first run of 'this tree'
+in an invocation was not slower than the later ones (4.25 vs 4.00 / 4.22 s and 4.96 vs 5.01 / 4.73 s);
+``NUMBA_DEBUG_CACHE=1`` shows the same six cached kernels loaded and none compiled or saved in a first and a
+later run, and no file under ``src/**/__pycache__`` changes during the parent's simulation or any child run.
+With scipy.signal / scipy.stats imported only by the functions that call them (2026-12-02, load 0.5-0.8, 3 rounds,
+peer 83c235a): this tree CPU 4.65 / 4.35 / 4.31 s (median 4.35 s; user 3.89 / 3.91 / 3.89 s, the first run's
+excess is system time, 0.76 against 0.43 s), max RSS 304.5-331.4 MiB (347.5 MB), JSON 1.020 MB; ``--refine none``
+3.33 / 2.58 / 2.47 s, 304 MiB; peer 10.9-13.3 s, 763 MiB; ratio this/peer CPU 0.36; against the target CPU 0.87,
+max RSS 0.87.
+
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2] [REFINE=none]
         (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, with ``--refine none``)
         (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
@@ -86,7 +98,8 @@ def run(src: str, files: dict, out: str | None, json_path: str, extra=()) -> dic
     wall = time.perf_counter() - t0
     p.returncode = os.waitstatus_to_exitcode(status)
     size = Path(out).stat().st_size if out else Path(json_path).stat().st_size
-    return {"wall_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime, "maxrss_mib": ru.ru_maxrss / 1024, "bytes": size,
+    return {"wall_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime, "user_s": ru.ru_utime, "sys_s": ru.ru_stime,
+            "majflt": ru.ru_majflt, "maxrss_mib": ru.ru_maxrss / 1024, "bytes": size,
             "rc": p.returncode, "stderr": p.stderr.read()[-400:]}
 
 
@@ -126,7 +139,8 @@ def main():
                 print(f"  {label}: exit {r['rc']}: {r['stderr']}")
                 continue
             rows[label].append(r)
-            print(f"  {label:10s} CPU {r['cpu_s']:6.2f} s  wall {r['wall_s']:7.2f} s  max RSS {r['maxrss_mib']:6.1f} MiB "
+            print(f"  {label:10s} CPU {r['cpu_s']:6.2f} s (user {r['user_s']:5.2f} + sys {r['sys_s']:4.2f}, "
+                  f"{r['majflt']} major faults)  wall {r['wall_s']:7.2f} s  max RSS {r['maxrss_mib']:6.1f} MiB "
                   f"({r['maxrss_mib'] * 2**20 / 1e6:5.1f} MB)  "
                   f"{'result JSON (-o)' if out else 'stdout (--json)'} {r['bytes'] / 1e6:.3f} MB  "
                   f"load {os.getloadavg()[0]:.1f}", flush=True)

@@ -14,8 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 from shipid.estimate.fir_kernels import ar_fit
+from shipid.estimate.iir_kernels import lfilter as iir_lfilter
 
 
 @dataclass(frozen=True)
@@ -27,7 +27,12 @@ class ARMA:
     lam: float
 
     def prefilter(self, x: np.ndarray) -> np.ndarray:
-        """Apply ``L = H^-1 = A/C`` (eq. 43) along axis 0."""
+        """Apply ``L = H^-1 = A/C`` (eq. 43) along axis 0 (a 1-D signal through the compiled
+        :func:`shipid.estimate.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s numbers)."""
+        if np.ndim(x) == 1:
+            return iir_lfilter(self.a, self.c, x)
+        from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
+
         return lfilter(self.a, self.c, x, axis=0)
 
 
@@ -146,6 +151,8 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     th = _ls(R, xs[start:])
     a = _stabilise(np.concatenate([[1.0], th[:na]]))
     c = _stabilise(np.concatenate([[1.0], th[na:]]))
+    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
+
     eps = lfilter(a, c, xs)[start:]
     lam = float(np.mean(eps**2)) * scale**2
     return ARMA(a, c, lam)

@@ -19,7 +19,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 from shipid.estimate.fir_kernels import project_qr
 
 
@@ -65,6 +64,8 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
 
 def arx_simulate(b: np.ndarray, a: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Noise-free simulation ``y = B/A u``."""
+    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
+
     return lfilter(b, a, u)
 
 

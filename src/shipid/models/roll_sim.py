@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.data.trial import Trial
 from shipid.models.roll import RollShipParams, imu_outputs, params_from_vessel, simulate_zoh
@@ -91,6 +90,8 @@ def wave_moment(n: int, dt: float, spec: NoiseSpec, rng: np.random.Generator) ->
     b, a = bilinear_tf([2 * spec.wave_damping * w, 0.0], [1.0, 2 * spec.wave_damping * w, w * w], dt)
     nburn = int(20 * spec.wave_period / dt)
     e = rng.standard_normal(n + nburn)
+    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
+
     return lfilter(b, a, e)[nburn:]
 
 

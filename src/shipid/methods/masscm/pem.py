@@ -58,8 +58,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
-from scipy.signal import welch
-from scipy.stats import chi2
 
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
@@ -301,6 +299,8 @@ def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
         return loc
     loc[15:18] = np.log(np.maximum(np.var(np.diff(r[0], n=2, axis=0), axis=0) / 6, 1e-12))
     eps = r[0][:, 0]
+    from scipy.signal import welch  # scipy.signal (with scipy.stats) only where it is called
+
     f, P = welch(eps, fs=1.0 / s.T, nperseg=min(2048, s.n))
     w = 2 * np.pi * f[1 + int(np.argmax(P[1:]))]
     loc[12:15] = np.log([w, 0.1, 1.0])
@@ -371,6 +371,8 @@ def ljung_box_reason(sets, locs, residuals, what: str, lags: int = WHITE_LAGS, p
     ``1 - p`` quantile with ``lags`` degrees of freedom; shared by this module and
     :mod:`shipid.methods.masscm.whittle`.
     """
+    from scipy.stats import chi2  # scipy.stats only where it is called
+
     crit = float(chi2.ppf(1 - p, lags))
     for s, loc in zip(sets, locs):
         e = residuals(s, loc)

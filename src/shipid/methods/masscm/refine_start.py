@@ -15,7 +15,6 @@ so that on a one-hour record at 50 Hz its transient is about a third of the stac
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, sosfiltfilt
 
 from shipid.models.roll_reduced import KnownParams, roll_terms
 
@@ -24,6 +23,8 @@ def initial_rows(s, theta, known: KnownParams) -> np.ndarray:
     """Start values ``c_v, c_r`` (12,) (coefficients of ``[phi, v, p, r, delta, tau]`` of (11)) for a dataset
     ``s`` with ``y (N, 3)`` (``p, a_s, r``), ``delta``, ``T``, ``n``, ``cond``, ``z_f`` at ``theta`` (names
     :data:`~shipid.methods.masscm.crlb_kf.FREE`); see the module docstring."""
+    from scipy.signal import butter, sosfiltfilt  # scipy.signal (with scipy.stats) only where it is called
+
     T = s.T
     sos = butter(2, [0.02, min(2.0, 0.4 / T)], btype="bandpass", fs=1.0 / T, output="sos")
     p, a, r = (s.y[:, i] - s.y[:, i].mean() for i in range(3))
