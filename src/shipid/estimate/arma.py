@@ -151,9 +151,7 @@ def hannan_rissanen(x: np.ndarray, na: int = 4, nc: int = 4, n_long: int | None 
     th = _ls(R, xs[start:])
     a = _stabilise(np.concatenate([[1.0], th[:na]]))
     c = _stabilise(np.concatenate([[1.0], th[na:]]))
-    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
-
-    eps = lfilter(a, c, xs)[start:]
+    eps = iir_lfilter(a, c, xs)[start:]
     lam = float(np.mean(eps**2)) * scale**2
     return ARMA(a, c, lam)
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from shipid.estimate.fir_kernels import project_qr
+from shipid.estimate.iir_kernels import lfilter
 
 
 def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
@@ -63,9 +64,8 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
 
 
 def arx_simulate(b: np.ndarray, a: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Noise-free simulation ``y = B/A u``."""
-    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
-
+    """Noise-free simulation ``y = B/A u`` of a 1-D input from rest (:func:`shipid.estimate.iir_kernels.lfilter`,
+    ``scipy.signal.lfilter``'s numbers)."""
     return lfilter(b, a, u)
 
 

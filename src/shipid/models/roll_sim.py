@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shipid.data.trial import Trial
+from shipid.estimate.iir_kernels import lfilter
 from shipid.models.roll import RollShipParams, imu_outputs, params_from_vessel, simulate_zoh
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, bilinear_tf
 from shipid.vessels import load_vessel
@@ -90,8 +91,6 @@ def wave_moment(n: int, dt: float, spec: NoiseSpec, rng: np.random.Generator) ->
     b, a = bilinear_tf([2 * spec.wave_damping * w, 0.0], [1.0, 2 * spec.wave_damping * w, w * w], dt)
     nburn = int(20 * spec.wave_period / dt)
     e = rng.standard_normal(n + nburn)
-    from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called
-
     return lfilter(b, a, e)[nburn:]
 
 

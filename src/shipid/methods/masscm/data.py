@@ -18,8 +18,7 @@ import numpy as np
 
 from shipid.data.trial import Trial
 from shipid.errors import InputError
-from shipid.estimate.iir_kernels import lfilter
-from shipid.estimate.iv import arx_fit
+from shipid.estimate.iv import arx_fit, arx_simulate
 from shipid.methods.masscm.options import REQUIRED, MassCMOptions
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL
 
@@ -86,7 +85,7 @@ def prepare(datasets: Sequence[tuple[str, Trial]], options: MassCMOptions = Mass
         sims = {}
         for name, sgl in (("y", y - y.mean()), ("a_s", ds.a_s - ds.a_s.mean()), ("r", ds.r - ds.r.mean())):
             b, a = arx_fit(sgl, ds.delta, options.arx_na, options.arx_nb)
-            sims[name] = lfilter(b, a, ds.delta)            # the simulation B/A delta (estimate.iv.arx_simulate)
+            sims[name] = arx_simulate(b, a, ds.delta)       # the simulation B/A delta
         ds.y_hat0, ds.a_hat0, ds.r_hat0 = sims["y"], sims["a_s"], sims["r"]
         out.append(ds)
     return out
