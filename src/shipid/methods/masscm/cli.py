@@ -26,6 +26,7 @@ from shipid.cli import analyse, identify, study
 from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
 from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import InputError, ShipidError
+from shipid.methods.masscm.refine_modes import REFINE_MODES
 
 KNOWN_KEYS = ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")
 _UNITS = {"U": "m/s", "M": "kg", "zg_bar": "m", "m_c": "kg", "zc_bar": "m", "zs_bar": "m", "g": "m/s^2",
@@ -102,7 +103,7 @@ def _fmt(v: float) -> str:
               help="Noise model of the prefilter (43): auto (= bj): Box-Jenkins (1 - c q^-2)^k / D(q), k <= 2, with "
                    "(c, k) chosen by the data (innovation likelihood); ar: AR(40); ar-structured: c = 0.99; "
                    "arma: structured ARMA.")
-@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle", "pem-floor"]), default="auto",
+@click.option("--refine", type=click.Choice(REFINE_MODES), default="auto",
               show_default=True,
               help="auto: refine only where the data show sensor noise and a wave structure (the rule of "
                    "methods/masscm/refine.py); pem: always the maximum-likelihood refinement of Algorithm 1's "
@@ -215,7 +216,7 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
               help="Noise model of Algorithm 1 (default: the estimator's default).")
-@click.option("--refine", type=click.Choice(["auto", "none", "pem", "whittle", "pem-floor"]), default="auto",
+@click.option("--refine", type=click.Choice(REFINE_MODES), default="auto",
               show_default=True,
               help="auto (the estimator's default): refine where the rule of methods/masscm/refine.py finds sensor "
                    "noise and a wave structure; pem: always the maximum-likelihood refinement of Algorithm 1's "

@@ -65,11 +65,9 @@ from shipid.methods.masscm.pem_result import refine_result as _pem
 from shipid.methods.masscm.pem_result import refine_result_floor as _pem_floor
 from shipid.methods.masscm.whittle_result import refine_result as _whittle
 from shipid.methods.masscm.plausibility import Judgement, judge
+from shipid.methods.masscm.refine_modes import REFINE_MODES
 from shipid.models.roll_reduced import THETA_NAMES
 
-#: The values of ``MassCMOptions.refine``: ``"auto"`` the rule of this module, ``"none"`` Algorithm 1 alone, or an
-#: engine of :data:`ENGINES` run unconditionally.
-REFINE_MODES = ("auto", "none", "pem", "whittle", "pem-floor")
 
 #: Refinement engines: ``name -> f(result, datasets, known, z_f) -> result`` (the result's ``diagnostics["refine"]``
 #: with ``applied`` and ``reason``; a failure keeps Algorithm 1's estimate with one warning line).
