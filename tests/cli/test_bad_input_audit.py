@@ -55,6 +55,7 @@ EXPECT = {
 COMMANDS = {
     "check": lambda f, out: ["check", str(f)],
     "convert": lambda f, out: ["convert", str(f), str(out)],
+    "identify-ebm": lambda f, out: ["identify", "ebm", "--trial", str(f), "--json", "-o", str(out)],
 }
 
 
