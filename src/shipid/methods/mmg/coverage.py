@@ -3,7 +3,7 @@
 Each campaign run (:func:`shipid.studies.engine.run_campaign`, task :func:`run_one`) draws from its own
 ``SeedSequence``: a TRUE model, the published Esso Osaka 3-m MMG set
 (:func:`shipid.models.mmg.load_published`) with every coefficient of ``coef`` multiplied by
-``1 + 0.15 N(0, 1)`` clipped to [0.05, 1.95] (sign kept); measurement noise on x, y, psi, u, v, r
+``1 + 0.15 N(0, 1)`` (the coefficients free in the structure below; the fixed ones stay) clipped to [0.05, 1.95] (sign kept); measurement noise on x, y, psi, u, v, r
 with standard deviations drawn per run (the estimator is not told them); rudder/propeller
 sequences: a 35-deg turn to each side, a timed 20-deg zig-zag and a random-input run from
 u = 0.4 m/s at n = 10 1/s, simulated by :func:`shipid.models.mmg.simulate_batch`.
@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.data.trial import Trial
+from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
 from shipid.methods.mmg.pipeline import identify
 from shipid.models import mmg
 
@@ -26,9 +27,19 @@ SPREAD = 0.15
 DT = 0.1
 
 
+def free_coefficients(base: mmg.MmgModel) -> list[str]:
+    """The coefficients :data:`STRUCTURE` leaves free (the others stay at ``base``'s values in the fit)."""
+    _, free = apply_candidate(base, CANDIDATES[base.structure][STRUCTURE])
+    return [c for m in mmg.MODES for c in free.get(m, ())]
+
+
 def draw_truth(rng: np.random.Generator, base: mmg.MmgModel) -> mmg.MmgModel:
-    """``base`` with each coefficient × clip(1 + SPREAD N(0,1), 0.05, 1.95) (sign kept)."""
-    coef = {k: float(v) * float(np.clip(1.0 + SPREAD * rng.standard_normal(), 0.05, 1.95))
+    """``base`` with each FREE coefficient × clip(1 + SPREAD N(0,1), 0.05, 1.95) (sign kept); the
+    coefficients the structure fixes keep their values, so the fit's fixed values are right. The truth
+    carries the structure's particulars (:func:`apply_candidate`), so it lies inside the fitted model class."""
+    base, free = apply_candidate(base, CANDIDATES[base.structure][STRUCTURE])
+    names = {c for m in mmg.MODES for c in free.get(m, ())}
+    coef = {k: float(v) * (float(np.clip(1.0 + SPREAD * rng.standard_normal(), 0.05, 1.95)) if k in names else 1.0)
             for k, v in base.coef.items()}
     return mmg.MmgModel(base.structure, dict(base.particulars), coef, name="coverage-truth",
                         sources=dict(base.sources))
