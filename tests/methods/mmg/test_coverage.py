@@ -88,3 +88,17 @@ def test_regression_from_exact_states_recovers_the_truth_and_step1_smoothing_bia
     *_, smoothed5, _ = _noise_free_runs(5.0)
     sm5 = coefs(fit(smoothed5, base, free))
     assert abs(sm5["N_r"] / truth.coef["N_r"] - 1) < abs(sm["N_r"] / truth.coef["N_r"] - 1)
+
+
+def test_study_says_loudly_that_the_std_do_not_cover(capsys):
+    """The study's summary names the coefficients whose ±2 std cover the truth too rarely; --strict exits 3."""
+    import json
+
+    from shipid.cli import main
+
+    assert main(["study", "mmg-coverage", "--runs", "3", "--seed", "701", "--workers", "1", "--seconds", "60",
+                 "--json", "--strict"]) == 3
+    cap = capsys.readouterr()
+    s = json.loads(cap.out)
+    assert len(s["warnings"]) == 1 and "N_r" in s["warnings"][0]
+    assert "Traceback" not in cap.err and "RuntimeWarning" not in cap.err

@@ -10,7 +10,7 @@ from dataclasses import replace
 import click
 
 from shipid.cli import study
-from shipid.cli._common import emit, out_options
+from shipid.cli._common import emit, loud_lines, out_options, strict_option
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
 
 
@@ -25,6 +25,7 @@ def _fmt(x, spec):
               help="Length of each simulated manoeuvre (s).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
+@strict_option
 def mmg_coverage(runs, seconds, as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed Esso Osaka 3-m ships (shipid.methods.mmg.coverage).
 
@@ -39,6 +40,7 @@ def mmg_coverage(runs, seconds, as_json, out, force, campaign):
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "seconds": seconds, "failed": res.n_failed})
+    s["warnings"] = loud_lines(s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 
 

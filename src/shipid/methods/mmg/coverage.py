@@ -125,7 +125,14 @@ def summarise(outputs) -> dict:
                      "bias_rel": float(rel.mean()) if rel.size else None,
                      "spread_rel": float(rel.std(ddof=1)) if rel.size > 1 else None,
                      "coverage_2std": float(np.mean(np.abs(z) <= 2.0)) if z.size else None}
-    return {"runs": len(runs), "table": table}
+    low = [nm for nm, t in table.items() if t["coverage_2std"] is not None
+           and t["coverage_2std"] < 0.95 - 2.0 * np.sqrt(0.95 * 0.05 / t["estimated"])]
+    findings = []
+    if low:
+        findings.append(f"the +-2 std of {len(low)} of {len(table)} coefficients cover the truth less often than "
+                        f"0.95 allows at these run counts ({', '.join(low)}): those standard errors are not honest "
+                        "(step-1 smoothing bias, shipid.methods.mmg.coverage)")
+    return {"runs": len(runs), "table": table, "warnings": findings}
 
 
 __all__ = ["run_one", "summarise", "draw_truth", "simulate_campaign", "STRUCTURE"]
