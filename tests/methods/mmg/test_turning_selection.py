@@ -62,9 +62,12 @@ def test_calibrate_folds_is_the_calibration_of_side_calibration(setup):
                                  CAL, S.SIDE_GAIN_GRID, parameter="rudder_side_gain")
     (a, tab), = T.calibrate_folds(runs, [T.replay_data(t) for t in trials], T.peak_runs(trials), prior, CAL, [idx])
     assert a == pytest.approx(a_ref, abs=1e-9)
-    assert set(tab) == set(tab_ref)
-    for k in tab:
-        assert tab[k] == pytest.approx(tab_ref[k], rel=1e-9)
+    # the grid points are the same numbers; the parabola's vertex (a key computed from the scores) agrees to
+    # round-off only, as the scores do (the two paths sum the same terms in a different order)
+    ka, kb = sorted(tab), sorted(tab_ref)
+    assert len(ka) == len(kb) and ka == pytest.approx(kb, abs=1e-12)
+    for k, kr in zip(ka, kb):
+        assert tab[k] == pytest.approx(tab_ref[kr], rel=1e-9)
     assert T.peak_runs(trials) == [True, True, True, False]
 
 

@@ -83,8 +83,10 @@ CANDIDATES: dict[str, dict[str, dict]] = {"esso-lowspeed": _esso_candidates(),
 
 
 def candidate_config(config: "FitConfig", cand: Mapping) -> "FitConfig":
-    """The fit settings of a candidate (its ``weighting`` replaces the default's)."""
-    return _replace(config, weighting=cand["weighting"]) if "weighting" in cand else config
+    """The fit settings of a candidate: its ``weighting``, ``equation`` and ``window_s``, where it has them,
+    replace the default's."""
+    over = {k: cand[k] for k in ("weighting", "equation", "window_s") if k in cand}
+    return _replace(config, **over) if over else config
 
 
 def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, dict[str, tuple[str, ...]]]:

@@ -280,10 +280,11 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
-              selection="auto"):
+              selection="auto", simex="auto", equation="integral"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
     from shipid.methods.mmg import rudder_angle as RA
+    from shipid.methods.mmg import simex as SX
     from shipid.methods.mmg import turning_nested as TN
     from shipid.methods.mmg import turning_selection as TS
 
@@ -328,7 +329,9 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
                               f"(only {', '.join(TS.TURNING_CANDIDATES)})")
         sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": selectors[selection],
                   "resolve": TS.resolve}
-    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine,
+    sx = {"auto": SX.SimexConfig(), "on": SX.SimexConfig(pilot=False), "off": None}[simex]
+    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine, simex=sx,
+                     fit_config=R.FitConfig(equation=equation),
                      extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign,
                                        "selection": selection}, **sel_kw)
     res.model["prior"] = prior_info
@@ -382,6 +385,16 @@ _ID_OPTS = [
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
+    click.option("--equation", default="integral", show_default=True,
+                 type=click.Choice(["integral", "differential"]),
+                 help="Step-2 regression form (shipid.methods.mmg.estimator.FitConfig): 'integral' regresses the "
+                      "impulse over Froude-scaled windows (10 s at L = 3 m) and needs no smoothed accelerations; "
+                      "'differential' the forces of the smoothed accelerations (Yoon & Rhee eq. 16; biased after "
+                      "fast rudder changes, see 'shipid study mmg-coverage')."),
+    click.option("--simex", default="auto", show_default=True, type=click.Choice(["auto", "on", "off"]),
+                 help="Correct the regression for the errors of the smoothed states by SIMEX "
+                      "(shipid.methods.mmg.simex): 'auto' only where a pilot with doubled noise moves an "
+                      "estimate by a quarter of its SE; 'on' always; 'off' never."),
     out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
                          "file needs --force."),
@@ -399,14 +412,16 @@ def _with_id_opts(f):
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="A training run (repeat for several).")
 @_with_id_opts
-def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, as_json, out, force):
+def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
+                 as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
     given runs unless --structure names one. The result is a self-describing MODEL.json
     for 'shipid validate'.
     """
-    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection)
+    _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
+              simex, equation)
 
 
 
@@ -415,10 +430,11 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
 @click.option("--train", "train", cls=ManyValues, required=True, type=click.Path(dir_okay=False),
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
-def identify_realdata(train, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, as_json, out,
-                      force):
+def identify_realdata(train, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
+                      as_json, out, force):
     """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
-    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection)
+    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
+              simex, equation)
 
 
 # ----------------------------------------------------------------------------- studies

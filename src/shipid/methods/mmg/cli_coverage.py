@@ -23,10 +23,19 @@ def _fmt(x, spec):
 @click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--seconds", type=click.FloatRange(30.0, 1200.0), default=120.0, show_default=True,
               help="Length of each simulated manoeuvre (s).")
+@click.option("--equation", type=click.Choice(["differential", "integral"]), default=None,
+              help="Step-2 regression form (FitConfig.equation); default: identify mmg's.")
+@click.option("--window", "window_s", type=click.FloatRange(0.1, 120.0), default=None,
+              help="Window of the integral form (s); default: FitConfig's.")
+@click.option("--simex/--no-simex", default=True, show_default=True,
+              help="Correct the regression for step-1 state errors (shipid.methods.mmg.simex).")
+@click.option("--rudder-rate", type=click.FloatRange(min=0.1), default=None,
+              help="Rudder rate of the simulated steering gear, deg/s [default: the IMO 2.32 deg/s Froude-scaled "
+                   "to the 3-m model, 24.1]; 'inf' for instantaneous steps.")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
 @strict_option
-def mmg_coverage(runs, seconds, as_json, out, force, campaign):
+def mmg_coverage(runs, seconds, equation, window_s, simex, rudder_rate, as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed Esso Osaka 3-m ships (shipid.methods.mmg.coverage).
 
     Per run: coefficients x (1 + 0.15 N(0,1)), noise levels drawn per run, 4 manoeuvres, then
@@ -36,10 +45,15 @@ def mmg_coverage(runs, seconds, as_json, out, force, campaign):
     from shipid.methods.mmg.coverage import summarise
 
     res = replace(campaign, progress=not as_json).run("shipid.methods.mmg.coverage:run_one", runs,
-                                                       kwargs={"seconds": float(seconds)}, name="mmg-coverage")
+                                                       kwargs={"seconds": float(seconds), "equation": equation,
+                                                               "window_s": window_s, "simex": simex,
+                                                               **({} if rudder_rate is None else
+                                                                  {"rudder_rate": float(rudder_rate)})},
+                                                       name="mmg-coverage")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
-    s.update({"seed": campaign.seed, "seconds": seconds, "failed": res.n_failed})
+    s.update({"seed": campaign.seed, "seconds": seconds, "failed": res.n_failed, "equation": equation,
+              "window_s": window_s, "simex": simex, "rudder_rate": rudder_rate})
     s["warnings"] = loud_lines(s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 

@@ -23,6 +23,7 @@ from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig,
                                           horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
 from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
+from shipid.methods.mmg.simex import SimexConfig, simex_fit
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -159,13 +160,17 @@ def default_refine(prior: mmg.MmgModel, refine: str = "auto") -> str:
 
 
 def _covariance(f_reg: MmgFit, f: MmgFit, runs, prior: mmg.MmgModel, config: FitConfig,
-                oe) -> tuple[np.ndarray, str]:
+                oe, simex_info=None) -> tuple[np.ndarray, str]:
     """The covariance MODEL.json carries: the run bootstrap / HAC of the regression
     (:func:`~shipid.methods.mmg.covariance.honest_covariance` of the regression fit ``f_reg``); with an
     output-error refinement (``f``, ``oe``) the rows
     and columns of the refined coefficients are the refinement's horizon-cluster sandwich (per mode, as
-    :func:`~shipid.methods.mmg.output_error.refined_fit` keeps them), with no cross terms to the others."""
+    :func:`~shipid.methods.mmg.output_error.refined_fit` keeps them), with no cross terms to the others.
+    With a SIMEX correction (``simex_info``) its Monte Carlo covariance is added to the regression's."""
     S, note = honest_covariance(f_reg, runs, prior, config)
+    if simex_info is not None and simex_info.applied:
+        S = S + simex_info.mc_cov
+        note += " + Monte Carlo variance of the SIMEX correction"
     if oe is None:
         return S, note
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
@@ -183,7 +188,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
              extra_provenance: Mapping | None = None, selector=None, refine: str = "none",
              oe_config: OEConfig = OEConfig(), candidates: Mapping[str, Mapping] | None = None,
-             resolve=None) -> Result:
+             resolve=None, simex="default") -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -212,6 +217,13 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         ``"auto"``: :func:`default_refine`, and refine only when the training runs hold at least
         :data:`MIN_HORIZONS_PER_COEFFICIENT` horizons per refined coefficient (else the
         regression estimate, with the reason in ``diagnostics["output_error"]``).
+    simex : SimexConfig or None
+        Correct the chosen structure's regression estimate for the errors of the smoothed states
+        (:func:`shipid.methods.mmg.simex.simex_fit`: with the default ``SimexConfig()`` only where its pilot
+        finds the measurement noise material; the covariance gains the correction's Monte Carlo part);
+        recorded in ``diagnostics["simex"]``. None: no correction. The output-error refinement, if any,
+        starts from the corrected estimate. The cross-validation fits of the structure selection are
+        not corrected.
     """
     if not trials:
         raise InputError("no training runs given")
@@ -237,7 +249,12 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         cand, cal = resolve(trials, runs, prior, cand, fit_config)
     cprior, free = apply_candidate(prior, cand)
     fit_config = candidate_config(fit_config, cand)
-    f = f_reg = fit(runs, cprior, free, fit_config, name=name)
+    f = f_naive = fit(runs, cprior, free, fit_config, name=name)
+    simex_info = None
+    if isinstance(simex, str) and simex == "default":
+        simex = SimexConfig()
+    if simex is not None:
+        f, simex_info = simex_fit(f_naive, trials, cprior, free, fit_config, smooth_config, simex)
     oe, skipped = None, None
     auto = refine == "auto"
     if auto:
@@ -265,10 +282,12 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cand.get("particulars"),
-                       covariance=_covariance(f_reg, f, runs, cprior, fit_config, oe))
+                       covariance=_covariance(f_naive, f, runs, cprior, fit_config, oe, simex_info))
     res.model["training_conditions"] = training_conditions(trials)
     if cal is not None:
         res.diagnostics["calibration"] = cal
+    if simex_info is not None:
+        res.diagnostics["simex"] = simex_info.to_dict()
     if skipped:
         res.diagnostics["output_error"] = {"refined": [], "note": skipped}
     if oe is not None:
