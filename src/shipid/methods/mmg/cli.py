@@ -280,7 +280,7 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
-              selection="auto", simex="auto", equation="integral"):
+              selection="auto", simex="auto", equation="auto"):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
     from shipid.methods.mmg import rudder_angle as RA
@@ -385,12 +385,14 @@ _ID_OPTS = [
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
-    click.option("--equation", default="integral", show_default=True,
-                 type=click.Choice(["integral", "differential"]),
+    click.option("--equation", default="auto", show_default=True,
+                 type=click.Choice(["auto", "integral", "differential"]),
                  help="Step-2 regression form (shipid.methods.mmg.estimator.FitConfig): 'integral' regresses the "
                       "impulse over Froude-scaled windows (10 s at L = 3 m) and needs no smoothed accelerations; "
                       "'differential' the forces of the smoothed accelerations (Yoon & Rhee eq. 16; biased after "
-                      "fast rudder changes, see 'shipid study mmg-coverage')."),
+                      "fast rudder changes, see 'shipid study mmg-coverage'); 'auto' the form chosen for the "
+                      "prior's structure (EQUATION_BY_STRUCTURE: integral for the Esso low-speed hull, "
+                      "differential for KVLCC2)."),
     click.option("--simex", default="auto", show_default=True, type=click.Choice(["auto", "on", "off"]),
                  help="Correct the regression for the errors of the smoothed states by SIMEX "
                       "(shipid.methods.mmg.simex): 'auto' only where a pilot with doubled noise moves an "

@@ -21,7 +21,7 @@ their standard errors: at seed 700 with instantaneous rudder steps N_r +72 %, N_
 +24 %, coverage 0.00. Two causes, both located with the exact simulated states
 (``tests/methods/mmg/test_coverage.py``): (1) the white-jerk smoother cannot follow the acceleration
 step after a rudder change, so the response lags its regressors — the integral form
-(``FitConfig.equation="integral"``, the default since 2026-12-03) needs no accelerations and on
+(``FitConfig.equation="integral"``, the default for this structure since 2026-12-03) needs no accelerations and on
 exact states returns the truth; (2) errors in variables: the smoothed states carry errors that
 bias a regression that is nonlinear in them towards zero (with exact regressors and smoothed
 responses the N row is unbiased) — the SIMEX correction (:mod:`shipid.methods.mmg.simex`) removes

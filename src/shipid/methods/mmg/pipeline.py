@@ -19,7 +19,7 @@ from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.methods.mmg.covariance import honest_covariance, ridge_covariance
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
-from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
+from shipid.methods.mmg.estimator import (MEAS, FitConfig, equation_for, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
                                           horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
 from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
@@ -135,7 +135,8 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
         diag["structure_selection"] = dict(selection)
     prov = {"training_runs": [{"file": r.source, "sha256_16": _file_id(r.source)} for r in runs],
             "step1": {k: float(v) for k, v in smooth_config.__dict__.items()},  # sigmas unused if auto_sigma
-            "step2": {k: v for k, v in fit_config.__dict__.items()},
+            "step2": {**{k: v for k, v in fit_config.__dict__.items()},
+                      "equation_used": equation_for(fit_config, prior)},
             "pipeline": "EBM (Yoon & Rhee 2003) adapted: kinematic CD-EKF + RTS, forces from EOM, ridge per mode"}
     if extra_provenance:
         prov.update(extra_provenance)

@@ -82,7 +82,8 @@ class SimexInfo:
     draws: ``Σ_j w_j² S²(λ_j) / draws`` with ``w`` the extrapolation weights and ``S²`` the draws'
     covariance at ``λ_j``), the correction applied per coefficient, the σ̂ per run; ``applied`` False when
     the pilot found the noise immaterial (``pilot_moved_se``: the largest move of an estimate at the
-    largest λ, in iid standard errors)."""
+    largest λ, in iid standard errors); ``noise_sd`` the spread of one draw's estimate at λ = 1 per unit λ (the
+    part of the estimate's standard deviation the measured noise alone causes; a diagnostic, not the SE)."""
 
     names: tuple[str, ...]
     lambdas: tuple[float, ...]
@@ -92,13 +93,15 @@ class SimexInfo:
     sd: dict[str, list[float]]
     applied: bool = True
     pilot_moved_se: float = float("nan")
+    noise_sd: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         return {"method": "SIMEX (Cook & Stefanski 1994)", "applied": self.applied,
                 "pilot_largest_move_in_se": self.pilot_moved_se, "lambdas": list(self.lambdas),
                 "path": {n: self.path[i].tolist() for i, n in enumerate(self.names)},
                 "correction": dict(self.correction), "measurement_sd": dict(self.sd),
-                "mc_se": dict(zip(self.names, np.sqrt(np.maximum(np.diag(self.mc_cov), 0.0)).tolist()))}
+                "mc_se": dict(zip(self.names, np.sqrt(np.maximum(np.diag(self.mc_cov), 0.0)).tolist())),
+                "noise_sd": None if self.noise_sd is None else dict(zip(self.names, self.noise_sd.tolist()))}
 
 
 def simex_fit(f0: R.MmgFit, trials: Sequence[Trial], prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
@@ -159,7 +162,10 @@ def simex_fit(f0: R.MmgFit, trials: Sequence[Trial], prior: mmg.MmgModel, free: 
     corrected = dict(zip(names, at_minus_one))
     fits = {m: replace(fi, theta=np.array([corrected[c] for c in f0.free[m]])) for m, fi in f0.fits.items()}
     model = f0.model.with_coef(corrected, name=f0.model.name)
+    j1 = int(np.argmin(np.abs(np.asarray(config.lambdas, float) - 1.0)))
+    noise_sd = np.sqrt(np.maximum(np.diag(spread[j1]), 0.0) / max(config.lambdas[j1], 1e-12))
     info = SimexInfo(names=tuple(names), lambdas=tuple(lam.tolist()), path=path, mc_cov=mc, applied=True,
+                     noise_sd=noise_sd,
                      pilot_moved_se=moved,
                      correction={n: float(corrected[n] - path[i, 0]) for i, n in enumerate(names)},
                      sd={str(tr.meta.get("source", i)): sd.tolist() for i, (tr, sd) in enumerate(zip(trials, sds))})
