@@ -113,6 +113,8 @@ def test_identify_mmg_not_converged_is_loud_and_validate_warns(tmp_path, capsys)
     assert "NOT converged" in cap.out
     d = json.loads(model.read_text())
     assert d["diagnostics"]["converged"] is False
+    assert d["provenance"]["step2"]["equation_used"] == "differential"
+    assert d["diagnostics"]["simex"]["applied"] is False     # the pilot: the logs' noise does not bias the fit
     assert [f"shipid: warning: {x}" for x in d["diagnostics"]["warnings"]] == w
     assert main([*argv, "--force", "--strict"]) == 3
     capsys.readouterr()

@@ -174,3 +174,28 @@ def test_simex_reduces_the_errors_in_variables_bias_on_noisy_runs():
             naive.append((a[n]["value"] - a[n]["true"]) / abs(a[n]["true"]))
             corr.append((b[n]["value"] - b[n]["true"]) / abs(b[n]["true"]))
     assert abs(np.mean(corr)) < 0.5 * abs(np.mean(naive))
+
+
+def test_equation_auto_follows_the_structure_and_is_recorded():
+    """``FitConfig(equation="auto")`` is the per-structure choice of EQUATION_BY_STRUCTURE; an unknown form is one
+    InputError; identify records the form used in the provenance."""
+    from shipid.errors import InputError
+    from shipid.methods.mmg import estimator as E
+    from shipid.methods.mmg import coverage as C
+    from shipid.methods.mmg.pipeline import identify
+    from shipid.models import mmg
+
+    esso = mmg.load_published("esso_osaka_3m")
+    assert E.equation_for(E.FitConfig(), esso) == "integral"
+    assert E.equation_for(E.FitConfig(), mmg.load_published("kvlcc2_hsva")) == "differential"
+    assert E.equation_for(E.FitConfig(equation="differential"), esso) == "differential"
+    base, truth, free, smoothed, _ = _noise_free_runs()
+    with pytest.raises(InputError, match="unknown equation"):
+        E.regression_data(smoothed[:1], base, free, E.FitConfig(equation="trapezoid"))
+    rng = np.random.default_rng(11)
+    trials, _ = C.simulate_campaign(C.draw_truth(rng, esso), rng, seconds=60.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = identify(trials, esso, structure=C.STRUCTURE, select=False, refine="none", simex=None)
+    assert res.provenance["step2"]["equation"] == "auto" and res.provenance["step2"]["equation_used"] == "integral"
+    assert "simex" not in res.diagnostics
