@@ -395,7 +395,8 @@ _ID_OPTS = [
                       "differential for KVLCC2)."),
     click.option("--simex", default="auto", show_default=True, type=click.Choice(["auto", "on", "off"]),
                  help="Correct the regression for the errors of the smoothed states by SIMEX "
-                      "(shipid.methods.mmg.simex): 'auto' only where a pilot with doubled noise moves an "
+                      "(shipid.methods.mmg.simex): 'auto' only where a pilot with added noise of twice the "
+                      "measured variance moves an "
                       "estimate by a quarter of its SE; 'on' always; 'off' never."),
     out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "

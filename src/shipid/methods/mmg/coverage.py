@@ -25,12 +25,14 @@ step after a rudder change, so the response lags its regressors — the integral
 exact states returns the truth; (2) errors in variables: the smoothed states carry errors that
 bias a regression that is nonlinear in them towards zero (with exact regressors and smoothed
 responses the N row is unbiased) — the SIMEX correction (:mod:`shipid.methods.mmg.simex`) removes
-most of that. On the tuning seed 710 (30 runs, rudder at :data:`RUDDER_RATE`, SIMEX on), the bias of
+most of that. On the tuning seed 710 (30 runs, rudder at :data:`RUDDER_RATE`, SIMEX on with λ up to 2), the bias of
 N_r was +49 % differential, +12 / +3.1 / +0.5 % with 5 / 10 / 20-s integral windows; the default
 window (:data:`~shipid.methods.mmg.estimator.WINDOW_FROUDE`, 10 s here) is a compromise with the
-real KVLCC2 runs, where long windows fail. The fresh-seed result is in the README (MMG section);
-the ±2 std still cover less often than 0.95 (about 0.75 on N_v, N_r): with four 120-s runs the
-regression's HAC standard errors are too small for the strongly correlated window residuals, and
+real KVLCC2 runs, where long windows fail. The fresh-seed result is in the README (MMG section):
+at seed 730 the bias of N_v, N_r is about +1 % and the ±2 std cover 0.84–0.86 (still short: at seed 720
+with the former λ grid up to 2 the misses were the runs with the largest velocity noise, where SIMEX
+left +12 to +29 %; and with four 120-s runs the regression's HAC standard errors are short for the
+strongly correlated window residuals);
 the study says so. The output-error refinement (``refine='output-error'``) is not studied here
 (two 60-s horizons per run are fewer than the coefficients). The IMO-band coverage is not implemented.
 """

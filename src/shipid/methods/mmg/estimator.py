@@ -225,13 +225,12 @@ class FitConfig:
 
 #: Default window of the integral equation in units of √(L/g): 10 s for the Esso Osaka 3 m, 15.3 s for
 #: the 7-m KVLCC2, 86 s for a 300-m ship. Chosen between the two kinds of evidence there is: on the
-#: simulated coverage study's tuning seed 710 (30 runs, rudder at the Froude-scaled IMO rate, SIMEX on) the
-#: bias of N_r was +49 % (differential form), +12 % (5-s window), +3.1 % (10 s), +0.5 % (20 s); on the
-#: real HSVA KVLCC2 zig-zags (all 13) a 30-s window gives N_v ≈ 0 and N_r > 0 (the hull unstable in yaw)
-#: where the 15-s one is within about one standard error of the differential form — long windows
-#: weight the low-frequency content, where an unmodelled steady yaw moment dominates. The cost on
-#: the KVLCC2 forward rudder-angle CV (score of the differential form 23.85, 15-s windows 24.65) is
-#: stated in :mod:`shipid.methods.mmg.simex`.
+#: simulated coverage study's tuning seed 710 (30 runs, rudder at the Froude-scaled IMO rate, SIMEX on with
+#: λ up to 2) the bias of N_r was +49 % (differential form), +12 % (5-s window), +3.1 % (10 s),
+#: +0.5 % (20 s); on the real HSVA KVLCC2 zig-zags (all 13) a 30-s window gives N_v ≈ 0 and N_r > 0
+#: (the hull unstable in yaw) where the 15-s one is within about one standard error of the differential form — long windows
+#: weight the low-frequency content, where an unmodelled steady yaw moment dominates. The KVLCC2
+#: structure keeps the differential form (:data:`EQUATION_BY_STRUCTURE`).
 WINDOW_FROUDE = 18.0
 
 
