@@ -58,9 +58,7 @@ def _noise_free_runs(rate_deg_s=np.inf):
     smoothed, exact = [], []
     for kind in ("turn+", "turn-", "zigzag", "random"):
         U = C._orders(kind, t, rng)
-        step = np.deg2rad(rate_deg_s) * 0.1
-        for k in range(1, t.size):
-            U[k, 0] = U[k - 1, 0] + np.clip(U[k, 0] - U[k - 1, 0], -step, step)
+        U[:, 0] = C.rate_limited(U[:, 0], rate_deg_s, 0.1)
         X = mmg.simulate_batch(truth, t, np.array([[0, 0, 0, 0.4, 0, 0]]), U[None])[0]
         ch = {c: X[:, i] for i, c in enumerate(mmg.STATE_NAMES)}
         ch.update(delta=U[:, 0], n=U[:, 1])

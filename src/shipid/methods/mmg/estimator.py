@@ -154,6 +154,13 @@ _H = np.zeros((6, 9))
 _H[np.arange(6), np.arange(6)] = 1.0
 
 
+def measurements(trial: Trial) -> np.ndarray:
+    """Step 1's measurement matrix ``(n, 6)`` of :data:`MEAS`, the heading unwrapped (no wrap in the innovations)."""
+    z = np.stack([np.asarray(trial[c], float) for c in MEAS], axis=-1)
+    z[:, 2] = np.unwrap(z[:, 2])
+    return z
+
+
 def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled: bool = True) -> SmoothedRun:
     """Step 1 on one run: kinematic CD-EKF and RTS smoother (module docstring).
 
@@ -163,8 +170,7 @@ def smooth_run(trial: Trial, config: SmoothConfig = SmoothConfig(), *, compiled:
     """
     trial.require(list(MEAS) + ["delta", "n"], method="identify mmg")
 
-    z = np.stack([trial[c] for c in MEAS], axis=-1)
-    z[:, 2] = np.unwrap(z[:, 2])                       # heading continuous: no wrap in the innovations
+    z = measurements(trial)
     t = np.asarray(trial.t, float) - float(trial.t[0])
     c = config
     sig = np.array([c.sigma_pos, c.sigma_pos, c.sigma_psi, c.sigma_uv, c.sigma_uv, c.sigma_r])
@@ -291,11 +297,16 @@ def regression_data(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapp
     if config.equation not in ("auto", "differential", "integral"):
         raise InputError(f"unknown equation '{config.equation}' (auto, differential, integral)")
     integral = equation_for(config, prior) == "integral"
+    split = {}                                  # per mode: indices of the free and of the fixed coefficients
+    for mode in mmg.MODES:
+        names = allnames[mode]
+        idx_free = [names.index(c) for c in free[mode]]
+        split[mode] = (idx_free, [i for i in range(len(names)) if i not in idx_free])
     for run in runs:
         dt = float(np.median(np.diff(run.t)))
         k0 = int(round(config.trim_s / dt))
         if integral:
-            for mode, (H, y) in _integral_rows(run, prior, free, allnames, config, k0, dt).items():
+            for mode, (H, y) in _integral_rows(run, prior, split, config, k0, dt).items():
                 parts[mode][0].append(H)
                 parts[mode][1].append(y)
             continue
@@ -312,9 +323,7 @@ def regression_data(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapp
         w = row_weights(u, v, r, prior.particulars["L"], config)
         for mode, Fm in zip(mmg.MODES, F):
             H, F0 = b[mode]
-            names = allnames[mode]
-            idx_free = [names.index(c) for c in free[mode]]
-            idx_fix = [i for i in range(len(names)) if i not in idx_free]
+            idx_free, idx_fix = split[mode]
             th = prior.theta(mode)
             y = Fm - F0 - H[:, idx_fix] @ th[idx_fix]
             parts[mode][0].append(H[:, idx_free] * w[:, None])
@@ -328,9 +337,10 @@ def regression_data(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapp
     return out
 
 
-def _integral_rows(run: SmoothedRun, prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
-                   allnames: Mapping[str, Sequence[str]], config: FitConfig, k0: int, dt: float) -> dict:
-    """One run's rows of the integral equation (``FitConfig.equation == "integral"``).
+def _integral_rows(run: SmoothedRun, prior: mmg.MmgModel, split: Mapping[str, tuple[list, list]],
+                   config: FitConfig, k0: int, dt: float) -> dict:
+    """One run's rows of the integral equation (``FitConfig.equation == "integral"``); ``split``: per mode
+    the indices of the free and of the fixed coefficients (:func:`regression_data`).
 
     The rigid-body forces are linear in the accelerations,
     ``F = M (u̇, v̇, ṙ) + c(u, v, r)`` (:func:`shipid.models.mmg.rigid_body_forces`), so over a
@@ -349,12 +359,13 @@ def _integral_rows(run: SmoothedRun, prior: mmg.MmgModel, free: Mapping[str, Seq
     idx = np.arange(k0, n - k0)
     W = max(1, int(round(integral_window(config, prior.particulars["L"]) / dt)))
     if idx.size <= W:
-        return {m: (np.zeros((0, len(free[m]))), np.zeros(0)) for m in mmg.MODES}
+        return {m: (np.zeros((0, len(split[m][0]))), np.zeros(0)) for m in mmg.MODES}
     s, U, t = run.s[idx], run.inputs[idx], run.t[idx]
     psi, u, v, r = s[:, 2], s[:, 3], s[:, 4], s[:, 5]
     # the regressors at both ends of each sample interval with that interval's (held) inputs
+    ends = (slice(0, -1), slice(1, None))
     b = [mmg.basis(prior, u[j], v[j], r[j], U[:-1, 0], U[:-1, 1],
-                   *mmg.apparent_wind(U[:-1, 2], U[:-1, 3], psi[j], u[j], v[j])) for j in (slice(0, -1), slice(1, None))]
+                   *mmg.apparent_wind(U[:-1, 2], U[:-1, 3], psi[j], u[j], v[j])) for j in ends]
     z = np.zeros_like(u)
     C = mmg.rigid_body_forces(prior, u, v, r, z, z, z)                 # velocity-dependent part c(u, v, r)
     a0 = np.arange(0, idx.size - W, max(1, config.decimate))
@@ -385,12 +396,9 @@ def _integral_rows(run: SmoothedRun, prior: mmg.MmgModel, free: Mapping[str, Seq
         wr = np.where(slow[a1 + 1] - slow[a0] > 0, np.nan, wr)
     out = {}
     for mode, Mm, Cm in zip(mmg.MODES, M, C):
-        names = allnames[mode]
-        idx_free = [names.index(c) for c in free[mode]]
-        idx_fix = [i for i in range(len(names)) if i not in idx_free]
+        idx_free, idx_fix = split[mode]
         th = prior.theta(mode)
-        rest = [Cm[j] - F0 - H[:, idx_fix] @ th[idx_fix]
-                for j, (H, F0) in zip((slice(0, -1), slice(1, None)), (b[0][mode], b[1][mode]))]
+        rest = [Cm[j] - F0 - H[:, idx_fix] @ th[idx_fix] for j, (H, F0) in zip(ends, (b[0][mode], b[1][mode]))]
         y = Mm + window_integral(*rest)
         Hf = window_integral(b[0][mode][0][:, idx_free], b[1][mode][0][:, idx_free])
         out[mode] = (Hf * wr[:, None], y * wr)
@@ -566,7 +574,7 @@ def cross_validate(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, candidates:
     return table
 
 
-__all__ = ["SmoothConfig", "SmoothedRun", "smooth_run", "FitConfig", "EQUATION_BY_STRUCTURE", "equation_for",
+__all__ = ["SmoothConfig", "SmoothedRun", "measurements", "smooth_run", "FitConfig", "EQUATION_BY_STRUCTURE", "equation_for",
            "WINDOW_FROUDE", "integral_window", "CANDIDATES", "regression_data", "fit",
            "kinematic_f", "kinematic_F", "apply_candidate", "candidate_config", "row_weights", "subsample",
            "noise_from_data", "MmgFit", "heldout_score", "horizon_sse", "horizon_score", "fold_groups", "cross_validate"]

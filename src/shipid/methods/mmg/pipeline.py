@@ -19,8 +19,8 @@ from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.methods.mmg.covariance import honest_covariance, ridge_covariance
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
-from shipid.methods.mmg.estimator import (MEAS, FitConfig, equation_for, MmgFit, SmoothConfig, SmoothedRun, cross_validate, fit,
-                                          horizon_score, horizon_sse, smooth_run)
+from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate,
+                                          equation_for, fit, horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
 from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
 from shipid.methods.mmg.simex import SimexConfig, simex_fit
@@ -189,7 +189,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
              extra_provenance: Mapping | None = None, selector=None, refine: str = "none",
              oe_config: OEConfig = OEConfig(), candidates: Mapping[str, Mapping] | None = None,
-             resolve=None, simex="default") -> Result:
+             resolve=None, simex: SimexConfig | None = SimexConfig()) -> Result:
     """The whole pipeline on training runs: smooth, (select structure by CV), fit, Result.
 
     Parameters
@@ -252,8 +252,6 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     fit_config = candidate_config(fit_config, cand)
     f = f_naive = fit(runs, cprior, free, fit_config, name=name)
     simex_info = None
-    if isinstance(simex, str) and simex == "default":
-        simex = SimexConfig()
     if simex is not None:
         f, simex_info = simex_fit(f_naive, trials, cprior, free, fit_config, smooth_config, simex)
     oe, skipped = None, None

@@ -51,8 +51,7 @@ class SimexConfig:
     ``extrapolant``: ``"linear"`` or ``"quadratic"`` in λ (module docstring).
 
     ``pilot``: first refit twice at ``λ = pilot_lambda`` (added noise of twice the measured variance); if no
-    estimate moves by more than ``pilot_threshold``
-    of its (iid ridge, i.e. small) standard error, the measurement noise is too small to bias the
+    estimate moves by more than ``pilot_threshold`` of its (iid ridge, i.e. small) standard error, the measurement noise is too small to bias the
     regression and the correction is not made (the naive fit is returned, ``SimexInfo.applied`` False).
     On the Esso Osaka logs the pilot moved no estimate by 0.1 SE (module docstring)."""
 
@@ -74,9 +73,7 @@ def _noisy(trial: Trial, sd: np.ndarray, scale: float, rng: np.random.Generator)
 
 def measurement_sd(trial: Trial) -> np.ndarray:
     """σ̂ of each step-1 measurement channel of ``trial`` (heading unwrapped first)."""
-    z = np.stack([np.asarray(trial[c], float) for c in R.MEAS], axis=-1)
-    z[:, 2] = np.unwrap(z[:, 2])
-    return R.noise_from_data(z)
+    return R.noise_from_data(R.measurements(trial))
 
 
 @dataclass(frozen=True)
@@ -86,8 +83,9 @@ class SimexInfo:
     draws: ``Σ_j w_j² S²(λ_j) / draws`` with ``w`` the extrapolation weights and ``S²`` the draws'
     covariance at ``λ_j``), the correction applied per coefficient, the σ̂ per run; ``applied`` False when
     the pilot found the noise immaterial (``pilot_moved_se``: the largest move of an estimate at
-    ``pilot_lambda``, in iid standard errors); ``noise_sd`` the spread of one draw's estimate at the λ nearest 1, per unit λ (the
-    part of the estimate's standard deviation the measured noise alone causes; a diagnostic, not the SE)."""
+    ``pilot_lambda``, in iid standard errors); ``noise_sd`` the spread of one draw's estimate at the λ
+    nearest 1, per unit λ (the part of the estimate's standard deviation the measured noise alone causes;
+    a diagnostic, not the SE)."""
 
     names: tuple[str, ...]
     lambdas: tuple[float, ...]
@@ -122,35 +120,34 @@ def simex_fit(f0: R.MmgFit, trials: Sequence[Trial], prior: mmg.MmgModel, free: 
     names = [c for m in mmg.MODES for c in f0.free.get(m, ())]
     used = {m: tuple(f0.free.get(m, ())) for m in mmg.MODES}
     sds = [measurement_sd(tr) for tr in trials]
+    sd_of = {str(tr.meta.get("source", i)): sd.tolist() for i, (tr, sd) in enumerate(zip(trials, sds))}
     rng = np.random.default_rng(np.random.SeedSequence([int(config.seed), 0x51_3E]))
     p = len(names)
+    th0 = np.array([f0.model.coef[n] for n in names])
+
+    def refit(lam: float) -> np.ndarray:
+        """The estimates after steps 1 and 2 on the runs with added noise of variance ``lam σ̂²`` (one draw)."""
+        runs = [R.smooth_run(_noisy(tr, sd, np.sqrt(lam), rng), smooth_config) for tr, sd in zip(trials, sds)]
+        fb = R.fit(runs, prior, used, fit_config)
+        return np.array([fb.model.coef[n] for n in names])
+
+    moved = float("nan")
     if config.pilot:
-        lam_max = float(config.pilot_lambda)
-        se = np.array([f0.fits[m].se[list(f0.free[m]).index(c)] for m in mmg.MODES for c in f0.free.get(m, ())])
-        th0 = np.array([f0.model.coef[n] for n in names])
+        # the fit's (iid) standard errors in the order of ``names`` (each mode's fit holds its free coefficients)
+        se = np.concatenate([f0.fits[m].se for m in mmg.MODES if f0.free.get(m)]) if p else np.zeros(0)
         moved = 0.0
         for _ in range(2):
-            runs = [R.smooth_run(_noisy(tr, sd, np.sqrt(lam_max), rng), smooth_config) for tr, sd in zip(trials, sds)]
-            fb = R.fit(runs, prior, used, fit_config)
-            d = np.abs(np.array([fb.model.coef[n] for n in names]) - th0) / np.where(se > 0, se, np.inf)
+            d = np.abs(refit(float(config.pilot_lambda)) - th0) / np.where(se > 0, se, np.inf)
             moved = max(moved, float(np.nanmax(d)) if d.size else 0.0)
         if moved < config.pilot_threshold:
             info = SimexInfo(names=tuple(names), lambdas=(0.0,), path=th0[:, None], mc_cov=np.zeros((p, p)),
-                             correction={n: 0.0 for n in names},
-                             sd={str(tr.meta.get("source", i)): sd.tolist() for i, (tr, sd) in enumerate(zip(trials, sds))},
-                             applied=False, pilot_moved_se=moved)
+                             correction={n: 0.0 for n in names}, sd=sd_of, applied=False, pilot_moved_se=moved)
             return f0, info
-    else:
-        moved = float("nan")
     path = np.empty((p, 1 + len(config.lambdas)))
-    path[:, 0] = [f0.model.coef[n] for n in names]
+    path[:, 0] = th0
     spread = []                                   # covariance of one draw's estimate at each λ
     for j, lam in enumerate(config.lambdas):
-        draws = np.empty((config.draws, p))
-        for b in range(config.draws):
-            runs = [R.smooth_run(_noisy(tr, sd, np.sqrt(lam), rng), smooth_config) for tr, sd in zip(trials, sds)]
-            fb = R.fit(runs, prior, used, fit_config)
-            draws[b] = [fb.model.coef[n] for n in names]
+        draws = np.array([refit(lam) for _ in range(config.draws)]).reshape(config.draws, p)
         path[:, 1 + j] = draws.mean(axis=0)
         spread.append(np.cov(draws, rowvar=False, ddof=1).reshape(p, p) if config.draws > 1 else np.zeros((p, p)))
     lam = np.concatenate([[0.0], np.asarray(config.lambdas, float)])
@@ -169,10 +166,8 @@ def simex_fit(f0: R.MmgFit, trials: Sequence[Trial], prior: mmg.MmgModel, free: 
     j1 = int(np.argmin(np.abs(np.asarray(config.lambdas, float) - 1.0)))
     noise_sd = np.sqrt(np.maximum(np.diag(spread[j1]), 0.0) / max(config.lambdas[j1], 1e-12))
     info = SimexInfo(names=tuple(names), lambdas=tuple(lam.tolist()), path=path, mc_cov=mc, applied=True,
-                     noise_sd=noise_sd,
-                     pilot_moved_se=moved,
-                     correction={n: float(corrected[n] - path[i, 0]) for i, n in enumerate(names)},
-                     sd={str(tr.meta.get("source", i)): sd.tolist() for i, (tr, sd) in enumerate(zip(trials, sds))})
+                     noise_sd=noise_sd, pilot_moved_se=moved,
+                     correction={n: float(corrected[n] - path[i, 0]) for i, n in enumerate(names)}, sd=sd_of)
     return replace(f0, model=model, fits=fits), info
 
 
