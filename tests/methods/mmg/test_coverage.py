@@ -197,3 +197,37 @@ def test_equation_auto_follows_the_structure_and_is_recorded():
         res = identify(trials, esso, structure=C.STRUCTURE, select=False, refine="none", simex=None)
     assert res.provenance["step2"]["equation"] == "auto" and res.provenance["step2"]["equation_used"] == "integral"
     assert "simex" not in res.diagnostics
+
+
+def test_hac_covariance_gains_the_noise_part_the_simex_draws_measure():
+    """Below 5 runs MODEL.json's covariance is the HAC sandwich + the SIMEX Monte Carlo part + the noise's part
+    through the step-1 states (``SimexInfo.noise_cov``, the draws' covariance per unit λ pooled over the grid),
+    which is positive semi-definite; its description says so (shipid.methods.mmg.simex, module docstring)."""
+    from shipid.methods.mmg import coverage as C
+    from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg.covariance import hac_covariance
+    from shipid.methods.mmg.estimator import FitConfig, fit, smooth_run
+    from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
+    from shipid.methods.mmg.simex import SimexConfig, simex_fit
+    from shipid.models import mmg
+
+    esso = mmg.load_published("esso_osaka_3m")
+    rng = np.random.default_rng(12)
+    trials, _ = C.simulate_campaign(C.draw_truth(rng, esso), rng, seconds=60.0)
+    sc = SimexConfig(draws=3, pilot=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = P.identify(trials, esso, structure=C.STRUCTURE, select=False, refine="none", simex=sc)
+        prior, free = apply_candidate(esso, CANDIDATES[esso.structure][C.STRUCTURE])
+        cfg = FitConfig(equation="integral")
+        runs = [smooth_run(t) for t in trials]
+        f0 = fit(runs, prior, free, cfg)
+        f1, info = simex_fit(f0, trials, prior, free, cfg, config=sc)
+        hac = hac_covariance(f0, runs, prior, cfg)
+    assert info.applied and info.noise_cov.shape == info.mc_cov.shape
+    assert np.linalg.eigvalsh(info.noise_cov).min() >= -1e-12 * np.abs(info.noise_cov).max()
+    assert np.allclose(info.noise_sd, np.sqrt(np.diag(info.noise_cov)), rtol=1e-12, atol=0)
+    order = [res.covariance_names.index(n) for n in info.names]
+    stored = np.asarray(res.covariance)[np.ix_(order, order)]
+    assert np.allclose(stored, hac + info.mc_cov + info.noise_cov, rtol=1e-9, atol=0)
+    assert "measurement noise's part" in res.diagnostics["covariance"]["kind"]

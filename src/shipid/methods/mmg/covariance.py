@@ -33,18 +33,22 @@ frozen studies, RMS z / median |z| (a normal gives 1 / 0.67)::
 
     case                               ridge          HAC            run bootstrap
     KVLCC2, 10 HSVA zig-zags           8.64 / 4.78    2.58 / 1.39    1.08 / 0.40
-    Esso Osaka, 35 Wakita training     4.96 / 2.07    1.32 / 0.80    1.06 / 0.65
+    Esso Osaka, 35 Wakita training     8.33 / 4.35    1.11 / 0.69    0.85 / 0.52
 
-The ridge errors are 5–9 times too small, the HAC sandwich still 1.3–2.6 times; the run
-bootstrap is about right (on KVLCC2 heavy-tailed: most differences are small, a few are
-large), so :func:`honest_covariance`, which ``identify mmg`` stores in MODEL.json, uses it.
+(KVLCC2: the differential form of step 2, its default; Esso: the integral form, its default since
+2026-12-03 — with the differential form the Esso row was 4.96 / 2.07, 1.32 / 0.80, 1.06 / 0.65.)
+The ridge errors are 5–9 times too small; the HAC sandwich is 2.6 times too small on KVLCC2 and
+about right on Esso with the integral form (whose per-coefficient RMS z is still 1.7–1.9 for
+N_v, N_r); the run bootstrap is about right on KVLCC2 (heavy-tailed: most differences are small,
+a few are large) and somewhat conservative on Esso, so :func:`honest_covariance`, which
+``identify mmg`` stores in MODEL.json, uses it.
 """
 
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 
@@ -173,21 +177,31 @@ def parameter_covariance(f: MmgFit, runs: Sequence[SmoothedRun], prior: mmg.MmgM
     return S
 
 
+class HonestCovariance(NamedTuple):
+    """:func:`honest_covariance`'s answer: the matrix, its one-line description and its kind
+    (``"run-bootstrap"`` or ``"hac"``)."""
+
+    cov: np.ndarray
+    note: str
+    kind: str
+
+
 def honest_covariance(f: MmgFit, runs: Sequence[SmoothedRun], prior: mmg.MmgModel,
-                      config: FitConfig = FitConfig(), *, draws: int = 200, seed: int = 0) -> tuple[np.ndarray, str]:
-    """The covariance MODEL.json carries and its description: the run bootstrap from
+                      config: FitConfig = FitConfig(), *, draws: int = 200, seed: int = 0) -> HonestCovariance:
+    """The covariance MODEL.json carries, its description and kind: the run bootstrap from
     :data:`MIN_BOOTSTRAP_RUNS` training runs on, the HAC sandwich below that (fewer runs
     give too few distinct resamples; the HAC is then the less optimistic of the two that can be formed)."""
     R = len(runs)
     if R >= MIN_BOOTSTRAP_RUNS:
         try:
-            return (bootstrap_covariance(f, runs, prior, config, draws=draws, seed=seed),
-                    f"run-bootstrap SE ({draws} resamples of the {R} training runs, seed {seed})")
+            return HonestCovariance(bootstrap_covariance(f, runs, prior, config, draws=draws, seed=seed),
+                                    f"run-bootstrap SE ({draws} resamples of the {R} training runs, seed {seed})",
+                                    "run-bootstrap")
         except InputError:
             pass
-    return (hac_covariance(f, runs, prior, config),
-            f"HAC (Newey-West within runs) SE: {R} training run(s), too few for a run bootstrap; optimistic "
-            "when runs differ by more than noise")
+    return HonestCovariance(hac_covariance(f, runs, prior, config),
+                            f"HAC (Newey-West within runs) SE: {R} training run(s), too few for a run bootstrap; "
+                            "optimistic when runs differ by more than noise", "hac")
 
 
 def split_half_z(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
@@ -236,4 +250,4 @@ def split_half_z(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapping
 
 
 __all__ = ["KINDS", "CovarianceOptions", "free_names", "hac_covariance", "bootstrap_draws", "bootstrap_covariance",
-           "ridge_covariance", "parameter_covariance", "honest_covariance", "split_half_z", "MIN_BOOTSTRAP_RUNS"]
+           "ridge_covariance", "parameter_covariance", "honest_covariance", "HonestCovariance", "split_half_z", "MIN_BOOTSTRAP_RUNS"]

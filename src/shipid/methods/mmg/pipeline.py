@@ -167,11 +167,16 @@ def _covariance(f_reg: MmgFit, f: MmgFit, runs, prior: mmg.MmgModel, config: Fit
     output-error refinement (``f``, ``oe``) the rows
     and columns of the refined coefficients are the refinement's horizon-cluster sandwich (per mode, as
     :func:`~shipid.methods.mmg.output_error.refined_fit` keeps them), with no cross terms to the others.
-    With a SIMEX correction (``simex_info``) its Monte Carlo covariance is added to the regression's."""
-    S, note = honest_covariance(f_reg, runs, prior, config)
+    With a SIMEX correction (``simex_info``) its Monte Carlo covariance is added to the regression's, and
+    where that is the HAC sandwich also the part of the covariance the measured noise causes through the
+    step-1 states (:attr:`~shipid.methods.mmg.simex.SimexInfo.noise_cov`; the run bootstrap holds it)."""
+    S, note, kind = honest_covariance(f_reg, runs, prior, config)
     if simex_info is not None and simex_info.applied:
         S = S + simex_info.mc_cov
         note += " + Monte Carlo variance of the SIMEX correction"
+        if kind == "hac" and simex_info.noise_cov is not None:
+            S = S + simex_info.noise_cov
+            note += " + the measurement noise's part through the step-1 states (SIMEX draws)"
     if oe is None:
         return S, note
     names = [c for m in mmg.MODES for c in f.free.get(m, ())]
