@@ -231,3 +231,31 @@ def test_hac_covariance_gains_the_noise_part_the_simex_draws_measure():
     stored = np.asarray(res.covariance)[np.ix_(order, order)]
     assert np.allclose(stored, hac + info.mc_cov + info.noise_cov, rtol=1e-9, atol=0)
     assert "measurement noise's part" in res.diagnostics["covariance"]["kind"]
+
+
+def test_imo_check_compares_bands_with_the_truths_criteria():
+    """``run_one(imo_samples=N)`` records per IMO criterion the identified nominal, std and band and the truth's
+    value at the same propeller rate and steering gear; the coefficient results are those without it (the band's
+    seed is drawn last); ``summarise_imo`` counts the truth inside the band."""
+    from shipid.methods.mmg import coverage as C
+    from shipid.methods.mmg.imo import assess
+
+    a = C.run_one(0, np.random.SeedSequence([7102, 0]), seconds=60.0, imo_samples=6)
+    b = C.run_one(0, np.random.SeedSequence([7102, 0]), seconds=60.0)
+    assert a["coefficients"] == b["coefficients"]
+    im = a["imo"]
+    assert {"turning-35 advance", "turning-35-port tactical diameter", "zigzag-10 first overshoot"} <= set(im)
+    assert "stopping track reach" not in im          # the campaign never reverses the propeller
+    for c in im.values():
+        assert c["band"][0] <= c["band"][1] and c["std"] > 0 and np.isfinite(c["true"])
+    # the truth's value is assess() of the truth itself at the study's conditions
+    rng = np.random.default_rng(np.random.SeedSequence([7102, 0]))
+    truth = C.draw_truth(rng, C.mmg.load_published("esso_osaka_3m"))
+    t = assess({"model": truth.to_dict()}, samples=0, rps=C.IMO_RPS, rudder_rate_deg_s=C.RUDDER_RATE)
+    tv = {c["name"]: c["value"] for c in t["criteria"]}
+    assert all(im[n]["true"] == tv[n] for n in im)
+    s = C.summarise_imo([a, a])
+    n = "turning-35 advance"
+    inside = im[n]["band"][0] <= im[n]["true"] <= im[n]["band"][1]
+    assert s[n]["n"] == 2 and s[n]["coverage_band"] == float(inside)
+    assert s[n]["bias"] == pytest.approx(im[n]["value"] - im[n]["true"], rel=1e-12)

@@ -32,28 +32,33 @@ def _fmt(x, spec):
 @click.option("--rudder-rate", type=click.FloatRange(min=0.1), default=None,
               help="Rudder rate of the simulated steering gear, deg/s [default: the IMO 2.32 deg/s Froude-scaled "
                    "to the 3-m model, 24.1]; 'inf' for instantaneous steps.")
+@click.option("--imo-samples", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Also check the IMO criteria's bands (shipid imo) against the truth's, with this many Monte "
+                   "Carlo draws per run (0: no IMO check).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
 @strict_option
-def mmg_coverage(runs, seconds, equation, window_s, simex, rudder_rate, as_json, out, force, campaign):
+def mmg_coverage(runs, seconds, equation, window_s, simex, rudder_rate, imo_samples, as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed Esso Osaka 3-m ships (shipid.methods.mmg.coverage).
 
     Per run: coefficients x (1 + 0.15 N(0,1)), noise levels drawn per run, 4 manoeuvres, then
     `identify mmg` with the fixed structure hull+rudder+thrust and no refinement. Prints per
     free coefficient the bias and spread of the relative error and the coverage of +-2 std.
     """
-    from shipid.methods.mmg.coverage import summarise
+    from shipid.methods.mmg.coverage import IMO_RPS, summarise
 
     res = replace(campaign, progress=not as_json).run("shipid.methods.mmg.coverage:run_one", runs,
                                                        kwargs={"seconds": float(seconds), "equation": equation,
                                                                "window_s": window_s, "simex": simex,
+                                                               **({"imo_samples": imo_samples} if imo_samples else {}),
                                                                **({} if rudder_rate is None else
                                                                   {"rudder_rate": float(rudder_rate)})},
                                                        name="mmg-coverage")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "seconds": seconds, "failed": res.n_failed, "equation": equation,
-              "window_s": window_s, "simex": simex, "rudder_rate": rudder_rate})
+              "window_s": window_s, "simex": simex, "rudder_rate": rudder_rate,
+              "imo_samples": imo_samples, **({"imo_rps": IMO_RPS} if imo_samples else {})})
     s["warnings"] = loud_lines(s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 
@@ -67,3 +72,10 @@ def _table(res, s: dict) -> None:
         sp = None if t["spread_rel"] is None else 100 * t["spread_rel"]
         click.echo(f"{nm:<12}{t['estimated']:>6d}/{t['runs']:<3d}{_fmt(b, '10.1f')}{_fmt(sp, '10.1f')}"
                    f"{_fmt(t['coverage_2std'], '10.2f')}")
+    if s.get("imo"):
+        click.echo(f"IMO criteria at {s['imo_rps']:g} rev/s (each model at its own speed), truth inside the band / "
+                   "inside nominal +- 2 std:")
+        click.echo(f"{'criterion':<52}{'n':>4}{'bias':>9}{'rms err':>9}{'mean std':>9}{'band':>6}{'2sd':>6}")
+        for nm, t in s["imo"].items():
+            click.echo(f"{nm + ' [' + t['unit'] + ']':<52}{t['n']:>4d}{t['bias']:>9.3f}{t['rms_error']:>9.3f}"
+                       f"{t['mean_std']:>9.3f}{t['coverage_band']:>6.2f}{t['coverage_2std']:>6.2f}")

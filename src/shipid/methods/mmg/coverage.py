@@ -51,6 +51,7 @@ import warnings
 import numpy as np
 
 from shipid.data.trial import Trial
+from shipid.methods.mmg import imo
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
 from shipid.methods.mmg.estimator import FitConfig
 from shipid.methods.mmg.pipeline import identify
@@ -60,6 +61,8 @@ from shipid.models import mmg
 STRUCTURE = "hull+rudder+thrust"
 SPREAD = 0.15
 DT = 0.1
+#: Propeller rate (rev/s) of the IMO manoeuvres compared in :func:`imo_comparison`: the campaign's approach rate.
+IMO_RPS = 10.0
 
 
 def free_coefficients(base: mmg.MmgModel) -> list[str]:
@@ -129,14 +132,34 @@ def simulate_campaign(truth: mmg.MmgModel, rng: np.random.Generator, seconds: fl
     return trials, sig
 
 
+def imo_comparison(result: dict, truth: mmg.MmgModel, samples: int, seed: int) -> dict:
+    """The IMO criteria (:func:`shipid.methods.mmg.imo.assess`) of the identified MODEL.json dict ``result``
+    with ``samples`` Monte Carlo draws, and of ``truth`` (no draws), both at the campaign's propeller rate
+    (:data:`IMO_RPS`, each model at its own straight-line speed there) and steering gear (:data:`RUDDER_RATE`):
+    per criterion the nominal value, its std and band, and the truth's value (criteria either side lacks
+    are left out)."""
+    kw = {"rps": IMO_RPS, "rudder_rate_deg_s": RUDDER_RATE}
+    a = imo.assess(result, samples=samples, seed=seed, **kw)
+    b = imo.assess({"model": truth.to_dict()}, samples=0, **kw)
+    out = {}
+    for ca, cb in zip(a["criteria"], b["criteria"]):
+        if np.isfinite(ca["value"]) and np.isfinite(cb["value"]) and np.isfinite(ca["std"]):
+            out[ca["name"]] = {"value": ca["value"], "std": ca["std"], "band": list(ca["band"]),
+                               "true": cb["value"], "unit": ca["unit"]}
+    return out
+
+
 def run_one(i: int, seed=0, *, seconds: float = 120.0, equation: str | None = None,
-            window_s: float | None = None, simex: bool = True, rudder_rate: float = RUDDER_RATE) -> dict:
+            window_s: float | None = None, simex: bool = True, rudder_rate: float = RUDDER_RATE,
+            imo_samples: int = 0) -> dict:
     """Campaign task: draw truth and noise, simulate, identify with a fixed structure, compare.
 
     ``equation`` / ``window_s``: the step-2 form (:class:`~shipid.methods.mmg.estimator.FitConfig`),
     the default's where None; ``simex``: correct the regression by
     :func:`shipid.methods.mmg.simex.simex_fit` (default :class:`~shipid.methods.mmg.simex.SimexConfig`);
-    ``rudder_rate`` (deg/s) of the simulated steering gear (:data:`RUDDER_RATE`; inf: steps)."""
+    ``rudder_rate`` (deg/s) of the simulated steering gear (:data:`RUDDER_RATE`; inf: steps);
+    ``imo_samples`` > 0: also compare the IMO criteria and their bands with the truth's
+    (:func:`imo_comparison`, the band's seed drawn from the run's generator after everything else)."""
     cfg = FitConfig()
     if equation is not None:
         cfg = dataclasses.replace(cfg, equation=equation)
@@ -156,7 +179,25 @@ def run_one(i: int, seed=0, *, seconds: float = 120.0, equation: str | None = No
     for nm in res.covariance_names:
         e = res.estimates[nm]
         out["coefficients"][nm] = {"true": truth.coef[nm], "value": e.value, "std": e.std, "status": e.status}
+    if imo_samples > 0:
+        out["imo"] = imo_comparison(res.to_dict(), truth, int(imo_samples), int(rng.integers(2 ** 31)))
     return out
+
+
+def summarise_imo(runs: list[dict]) -> dict:
+    """Per IMO criterion over the runs that have it: mean and RMS of (nominal − truth), mean std, and how
+    often the truth lies inside the 2.275–97.725 % band and inside nominal ± 2 std."""
+    names = sorted({n for o in runs for n in o.get("imo", {})})
+    table = {}
+    for nm in names:
+        r = [o["imo"][nm] for o in runs if nm in o.get("imo", {})]
+        err = np.array([x["value"] - x["true"] for x in r])
+        std = np.array([x["std"] for x in r])
+        inband = [x["band"][0] <= x["true"] <= x["band"][1] for x in r]
+        table[nm] = {"n": len(r), "unit": r[0]["unit"], "bias": float(err.mean()),
+                     "rms_error": float(np.sqrt(np.mean(err ** 2))), "mean_std": float(std.mean()),
+                     "coverage_band": float(np.mean(inband)), "coverage_2std": float(np.mean(np.abs(err) <= 2 * std))}
+    return table
 
 
 def summarise(outputs) -> dict:
@@ -179,7 +220,16 @@ def summarise(outputs) -> dict:
         findings.append(f"the +-2 std of {len(low)} of {len(table)} coefficients cover the truth less often than "
                         f"0.95 allows at these run counts ({', '.join(low)}): those standard errors are not honest "
                         "(shipid.methods.mmg.coverage)")
-    return {"runs": len(runs), "table": table, "warnings": findings}
+    out = {"runs": len(runs), "table": table, "warnings": findings}
+    if any("imo" in o for o in runs):
+        it = summarise_imo(runs)
+        out["imo"] = it
+        lowi = [nm for nm, t in it.items() if t["coverage_band"] < 0.95 - 2.0 * np.sqrt(0.95 * 0.05 / t["n"])]
+        if lowi:
+            findings.append(f"the IMO bands of {len(lowi)} of {len(it)} criteria contain the true value less often "
+                            f"than 0.95 allows at these run counts ({', '.join(lowi)}) "
+                            "(shipid.methods.mmg.coverage)")
+    return out
 
 
-__all__ = ["run_one", "summarise", "draw_truth", "simulate_campaign", "STRUCTURE"]
+__all__ = ["run_one", "summarise", "summarise_imo", "imo_comparison", "draw_truth", "simulate_campaign", "STRUCTURE"]
