@@ -67,6 +67,17 @@ def test_identify_known_file_missing_key(files, tmp_path, capsys):
     assert rc == 2 and "zg_bar" in err
 
 
+@pytest.mark.parametrize("key,value", [("U", "-1.0"), ("U", "0.0"), ("g", "0"), ("M", "-22.04")])
+def test_identify_known_non_positive_is_one_line_naming_it(files, tmp_path, capsys, key, value):
+    """A speed, mass or gravity that is not positive is refused before any data is read (one line, exit 2)."""
+    k = tmp_path / "k.toml"
+    k.write_text("\n".join(f"{key} = {value}" if ln.startswith(key + " ") else ln for ln in KNOWN.splitlines()))
+    rc = main(["identify", "mass-cm", "--nominal", files["nominal"], "--calibration", files["calibration"],
+               "--loaded", files["loaded"], "--known", str(k)])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and f"{key} = " in err and "k.toml" in err
+
+
 def test_crlb_json(capsys):
     rc = main(["analyse", "crlb", "mass-cm", "--duration", "60", "--wave-roll", "1.0", "--method", "spectrum",
                "--json"])

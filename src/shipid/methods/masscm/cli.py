@@ -65,8 +65,10 @@ def read_known(path: str) -> dict:
         raise InputError(f"missing known parameter(s): {', '.join(missing)} (need {', '.join(KNOWN_KEYS)})",
                          file=path)
     vals = {k: _si(k, raw[k], path) for k in KNOWN_KEYS}
-    if vals["M"] <= 0 or vals["m_c"] <= 0:
-        raise InputError("M and m_c must be positive", file=path)
+    bad = [k for k in ("U", "M", "m_c", "g") if not vals[k] > 0]
+    if bad:
+        raise InputError(f"{', '.join(f'{k} = {vals[k]:g}' for k in bad)}: must be positive (U is the ship's speed "
+                         "through the water, which scales the rudder force; g the gravity)", file=path)
     out = {"known": KnownParams(**vals), "z_f": None, "z_f_prior": None, "theta0": None}
     if "z_f" in raw:
         out["z_f"] = _si("z_f", raw["z_f"], path)
