@@ -97,7 +97,10 @@ def hac_covariance(f: MmgFit, runs: Sequence[SmoothedRun], prior: mmg.MmgModel,
         y = np.concatenate([d[m].y for d in data])
         seg = np.concatenate([np.full(d[m].y.size, i) for i, d in enumerate(data)])
         rf = ridge(H, y, f.fits[m].k, cov="hac", segments=seg)
-        if not np.allclose(rf.theta, f.fits[m].theta, rtol=1e-8, atol=0.0):
+        # the same regression with its rows regrouped by run: equal up to round-off, which grows with the
+        # conditioning (a coefficient 1e-3 of the largest in a cond-6.6e3 X mode moved by 1.8e-8 relative)
+        th = f.fits[m].theta
+        if not np.allclose(rf.theta, th, rtol=1e-6, atol=1e-9 * float(np.max(np.abs(th), initial=0.0))):
             raise InputError(f"mode {m}: the HAC refit does not reproduce the fitted coefficients")
         blocks.append(rf.cov_theta)
     p = sum(b.shape[0] for b in blocks)
