@@ -120,6 +120,8 @@ def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_pa
     assert main(["imo", str(mj), "--json", "--samples", "60", "--seed", "1"]) == 0
     cli = json.loads(capsys.readouterr().out)
     np.testing.assert_array_equal([c["band"] for c in cli["criteria"]], [c["band"] for c in rep["criteria"]])
+    # what the bands do not hold (the coverage study's finding) is said in the JSON and in the table
+    assert I.BAND_CAVEAT in cli["notes"] and "note: " + I.BAND_CAVEAT in I.format_report(rep)
 
 
 @pytest.mark.realdata
