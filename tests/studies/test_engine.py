@@ -72,6 +72,42 @@ def test_worker_process_death_is_survived(tmp_path, reference):
         [(r.index, r.outputs, r.status, r.error) for r in reference.records]
 
 
+def test_a_pool_that_breaks_between_collecting_and_submitting_is_replaced(monkeypatch, reference):
+    """The race CI met on 2026-12-03: a worker died while other futures were being collected, so the next
+    ``submit`` raised BrokenProcessPool before the dead worker's futures were marked. Here a stand-in pool
+    (threads) refuses its 3rd and 9th submissions that way and stays broken, as a real one does, while the
+    futures already in flight end normally: the chunk goes back to its queue, a fresh pool takes it once
+    nothing is in flight, and the results equal the in-process reference."""
+    import concurrent.futures as cf
+    from concurrent.futures.process import BrokenProcessPool
+
+    from shipid.studies import executors
+
+    calls = [0]
+
+    class FlakyPool(cf.ThreadPoolExecutor):
+        def __init__(self, max_workers=None, mp_context=None, initializer=None):
+            super().__init__(max_workers=max_workers)
+            self.broke = False
+
+        def submit(self, fn, /, *args, **kwargs):
+            calls[0] += 1
+            if self.broke or calls[0] in (3, 9):
+                self.broke = True            # a broken pool stays broken, as the real one does
+                raise BrokenProcessPool("stand-in: broken since the last wait")
+            return super().submit(fn, *args, **kwargs)
+
+    monkeypatch.setattr(cf, "ProcessPoolExecutor", FlakyPool)
+    monkeypatch.setattr(executors, "start_forkserver", lambda *a, **k: False)
+    rows = [r for rows in executors.iter_pool([list(range(k, min(k + 25, 300))) for k in range(0, 300, 25)], 2,
+                                               lambda c: (TOY, 11, c, None, {"n": 50, "fail_every": 97}), 11)
+            for r in rows]
+    assert calls[0] > 9
+    got = sorted((r["index"], None if r["outputs_json"] is None else json.loads(r["outputs_json"]), r["status"])
+                 for r in rows)
+    assert got == [(r.index, r.outputs, r.status) for r in reference.records]
+
+
 def test_run_that_always_kills_its_worker_is_recorded_failed(reference):
     res = run_campaign(TOY, 300, 11, kwargs={"n": 50, "fail_every": 97, "die_at": 40}, workers=2, progress=False)
     assert res.records[40].status == "failed"

@@ -234,7 +234,9 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
     When a worker dies, every chunk in flight is lost (the pool breaks). Those chunks
     become *suspects* and are re-run one at a time in a fresh pool; a suspect that
     breaks the pool alone is split into single runs, and a single run that does so
-    is recorded as failed (``WorkerDied``).
+    is recorded as failed (``WorkerDied``). A pool found broken when a chunk is submitted (a worker died
+    while finished futures were being collected) takes the chunk back into its queue; the dead worker's
+    futures then end broken in the wait, or, with none in flight, a fresh pool is started.
     """
     import concurrent.futures as cf
     from concurrent.futures.process import BrokenProcessPool
@@ -244,18 +246,37 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
     normal, suspects = deque(chunks), deque()
     inflight: dict = {}
     pool = None
+    def submit(queue: deque, alone: bool) -> bool:
+        """Submit the head of ``queue``; False (the chunk put back) if the pool broke since the last wait:
+        a worker died while other futures were being collected, and its own futures are not yet marked."""
+        c = queue.popleft()
+        try:
+            inflight[pool.submit(run_chunk, *args(c))] = (c, alone)
+            return True
+        except BrokenProcessPool:
+            queue.appendleft(c)
+            return False
+
+    idle_breaks = 0
     try:
         while normal or suspects or inflight:
             if pool is None:
                 pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker_init)
+            ok = True
             if suspects:
                 if not inflight:
-                    c = suspects.popleft()
-                    inflight[pool.submit(run_chunk, *args(c))] = (c, True)
+                    ok = submit(suspects, True)
             else:
-                while normal and len(inflight) < 2 * workers:
-                    c = normal.popleft()
-                    inflight[pool.submit(run_chunk, *args(c))] = (c, False)
+                while ok and normal and len(inflight) < 2 * workers:
+                    ok = submit(normal, False)
+            if not ok and not inflight:       # broken with nothing in flight: nothing to blame, a fresh pool
+                pool.shutdown(wait=True, cancel_futures=True)
+                pool = None
+                idle_breaks += 1
+                if idle_breaks > 3:
+                    raise RuntimeError("the worker pool broke four times with no run in flight")
+                continue
+            idle_breaks = 0
             done, _ = cf.wait(list(inflight), return_when=cf.FIRST_COMPLETED)
             if any(isinstance(f.exception(), BrokenProcessPool) for f in done):
                 cf.wait(list(inflight))  # the rest of the pool's futures end now too
