@@ -246,6 +246,7 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
     normal, suspects = deque(chunks), deque()
     inflight: dict = {}
     pool = None
+
     def submit(queue: deque, alone: bool) -> bool:
         """Submit the head of ``queue``; False (the chunk put back) if the pool broke since the last wait:
         a worker died while other futures were being collected, and its own futures are not yet marked."""
