@@ -177,3 +177,30 @@ def test_initial_turning_on_a_constructed_track():
     rec = BatchRecord(t, x, cmd, cmd, np.zeros((1, t.size)))
     # heading change 10 deg at t = 15 s, 10 s after execute: 20 m of track
     assert I.initial_turning(rec, 0) == pytest.approx(20.0, rel=1e-9)
+
+
+def test_each_draw_approaches_at_its_own_equilibrium():
+    """A draw of the surge coefficients is a model with its own straight-line speed at the propeller rate; its
+    criteria in the band are those of that model assessed alone (which starts from its own equilibrium).
+    Holding the estimate's speed for every draw left the surge coefficients' share out of the turning bands
+    (shipid.methods.mmg.imo.approach_rows)."""
+    need()
+    res = _published_esso_result()
+    x0f = res["model"]["coefficients"]["X_0F"]
+    res = dict(res, covariance_names=["X_0F"], covariance=[[(0.1 * x0f) ** 2]])
+    rep = I.assess(res, samples=6, seed=5)
+    _, vals = I.sample_coefficients(res, 6, seed=5)
+    alone = []
+    for v in vals[1:]:
+        m = dict(res["model"], coefficients=dict(res["model"]["coefficients"], X_0F=float(v[0])))
+        one = I.assess({"model": m}, samples=0)
+        alone.append({c["name"]: c["value"] for c in one["criteria"]})
+    for c in rep["criteria"]:
+        if c["name"].startswith(("turning-35", "initial turning")):
+            mine = np.array([a[c["name"]] for a in alone])
+            assert c["std"] == pytest.approx(np.std(mine, ddof=1), rel=1e-6)
+            assert c["band"] == pytest.approx(list(np.percentile(mine, I.BAND)), rel=1e-9)
+    assert any("its own straight-line speed" in n for n in rep["notes"])
+    # with speed and rate both given, every draw starts there (and the notes say so)
+    both = I.assess(res, samples=2, seed=5, speed=rep["conditions"]["speed"], rps=rep["conditions"]["rps"])
+    assert any("not each draw's equilibrium" in n for n in both["notes"])

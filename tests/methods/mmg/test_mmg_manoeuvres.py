@@ -165,3 +165,21 @@ def test_conditions_of_an_older_model_file_come_from_its_training_runs(tmp_path,
     res["provenance"]["training_runs"].append({"file": str(tmp_path / "gone.csv")})
     with pytest.raises(InputError, match="--speed or --rps"):
         MM.resolve_conditions(kv, res)
+
+
+def test_rows_equilibrium_is_each_rows_scalar_equilibrium():
+    need_params()
+    es = mmg.load_published("esso_osaka_3m")
+    scales = [1.0, 0.8, 1.3]
+    Th = MM.theta_rows(es, ["X_0F", "N_r"], [[es.coef["X_0F"] * s, es.coef["N_r"]] for s in scales])
+    speeds = MM.rows_equilibrium(es, Th, rps=10.0)
+    rates = MM.rows_equilibrium(es, Th, speed=0.4)
+    for s, u, n in zip(scales, speeds, rates):
+        m = es.with_coef({"X_0F": es.coef["X_0F"] * s})
+        assert u == pytest.approx(MM.equilibrium_speed(m, 10.0), rel=1e-9)
+        assert n == pytest.approx(MM.equilibrium_rps(m, 0.4), rel=1e-9)
+    # a row whose hull pushes it ahead at every speed has none
+    Th = MM.theta_rows(es, ["X_0F"], [[-50.0 * es.coef["X_0F"]]])
+    assert np.isnan(MM.rows_equilibrium(es, Th, rps=10.0)[0])
+    with pytest.raises(ValueError):
+        MM.rows_equilibrium(es, Th)

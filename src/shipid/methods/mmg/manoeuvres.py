@@ -302,6 +302,43 @@ def rows_rk4(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, d
     return np.where(np.abs(x) < 1e6, x, np.nan)
 
 
+def rows_equilibrium(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], *, rps: float | None = None,
+                     speed: float | None = None, iterations: int = 200) -> np.ndarray:
+    """Per row of ``Th`` the straight-line equilibrium: the speed (m/s) at propeller rate ``rps``, as
+    :func:`equilibrium_speed`, or the rate (rev/s) that holds ``speed``, as :func:`equilibrium_rps`;
+    NaN where a row has none in the same bracket.
+
+    Vectorised bisection on the surge acceleration of :func:`rows_deriv` (δ = v = r = 0, still air) to
+    float resolution. The Monte Carlo bands of :func:`shipid.methods.mmg.imo.assess` start each draw from
+    its own equilibrium, as the nominal model starts from its own: the approach speed at a given
+    propeller rate is as uncertain as the surge coefficients that set it."""
+    if (rps is None) == (speed is None):
+        raise ValueError("give exactly one of rps, speed")
+    B = next(iter(Th.values())).shape[0]
+    L = float(model.particulars["L"])
+    if rps is not None:
+        lo, hi, sgn = np.full(B, 1e-3), np.full(B, 3.0 * np.sqrt(9.81 * L)), 1.0
+
+        def du(a):
+            return rows_deriv(model, Th, np.column_stack([np.zeros((B, 3)), a, np.zeros((B, 2))]),
+                              np.zeros(B), np.full(B, float(rps)))[:, 3]
+    else:
+        lo, hi, sgn = np.full(B, 1e-3), np.full(B, 200.0), -1.0
+
+        def du(a):
+            return rows_deriv(model, Th, np.column_stack([np.zeros((B, 3)), np.full(B, float(speed)),
+                                                          np.zeros((B, 2))]), np.zeros(B), a)[:, 3]
+    with np.errstate(all="ignore"):
+        ok = (sgn * du(lo) > 0) & (sgn * du(hi) < 0)
+        for _ in range(iterations):
+            mid = 0.5 * (lo + hi)
+            pos = sgn * du(mid) > 0
+            lo, hi = np.where(pos, mid, lo), np.where(pos, hi, mid)
+            if np.all(hi - lo <= 4.0 * np.finfo(float).eps * np.abs(hi)):
+                break
+    return np.where(ok, 0.5 * (lo + hi), np.nan)
+
+
 @dataclass(frozen=True)
 class BatchRecord:
     """Histories of a batch: ``t`` (n,), ``x`` (B, n, 6), ``delta``, ``delta_cmd``, ``n`` (B, n)."""
@@ -319,11 +356,21 @@ class BatchRecord:
         return Trial(self.t, ch, {}, dict(meta or {}))
 
 
+def _start(B: int, cond: Conditions, speed, rps) -> tuple[np.ndarray, np.ndarray]:
+    """Initial states (B, 6) and propeller rates (B,) of a batch: ``cond``'s, or the per-row ``speed`` / ``rps``."""
+    x = np.tile([0.0, 0.0, 0.0, cond.speed, 0.0, 0.0], (B, 1))
+    if speed is not None:
+        x[:, 3] = np.broadcast_to(np.asarray(speed, float), (B,))
+    n = np.full(B, cond.rps) if rps is None else np.array(np.broadcast_to(np.asarray(rps, float), (B,)))
+    return x, n
+
+
 def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], order: np.ndarray,
                           psi_switch: np.ndarray, side: np.ndarray, cond: Conditions, *, dt: float = 0.1,
                           t_max: float | None = None, t_approach: float = T_APPROACH,
                           until_heading: float = np.deg2rad(200.0), until_reversals: int = 3,
-                          exact_reversal: bool = False) -> BatchRecord:
+                          exact_reversal: bool = False, speed: np.ndarray | None = None,
+                          rps: np.ndarray | None = None) -> BatchRecord:
     """Turning circles (``psi_switch = inf``) and zig-zags of many rows at once.
 
     Row ``i``: coefficients ``Th[mode][i]``, rudder order ``order[i]`` (rad, > 0) first to
@@ -341,6 +388,9 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
     option the gear's travel at the reversal sample is ``rate dt (2 − f)`` instead of
     ``rate dt``, i.e. it has moved as if reversed at ``t*`` (with the usual one-step lead
     of the sampled gear), so the overshoots vary smoothly with the coefficients.
+
+    ``speed``, ``rps``: per-row approach speed and propeller rate (B,), instead of ``cond``'s for all rows
+    (e.g. each row's own :func:`rows_equilibrium`).
     """
     order, psi_switch, side = (np.asarray(a, float) for a in (order, psi_switch, side))
     B = order.size
@@ -350,8 +400,7 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
     sign = rudder_turn_sign(model, cond)
     k_exec = int(np.searchsorted(np.arange(nmax) * dt, min(t_approach, 0.1 * t_max) - 1e-9 * dt))
     step = cond.rudder_rate * dt
-    x = np.tile([0.0, 0.0, 0.0, cond.speed, 0.0, 0.0], (B, 1))
-    nn = np.full(B, cond.rps)
+    x, nn = _start(B, cond, speed, rps)
     X = np.full((B, nmax, 6), np.nan)
     D = np.zeros((B, nmax))
     C = np.zeros((B, nmax))
@@ -398,10 +447,12 @@ def simulate_rudder_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], ord
 
 def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], cond: Conditions, *,
                             dt: float = 0.1, t_max: float | None = None,
-                            t_approach: float = T_APPROACH) -> BatchRecord:
+                            t_approach: float = T_APPROACH, speed: np.ndarray | None = None,
+                            rps: np.ndarray | None = None) -> BatchRecord:
     """Full-astern stopping test of many rows: rudder amidships, the propeller ordered to
     ``cond.rps_astern`` at execute and moving at ``cond.rps_rate`` (instantly if None);
-    stops when every row has lost its ahead speed (u ≤ 0) or at ``t_max`` (approach + 200 L/U)."""
+    stops when every row has lost its ahead speed (u ≤ 0) or at ``t_max`` (approach + 200 L/U).
+    ``speed``, ``rps``: per-row approach (B,), as in :func:`simulate_rudder_batch`."""
     if cond.rps_astern is None:
         raise ShipidError("no astern propeller rate (the training runs never reversed)")
     B = next(iter(Th.values())).shape[0]
@@ -410,10 +461,9 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
     nmax = int(round(t_max / dt)) + 1
     k_exec = int(round(min(t_approach, 0.1 * t_max) / dt))
     nstep = np.inf if cond.rps_rate is None else cond.rps_rate * dt
-    x = np.tile([0.0, 0.0, 0.0, cond.speed, 0.0, 0.0], (B, 1))
+    x, n = _start(B, cond, speed, rps)
     X = np.full((B, nmax, 6), np.nan)
     Nn = np.zeros((B, nmax))
-    n = np.full(B, cond.rps)
     zero = np.zeros(B)
     k = 0
     with np.errstate(all="ignore"):
@@ -435,4 +485,4 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
 
 __all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
-           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH", "straight_du"]
+           "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_equilibrium", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH", "straight_du"]
