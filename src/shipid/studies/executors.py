@@ -258,6 +258,12 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
             queue.appendleft(c)
             return False
 
+    def drop() -> None:
+        """Shut the (broken) pool down; the loop starts a fresh one."""
+        nonlocal pool
+        pool.shutdown(wait=True, cancel_futures=True)
+        pool = None
+
     idle_breaks = 0
     try:
         while normal or suspects or inflight:
@@ -271,8 +277,7 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
                 while ok and normal and len(inflight) < 2 * workers:
                     ok = submit(normal, False)
             if not ok and not inflight:       # broken with nothing in flight: nothing to blame, a fresh pool
-                pool.shutdown(wait=True, cancel_futures=True)
-                pool = None
+                drop()
                 idle_breaks += 1
                 if idle_breaks > 3:
                     raise RuntimeError("the worker pool broke four times with no run in flight")
@@ -293,8 +298,7 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
                 else:  # e.g. outputs that cannot be pickled back
                     yield failed_rows(seed, c, error_text(exc))
             if broken:
-                pool.shutdown(wait=True, cancel_futures=True)
-                pool = None
+                drop()
                 for c, alone in broken:
                     if not alone:
                         suspects.append(c)
@@ -304,7 +308,7 @@ def iter_pool(chunks, workers: int, args, seed: int, warm: tuple | None = None) 
                         yield failed_rows(seed, c, "WorkerDied: the worker process died running this run")
     finally:
         if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+            drop()
 
 
 def iter_dask(client, chunks, args, seed: int) -> Iterator[list[dict]]:

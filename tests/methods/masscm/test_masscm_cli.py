@@ -76,6 +76,8 @@ def test_identify_known_non_positive_is_one_line_naming_it(files, tmp_path, caps
                "--loaded", files["loaded"], "--known", str(k)])
     err = capsys.readouterr().err
     assert rc == 2 and len(err.strip().splitlines()) == 1 and f"{key} = " in err and "k.toml" in err
+    # the line explains the value it names, and only that one
+    assert f"({key} " in err and all(f"{o} the" not in err and f"{o} is" not in err for o in ("U", "g", "M") if o != key)
 
 
 def test_crlb_json(capsys):

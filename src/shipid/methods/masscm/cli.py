@@ -67,8 +67,10 @@ def read_known(path: str) -> dict:
     vals = {k: _si(k, raw[k], path) for k in KNOWN_KEYS}
     bad = [k for k in ("U", "M", "m_c", "g") if not vals[k] > 0]
     if bad:
-        raise InputError(f"{', '.join(f'{k} = {vals[k]:g}' for k in bad)}: must be positive (U is the ship's speed "
-                         "through the water, which scales the rudder force; g the gravity)", file=path)
+        why = {"U": "U is the ship's speed through the water, which scales the rudder force", "g": "g the gravity",
+               "M": "M the nominal mass", "m_c": "m_c the calibration load"}
+        raise InputError(f"{', '.join(f'{k} = {vals[k]:g}' for k in bad)}: must be positive "
+                         f"({'; '.join(why[k] for k in bad)})", file=path)
     out = {"known": KnownParams(**vals), "z_f": None, "z_f_prior": None, "theta0": None}
     if "z_f" in raw:
         out["z_f"] = _si("z_f", raw["z_f"], path)

@@ -329,7 +329,7 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
             "criteria": [c.to_dict() for c in crit], "warnings": warnings,
             "notes": ["criteria of IMO MSC.137(76) 5.3-5.4 in ship lengths (model scale); overshoot limits "
                       "from the full-scale L/V", "band: 2.275-97.725 % quantiles of the Monte Carlo over the "
-                      f"parameter covariance ({cov_kind})", approach_note(speed is not None, rps is not None),
+                      "parameter covariance (covariance_kind)", approach_note(speed is not None, rps is not None),
                       BAND_CAVEAT]}
 
 
