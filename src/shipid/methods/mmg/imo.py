@@ -62,9 +62,8 @@ BAND = (2.275, 97.725)
 #: What the bands do not hold, as the simulated coverage study measured it (:mod:`shipid.methods.mmg.coverage`).
 BAND_CAVEAT = ("the bands carry the coefficients' estimation uncertainty, not a bias of the fit: on simulated "
                "four-run campaigns of the Esso Osaka 3 m (shipid study mmg-coverage --seed 790 --imo-samples 40) "
-               "they held the "
-               "truth 0.98-1.00 of the time for every criterion, a little wide for the turning ones (advance: "
-               "mean std 0.022 L, error RMS 0.018 L, bias +0.007 L)")
+               "they held the truth 0.98-1.00 of the time for every criterion, a little wide for the turning "
+               "ones (advance: mean std 0.022 L, error RMS 0.018 L, bias +0.007 L)")
 #: Maximum stopping track reach (ship lengths).
 STOPPING_LIMIT = 15.0
 #: Slowest steering gear SOLAS II-1 reg. 29.3.2 allows (deg/s): 35° one side to 30° the other in 28 s.
@@ -122,10 +121,11 @@ def approach_rows(model, Th: Mapping[str, np.ndarray], cond: MM.Conditions, *, s
     ``no_eq`` True where a draw has no equilibrium."""
     R = next(iter(Th.values())).shape[0]
     u0, n0 = np.full(R, cond.speed), np.full(R, cond.rps)
+    draws = {m: T[1:] for m, T in Th.items()}
     if R > 1 and not speed_given:
-        u0[1:] = MM.rows_equilibrium(model, {m: T[1:] for m, T in Th.items()}, rps=cond.rps)
+        u0[1:] = MM.rows_equilibrium(model, draws, rps=cond.rps)
     elif R > 1 and not rps_given:
-        n0[1:] = MM.rows_equilibrium(model, {m: T[1:] for m, T in Th.items()}, speed=cond.speed)
+        n0[1:] = MM.rows_equilibrium(model, draws, speed=cond.speed)
     return u0, n0, ~(np.isfinite(u0) & np.isfinite(n0))
 
 

@@ -122,12 +122,20 @@ def straight_du(model: mmg.MmgModel, u: float, n: float) -> float:
     return float(X[0] / mmg.mass_terms(model)[0])
 
 
+#: Propeller rates (rev/s) searched for a straight-line equilibrium (:func:`equilibrium_rps`, :func:`rows_equilibrium`).
+RPS_BRACKET = (1e-3, 200.0)
+
+
+def speed_bracket(model: mmg.MmgModel) -> tuple[float, float]:
+    """Speeds (m/s) searched for a straight-line equilibrium: up to Froude number 3."""
+    return 1e-3, 3.0 * np.sqrt(9.81 * model.particulars["L"])
+
+
 def equilibrium_speed(model: mmg.MmgModel, rps: float) -> float:
     """Straight-line speed (m/s) at which the model's surge force vanishes at ``rps`` (δ = 0, v = r = 0)."""
     from scipy.optimize import brentq
 
-    L = model.particulars["L"]
-    lo, hi = 1e-3, 3.0 * np.sqrt(9.81 * L)            # up to Froude number 3
+    lo, hi = speed_bracket(model)
     flo, fhi = straight_du(model, lo, rps), straight_du(model, hi, rps)
     if not (flo > 0 > fhi):
         raise ShipidError(f"model {model.name!r} has no straight-line equilibrium speed at {rps:g} rev/s "
@@ -139,7 +147,7 @@ def equilibrium_rps(model: mmg.MmgModel, speed: float) -> float:
     """Propeller rate (rev/s) that holds the straight-line speed ``speed`` (δ = 0, v = r = 0)."""
     from scipy.optimize import brentq
 
-    lo, hi = 1e-3, 200.0
+    lo, hi = RPS_BRACKET
     flo, fhi = straight_du(model, speed, lo), straight_du(model, speed, hi)
     if not (flo < 0 < fhi):
         raise ShipidError(f"model {model.name!r}: no propeller rate in (0, {hi:g}] rev/s holds {speed:g} m/s; "
@@ -315,19 +323,14 @@ def rows_equilibrium(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], *, rps: 
     if (rps is None) == (speed is None):
         raise ValueError("give exactly one of rps, speed")
     B = next(iter(Th.values())).shape[0]
-    L = float(model.particulars["L"])
-    if rps is not None:
-        lo, hi, sgn = np.full(B, 1e-3), np.full(B, 3.0 * np.sqrt(9.81 * L)), 1.0
+    lo, hi = (np.full(B, b) for b in (speed_bracket(model) if rps is not None else RPS_BRACKET))
+    sgn = 1.0 if rps is not None else -1.0          # du/dt falls with speed, rises with the rate
 
-        def du(a):
-            return rows_deriv(model, Th, np.column_stack([np.zeros((B, 3)), a, np.zeros((B, 2))]),
-                              np.zeros(B), np.full(B, float(rps)))[:, 3]
-    else:
-        lo, hi, sgn = np.full(B, 1e-3), np.full(B, 200.0), -1.0
+    def du(a):
+        x = np.zeros((B, 6))
+        x[:, 3] = a if rps is not None else speed
+        return rows_deriv(model, Th, x, np.zeros(B), np.full(B, float(rps)) if rps is not None else a)[:, 3]
 
-        def du(a):
-            return rows_deriv(model, Th, np.column_stack([np.zeros((B, 3)), np.full(B, float(speed)),
-                                                          np.zeros((B, 2))]), np.zeros(B), a)[:, 3]
     with np.errstate(all="ignore"):
         ok = (sgn * du(lo) > 0) & (sgn * du(hi) < 0)
         for _ in range(iterations):
