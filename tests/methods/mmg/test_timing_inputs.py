@@ -69,5 +69,20 @@ def test_retime_with_zero_input_offsets_is_the_state_retiming_bit_for_bit():
 
 
 def test_an_offset_on_the_grid_end_is_named():
-    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=1.5)) == ["wind"]
-    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=0.2)) == []
+    top = float(TI.GRID[-1])
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=top)) == ["wind"]
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=float(TI.GRID[0]), wind=0.2)) == ["propeller rate"]
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=1.5)) == []
+    # a narrower grid passed in is the one checked
+    assert TI.at_bound(TI.InputLags(delta=0.8, n=-0.3, wind=1.5), np.arange(-1.0, 1.51, 0.5)) == ["wind"]
+
+
+def test_the_samples_left_out_at_each_end_cover_the_largest_offset_at_any_sample_rate():
+    # a column shifted by tau is held constant over the last tau seconds; those samples, and the smoothing
+    # window's half width, must lie in the part left out (at 10 Hz the filter margin already covers 3 s)
+    for dt in (0.1, 0.05, 0.02):
+        d = {"t": np.arange(0.0, 200.0, dt)}
+        e = TI._edge(d, TI.GRID)
+        assert e * dt >= float(np.max(np.abs(TI.GRID)))
+        assert e >= TI._EDGE
+    assert TI._edge({"t": np.arange(0.0, 200.0, 0.1)}, TI.GRID) == TI._EDGE
