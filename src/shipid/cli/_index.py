@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'd8317d2781e23379'
+SOURCES = '492af8f37885157b'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -76,7 +76,7 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
     ('study', 'mmg-covariance'):
         ('shipid.methods.mmg.cli_covariance', 'Which MMG parameter covariance is honest: split-half check on real training runs.', False),
     ('study', 'mmg-coverage'):
-        ('shipid.methods.mmg.cli_coverage', 'Coverage of the MMG std on perturbed Esso Osaka 3-m ships (shipid.methods.mmg.coverage).', False),
+        ('shipid.methods.mmg.cli_coverage', 'Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).', False),
     ('study', 'store-info'):
         ('shipid.cli.campaign_cmds', 'List the campaigns in a store with their definition and progress.', False),
     ('study', 'toy'):

@@ -271,3 +271,78 @@ def test_hac_refit_check_allows_round_off_of_a_small_coefficient():
     out = C.run_one(72, np.random.SeedSequence([780, 72]))
     std = [c["std"] for c in out["coefficients"].values()]
     assert len(std) == 15 and all(np.isfinite(s) and s > 0 for s in std)
+
+
+def test_kvlcc2_campaign_is_the_hsva_programme_of_zigzags_from_the_truths_own_approach_speed():
+    """The KVLCC2 campaign (``VESSELS["kvlcc2"]``): seven Kempf zig-zags at 10.23 rev/s, each starting at the
+    truth's straight-line speed, first rudder to the programme's side, reversed as the heading passes the
+    switching angle; noise only on the states."""
+    from shipid.methods.mmg import coverage as C
+    from shipid.methods.mmg import manoeuvres as M
+    from shipid.models import mmg
+
+    ves = C.VESSELS["kvlcc2"]
+    rng = np.random.default_rng(5)
+    truth = C.draw_truth(rng, mmg.load_published(ves.published), ves.structure)
+    trials, sig = C.simulate_zigzag_campaign(truth, rng, ves, seconds=60.0)
+    u0 = M.equilibrium_speed(truth, ves.rps)
+    assert len(trials) == len(ves.zigzags) and sig.shape == (6,)
+    for tr, (order, switch, side) in zip(trials, ves.zigzags):
+        d = np.asarray(tr["delta"])
+        assert np.allclose(np.diff(tr.t), ves.dt) and tr.t[-1] == pytest.approx(60.0, abs=ves.dt)
+        assert np.all(np.asarray(tr["n"]) == ves.rps)
+        assert abs(tr["u"][0] - u0) < 5 * sig[3]
+        assert np.max(np.abs(d)) == pytest.approx(np.deg2rad(order), rel=1e-9)
+        first = d[np.flatnonzero(np.abs(d) > 1e-9)[0]]
+        assert np.sign(first) == side * M.rudder_turn_sign(truth, M.Conditions(u0, ves.rps, 1.0))
+        assert np.any(np.sign(d) == -np.sign(first))          # reversed at least once within 60 s
+        # the steering gear's rate
+        assert np.max(np.abs(np.diff(d))) <= np.deg2rad(ves.rudder_rate) * ves.dt * (1 + 1e-9)
+
+
+def test_kvlcc2_run_one_is_deterministic_and_reports_the_structures_free_coefficients():
+    from shipid.methods.mmg import coverage as C
+    from shipid.models import mmg
+
+    ves = C.VESSELS["kvlcc2"]
+    a = C.run_one(0, np.random.SeedSequence([11, 0]), vessel="kvlcc2", seconds=60.0)
+    b = C.run_one(0, np.random.SeedSequence([11, 0]), vessel="kvlcc2", seconds=60.0)
+    assert a == b
+    assert set(a["coefficients"]) == set(C.free_coefficients(mmg.load_published(ves.published), ves.structure))
+    est = [c for c in a["coefficients"].values() if c["status"] == "estimated"]
+    assert est and all(np.isfinite(c["std"]) and c["std"] > 0 for c in est)
+
+
+def test_the_differential_form_is_checked_against_the_integral_form_and_the_disagreement_said():
+    """``pipeline.form_check``: a differential-form result carries the integral form's estimates and each
+    coefficient's difference in the reported standard errors; a difference over ``FORM_CHECK_SE`` gives one
+    warning line naming it; the integral form is not checked."""
+    from shipid.methods.mmg import coverage as C
+    from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg.estimator import FitConfig
+    from shipid.models import mmg
+
+    ves = C.VESSELS["kvlcc2"]
+    rng = np.random.default_rng(21)
+    base = mmg.load_published(ves.published)
+    truth = C.draw_truth(rng, base, ves.structure)
+    trials, _ = C.simulate_zigzag_campaign(truth, rng, ves, seconds=60.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        d = P.identify(trials, base, structure=ves.structure, select=False, refine="none", simex=None)
+        i = P.identify(trials, base, structure=ves.structure, select=False, refine="none", simex=None,
+                       fit_config=FitConfig(equation="integral"))
+    assert "form_check" not in i.diagnostics
+    chk = d.diagnostics["form_check"]
+    for c, z in chk["difference_in_se"].items():
+        e = d.estimates[c]
+        assert z == pytest.approx((e.value - chk["integral"][c]) / e.std, rel=1e-12)
+        # the integral form's values are that form's own estimates
+        assert chk["integral"][c] == pytest.approx(i.estimates[c].value, rel=1e-9, abs=1e-12)
+    assert chk["over"] == sorted((c for c, z in chk["difference_in_se"].items() if abs(z) > P.FORM_CHECK_SE),
+                                 key=lambda c: -abs(chk["difference_in_se"][c]))
+    lines = [w for w in d.diagnostics.warnings if "differential and integral forms" in w]
+    assert len(lines) == (1 if chk["over"] else 0)
+    assert P.form_line({"over": [], "difference_in_se": {"N_v": 0.5}}) is None
+    line = P.form_line({"over": ["N_r", "N_v"], "difference_in_se": {"N_r": -3.25, "N_v": 2.5, "Y_v": 0.1}})
+    assert "on 2 of 3 estimated coefficients (N_r, N_v; largest 3.2 SE, N_r)" in line

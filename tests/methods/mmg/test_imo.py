@@ -204,3 +204,20 @@ def test_each_draw_approaches_at_its_own_equilibrium():
     # with speed and rate both given, every draw starts there (and the notes say so)
     both = I.assess(res, samples=2, seed=5, speed=rep["conditions"]["speed"], rps=rep["conditions"]["rps"])
     assert any("not each draw's equilibrium" in n for n in both["notes"])
+
+
+def test_a_model_whose_standard_errors_are_flagged_gets_a_warning_that_its_bands_are_too_narrow():
+    """``diagnostics.form_check.over`` (the differential and integral forms of step 2 disagree,
+    shipid.methods.mmg.pipeline.form_check): the bands come from those standard errors, so ``assess`` says
+    they are too narrow, with the simulated study's figures; without it, no such line."""
+    need()
+    res = _published_esso_result()
+    x0f = res["model"]["coefficients"]["X_0F"]
+    res = dict(res, covariance_names=["X_0F"], covariance=[[(0.01 * x0f) ** 2]])
+    plain = I.assess(res, samples=2, seed=3)
+    assert not any(I.FORM_BANDS in w for w in plain["warnings"])
+    flagged = dict(res, diagnostics={"form_check": {"over": ["N_r", "N_v"], "difference_in_se": {}}})
+    rep = I.assess(flagged, samples=2, seed=3)
+    lines = [w for w in rep["warnings"] if I.FORM_BANDS in w]
+    assert len(lines) == 1 and "on 2 coefficients" in lines[0]
+    assert [c["band"] for c in rep["criteria"]] == [c["band"] for c in plain["criteria"]]

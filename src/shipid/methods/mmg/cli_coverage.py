@@ -1,6 +1,7 @@
 """``shipid study mmg-coverage``: simulated coverage of the MMG standard errors.
 
-* ``shipid study mmg-coverage --runs N [--seed S] [--workers W ...] [--seconds T] [--json] [-o R.json]``
+* ``shipid study mmg-coverage --runs N [--vessel esso-osaka|kvlcc2] [--seed S] [--workers W ...] [--seconds T]
+  [--json] [-o R.json]``
 """
 
 from __future__ import annotations
@@ -21,8 +22,12 @@ def _fmt(x, spec):
 
 @study.command("mmg-coverage")
 @click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
-@click.option("--seconds", type=click.FloatRange(30.0, 1200.0), default=120.0, show_default=True,
-              help="Length of each simulated manoeuvre (s).")
+@click.option("--vessel", type=click.Choice(["esso-osaka", "kvlcc2"]), default="esso-osaka", show_default=True,
+              help="Ship, fixed structure and test programme (shipid.methods.mmg.coverage.VESSELS): the Esso Osaka "
+                   "3 m with turns, a zig-zag and a random run, or the KVLCC2 L7 with seven HSVA-like zig-zags "
+                   "(needs the shared data folder).")
+@click.option("--seconds", type=click.FloatRange(30.0, 1200.0), default=None,
+              help="Length of each simulated manoeuvre (s) [default: the vessel's, 120 Esso / 150 KVLCC2].")
 @click.option("--equation", type=click.Choice(["differential", "integral"]), default=None,
               help="Step-2 regression form (FitConfig.equation); default: identify mmg's.")
 @click.option("--window", "window_s", type=click.FloatRange(0.1, 120.0), default=None,
@@ -30,42 +35,47 @@ def _fmt(x, spec):
 @click.option("--simex/--no-simex", default=True, show_default=True,
               help="Correct the regression for step-1 state errors (shipid.methods.mmg.simex).")
 @click.option("--rudder-rate", type=click.FloatRange(min=0.1), default=None,
-              help="Rudder rate of the simulated steering gear, deg/s [default: the IMO 2.32 deg/s Froude-scaled "
-                   "to the 3-m model, 24.1]; 'inf' for instantaneous steps.")
+              help="Rudder rate of the simulated steering gear, deg/s [default: Esso the IMO 2.32 deg/s Froude-scaled "
+                   "to the 3-m model, 24.1; KVLCC2 the HSVA runs' 13]; 'inf' for instantaneous steps.")
 @click.option("--imo-samples", type=click.IntRange(min=0), default=0, show_default=True,
               help="Also check the IMO criteria's bands (shipid imo) against the truth's, with this many Monte "
                    "Carlo draws per run (0: no IMO check).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
 @strict_option
-def mmg_coverage(runs, seconds, equation, window_s, simex, rudder_rate, imo_samples, as_json, out, force, campaign):
-    """Coverage of the MMG std on perturbed Esso Osaka 3-m ships (shipid.methods.mmg.coverage).
+def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, imo_samples, as_json, out, force,
+                 campaign):
+    """Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).
 
-    Per run: coefficients x (1 + 0.15 N(0,1)), noise levels drawn per run, 4 manoeuvres, then
-    `identify mmg` with the fixed structure hull+rudder+thrust and no refinement. Prints per
-    free coefficient the bias and spread of the relative error and the coverage of +-2 std.
+    Per run: coefficients x (1 + 0.15 N(0,1)), noise levels drawn per run, the vessel's manoeuvres, then
+    `identify mmg` with its fixed structure (Esso: hull+rudder+thrust; KVLCC2: full/symmetric-gamma_R)
+    and no refinement. Prints per free coefficient the bias and spread of the relative error and the
+    coverage of +-2 std.
     """
-    from shipid.methods.mmg.coverage import IMO_RPS, summarise
+    from shipid.methods.mmg.coverage import VESSELS, summarise
 
-    res = replace(campaign, progress=not as_json).run("shipid.methods.mmg.coverage:run_one", runs,
-                                                       kwargs={"seconds": float(seconds), "equation": equation,
-                                                               "window_s": window_s, "simex": simex,
-                                                               **({"imo_samples": imo_samples} if imo_samples else {}),
-                                                               **({} if rudder_rate is None else
-                                                                  {"rudder_rate": float(rudder_rate)})},
+    ves = VESSELS[vessel]
+    seconds = ves.seconds if seconds is None else float(seconds)
+    kw = {"seconds": seconds, "equation": equation, "window_s": window_s, "simex": simex,
+          **({"imo_samples": imo_samples} if imo_samples else {}),
+          **({} if rudder_rate is None else {"rudder_rate": float(rudder_rate)}),
+          **({} if vessel == "esso-osaka" else {"vessel": vessel})}
+    res = replace(campaign, progress=not as_json).run("shipid.methods.mmg.coverage:run_one", runs, kwargs=kw,
                                                        name="mmg-coverage")
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
-    s.update({"seed": campaign.seed, "seconds": seconds, "failed": res.n_failed, "equation": equation,
-              "window_s": window_s, "simex": simex, "rudder_rate": rudder_rate,
-              "imo_samples": imo_samples, **({"imo_rps": IMO_RPS} if imo_samples else {})})
+    s.update({"vessel": vessel, "structure": ves.structure, "seed": campaign.seed, "seconds": seconds,
+              "failed": res.n_failed, "equation": equation, "window_s": window_s, "simex": simex,
+              "rudder_rate": ves.rudder_rate if rudder_rate is None else float(rudder_rate),
+              "imo_samples": imo_samples, **({"imo_rps": ves.rps} if imo_samples else {})})
     s["warnings"] = loud_lines(s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 
 
 def _table(res, s: dict) -> None:
     echo_campaign_summary(res)
-    click.echo(f"MMG coverage study: {s['runs']} runs, seed {s['seed']}, {s['seconds']:g} s per manoeuvre")
+    click.echo(f"MMG coverage study ({s['vessel']}, {s['structure']}): {s['runs']} runs, seed {s['seed']}, "
+               f"{s['seconds']:g} s per manoeuvre")
     click.echo(f"{'coefficient':<12}{'estimated':>10}{'bias %':>10}{'spread %':>10}{'cover 2sd':>10}")
     for nm, t in s["table"].items():
         b = None if t["bias_rel"] is None else 100 * t["bias_rel"]

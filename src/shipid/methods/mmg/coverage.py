@@ -55,17 +55,39 @@ N_v, N_r, NR_arm coverage was 0.89, 0.87, 0.90 (bias +2.6, +3.1, +0.9 %), at 790
 +2.1, +2.2, +0.8 %): the residual errors-in-variables bias after the linear SIMEX extrapolation (its path in
 λ is concave; a rational-linear extrapolant removed the bias on the tuning truth but was unstable), which the
 study warns.
+
+The KVLCC2 campaign (``vessel="kvlcc2"``, ``shipid study mmg-coverage --vessel kvlcc2``, since 2026-12-04;
+:data:`VESSELS`): truths around the ``kvlcc2_hsva`` prior, seven zig-zags of 150 s (10/10 and 20/20 to
+each side, 15/5, 25/5, 35/5) at 10.23 rev/s with the rudder at 13 deg/s as in the HSVA runs, the
+structure ``full/symmetric-gamma_R`` the horizon selection chooses on those runs, run-bootstrap
+covariance (7 runs), SIMEX applied by its pilot. Explored on seed 900 (40 runs), reported on the fresh
+seed 910 (100 runs each form, 40 IMO draws per run). The KVLCC2 default, the differential form: N_v,
+N_r, NR_arm biased +4.0, +5.1, +2.4 % (towards zero) with spreads of 1.0, 1.3, 0.5 %, so their ±2 std
+covered the truth in 0.25, 0.18, 0.21 of the runs; Y_v, Y_r, YR_gain 0.81–0.87; the IMO bands held the
+truth 0.31–0.33 (initial turning), 0.53–0.70 (first overshoots), 0.88–0.89 (advance), 0.99–1.00
+(tactical diameter). The integral form (``--equation integral``) on the same truths and noise: biases
+within ±0.1 % for those six, spreads two to four times smaller, coverage 0.97–0.99; of the 21
+coefficients only XP_gain (0.87) and X_vr (0.80, 30 runs estimated) short; IMO bands 0.93–0.96 for the
+turning criteria, 0.81–0.89 for the overshoots (RMS error 0.01–0.03 deg, mean std 0.007–0.012 deg: the
+sampled rudder reversal's resolution). On the real HSVA runs the real-data CVs still favour the
+differential form (:data:`shipid.methods.mmg.estimator.EQUATION_BY_STRUCTURE`), so it stays the default
+there and every differential-form result is compared with the integral form
+(:func:`shipid.methods.mmg.pipeline.form_check`): on all 13 HSVA runs they disagree by more than 2
+standard errors on 10 of 18 estimated coefficients (N_v −2.2, N_r −2.4, NR_arm −2.8 SE; the opposite
+direction to the simulated bias, so not that bias alone), which identify says in one line.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
 from shipid.data.trial import Trial
 from shipid.methods.mmg import imo
+from shipid.methods.mmg import manoeuvres as M
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
 from shipid.methods.mmg.estimator import FitConfig
 from shipid.methods.mmg.pipeline import identify
@@ -79,17 +101,17 @@ DT = 0.1
 IMO_RPS = 10.0
 
 
-def free_coefficients(base: mmg.MmgModel) -> list[str]:
-    """The coefficients :data:`STRUCTURE` leaves free (the others stay at ``base``'s values in the fit)."""
-    _, free = apply_candidate(base, CANDIDATES[base.structure][STRUCTURE])
+def free_coefficients(base: mmg.MmgModel, structure: str = STRUCTURE) -> list[str]:
+    """The coefficients ``structure`` leaves free (the others stay at ``base``'s values in the fit)."""
+    _, free = apply_candidate(base, CANDIDATES[base.structure][structure])
     return [c for m in mmg.MODES for c in free.get(m, ())]
 
 
-def draw_truth(rng: np.random.Generator, base: mmg.MmgModel) -> mmg.MmgModel:
+def draw_truth(rng: np.random.Generator, base: mmg.MmgModel, structure: str = STRUCTURE) -> mmg.MmgModel:
     """``base`` with each FREE coefficient × clip(1 + SPREAD N(0,1), 0.05, 1.95) (sign kept); the
     coefficients the structure fixes keep their values, so the fit's fixed values are right. The truth
     carries the structure's particulars (:func:`apply_candidate`), so it lies inside the fitted model class."""
-    base, free = apply_candidate(base, CANDIDATES[base.structure][STRUCTURE])
+    base, free = apply_candidate(base, CANDIDATES[base.structure][structure])
     names = {c for m in mmg.MODES for c in free.get(m, ())}
     coef = {k: float(v) * (float(np.clip(1.0 + SPREAD * rng.standard_normal(), 0.05, 1.95)) if k in names else 1.0)
             for k, v in base.coef.items()}
@@ -146,13 +168,77 @@ def simulate_campaign(truth: mmg.MmgModel, rng: np.random.Generator, seconds: fl
     return trials, sig
 
 
-def imo_comparison(result: dict, truth: mmg.MmgModel, samples: int, seed: int) -> dict:
+@dataclass(frozen=True)
+class Vessel:
+    """A campaign's ship and test programme.
+
+    ``published``: the MMG set whose perturbations are the truths (:func:`shipid.models.mmg.load_published`);
+    ``structure``: the fixed structure identified (a key of ``CANDIDATES[base.structure]``); ``rps``: the
+    propeller rate (rev/s) of the runs and of the IMO comparison; ``rudder_rate``: the steering gear (deg/s);
+    ``dt``: sample interval (s); ``noise``: standard deviations of x, y, ψ, u, v, r (m, rad, m/s, rad/s),
+    each multiplied by U(0.5, 2) per campaign; ``zigzags``: the runs as (order deg, switch deg, first side
+    +1 starboard / −1 port), Kempf zig-zags from the truth's straight-line speed at ``rps``
+    (:func:`simulate_zigzag_campaign`); empty: the Esso programme of :func:`simulate_campaign`;
+    ``seconds``: default run length (s)."""
+
+    key: str
+    published: str
+    structure: str
+    rps: float
+    rudder_rate: float
+    dt: float
+    noise: tuple[float, ...]
+    zigzags: tuple[tuple[float, float, float], ...] = ()
+    seconds: float = 120.0
+
+
+#: The campaigns :func:`run_one` knows. ``kvlcc2``: the HSVA test programme of the KVLCC2 L7 model (13
+#: zig-zags, 5°–35°, at 10.23 rev/s, rudder at 13 deg/s: the medians :func:`shipid.methods.mmg.manoeuvres.training_conditions`
+#: gives on the HSVA runs) cut to seven zig-zags of 150 s, identified in the structure the
+#: horizon selection chooses on all 13 HSVA runs (``full/symmetric-gamma_R``) with the differential
+#: form (:data:`shipid.methods.mmg.estimator.EQUATION_BY_STRUCTURE`); truths around the prior the
+#: HSVA runs are identified from (``kvlcc2_hsva``: Yasukawa & Yoshimura 2015's coefficients, HSVA
+#: particulars; needs the shared data folder).
+VESSELS = {
+    "esso-osaka": Vessel("esso-osaka", "esso_osaka_3m", STRUCTURE, IMO_RPS, RUDDER_RATE, DT,
+                         (0.02, 0.02, 0.005, 0.01, 0.01, 0.003)),
+    "kvlcc2": Vessel("kvlcc2", "kvlcc2_hsva", "full/symmetric-gamma_R", 10.23, 13.0, 0.05,
+                     (0.01, 0.01, 0.002, 0.005, 0.005, 0.002),
+                     ((10.0, 10.0, 1.0), (10.0, 10.0, -1.0), (20.0, 20.0, 1.0), (20.0, 20.0, -1.0),
+                      (15.0, 5.0, 1.0), (25.0, 5.0, -1.0), (35.0, 5.0, 1.0)), 150.0),
+}
+
+
+def simulate_zigzag_campaign(truth: mmg.MmgModel, rng: np.random.Generator, vessel: Vessel,
+                             seconds: float | None = None):
+    """The zig-zags of ``vessel`` on ``truth`` (:func:`shipid.methods.mmg.manoeuvres.simulate_rudder_batch`,
+    after a 10-s approach at the truth's straight-line speed at ``vessel.rps``), with measurement noise,
+    and the noise standard deviations drawn for them."""
+    sig = np.asarray(vessel.noise, float) * rng.uniform(0.5, 2.0, 6)
+    cond = M.Conditions(speed=M.equilibrium_speed(truth, vessel.rps), rps=vessel.rps,
+                        rudder_rate=float(np.deg2rad(vessel.rudder_rate)))
+    order, switch, side = (np.array(c, float) for c in zip(*vessel.zigzags))
+    rec = M.simulate_rudder_batch(truth, M.theta_rows(truth), np.deg2rad(order), np.deg2rad(switch), side, cond,
+                                  dt=vessel.dt, t_max=float(vessel.seconds if seconds is None else seconds),
+                                  until_reversals=np.iinfo(np.int32).max)
+    trials = []
+    for i, (o, sw, sd) in enumerate(vessel.zigzags):
+        ch = {c: rec.x[i, :, j] + s * rng.standard_normal(rec.t.size)
+              for j, (c, s) in enumerate(zip(mmg.STATE_NAMES, sig))}
+        ch.update(delta=rec.delta[i], n=rec.n[i])
+        trials.append(Trial(rec.t, ch, {}, {"source": f"coverage-zigzag-{o:g}-{sw:g}-{'S' if sd > 0 else 'P'}"}))
+    return trials, sig
+
+
+def imo_comparison(result: dict, truth: mmg.MmgModel, samples: int, seed: int,
+                   vessel: Vessel | None = None) -> dict:
     """The IMO criteria (:func:`shipid.methods.mmg.imo.assess`) of the identified MODEL.json dict ``result``
     with ``samples`` Monte Carlo draws, and of ``truth`` (no draws), both at the campaign's propeller rate
     (:data:`IMO_RPS`, each model at its own straight-line speed there) and steering gear (:data:`RUDDER_RATE`):
     per criterion the nominal value, its std and band, and the truth's value (criteria either side lacks
     are left out)."""
-    kw = {"rps": IMO_RPS, "rudder_rate_deg_s": RUDDER_RATE}
+    vessel = VESSELS["esso-osaka"] if vessel is None else vessel
+    kw = {"rps": vessel.rps, "rudder_rate_deg_s": vessel.rudder_rate}
     a = imo.assess(result, samples=samples, seed=seed, **kw)
     b = imo.assess({"model": truth.to_dict()}, samples=0, **kw)
     out = {}
@@ -163,10 +249,13 @@ def imo_comparison(result: dict, truth: mmg.MmgModel, samples: int, seed: int) -
     return out
 
 
-def run_one(i: int, seed=0, *, seconds: float = 120.0, equation: str | None = None,
-            window_s: float | None = None, simex: bool = True, rudder_rate: float = RUDDER_RATE,
-            imo_samples: int = 0) -> dict:
+def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | None = None,
+            window_s: float | None = None, simex: bool = True, rudder_rate: float | None = None,
+            imo_samples: int = 0, vessel: str = "esso-osaka") -> dict:
     """Campaign task: draw truth and noise, simulate, identify with a fixed structure, compare.
+
+    ``vessel``: a key of :data:`VESSELS` (ship, structure, test programme); ``seconds`` and
+    ``rudder_rate``: its defaults where None.
 
     ``equation`` / ``window_s``: the step-2 form (:class:`~shipid.methods.mmg.estimator.FitConfig`),
     the default's where None; ``simex``: correct the regression by
@@ -179,13 +268,19 @@ def run_one(i: int, seed=0, *, seconds: float = 120.0, equation: str | None = No
         cfg = dataclasses.replace(cfg, equation=equation)
     if window_s is not None:
         cfg = dataclasses.replace(cfg, window_s=float(window_s))
+    ves = VESSELS[vessel]
+    if rudder_rate is not None:
+        ves = dataclasses.replace(ves, rudder_rate=float(rudder_rate))
     rng = np.random.default_rng(seed)
-    base = mmg.load_published("esso_osaka_3m")
-    truth = draw_truth(rng, base)
-    trials, sig = simulate_campaign(truth, rng, seconds, rudder_rate)
+    base = mmg.load_published(ves.published)
+    truth = draw_truth(rng, base, ves.structure)
+    if ves.zigzags:
+        trials, sig = simulate_zigzag_campaign(truth, rng, ves, seconds)
+    else:
+        trials, sig = simulate_campaign(truth, rng, ves.seconds if seconds is None else seconds, ves.rudder_rate)
     with warnings.catch_warnings(record=True) as caught:   # the fit's warnings go into the run's record
         warnings.simplefilter("always")
-        res = identify(trials, base, structure=STRUCTURE, select=False, refine="none", fit_config=cfg,
+        res = identify(trials, base, structure=ves.structure, select=False, refine="none", fit_config=cfg,
                        simex=SimexConfig() if simex else None)
     lines = list(res.diagnostics.get("warnings", []))
     lines += [str(w.message) for w in caught if str(w.message) not in lines]
@@ -194,7 +289,7 @@ def run_one(i: int, seed=0, *, seconds: float = 120.0, equation: str | None = No
         e = res.estimates[nm]
         out["coefficients"][nm] = {"true": truth.coef[nm], "value": e.value, "std": e.std, "status": e.status}
     if imo_samples > 0:
-        out["imo"] = imo_comparison(res.to_dict(), truth, int(imo_samples), int(rng.integers(2 ** 31)))
+        out["imo"] = imo_comparison(res.to_dict(), truth, int(imo_samples), int(rng.integers(2 ** 31)), ves)
     return out
 
 
@@ -246,4 +341,5 @@ def summarise(outputs) -> dict:
     return out
 
 
-__all__ = ["run_one", "summarise", "summarise_imo", "imo_comparison", "draw_truth", "simulate_campaign", "STRUCTURE"]
+__all__ = ["run_one", "summarise", "summarise_imo", "imo_comparison", "draw_truth", "simulate_campaign",
+           "simulate_zigzag_campaign", "Vessel", "VESSELS", "STRUCTURE"]
