@@ -346,3 +346,17 @@ def test_the_differential_form_is_checked_against_the_integral_form_and_the_disa
     assert P.form_line({"over": [], "difference_in_se": {"N_v": 0.5}}) is None
     line = P.form_line({"over": ["N_r", "N_v"], "difference_in_se": {"N_r": -3.25, "N_v": 2.5, "Y_v": 0.1}})
     assert "on 2 of 3 estimated coefficients (N_r, N_v; largest 3.2 SE, N_r)" in line
+
+
+def test_summary_counts_the_runs_whose_differential_fit_flagged_itself():
+    from shipid.methods.mmg.coverage import summarise
+
+    def run(over=None):
+        o = {"coefficients": {"N_r": {"true": -0.05, "value": -0.048, "std": 0.001, "status": "estimated"}}}
+        if over is not None:
+            o["form_check_over"] = over
+        return o
+
+    s = summarise([run(["N_r"]), run([]), run(["N_r"]), None])
+    assert s["form_check"] == {"runs": 3, "flagged": 2, "by_coefficient": {"N_r": 2}}
+    assert "form_check" not in summarise([run(), run()])

@@ -82,6 +82,12 @@ def _table(res, s: dict) -> None:
         sp = None if t["spread_rel"] is None else 100 * t["spread_rel"]
         click.echo(f"{nm:<12}{t['estimated']:>6d}/{t['runs']:<3d}{_fmt(b, '10.1f')}{_fmt(sp, '10.1f')}"
                    f"{_fmt(t['coverage_2std'], '10.2f')}")
+    fc = s.get("form_check")
+    if fc:
+        top = sorted(fc["by_coefficient"].items(), key=lambda kv: -kv[1])[:6]
+        click.echo(f"differential-form check (pipeline.form_check): {fc['flagged']} of {fc['runs']} fits said their "
+                   "standard errors were off" + (" (most often: " + ", ".join(f"{k} {v}" for k, v in top) + ")"
+                                                  if top else ""))
     if s.get("imo"):
         click.echo(f"IMO criteria at {s['imo_rps']:g} rev/s (each model at its own speed), truth inside the band / "
                    "inside nominal +- 2 std:")
