@@ -360,3 +360,27 @@ def test_summary_counts_the_runs_whose_differential_fit_flagged_itself():
     s = summarise([run(["N_r"]), run([]), run(["N_r"]), None])
     assert s["form_check"] == {"runs": 3, "flagged": 2, "by_coefficient": {"N_r": 2}}
     assert "form_check" not in summarise([run(), run()])
+
+
+def test_form_check_skips_a_mode_without_a_fit():
+    """A mode whose columns are all dropped has no fit; the check compares the modes that have one."""
+    import dataclasses
+
+    from shipid.methods.mmg import pipeline as P
+    from shipid.methods.mmg.estimator import MmgFit
+    from shipid.result import Estimate
+
+    class FakeFit:
+        theta = np.array([-0.05])
+
+    fake = MmgFit(model=None, fits={"N": FakeFit()}, free={"N": ("N_r",)}, dropped={})
+    res = type("R", (), {"estimates": {"N_r": Estimate(-0.0485, 0.001, "-", "estimated", "")}})()
+    orig = P.fit
+    try:
+        P.fit = lambda *a, **k: fake
+        chk = P.form_check(res, [], type("Pr", (), {"structure": "yasukawa2015"})(), {"N": ("N_r",)},
+                           dataclasses.replace(P.FitConfig(), equation="differential"))
+    finally:
+        P.fit = orig
+    assert chk["integral"] == {"N_r": -0.05} and chk["difference_in_se"]["N_r"] == pytest.approx(1.5)
+    assert chk["over"] == []

@@ -106,8 +106,8 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
     if equation_for(fit_config, prior) != "differential":
         return None
     fi = fit(runs, prior, free, replace(fit_config, equation="integral"))
-    other = {c: float(v) for m in mmg.MODES for c, v in zip(fi.free.get(m, ()), fi.fits[m].theta)} \
-        if fi.fits else {}
+    # a mode with no estimable column has no fit (estimator.fit skips it)
+    other = {c: float(v) for m, fm in fi.fits.items() for c, v in zip(fi.free.get(m, ()), fm.theta)}
     z = {}
     for c, v in other.items():
         e = res.estimates.get(c)
