@@ -183,7 +183,6 @@ class Vessel:
     (:func:`simulate_zigzag_campaign`); empty: the Esso programme of :func:`simulate_campaign`;
     ``seconds``: default run length (s)."""
 
-    key: str
     published: str
     structure: str
     rps: float
@@ -202,9 +201,9 @@ class Vessel:
 #: HSVA runs are identified from (``kvlcc2_hsva``: Yasukawa & Yoshimura 2015's coefficients, HSVA
 #: particulars; needs the shared data folder).
 VESSELS = {
-    "esso-osaka": Vessel("esso-osaka", "esso_osaka_3m", STRUCTURE, IMO_RPS, RUDDER_RATE, DT,
+    "esso-osaka": Vessel("esso_osaka_3m", STRUCTURE, IMO_RPS, RUDDER_RATE, DT,
                          (0.02, 0.02, 0.005, 0.01, 0.01, 0.003)),
-    "kvlcc2": Vessel("kvlcc2", "kvlcc2_hsva", "full/symmetric-gamma_R", 10.23, 13.0, 0.05,
+    "kvlcc2": Vessel("kvlcc2_hsva", "full/symmetric-gamma_R", 10.23, 13.0, 0.05,
                      (0.01, 0.01, 0.002, 0.005, 0.005, 0.002),
                      ((10.0, 10.0, 1.0), (10.0, 10.0, -1.0), (20.0, 20.0, 1.0), (20.0, 20.0, -1.0),
                       (15.0, 5.0, 1.0), (25.0, 5.0, -1.0), (35.0, 5.0, 1.0)), 150.0),
@@ -236,7 +235,8 @@ def imo_comparison(result: dict, truth: mmg.MmgModel, samples: int, seed: int,
                    vessel: Vessel | None = None) -> dict:
     """The IMO criteria (:func:`shipid.methods.mmg.imo.assess`) of the identified MODEL.json dict ``result``
     with ``samples`` Monte Carlo draws, and of ``truth`` (no draws), both at the campaign's propeller rate
-    (:data:`IMO_RPS`, each model at its own straight-line speed there) and steering gear (:data:`RUDDER_RATE`):
+    (``vessel.rps``, each model at its own straight-line speed there) and steering gear (``vessel.rudder_rate``;
+    ``vessel`` None: the Esso campaign's, :data:`IMO_RPS` and :data:`RUDDER_RATE`):
     per criterion the nominal value, its std and band, and the truth's value (criteria either side lacks
     are left out)."""
     vessel = VESSELS["esso-osaka"] if vessel is None else vessel
@@ -273,13 +273,14 @@ def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | Non
     ves = VESSELS[vessel]
     if rudder_rate is not None:
         ves = dataclasses.replace(ves, rudder_rate=float(rudder_rate))
+    seconds = ves.seconds if seconds is None else float(seconds)
     rng = np.random.default_rng(seed)
     base = mmg.load_published(ves.published)
     truth = draw_truth(rng, base, ves.structure)
     if ves.zigzags:
         trials, sig = simulate_zigzag_campaign(truth, rng, ves, seconds)
     else:
-        trials, sig = simulate_campaign(truth, rng, ves.seconds if seconds is None else seconds, ves.rudder_rate)
+        trials, sig = simulate_campaign(truth, rng, seconds, ves.rudder_rate)
     with warnings.catch_warnings(record=True) as caught:   # the fit's warnings go into the run's record
         warnings.simplefilter("always")
         res = identify(trials, base, structure=ves.structure, select=False, refine="none", fit_config=cfg,

@@ -54,18 +54,19 @@ import numpy as np
 
 from shipid.errors import InputError
 from shipid.methods.mmg import manoeuvres as MM
+from shipid.methods.mmg.pipeline import FORM_CHECK_SE
 from shipid.simulate.metrics import turning_metrics, zigzag_metrics
 from shipid.methods.mmg.validate import model_from_result
 
 #: Quantiles of the band (the ±2-std probabilities of a normal).
 BAND = (2.275, 97.725)
-#: What the bands do not hold, as the simulated coverage study measured it (:mod:`shipid.methods.mmg.coverage`).
 #: What :func:`assess` adds where the model's standard errors are flagged by
 #: :func:`shipid.methods.mmg.pipeline.form_check` (figures: :mod:`shipid.methods.mmg.coverage`).
 FORM_BANDS = ("the bands are too narrow for such a model: on simulated seven-zig-zag KVLCC2 campaigns (shipid study "
               "mmg-coverage --vessel kvlcc2 --seed 910 --imo-samples 40) the differential form's bands held the truth "
               "0.31-0.33 of the time for the initial turning, 0.53-0.70 for the first overshoots and 0.88-0.89 for "
               "the advance; identified with --equation integral, 0.93-0.96 for the turning criteria")
+#: What the bands do not hold, as the simulated coverage study measured it (:mod:`shipid.methods.mmg.coverage`).
 BAND_CAVEAT = ("the bands carry the coefficients' estimation uncertainty, not a bias of the fit: on simulated "
                "four-run campaigns of the Esso Osaka 3 m (shipid study mmg-coverage --seed 790 --imo-samples 40) "
                "they held the truth 0.98-1.00 of the time for every criterion, a little wide for the turning "
@@ -332,7 +333,8 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     over = (((result.get("diagnostics") or {}).get("form_check") or {}).get("over") or [])
     if samples and over:
         warnings.append(f"the model's standard errors are flagged (step 2's differential and integral forms disagree "
-                        f"by more than 2 SE on {len(over)} coefficients, diagnostics.form_check): {FORM_BANDS}")
+                        f"by more than {FORM_CHECK_SE:g} SE on {len(over)} coefficients, diagnostics.form_check): "
+                        f"{FORM_BANDS}")
     cov_kind = ((result.get("diagnostics") or {}).get("covariance") or {}).get(
         "kind", "ridge SE (independent residuals assumed: optimistic)")
     return {"model": model.name, "structure": model.structure, "L": L, "L_over_U_model_s": lu,
