@@ -339,6 +339,9 @@ def test_the_differential_form_is_checked_against_the_integral_form_and_the_disa
         assert z == pytest.approx((e.value - chk["integral"][c]) / e.std, rel=1e-12)
         # the integral form's values are that form's own estimates
         assert chk["integral"][c] == pytest.approx(i.estimates[c].value, rel=1e-9, abs=1e-12)
+        # and the difference is the model-form term (imo.sample_coefficients)
+        assert chk["form_std"][c] == pytest.approx(abs(e.value - chk["integral"][c]), rel=1e-12)
+        assert chk["std_with_form"][c] == pytest.approx(np.hypot(e.std, chk["form_std"][c]), rel=1e-12)
     assert chk["over"] == sorted((c for c, z in chk["difference_in_se"].items() if abs(z) > P.FORM_CHECK_SE),
                                  key=lambda c: -abs(chk["difference_in_se"][c]))
     lines = [w for w in d.diagnostics.warnings if "differential and integral forms" in w]
@@ -360,6 +363,13 @@ def test_summary_counts_the_runs_whose_differential_fit_flagged_itself():
     s = summarise([run(["N_r"]), run([]), run(["N_r"]), None])
     assert s["form_check"] == {"runs": 3, "flagged": 2, "by_coefficient": {"N_r": 2}}
     assert "form_check" not in summarise([run(), run()])
+    assert "coverage_2std_with_form" not in s["table"]["N_r"]
+    # the std with the model-form term: an error of 0.003 is 3 std, and 1.5 / 2.5 of the two stds with form
+    runs = [run([]), run([])]
+    for o, sf in zip(runs, (0.002, 0.0012)):
+        o["coefficients"]["N_r"].update(value=-0.047, std_with_form=sf)
+    s = summarise(runs)
+    assert s["table"]["N_r"]["coverage_2std"] == 0.0 and s["table"]["N_r"]["coverage_2std_with_form"] == 0.5
 
 
 def test_form_check_skips_a_mode_without_a_fit():

@@ -106,10 +106,16 @@ def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_pa
     res = _identify(["HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat", "HSVA_CPMC_KVLCC2_Z_35_05.dat"],
                     tmp_path, "m1.json")
     capsys.readouterr()
-    rep = I.assess(res, samples=60, seed=1)
+    # the estimation part scales with the data; the model-form term (differential minus integral form,
+    # diagnostics.form_check) does not, so the halving is a property of the draws without it
+    assert res["diagnostics"]["form_check"]["integral"]
+    repf = I.assess(res, samples=60, seed=1)
+    _check_contains_nominal(repf)
+    assert repf["form_term"]
+    rep = I.assess(res, samples=60, seed=1, form_term=False)
     _check_contains_nominal(rep)
     q = dict(res, covariance=(np.asarray(res["covariance"]) / 4.0).tolist())
-    rep4 = I.assess(q, samples=60, seed=1)
+    rep4 = I.assess(q, samples=60, seed=1, form_term=False)
     _check_contains_nominal(rep4)
     w, w4 = _widths(rep), _widths(rep4)
     assert len(w) == 12
@@ -118,6 +124,9 @@ def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_pa
     # same seed, same answer; the CLI prints the same numbers as JSON
     mj = tmp_path / "m1.json"
     assert main(["imo", str(mj), "--json", "--samples", "60", "--seed", "1"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    np.testing.assert_array_equal([c["band"] for c in cli["criteria"]], [c["band"] for c in repf["criteria"]])
+    assert main(["imo", str(mj), "--json", "--samples", "60", "--seed", "1", "--no-form-term"]) == 0
     cli = json.loads(capsys.readouterr().out)
     np.testing.assert_array_equal([c["band"] for c in cli["criteria"]], [c["band"] for c in rep["criteria"]])
     # what the bands do not hold (the coverage study's finding) is said in the JSON and in the table
@@ -135,7 +144,8 @@ def test_bands_shrink_with_more_runs(tmp_path):
     many = _identify(sorted(p.name for p in KV.glob("*.dat")), tmp_path, "m13.json")
     for r in (few, many):
         assert r["diagnostics"]["covariance"]["kind"].startswith("run-bootstrap")
-    r3, r13 = I.assess(few, samples=60, seed=2), I.assess(many, samples=60, seed=2)
+    # the estimation uncertainty shrinks with the data; the model-form term need not (form_term=False)
+    r3, r13 = I.assess(few, samples=60, seed=2, form_term=False), I.assess(many, samples=60, seed=2, form_term=False)
     _check_contains_nominal(r3)
     _check_contains_nominal(r13)
     w3, w13 = _widths(r3), _widths(r13)
@@ -221,3 +231,38 @@ def test_a_model_whose_standard_errors_are_flagged_gets_a_warning_that_its_bands
     lines = [w for w in rep["warnings"] if I.FORM_BANDS in w]
     assert len(lines) == 1 and "on 2 coefficients" in lines[0]
     assert [c["band"] for c in rep["criteria"]] == [c["band"] for c in plain["criteria"]]
+
+
+def test_the_model_form_term_adds_the_forms_difference_to_the_draws():
+    """``form_check.integral`` (:func:`shipid.methods.mmg.pipeline.form_check`): the draws' covariance is
+    Σ + δδᵀ with δ = θ̂ − θ_integral over every coefficient the integral fit has; ``form_term=False`` and a
+    model without the check draw exactly as before."""
+    res = {"model": {"coefficients": {"a": 1.0, "b": -2.0, "c": 5.0}}, "covariance_names": ["a", "b"],
+           "covariance": [[4.0, 1.0], [1.0, 1.0]]}
+    chk = {"integral": {"a": -1.0, "b": -1.0}, "form_std": {"a": 2.0}, "over": [], "difference_in_se": {}}
+    withf = dict(res, diagnostics={"form_check": chk})
+    np.testing.assert_array_equal(I.form_delta(withf, ["a", "b"]), [2.0, -1.0])   # b enters though not compared
+    assert I.form_delta(res, ["a", "b"]) is None
+    _, plain = I.sample_coefficients(res, 4000, seed=3)
+    np.testing.assert_array_equal(I.sample_coefficients(withf, 4000, seed=3, form_term=False)[1], plain)
+    _, v = I.sample_coefficients(withf, 4000, seed=3)
+    np.testing.assert_array_equal(v[0], [1.0, -2.0])
+    # Σ + δδᵀ = [[8, -1], [-1, 2]]; sampling error of a variance from 4000 draws about 2.2 % relative
+    np.testing.assert_allclose(np.cov(v[1:].T), [[8.0, -1.0], [-1.0, 2.0]], rtol=0.1, atol=0.15)
+
+
+def test_assess_widens_the_bands_by_the_model_form_term_and_says_so():
+    need()
+    res = _published_esso_result()
+    x0f = res["model"]["coefficients"]["X_0F"]
+    res = dict(res, covariance_names=["X_0F"], covariance=[[(0.01 * x0f) ** 2]])
+    chk = {"integral": {"X_0F": 1.05 * x0f}, "form_std": {"X_0F": 0.05 * abs(x0f)}, "over": ["X_0F"],
+           "difference_in_se": {"X_0F": -5.0}}
+    flagged = dict(res, diagnostics={"form_check": chk})
+    rep, est = I.assess(flagged, samples=8, seed=3), I.assess(flagged, samples=8, seed=3, form_term=False)
+    assert rep["form_term"] and not est["form_term"] and "model-form term" in rep["covariance_kind"]
+    assert [w for w in rep["warnings"] if I.FORM_TERM_BANDS in w] and [w for w in est["warnings"]
+                                                                      if I.FORM_BANDS in w]
+    adv = [(a["std"], b["std"]) for a, b in zip(rep["criteria"], est["criteria"]) if "advance" in a["name"]]
+    # a surge offset 5 % off in the other form moves the advance far more than a 1 % estimation std
+    assert all(a > 2 * b > 0 for a, b in adv)

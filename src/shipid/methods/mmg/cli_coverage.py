@@ -76,12 +76,15 @@ def _table(res, s: dict) -> None:
     echo_campaign_summary(res)
     click.echo(f"MMG coverage study ({s['vessel']}, {s['structure']}): {s['runs']} runs, seed {s['seed']}, "
                f"{s['seconds']:g} s per manoeuvre")
-    click.echo(f"{'coefficient':<12}{'estimated':>10}{'bias %':>10}{'spread %':>10}{'cover 2sd':>10}")
+    wf = any("coverage_2std_with_form" in t for t in s["table"].values())
+    click.echo(f"{'coefficient':<12}{'estimated':>10}{'bias %':>10}{'spread %':>10}{'cover 2sd':>10}"
+               + (f"{'with form':>10}" if wf else ""))
     for nm, t in s["table"].items():
         b = None if t["bias_rel"] is None else 100 * t["bias_rel"]
         sp = None if t["spread_rel"] is None else 100 * t["spread_rel"]
         click.echo(f"{nm:<12}{t['estimated']:>6d}/{t['runs']:<3d}{_fmt(b, '10.1f')}{_fmt(sp, '10.1f')}"
-                   f"{_fmt(t['coverage_2std'], '10.2f')}")
+                   f"{_fmt(t['coverage_2std'], '10.2f')}" + (_fmt(t.get("coverage_2std_with_form"), '10.2f')
+                                                              if wf else ""))
     fc = s.get("form_check")
     if fc:
         top = sorted(fc["by_coefficient"].items(), key=lambda kv: -kv[1])[:6]
@@ -91,7 +94,13 @@ def _table(res, s: dict) -> None:
     if s.get("imo"):
         click.echo(f"IMO criteria at {s['imo_rps']:g} rev/s (each model at its own speed), truth inside the band / "
                    "inside nominal +- 2 std:")
-        click.echo(f"{'criterion':<52}{'n':>4}{'bias':>9}{'rms err':>9}{'mean std':>9}{'band':>6}{'2sd':>6}")
+        est = s.get("imo_estimation") or {}
+        if est:
+            click.echo("(bands with the model-form term; 'est': the same draws without it)")
+        click.echo(f"{'criterion':<52}{'n':>4}{'bias':>9}{'rms err':>9}{'mean std':>9}{'band':>6}{'2sd':>6}"
+                   + (f"{'est':>6}" if est else ""))
         for nm, t in s["imo"].items():
+            e = est.get(nm)
             click.echo(f"{nm + ' [' + t['unit'] + ']':<52}{t['n']:>4d}{t['bias']:>9.3f}{t['rms_error']:>9.3f}"
-                       f"{t['mean_std']:>9.3f}{t['coverage_band']:>6.2f}{t['coverage_2std']:>6.2f}")
+                       f"{t['mean_std']:>9.3f}{t['coverage_band']:>6.2f}{t['coverage_2std']:>6.2f}"
+                       + (f"{e['coverage_band']:>6.2f}" if e else ("" if not est else f"{'-':>6}")))

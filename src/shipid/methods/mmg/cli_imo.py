@@ -81,15 +81,21 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 @click.option("--rps", type=float, default=None, help="Propeller rate, rev/s [default: from the training data].")
 @click.option("--rudder-rate", type=float, default=None, help="Steering-gear rate, deg/s [default: training data].")
 @click.option("--dt", type=float, default=0.1, show_default=True, help="Simulation step, s.")
+@click.option("--no-form-term", "no_form_term", is_flag=True,
+              help="Draw from the estimation covariance alone, without the model-form term of a "
+                   "differential-form model (diagnostics.form_check).")
 @click.option("--strict", is_flag=True, help="Exit 3 when there are warnings.")
-def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, strict):
+def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, no_form_term,
+            strict):
     """IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.
 
     Turning ability (35 deg, both sides: advance <= 4.5 L, tactical diameter <= 5 L),
     initial turning (10 deg rudder: <= 2.5 L travelled by 10 deg heading change),
     10/10 first and second and 20/20 first overshoots, stopping (full astern, track
     reach <= 15 L) where the model has an astern propeller. Each value with the band
-    of --samples draws from the identified coefficients' covariance and P(pass).
+    of --samples draws from the identified coefficients' covariance and P(pass). For a model
+    identified with step 2's differential form the draws' covariance includes the difference
+    from the integral form as one standard deviation of model-form error.
     """
     from shipid.methods.mmg import imo as I
 
@@ -97,7 +103,7 @@ def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, 
         raise InputError(f"--dt must be positive, got {dt:g}")
     d, _ = _load(model)
     rep = I.assess(d, samples=samples, seed=seed, ship_length=ship_length, speed=speed, rps=rps,
-                   rudder_rate_deg_s=rudder_rate, dt=dt)
+                   rudder_rate_deg_s=rudder_rate, dt=dt, form_term=not no_form_term)
     for w in rep["warnings"]:
         click.echo(f"warning: {w}", err=True)
     emit(rep, as_json=as_json, out=out, force=force, indent=1, text=lambda: click.echo(I.format_report(rep)))
