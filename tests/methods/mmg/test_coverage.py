@@ -349,6 +349,11 @@ def test_the_differential_form_is_checked_against_the_integral_form_and_the_disa
     assert P.form_line({"over": [], "difference_in_se": {"N_v": 0.5}}) is None
     line = P.form_line({"over": ["N_r", "N_v"], "difference_in_se": {"N_r": -3.25, "N_v": 2.5, "Y_v": 0.1}})
     assert "on 2 of 3 estimated coefficients (N_r, N_v; largest 3.2 SE, N_r)" in line
+    assert chk["not_determined_with_form"] == [c for c, s in chk["std_with_form"].items()
+                                               if not s < abs(d.estimates[c].value)]
+    line = P.form_line({"over": ["N_r"], "difference_in_se": {"N_r": -3.0, "N_v": 1.0},
+                        "not_determined_with_form": ["N_rrr"]})
+    assert "largest 3.0 SE, N_r; with that difference as model-form error 1 are not determined (N_rrr))" in line
 
 
 def test_summary_counts_the_runs_whose_differential_fit_flagged_itself():

@@ -272,9 +272,16 @@ def _print_result(res) -> None:
     cal = res.diagnostics.get("calibration")
     if cal:
         click.echo(f"{cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")
-    click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10} {'unit':>5}  status")
+    # the differential form's std with its model-form term (pipeline.form_check), where there is one
+    wf = (res.diagnostics.get("form_check") or {}).get("std_with_form")
+    click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10}" + (f" {'with form':>10}" if wf else "")
+               + f" {'unit':>5}  status")
     for k, e in res.estimates.items():
-        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g} {e.unit:>5}  {e.status}")
+        f = "" if not wf else (f" {wf[k]:10.3g}" if k in wf else f" {'-':>10}")
+        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g}{f} {e.unit:>5}  {e.status}")
+    if wf:
+        click.echo("with form: the std with the differential-minus-integral difference of step 2 as one more "
+                   "standard deviation (model-form error; shipid imo draws with it)")
     for m, d in res.diagnostics.get("ridge", {}).items():
         click.echo(f"mode {m}: R2 {d['R2']:.3f}, k {d['k']:.3g}, kappa {d['kappa']:.3g}, n {d['n']}")
 

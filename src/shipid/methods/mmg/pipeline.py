@@ -110,7 +110,8 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
 
     Returns None for the integral form; else ``{"integral": {name: value}, "difference_in_se": {name: z},
     "form_std": {name: |δ|}, "std_with_form": {name: s}, "over": [names with |z| > FORM_CHECK_SE,
-    largest first]}``.
+    largest first], "not_determined_with_form": [estimated names whose std_with_form is not below
+    |value|]}``.
     """
     if equation_for(fit_config, prior) != "differential":
         return None
@@ -125,8 +126,10 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
             form_std[c] = float(abs(e.value - v))
             with_form[c] = float(np.hypot(e.std, e.value - v))
     over = sorted((c for c in z if abs(z[c]) > FORM_CHECK_SE), key=lambda c: -abs(z[c]))
+    # the rule of undetermined_note, applied to the std with the model-form term
+    loose = [c for c in with_form if not with_form[c] < abs(res.estimates[c].value)]
     return {"integral": other, "difference_in_se": z, "form_std": form_std, "std_with_form": with_form,
-            "over": over}
+            "over": over, "not_determined_with_form": loose}
 
 
 def form_line(check: Mapping) -> str | None:
@@ -135,8 +138,11 @@ def form_line(check: Mapping) -> str | None:
     if not over:
         return None
     names = ", ".join(over[:4]) + (f" and {len(over) - 4} more" if len(over) > 4 else "")
+    loose = check.get("not_determined_with_form") or []
+    also = (f"; with that difference as model-form error {len(loose)} are not determined ({', '.join(loose)})"
+            if loose else "")
     return (f"step 2's differential and integral forms disagree by more than {FORM_CHECK_SE:g} standard errors on "
-            f"{len(over)} of {len(z)} estimated coefficients ({names}; largest {abs(z[over[0]]):.1f} SE, {over[0]}): "
+            f"{len(over)} of {len(z)} estimated coefficients ({names}; largest {abs(z[over[0]]):.1f} SE, {over[0]}{also}): "
             "the standard errors leave out the differential form's bias (shipid.methods.mmg.pipeline.form_check; "
             "diagnostics.form_check.std_with_form adds the difference as model-form error, and shipid imo's bands "
             "include it); --equation integral gives the form whose error bars held in the simulated coverage study")
