@@ -89,7 +89,9 @@ short; with the form term every coefficient 0.96–1.00. The IMO bands with it h
 every criterion (conservative: tactical diameter mean std 0.032 L against an error RMS of 0.013 L,
 initial turning 0.007 / 0.007 L); the same draws without it 0.30–0.31 (initial turning), 0.52–0.63 (first
 overshoots), 0.88–0.89 (advance), 0.98–1.00 (second overshoots, tactical diameter). The check flagged 88
-of the 100 fits. On the model of all 13 HSVA runs (``shipid imo --samples 40``) the 35° tactical diameter
+of the 100 fits. A second fresh seed, 940 (same settings): with the term 1.00 for every coefficient and
+criterion, without it N_v / N_r / NR_arm 0.28 / 0.20 / 0.19 and 0.40–0.64 for the initial turning and first
+overshoots; flagged 87 of 100. On the model of all 13 HSVA runs (``shipid imo --samples 40``) the 35° tactical diameter
 becomes 3.67 ± 0.41 L starboard, 4.03 ± 0.44 L port (± 0.07 L without the term): the integral form's
 3.26 / 3.58 L lie inside, which of the two the other basin is nearer is not known here.
 """
