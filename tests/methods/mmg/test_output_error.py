@@ -166,3 +166,17 @@ def test_auto_refines_only_with_enough_horizons(truth, runs_of_truth):
     assert "2 restarted horizons for 15 coefficients" in auto.diagnostics["output_error"]["note"]
     assert {k: e.value for k, e in auto.estimates.items()} == {k: e.value for k, e in reg.estimates.items()}
     assert P.MIN_HORIZONS_PER_COEFFICIENT * 15 > 2
+
+
+def test_overlapping_training_horizons_cluster_by_run(truth, runs_of_truth):
+    """OEConfig.stride shorter than the horizon: about twice the horizons from the same runs, and the
+    sandwich takes whole runs as clusters (2 runs for 4 coefficients: singular, so NaN, not determined);
+    the default stride gives the non-overlapping horizons of the validation."""
+    H60 = OE.stack_horizons(runs_of_truth, 15.0, 2)
+    H15 = OE.stack_horizons(runs_of_truth, 15.0, 2, stride=7.5)
+    assert H15.count >= 2 * H60.count - len(runs_of_truth)
+    np.testing.assert_array_equal(H15.x0[0], H60.x0[0])
+    cfg = OE.OEConfig(horizon=15.0, max_iter=1)
+    a = OE.refine(truth, NAMES, runs_of_truth, config=cfg)
+    b = OE.refine(truth, NAMES, runs_of_truth, config=OE.OEConfig(horizon=15.0, max_iter=1, stride=7.5))
+    assert np.all(np.isfinite(a.cov)) and np.all(np.isnan(b.cov)) and b.horizons == H15.count

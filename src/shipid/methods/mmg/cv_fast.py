@@ -40,8 +40,12 @@ from shipid.methods.mmg.moments import fit_from_moments, run_moments
 from shipid.models import mmg, mmg_kernels
 
 
-def run_horizons(trial: Trial, horizon: float, decimate: int) -> dict[str, Any] | None:
-    """The restarted horizons of one run as :func:`shipid.methods.mmg.validate.validate` builds them (None if none)."""
+def run_horizons(trial: Trial, horizon: float, decimate: int, stride: float | None = None) -> dict[str, Any] | None:
+    """The restarted horizons of one run as :func:`shipid.methods.mmg.validate.validate` builds them (None if none).
+
+    ``stride``: seconds between horizon starts; None (default) restarts every ``horizon`` seconds, as the
+    validation does (non-overlapping horizons); a shorter stride gives overlapping ones.
+    """
     tr = R.subsample(trial, decimate)
     t = np.asarray(tr.t, float)
     Z = V.measured_states(tr)
@@ -49,7 +53,8 @@ def run_horizons(trial: Trial, horizon: float, decimate: int) -> dict[str, Any] 
     V._check_finite(tr, Z, U)
     dt = float(np.median(np.diff(t)))
     nsteps = int(round(horizon / dt))
-    starts = V.horizon_starts(t.size, nsteps, nsteps, min_steps=max(nsteps // 2, 2))
+    every = nsteps if stride is None else max(int(round(stride / dt)), 1)
+    starts = V.horizon_starts(t.size, nsteps, every, min_steps=max(nsteps // 2, 2))
     if starts.size == 0:
         return None
     L = nsteps + 1

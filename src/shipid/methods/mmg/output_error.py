@@ -63,7 +63,10 @@ class OEConfig:
     rarely excited, e.g. the astern side-force polynomials), which keep the
     regression value and its standard error. ``run_weighting``: ``"pooled"`` every horizon
     counts the same (the pooled RMS the CV scores); ``"per-run"`` each run's horizons share
-    a weight of one run (the mean over runs of the per-run mean square).
+    a weight of one run (the mean over runs of the per-run mean square). ``stride``: seconds
+    between the training horizons' starts; None restarts every ``horizon`` seconds (non-overlapping,
+    as the CV and the validation score); a shorter stride gives overlapping horizons (more shooting
+    nodes from the same runs), whose sandwich covariance then takes whole runs as clusters.
     """
 
     horizon: float = 60.0
@@ -75,6 +78,7 @@ class OEConfig:
     jacobian: str = "every"
     exclude_prefixes: tuple[str, ...] = ("YP_a", "NP_b", "XP_c")
     run_weighting: str = "pooled"
+    stride: float | None = None
 
 
 @dataclass(frozen=True)
@@ -94,12 +98,14 @@ class Horizons:
         return int(self.x0.shape[0])
 
 
-def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int = 2) -> Horizons:
-    """The horizons of :func:`shipid.methods.mmg.cv_fast.run_horizons` of every run, padded to one length."""
+def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int = 2,
+                   stride: float | None = None) -> Horizons:
+    """The horizons of :func:`shipid.methods.mmg.cv_fast.run_horizons` of every run, padded to one length
+    (``stride``: seconds between starts, None: ``horizon``)."""
     hz, run = [], []
     for i, tr in enumerate(trials):
         try:
-            H = run_horizons(tr, horizon, decimate)
+            H = run_horizons(tr, horizon, decimate, stride)
         except ShipidError:
             H = None
         if H is not None:
@@ -182,7 +188,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         (the same numbers to round-off, ``tests/methods/mmg/test_output_error_compiled.py``).
     """
     names = tuple(c for c in names if not c.startswith(config.exclude_prefixes))
-    H = stack_horizons(trials, config.horizon, config.decimate) if H is None else H
+    H = stack_horizons(trials, config.horizon, config.decimate, config.stride) if H is None else H
     if config.run_weighting == "per-run":
         _, inv, cnt = np.unique(H.run, return_inverse=True, return_counts=True)
         wh = np.sqrt(H.count / (cnt.size * cnt[inv]))          # mean weight 1 per horizon
@@ -251,18 +257,24 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
             break
     if not exact:
         r, J = fd_jacobian(z, r)
-    # sandwich covariance (clusters = horizons) with the finite-difference Jacobian at the final point
+    # sandwich covariance (clusters = horizons, or whole runs where the horizons overlap) with the
+    # finite-difference Jacobian at the final point
     Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
     rh = r.reshape(H.count, -1)
     A = np.einsum("pbn,qbn->pq", Jh, Jh)
     G = np.einsum("pbn,bn->bp", Jh, rh)
+    overlap = config.stride is not None and config.stride < config.horizon
+    if overlap:
+        _, inv = np.unique(H.run, return_inverse=True)
+        G = np.stack([G[inv == k].sum(0) for k in range(int(inv.max()) + 1)])
+    clusters = G.shape[0]
     try:
         Ai = np.linalg.inv(A)
         cov_z = Ai @ (G.T @ G) @ Ai
         cov_z = 0.5 * (cov_z + cov_z.T)
     except np.linalg.LinAlgError:
         cov_z = np.full((p, p), np.nan)
-    if H.count <= p:                 # the sandwich's rank is at most the number of clusters
+    if clusters <= p:                # the sandwich's rank is at most the number of clusters
         cov_z = np.full((p, p), np.nan)
     theta = th0 + z * S
     cov = cov_z * np.outer(S, S)

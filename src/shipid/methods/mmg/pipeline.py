@@ -330,7 +330,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         refine = default_refine(cprior, "auto")
     if refine == "output-error":
         try:
-            H = stack_horizons(trials, oe_config.horizon, oe_config.decimate)
+            H = stack_horizons(trials, oe_config.horizon, oe_config.decimate, oe_config.stride)
         except ShipidError:
             if not auto:
                 raise

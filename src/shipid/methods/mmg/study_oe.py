@@ -225,6 +225,13 @@ grid-end line. ``shipid study esso-osaka-heldout9`` (the defaults; 162 s user CP
 the output-error CV chose the same candidate, 1.233 (pooled 7.15° / 0.518 m; mean over left-out runs
 5.74° / 0.562 m). Held-out (read once after that choice): **6.51° / 0.489 m**, heading better than
 the published model's on 9 of 9 runs. Heading target NOT met, by 0.01°.
+
+Overlapping training horizons (2026-12-04, training runs only, no test run read; rule of
+:func:`shipid.methods.mmg.study_ext2.decide` fixed before the scores): the chosen candidate refined on
+60-s horizons restarted every 30 s (``OEConfig(stride=30.0)``, twice the shooting nodes, sandwich
+clustered by run) against every 60 s, same 4-fold re-timed CV (``study_ext2.cv_retimed(inputs=True)``):
+pooled score 1.2334 against 1.2335 (pooled 7.12° / 0.521 m against 7.18° / 0.515 m), 2 of 4 folds
+better: no gain, not adopted; the held-out runs were not scored for it.
 """
 
 from __future__ import annotations
