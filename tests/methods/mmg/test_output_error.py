@@ -180,3 +180,9 @@ def test_overlapping_training_horizons_cluster_by_run(truth, runs_of_truth):
     a = OE.refine(truth, NAMES, runs_of_truth, config=cfg)
     b = OE.refine(truth, NAMES, runs_of_truth, config=OE.OEConfig(horizon=15.0, max_iter=1, stride=7.5))
     assert np.all(np.isfinite(a.cov)) and np.all(np.isnan(b.cov)) and b.horizons == H15.count
+    # refine='auto' counts the clusters, not the overlapping horizons: 2 runs for 15 coefficients
+    auto = P.identify(runs_of_truth, truth, structure="hull+rudder+thrust", select=False, refine="auto",
+                      oe_config=OE.OEConfig(horizon=15.0, stride=7.5))
+    assert auto.diagnostics["output_error"]["refined"] == []
+    assert "2 runs of overlapping horizons for 15 coefficients" in auto.diagnostics["output_error"]["note"]
+    np.testing.assert_array_equal(OE.cluster_index(H60, cfg), np.arange(H60.count))

@@ -127,6 +127,14 @@ def stack_horizons(trials: Sequence[Trial], horizon: float = 60.0, decimate: int
                     run=np.asarray(run, int))
 
 
+def cluster_index(H: Horizons, config: OEConfig) -> np.ndarray:
+    """The sandwich cluster of each horizon (B,): the horizon itself, or its run where ``config.stride`` makes
+    the horizons overlap (overlapping horizons share samples, so they are not independent)."""
+    if config.stride is not None and config.stride < config.horizon:
+        return np.unique(H.run, return_inverse=True)[1]
+    return np.arange(H.count)
+
+
 def simulate(model: mmg.MmgModel, names: Sequence[str], values: np.ndarray, H: Horizons,
              compiled: bool = True) -> np.ndarray:
     """(K, B, L, 6) predictions of every horizon for each of the K parameter vectors ``values`` (K, p).
@@ -262,11 +270,9 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
     Jh = J.T.reshape(p, H.count, -1)                                       # (p, B, n_h)
     rh = r.reshape(H.count, -1)
     A = np.einsum("pbn,qbn->pq", Jh, Jh)
-    G = np.einsum("pbn,bn->bp", Jh, rh)
-    overlap = config.stride is not None and config.stride < config.horizon
-    if overlap:
-        _, inv = np.unique(H.run, return_inverse=True)
-        G = np.stack([G[inv == k].sum(0) for k in range(int(inv.max()) + 1)])
+    cl = cluster_index(H, config)
+    G = np.zeros((int(cl.max()) + 1, p))
+    np.add.at(G, cl, np.einsum("pbn,bn->bp", Jh, rh))                     # score of each cluster
     clusters = G.shape[0]
     try:
         Ai = np.linalg.inv(A)
@@ -319,5 +325,5 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Ho
     return replace(f, model=oe.model.with_coef({}, name=f.model.name), fits=fits), oe
 
 
-__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "simulate", "residuals", "refine", "refinable",
+__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "cluster_index", "simulate", "residuals", "refine", "refinable",
            "refined_fit"]

@@ -23,7 +23,7 @@ from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate,
                                           equation_for, fit, horizon_score, horizon_sse, smooth_run)
 from shipid.methods.mmg.manoeuvres import training_conditions
-from shipid.methods.mmg.output_error import OEConfig, refinable, refined_fit, stack_horizons
+from shipid.methods.mmg.output_error import OEConfig, cluster_index, refinable, refined_fit, stack_horizons
 from shipid.methods.mmg.simex import SimexConfig, simex_fit
 from shipid.models import mmg
 from shipid.result import Estimate, Result
@@ -214,7 +214,9 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
 REFINE_BY_DEFAULT = ("esso-lowspeed",)
 #: ``refine="auto"`` refines only with at least this many restarted horizons per refined
 #: coefficient: the horizons are the clusters of the sandwich covariance (its rank is at most
-#: their number) and the independent pieces of evidence of the criterion.
+#: their number) and the independent pieces of evidence of the criterion; where ``OEConfig.stride``
+#: makes them overlap the clusters are whole runs (:func:`shipid.methods.mmg.output_error.cluster_index`)
+#: and those are counted.
 MIN_HORIZONS_PER_COEFFICIENT = 5
 
 
@@ -336,8 +338,10 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
                 raise
             H = None
         p = len(refinable(f, oe_config))
-        if auto and (H is None or H.count < MIN_HORIZONS_PER_COEFFICIENT * p):
-            skipped = (f"not refined: {0 if H is None else H.count} restarted horizons for {p} coefficients "
+        n = 0 if H is None else int(cluster_index(H, oe_config).max()) + 1      # independent clusters
+        if auto and n < MIN_HORIZONS_PER_COEFFICIENT * p:
+            what = "restarted horizons" if H is None or n == H.count else "runs of overlapping horizons"
+            skipped = (f"not refined: {n} {what} for {p} coefficients "
                        f"(refine='auto' needs {MIN_HORIZONS_PER_COEFFICIENT} per coefficient)")
         else:
             f, oe = refined_fit(f, trials, oe_config, H=H)
