@@ -281,7 +281,10 @@ def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | Non
     :func:`shipid.methods.mmg.simex.simex_fit` (default :class:`~shipid.methods.mmg.simex.SimexConfig`);
     ``rudder_rate`` (deg/s) of the simulated steering gear (:data:`RUDDER_RATE`; inf: steps);
     ``imo_samples`` > 0: also compare the IMO criteria and their bands with the truth's
-    (:func:`imo_comparison`, the band's seed drawn from the run's generator after everything else)."""
+    (:func:`imo_comparison`, the band's seed drawn from the run's generator after everything else).
+    Where the SIMEX correction was applied the record holds its λ grid, mean path, noise and Monte Carlo
+    standard errors (``out["simex"]``, from :meth:`~shipid.methods.mmg.simex.SimexInfo.to_dict`), so that
+    other extrapolants can be studied on a stored campaign without refitting."""
     cfg = FitConfig()
     if equation is not None:
         cfg = dataclasses.replace(cfg, equation=equation)
@@ -305,6 +308,9 @@ def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | Non
     lines = list(res.diagnostics.get("warnings", []))
     lines += [str(w.message) for w in caught if str(w.message) not in lines]
     out = {"noise_sigma": sig.tolist(), "coefficients": {}, "warnings": lines}
+    sx = res.diagnostics.get("simex")
+    if sx and sx.get("applied"):
+        out["simex"] = {"lambdas": sx["lambdas"], "path": sx["path"], "noise_sd": sx["noise_sd"], "mc_se": sx["mc_se"]}
     check = res.diagnostics.get("form_check")
     if check is not None:
         out["form_check_over"] = list(check["over"])

@@ -22,6 +22,14 @@ three grids, bias / ±2-std coverage of N_r +3.5 % / 0.88 with λ up to 2, +1.9 
 better; its larger Monte Carlo variance is in the covariance). In an earlier exploratory run a quadratic
 extrapolant removed a little more bias and doubled the spread of Y_v, Y_r.
 
+The linear extrapolant under-corrects a little where the path curves (the coverage study's seed 780:
+N_v, N_r bias +2.6 / +3.1 %, 0.4 std; the quadratic extrapolant of the same paths +0.7 / +1.8 %). Counting
+the gap δ between the two extrapolants as one more std term (as the model-form term of
+:func:`shipid.methods.mmg.pipeline.form_check` does) was tried on those 100 stored runs and not adopted:
+δ is Monte Carlo noise (its mean |δ| 12 % of |N_v| against a predicted Monte Carlo std of δ of 16 %, from
+the draws' spread per unit λ), so √(std² + δ²) doubled the N_v, N_r error bars (coverage 0.89 → 0.98)
+without measuring the curvature, and δ² less its Monte Carlo variance was positive in a third of the runs.
+
 On real data: on the Esso Osaka logs σ̂ is at the level the logger's own smoothing leaves, the
 pilot (:attr:`SimexConfig.pilot`) moves no estimate by 0.1 SE, and no correction is made; a forced
 correction moved no coefficient by 0.1 % at about 30 s per fit of 24 runs.
