@@ -168,11 +168,25 @@ def test_store_info_and_toy_json(tmp_path, capsys):
     store = str(tmp_path / "s.sqlite")
     assert main(["study", "toy", "--runs", "10", "--fail-every", "4", "--workers", "1", "--store", store,
                  "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
     assert (out["runs"], out["ok"], out["failed"]) == (10, 8, 2)
+    # the failed runs are one warning line, on stderr and in the JSON (shipid.cli.campaign_cmds.failure_lines)
+    assert len(out["warnings"]) == 1 and "2 of 10 runs failed" in out["warnings"][0]
+    assert "run 3: " in out["warnings"][0] and "run 7: " in out["warnings"][0]
+    assert out["warnings"][0] in cap.err
     assert main(["study", "store-info", store, "--json"]) == 0
     info = json.loads(capsys.readouterr().out)["campaigns"][0]
     assert (info["name"], info["done"], info["failed"], info["n_runs"]) == ("toy", 10, 2, 10)
+
+
+def test_failed_runs_and_strict_exit_3(tmp_path, capsys):
+    """A study whose runs failed warns, so ``--strict`` exits 3; without failures it does not warn."""
+    assert main(["--strict", "study", "toy", "--runs", "6", "--fail-every", "4", "--workers", "1", "--json"]) == 3
+    assert "1 of 6 runs failed" in capsys.readouterr().err
+    assert main(["--strict", "study", "toy", "--runs", "6", "--workers", "1", "--json"]) == 0
+    cap = capsys.readouterr()
+    assert json.loads(cap.out)["warnings"] == [] and "failed and are left out" not in cap.err
 
 
 def test_not_a_store_is_one_line(tmp_path, capsys):

@@ -39,7 +39,7 @@ import math
 import click
 
 from shipid.cli import study
-from shipid.cli._common import emit, out_options
+from shipid.cli._common import emit, loud_lines, out_options
 from shipid.errors import ShipidError
 from shipid.studies.engine import CampaignOptions, CampaignResult
 
@@ -86,10 +86,22 @@ def echo_campaign_summary(res: CampaignResult) -> None:
            f"on {res.executor} ({res.workers} worker{'s' if res.workers != 1 else ''})")
     click.echo(f"{res.name}: {res.n_runs} runs ({res.n_ok} ok, {res.n_failed} failed{reused}) in "
                f"{res.wall_s:.2f} s, {how}{where}", err=True)
-    for r in res.failed[:3]:
-        click.echo(f"  run {r.index} failed: {r.error}", err=True)
-    if res.n_failed > 3:
-        click.echo(f"  ... and {res.n_failed - 3} more failed runs", err=True)
+
+
+def failure_lines(res: CampaignResult) -> list[str]:
+    """The warning line for the failed runs of ``res`` (none when every run succeeded).
+
+    One line: how many runs failed and were left out of the summary, and the first three errors
+    (run index and ``Type: message``, as the store records them). Every study command adds it to its
+    warnings (:func:`shipid.cli._common.loud_lines`), so a failed run is on stderr and in the JSON, in
+    text and ``--json`` mode alike, and ``--strict`` exits 3.
+    """
+    if not res.n_failed:
+        return []
+    shown = "; ".join(f"run {r.index}: {r.error}" for r in res.failed[:3])
+    more = f"; {res.n_failed - 3} more" if res.n_failed > 3 else ""
+    return [f"{res.name}: {res.n_failed} of {res.n_runs} runs failed and are left out of the summary "
+            f"({shown}{more})"]
 
 
 @study.command("toy")
@@ -112,7 +124,7 @@ def toy(runs, points, fail_every, sleep, as_json, out, force, campaign):
                        kwargs={"n": points, "fail_every": fail_every, "sleep": sleep})
     slopes = [o["b"] for o in res.outputs if o is not None]
     mean = math.fsum(slopes) / len(slopes) if slopes else None
-    summary = {**res.summary(), "mean_slope": mean}
+    summary = {**res.summary(), "mean_slope": mean, "warnings": loud_lines(failure_lines(res))}
 
     def text():
         echo_campaign_summary(res)

@@ -16,8 +16,8 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
-from shipid.cli._common import ManyValues, emit, loud, out_options, refuse_existing, strict_option
-from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
+from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, refuse_existing, strict_option
+from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 from shipid.data.io import read_trial
 from shipid.errors import ShipidError
 from shipid.methods.dp.coverage import summarise
@@ -176,6 +176,7 @@ def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign)
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
+    s["warnings"] = loud_lines(failure_lines(res) + list(s.get("warnings", [])))
     emit({"summary": s, "runs": outs}, as_json=as_json, out=out, force=force, indent=1,
          text=lambda: _coverage_table(res, s, covariance, campaign.seed))
 

@@ -10,8 +10,8 @@ from dataclasses import replace
 import click
 
 from shipid.cli import study
-from shipid.cli._common import emit, out_options
-from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
+from shipid.cli._common import emit, loud_lines, out_options
+from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 
 
 def _fmt(x, spec):
@@ -40,6 +40,7 @@ def ebm_coverage(runs, duration, as_json, out, force, campaign):
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
     s.update({"seed": campaign.seed, "duration": duration, "failed": res.n_failed})
+    s["warnings"] = loud_lines(failure_lines(res) + list(s.get("warnings", [])))
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s, duration, campaign.seed))
 
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from shipid.cli import analyse, identify, study
 from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
-from shipid.cli.campaign_cmds import campaign_options
+from shipid.cli.campaign_cmds import campaign_options, failure_lines
 from shipid.errors import InputError, ShipidError
 from shipid.methods.masscm.refine_modes import REFINE_MODES
 
@@ -193,8 +193,8 @@ def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, cam
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs, zf_mode=zf_mode, wall_s=time.perf_counter() - t0)
     s.update({"seed": seed, "data_seed": data_seed, "init": init, "workers": res.workers})
-    s["warnings"] = loud_lines([f"{s['flagged']} of {s['runs']} runs flagged implausible or not converged "
-                                "(left out of the means)"] if s["flagged"] else [])
+    s["warnings"] = loud_lines(failure_lines(res) + ([f"{s['flagged']} of {s['runs']} runs flagged implausible or "
+                                                      "not converged (left out of the means)"] if s["flagged"] else []))
     if out:  # Table 3 as a Result (tables/xy "spread") for `shipid report`
         from shipid.methods.masscm.series import spread_result
         spread_result(s, outs, command=f"shipid study mass-cm-sensitivity --runs {runs} --z-f {zf_mode} "
@@ -253,6 +253,7 @@ def mass_cm_coverage(regime, runs, duration, noise_model, refine, as_json, out, 
         s["refine_failed"] = sum(1 for o in outs if o is not None and not o.get("pem_ok", True))
     s.update({"seed": campaign.seed, "workers": res.workers, "noise_model": kw["noise_model"], "refine": refine,
               "wall_s": time.perf_counter() - t0})
+    s["warnings"] = loud_lines(failure_lines(res) + list(s.get("warnings", [])))
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _coverage_table(s, regime, duration, campaign.seed))
 
 

@@ -12,7 +12,7 @@ import click
 
 from shipid.cli import study
 from shipid.cli._common import emit, loud_lines, out_options, strict_option
-from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary
+from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 
 
 def _fmt(x, spec):
@@ -68,7 +68,7 @@ def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, 
               "failed": res.n_failed, "equation": equation, "window_s": window_s, "simex": simex,
               "rudder_rate": ves.rudder_rate if rudder_rate is None else float(rudder_rate),
               "imo_samples": imo_samples, **({"imo_rps": ves.rps} if imo_samples else {})})
-    s["warnings"] = loud_lines(s["warnings"])
+    s["warnings"] = loud_lines(failure_lines(res) + s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 
 
