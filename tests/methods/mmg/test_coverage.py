@@ -406,3 +406,44 @@ def test_form_check_skips_a_mode_without_a_fit():
         P.fit = orig
     assert chk["integral"] == {"N_r": -0.05} and chk["difference_in_se"]["N_r"] == pytest.approx(1.5)
     assert chk["over"] == []
+
+
+def test_summary_warns_once_about_runs_whose_imo_criteria_could_not_be_computed():
+    """A run with ``imo_failed`` keeps its coefficients in the table, is left out of the IMO table, and the
+    summary says so in one warning line naming the count and the first reason."""
+    from shipid.methods.mmg.coverage import summarise
+
+    crit = {"turning-35 advance": {"value": 3.0, "true": 3.1, "std": 0.1, "band": [2.8, 3.2], "unit": "L"}}
+
+    def run(imo=None, failed=None):
+        o = {"coefficients": {"N_r": {"true": -0.05, "value": -0.049, "std": 0.001, "status": "estimated"}}}
+        if imo is not None:
+            o["imo"] = imo
+        if failed is not None:
+            o["imo_failed"] = failed
+        return o
+
+    s = summarise([run(crit), run({}, failed="no straight-line equilibrium speed"), run(crit)])
+    assert s["table"]["N_r"]["estimated"] == 3
+    assert s["imo"]["turning-35 advance"]["n"] == 2
+    lines = [w for w in s["warnings"] if "IMO criteria of" in w]
+    assert len(lines) == 1 and "1 of 3" in lines[0] and "no straight-line equilibrium speed" in lines[0]
+    assert not any("IMO criteria of" in w for w in summarise([run(crit), run(crit)])["warnings"])
+
+
+def test_equilibrium_line_says_when_the_identified_surge_model_cannot_run_straight():
+    """The published Esso model runs straight at 10 rev/s (no line); with its resistance turned into thrust
+    (X_0F, X_0A > 0) and the propeller's thrust cut it has no equilibrium below Froude number 3, and the line
+    says so and names the propeller rate."""
+    from shipid.methods.mmg.pipeline import equilibrium_line
+    from shipid.models import mmg
+
+    d = mmg.load_published("esso_osaka_3m").to_dict()
+    assert equilibrium_line(dict(d, training_conditions={"rps_ahead": 10.0})) is None
+    assert equilibrium_line(dict(d, training_conditions={"rps_ahead": None})) is None
+    assert equilibrium_line(d) is None
+    bad = mmg.load_published("esso_osaka_3m").to_dict()
+    bad["coefficients"] = dict(bad["coefficients"], X_0F=0.05, X_0A=0.05, X_vr=0.0)
+    line = equilibrium_line(dict(bad, training_conditions={"rps_ahead": 10.0}))
+    assert line is not None and line.startswith("implausible surge model") and "10 rev/s" in line
+    assert "--speed" in line

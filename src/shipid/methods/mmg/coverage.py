@@ -105,6 +105,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shipid.data.trial import Trial
+from shipid.errors import ShipidError
 from shipid.methods.mmg import imo
 from shipid.methods.mmg import manoeuvres as M
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
@@ -281,7 +282,9 @@ def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | Non
     :func:`shipid.methods.mmg.simex.simex_fit` (default :class:`~shipid.methods.mmg.simex.SimexConfig`);
     ``rudder_rate`` (deg/s) of the simulated steering gear (:data:`RUDDER_RATE`; inf: steps);
     ``imo_samples`` > 0: also compare the IMO criteria and their bands with the truth's
-    (:func:`imo_comparison`, the band's seed drawn from the run's generator after everything else).
+    (:func:`imo_comparison`, the band's seed drawn from the run's generator after everything else); where
+    the identified model has no IMO criteria (no straight-line equilibrium at the propeller rate) the run keeps
+    its coefficients and records why (``out["imo_failed"]``), and :func:`summarise` warns.
     Where the SIMEX correction was applied the record holds its λ grid, mean path, noise and Monte Carlo
     standard errors (``out["simex"]``, from :meth:`~shipid.methods.mmg.simex.SimexInfo.to_dict`), so that
     other extrapolants can be studied on a stored campaign without refitting."""
@@ -321,9 +324,14 @@ def run_one(i: int, seed=0, *, seconds: float | None = None, equation: str | Non
             out["coefficients"][nm]["std_with_form"] = check["std_with_form"][nm]
     if imo_samples > 0:
         d, s = res.to_dict(), int(rng.integers(2 ** 31))
-        out["imo"] = imo_comparison(d, truth, int(imo_samples), s, ves)
-        if check is not None:   # the same draws without the model-form term (imo.sample_coefficients)
-            out["imo_estimation"] = imo_comparison(d, truth, int(imo_samples), s, ves, form_term=False)
+        try:
+            out["imo"] = imo_comparison(d, truth, int(imo_samples), s, ves)
+            if check is not None:   # the same draws without the model-form term (imo.sample_coefficients)
+                out["imo_estimation"] = imo_comparison(d, truth, int(imo_samples), s, ves, form_term=False)
+        except ShipidError as e:    # e.g. no straight-line equilibrium (pipeline.equilibrium_line): the
+            out["imo"] = {}         # coefficients are kept, the run has no IMO rows and says why
+            out.pop("imo_estimation", None)
+            out["imo_failed"] = str(e)
     return out
 
 
@@ -377,6 +385,10 @@ def summarise(outputs) -> dict:
                              "by_coefficient": {nm: k for nm, k in per.items() if k}}
     if any("imo_estimation" in o for o in runs):
         out["imo_estimation"] = summarise_imo(runs, "imo_estimation")
+    failed = [o["imo_failed"] for o in runs if "imo_failed" in o]
+    if failed:
+        findings.append(f"the IMO criteria of {len(failed)} of {len(runs)} identified models could not be computed "
+                        f"and are left out of the IMO table; their coefficients are counted (first: {failed[0]})")
     if any("imo" in o for o in runs):
         it = summarise_imo(runs)
         out["imo"] = it

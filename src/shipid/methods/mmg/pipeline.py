@@ -22,7 +22,7 @@ from shipid.methods.mmg.covariance import honest_covariance, ridge_covariance
 from shipid.methods.mmg.cv_fast import cross_validate_horizons
 from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig, SmoothedRun, cross_validate,
                                           equation_for, fit, horizon_score, horizon_sse, smooth_run)
-from shipid.methods.mmg.manoeuvres import training_conditions
+from shipid.methods.mmg.manoeuvres import equilibrium_speed, training_conditions
 from shipid.methods.mmg.output_error import OEConfig, cluster_index, refinable, refined_fit, stack_horizons
 from shipid.methods.mmg.simex import SimexConfig, simex_fit
 from shipid.models import mmg
@@ -256,6 +256,27 @@ def _covariance(f_reg: MmgFit, f: MmgFit, runs, prior: mmg.MmgModel, config: Fit
     return S, (f"refined coefficients: output-error horizon-cluster sandwich SE; the others: {note}")
 
 
+def equilibrium_line(model: Mapping) -> str | None:
+    """The warning line when the identified model (a MODEL.json ``model`` dict with its
+    ``training_conditions``) cannot run straight at the training runs' median propeller rate.
+
+    A ship at a steady propeller rate settles at the speed where thrust balances resistance
+    (:func:`~shipid.methods.mmg.manoeuvres.equilibrium_speed`). Where the identified surge model has no such
+    speed its surge coefficients are not physical (in the simulated coverage study this happened once in 100
+    campaigns, seed 800, where the propeller polynomial was poorly excited), and ``shipid simulate`` /
+    ``shipid imo`` need an approach speed. None when the model has an equilibrium or the runs have no
+    forward propeller rate."""
+    rps = (model.get("training_conditions") or {}).get("rps_ahead")
+    if not rps:
+        return None
+    try:
+        equilibrium_speed(mmg.MmgModel.from_dict(model), float(rps))
+    except ShipidError as e:
+        return (f"implausible surge model at the training runs' median propeller rate: {e}; its surge "
+                "coefficients are not physical, and 'shipid simulate' and 'shipid imo' need --speed")
+    return None
+
+
 def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | None = None,
              select: bool = True, folds: int | None = None, smooth_config: SmoothConfig = SmoothConfig(),
              fit_config: FitConfig = FitConfig(), name: str = "mmg-identified", progress=None,
@@ -357,6 +378,9 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
                        overrides=cand.get("particulars"),
                        covariance=_covariance(f_naive, f, runs, cprior, fit_config, oe, simex_info))
     res.model["training_conditions"] = training_conditions(trials)
+    line = equilibrium_line(res.model)
+    if line:
+        res.diagnostics.warnings.append(line)
     if cal is not None:
         res.diagnostics["calibration"] = cal
     if simex_info is not None:
@@ -389,5 +413,5 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
 
 
 __all__ = ["select_structure", "horizon_method", "undetermined_note", "build_result", "identify", "default_refine",
-           "form_check", "form_line", "FORM_CHECK_SE",
+           "form_check", "form_line", "equilibrium_line", "FORM_CHECK_SE",
            "REFINE_BY_DEFAULT", "MIN_HORIZONS_PER_COEFFICIENT"]
