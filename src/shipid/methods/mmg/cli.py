@@ -273,12 +273,15 @@ def _print_result(res) -> None:
     if cal:
         click.echo(f"{cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")
     # the differential form's std with its model-form term (pipeline.form_check), where there is one
-    wf = (res.diagnostics.get("form_check") or {}).get("std_with_form")
+    fc = res.diagnostics.get("form_check") or {}
+    wf, loose = fc.get("std_with_form"), set(fc.get("not_determined_with_form") or ())
     click.echo(f"{'coefficient':<12} {'value':>12} {'std':>10}" + (f" {'with form':>10}" if wf else "")
                + f" {'unit':>5}  status")
     for k, e in res.estimates.items():
         f = "" if not wf else (f" {wf[k]:10.3g}" if k in wf else f" {'-':>10}")
-        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g}{f} {e.unit:>5}  {e.status}")
+        # estimated by its SE alone, but not once the model-form term counts: never printed as an estimate
+        status = "not determined with form" if k in loose else e.status
+        click.echo(f"{k:<12} {e.value:12.5g} {e.std:10.3g}{f} {e.unit:>5}  {status}")
     if wf:
         click.echo("with form: the std with the differential-minus-integral difference of step 2 as one more "
                    "standard deviation (model-form error; shipid imo draws with it)")
