@@ -232,6 +232,13 @@ Overlapping training horizons (2026-12-04, training runs only, no test run read;
 clustered by run) against every 60 s, same 4-fold re-timed CV (``study_ext2.cv_retimed(inputs=True)``):
 pooled score 1.2334 against 1.2335 (pooled 7.12° / 0.521 m against 7.18° / 0.515 m), 2 of 4 folds
 better: no gain, not adopted; the held-out runs were not scored for it.
+
+Wind-driven current (2026-12-06, training runs only, rule of :func:`shipid.methods.mmg.study_ext2.cv_current`
+fixed before the scores): the runs moved into the water frame of a current ``c`` times the low-passed true
+wind (:mod:`shipid.methods.mmg.current`), ``c`` 0.01-0.03, time constant 60 or 300 s, same 4-fold re-timed
+CV of the chosen candidate. Best c = 0.01, τ = 60 s: 1.2295 against 1.2335, 2 of 4 folds better, gain 0.004
+below the rule's 0.02: not adopted; 2-3 % make every fold worse (table in that module). The held-out runs
+were not scored for it.
 """
 
 from __future__ import annotations
