@@ -430,20 +430,3 @@ def test_summary_warns_once_about_runs_whose_imo_criteria_could_not_be_computed(
     assert len(lines) == 1 and "1 of 3" in lines[0] and "no straight-line equilibrium speed" in lines[0]
     assert not any("IMO criteria of" in w for w in summarise([run(crit), run(crit)])["warnings"])
 
-
-def test_equilibrium_line_says_when_the_identified_surge_model_cannot_run_straight():
-    """The published Esso model runs straight at 10 rev/s (no line); with its resistance turned into thrust
-    (X_0F, X_0A > 0) and the propeller's thrust cut it has no equilibrium below Froude number 3, and the line
-    says so and names the propeller rate."""
-    from shipid.methods.mmg.pipeline import equilibrium_line
-    from shipid.models import mmg
-
-    d = mmg.load_published("esso_osaka_3m").to_dict()
-    assert equilibrium_line(dict(d, training_conditions={"rps_ahead": 10.0})) is None
-    assert equilibrium_line(dict(d, training_conditions={"rps_ahead": None})) is None
-    assert equilibrium_line(d) is None
-    bad = mmg.load_published("esso_osaka_3m").to_dict()
-    bad["coefficients"] = dict(bad["coefficients"], X_0F=0.05, X_0A=0.05, X_vr=0.0)
-    line = equilibrium_line(dict(bad, training_conditions={"rps_ahead": 10.0}))
-    assert line is not None and line.startswith("implausible surge model") and "10 rev/s" in line
-    assert "--speed" in line

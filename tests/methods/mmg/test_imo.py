@@ -267,20 +267,3 @@ def test_assess_widens_the_bands_by_the_model_form_term_and_says_so():
     # a surge offset 5 % off in the other form moves the advance far more than a 1 % estimation std
     assert all(a > 2 * b > 0 for a, b in adv)
 
-
-def test_identify_table_never_prints_a_coefficient_undetermined_with_the_form_term_as_estimated(capsys):
-    """The text table of ``identify mmg``: a coefficient whose SE alone is below |value| but whose std with
-    the model-form term is not (pipeline.form_check's not_determined_with_form) reads 'not determined with
-    form', the others keep their status."""
-    from shipid.methods.mmg.cli import _print_result
-    from shipid.result import Estimate
-
-    est = {"X_vv": Estimate(-0.19, 0.098, "-", "estimated", ""), "N_r": Estimate(-0.034, 0.0026, "-", "estimated", ""),
-           "X_vr": Estimate(-0.06, 0.075, "-", "not determined", "")}
-    diag = {"form_check": {"std_with_form": {"X_vv": 0.29, "N_r": 0.0066}, "not_determined_with_form": ["X_vv"]}}
-    res = type("R", (), {"estimates": est, "diagnostics": diag,
-                         "model": {"structure": "yasukawa2015", "structure_candidate": "full"}})()
-    _print_result(res)
-    rows = {ln.split()[0]: ln for ln in capsys.readouterr().out.splitlines() if ln.split()}
-    assert rows["X_vv"].endswith("not determined with form")
-    assert rows["N_r"].endswith("  estimated") and rows["X_vr"].endswith("  not determined")

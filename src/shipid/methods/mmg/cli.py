@@ -19,6 +19,7 @@ there); see :mod:`shipid.methods.mmg.study` for the frozen protocol.
 from __future__ import annotations
 
 import json
+import math
 
 import click
 
@@ -269,6 +270,9 @@ def _print_result(res) -> None:
         for c, row in sel["table"].items():
             mark = "  <-" if c == res.model.get("structure_candidate") else ""
             click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs) + mark)
+        if any(not math.isfinite(row["score"]) for row in sel["table"].values()):
+            click.echo("  (score inf: the candidate's fit failed or its simulation diverged in at least one fold, "
+                       "so it cannot be chosen)")
     cal = res.diagnostics.get("calibration")
     if cal:
         click.echo(f"{cal['parameter']} calibrated on all training runs: {cal['value']:.4g} ({cal['criterion']})")

@@ -80,8 +80,8 @@ def undetermined_note(value: float, se: float) -> str:
     not finite or not below its magnitude (the value is kept in the model)."""
     if np.isfinite(se) and se < abs(value):
         return ""
-    return (f"; SE {'not finite' if not np.isfinite(se) else 'not below |value|'}: not determined by the data "
-            "(the value is kept in the model)")
+    what = "not finite" if not np.isfinite(se) else f"{se:.3g} not below |value| {abs(value):.3g}"
+    return f"; SE {what}: not determined by the data (the value is kept in the model)"
 
 
 #: :func:`form_check` names the coefficients whose differential and integral estimates differ by more than
@@ -171,7 +171,10 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
                 i = f.free[mode].index(c)
                 v, se = float(f.fits[mode].theta[i]), float(se_of[c])
                 why = undetermined_note(v, se)
-                est[c] = Estimate(v, se, unit, "not determined" if why else "estimated", cov_note + why)
+                # an undetermined coefficient's note (its warning line) names the covariance by its first clause
+                # only: the full description is in every estimated coefficient's note and in diagnostics
+                est[c] = Estimate(v, se, unit, "not determined" if why else "estimated",
+                                  (cov_note.split(";")[0] if why else cov_note) + why)
             else:
                 why = "regime not visited in the training runs" if c in f.dropped.get(mode, ()) else \
                     "not free in the chosen structure"

@@ -26,7 +26,7 @@ from shipid.methods.mmg import timing_inputs as TI
 from shipid.methods.mmg.candidates import CANDIDATES
 from shipid.methods.mmg.candidates_asym import asym_variant
 from shipid.methods.mmg.candidates_surge import surge_variant
-from shipid.methods.mmg.current import DriftCurrent
+from shipid.methods.mmg.current import DriftCurrent, to_water_frame
 from shipid.models import mmg
 
 #: Decision rule (candidates_ext2 docstring): least pooled gain, folds that must improve.
@@ -151,8 +151,6 @@ def cv_current(trials: Sequence[Trial], grid: Sequence[DriftCurrent] = CURRENT_G
     grid minimum is an optimistic pick among six; the 0.02 margin of rule 1 is what guards against it,
     and the held-out runs are read only after the decision.
     """
-    from shipid.methods.mmg.current import to_water_frame
-
     cand = chosen_candidate()
     base = cv_retimed(trials, CHOSEN_NAME, cand, folds=folds, inputs=True, progress=progress)
     table = {}
