@@ -121,6 +121,8 @@ def test_every_kvlcc2_zigzag_reads_into_si_ranges():
     for f in files:
         tr = read_trial(f, required=["x", "y", "psi", "u", "v", "r", "delta", "n"])
         assert tr.meta["repairs"] == []
+        # the facility of the HSVA CPMC runs (the test report: 6.0 m water depth, h/T 13.2)
+        assert tr.meta["water_depth"] == 6.0 and "h/T 13.2" in tr.meta["water_depth_source"]
         assert tr.dt == pytest.approx(0.05, abs=1e-9)              # 20 Hz
         # approach speed U0 = 1.179 m/s and n = 10.23 rps (data/README.md)
         assert tr["u"][0] == pytest.approx(1.179, abs=0.01), f.name

@@ -31,6 +31,9 @@ _SUFFIXES = (".csv", ".parquet", ".pq")
               help="Identified MMG models only: propeller rate, rev/s [default: from the training data].")
 @click.option("--rudder-rate", type=float, default=None,
               help="Identified MMG models only: steering-gear rate, deg/s [default: from the training data].")
+@click.option("--water-depth", type=float, default=None,
+              help="Identified MMG models only: water depth, m [default: the training runs']; a depth class "
+                   "(h/T) other than the training runs' is a warning (no shallow-water terms).")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
 @click.option("--change-at", type=float, default=None,
               help="mass-cm-stream: time of the load change (s) [default: no change].")
@@ -38,7 +41,8 @@ _SUFFIXES = (".csv", ".parquet", ".pq")
               help="mass-cm-stream: the load after the change, 'M,ZM' (kg, m) [default: 0.7,-0.14].")
 def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, dt: float,
                  seed: int, speed: float | None, rps: float | None, rudder_rate: float | None,
-                 noise: bool, force: bool, change_at: float | None = None, to: str | None = None) -> None:
+                 noise: bool, force: bool, change_at: float | None = None, to: str | None = None,
+                 water_depth: float | None = None) -> None:
     """Simulate VESSEL through MANOEUVRE and write the trial.
 
     \b
@@ -60,9 +64,10 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
         if seed < 0:
             raise ShipidError(f"--seed must be >= 0, got {seed}")
         return simulate_identified(vessel, manoeuvre, out, duration=duration, dt=dt, seed=seed, speed=speed,
-                                   rps=rps, rudder_rate=rudder_rate, noise=noise, force=force)
-    if rps is not None or rudder_rate is not None:
-        raise ShipidError("--rps and --rudder-rate apply to identified MMG models (MODEL.json) only")
+                                   rps=rps, rudder_rate=rudder_rate, noise=noise, force=force,
+                                   water_depth=water_depth)
+    if rps is not None or rudder_rate is not None or water_depth is not None:
+        raise ShipidError("--rps, --rudder-rate and --water-depth apply to identified MMG models (MODEL.json) only")
     from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
     from shipid.simulate.registry import get_ship_model
 

@@ -456,7 +456,13 @@ def _read_kvlcc2(p: Path, label: str) -> RawTable:
         except ValueError:
             data[i] = [_cell(c, label, KVLCC2_COLUMNS[j][0], i + 1) for j, c in enumerate(fields)]
     title = " ".join(lines[2].split())
-    meta = {"encoding": "cp1252", "title": " / ".join(" ".join(x.split()) for x in lines[:h] if x.strip()),
+    facility = {}
+    if "HSVA" in lines[0] and "CPMC" in lines[0]:
+        # HSVA_SIMMAN_free_running_report.pdf (Cura Hochbaum 2006): the CPMC runs of the large towing tank,
+        # 300 m x 18 m x 6 m, "6.0 m water depth, ratio h/T = 13.2 (deep water)"
+        facility = {"water_depth": 6.0, "water_depth_source": "HSVA SIMMAN 2008 free running test report: large "
+                                                                "towing tank, 6.0 m water depth (h/T 13.2)"}
+    meta = {"encoding": "cp1252", **facility, "title": " / ".join(" ".join(x.split()) for x in lines[:h] if x.strip()),
             "manoeuvre": title,
             "assumptions": ["column 8 read as roll angle phi [deg] (shared/data/README.md: 'probably')"],
             "dataset": "kvlcc2_hsva"}

@@ -109,6 +109,7 @@ def test_bands_contain_nominal_and_halve_with_a_quarter_of_the_covariance(tmp_pa
     # the estimation part scales with the data; the model-form term (differential minus integral form,
     # diagnostics.form_check) does not, so the halving is a property of the draws without it
     assert res["diagnostics"]["form_check"]["integral"]
+    assert res["model"]["training_conditions"]["water_depth"] == 6.0          # the HSVA profile's facility
     repf = I.assess(res, samples=60, seed=1)
     _check_contains_nominal(repf)
     assert repf["form_term"]

@@ -47,6 +47,54 @@ def test_training_conditions_from_constructed_runs():
     assert np.degrees(tc["rudder_rate"]) == pytest.approx(5.0, rel=1e-9)    # two 10-deg moves in 2 s
     assert tc["rps_rate"] is None                                    # one jump: fewer than 5 moving samples
     assert tc["runs"] == 2
+    assert tc["water_depth"] is None and tc["water_depth_runs"] == 0
+    runs[0].meta["water_depth"] = 6.0
+    tc = MM.training_conditions(runs)
+    assert tc["water_depth"] == 6.0 and tc["water_depth_runs"] == 1
+
+
+def test_depth_classes_and_the_depth_check():
+    """PIANC / ITTC classes by h/T; a prediction outside the training runs' class is one warning line."""
+    assert [MM.depth_class(x) for x in (13.2, 3.01, 3.0, 1.6, 1.5, 1.3, 1.2, 1.1)] == \
+        ["deep", "deep", "medium deep", "medium deep", "shallow", "shallow", "very shallow", "very shallow"]
+    T = 0.455
+    notes, warns = MM.depth_check(T, 6.0, None)                        # at the training depth
+    assert warns == [] and notes == ["water depth 6 m (h/T 13.2, deep water; training runs 6 m)"]
+    notes, warns = MM.depth_check(T, 6.0, 2.0)                         # another deep-water depth: same class
+    assert warns == [] and "h/T 4.4" in notes[0]
+    notes, warns = MM.depth_check(T, 6.0, 0.6)
+    assert notes == [] and len(warns) == 1 and "h/T 1.32, shallow water" in warns[0] and "deep)" in warns[0]
+    notes, warns = MM.depth_check(T, None, 0.8)                        # training depth unknown, not deep
+    assert len(warns) == 1 and "not recorded" in warns[0] and "medium deep" in warns[0]
+    notes, warns = MM.depth_check(T, None, 5.0)
+    assert warns == [] and "deep water" in notes[0]
+    assert MM.depth_check(T, None, None) == ([], [])
+    with pytest.raises(InputError, match="must exceed the model's draught"):
+        MM.depth_check(T, 6.0, 0.4)
+
+
+def test_imo_and_simulate_say_when_the_depth_is_outside_the_training_runs(tmp_path, kv, capsys):
+    from shipid.methods.mmg import imo as I
+
+    model = {"method": "mmg-ebm", "model": dict(kv.to_dict(), training_conditions={
+        "rps_ahead": 10.23, "rudder_rate": float(np.deg2rad(15.0)), "runs": 13, "rps_astern": None,
+        "water_depth": 6.0, "water_depth_runs": 13})}
+    rep = I.assess(model, samples=0)
+    assert rep["warnings"] == [] and rep["conditions"]["water_depth"] == 6.0
+    rep = I.assess(model, samples=0, water_depth=0.6)
+    assert rep["conditions"]["water_depth"] == 0.6
+    assert sum("not the depth class of the training runs" in w for w in rep["warnings"]) == 1
+    mj = tmp_path / "MODEL.json"
+    mj.write_text(json.dumps(model))
+    out = tmp_path / "t.csv"
+    capsys.readouterr()
+    assert main(["simulate", str(mj), "turning-35", "--out", str(out), "--duration", "60", "--water-depth", "0.6"]) == 0
+    assert capsys.readouterr().err.count("not the depth class of the training runs") == 1
+    assert main(["--strict", "simulate", str(mj), "turning-35", "--out", str(out), "--force", "--duration", "60",
+                 "--water-depth", "0.6"]) == 3
+    assert main(["simulate", "esso-osaka", "zigzag-20", "--out", str(tmp_path / "z.csv"), "--water-depth", "3"]) == 2
+    assert main(["identify", "mmg", "--trial", str(out), "--water-depth", "-1"]) == 2
+    assert "--water-depth must be positive" in capsys.readouterr().err
 
 
 def test_rudder_move_rates_ignore_quantisation_and_drift():

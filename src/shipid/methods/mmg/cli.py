@@ -294,7 +294,7 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
-              selection="auto", simex="auto", equation="auto"):
+              selection="auto", simex="auto", equation="auto", water_depth=None):
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg import pipeline as P
     from shipid.methods.mmg import rudder_angle as RA
@@ -306,7 +306,12 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         raise ShipidError("no training runs given")
     if rudder_sign not in (None, 1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
+    if water_depth is not None and not (math.isfinite(water_depth) and water_depth > 0):
+        raise ShipidError(f"--water-depth must be positive, got {water_depth:g}")
     raw = [_read_run(p, fmt, channels) for p in paths]
+    if water_depth is not None:   # the runs' depth as given, over what a data profile records
+        for tr in raw:
+            tr.meta.update(water_depth=float(water_depth), water_depth_source="--water-depth")
     profiles = {tr.meta.get("profile") for tr in raw}
     notes: list[str] = []
     if rudder_sign is None:
@@ -412,6 +417,10 @@ _ID_OPTS = [
                       "(shipid.methods.mmg.simex): 'auto' only where a pilot with added noise of twice the "
                       "measured variance moves an "
                       "estimate by a quarter of its SE; 'on' always; 'off' never."),
+    click.option("--water-depth", type=float, default=None,
+                 help="Water depth of the training runs, m, recorded in MODEL.json's training conditions "
+                      "(simulate / imo warn when asked for another depth class) [default: from the data profile "
+                      "where it records one (HSVA KVLCC2: 6.0 m), else not recorded]."),
     out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
                          "file needs --force."),
@@ -430,7 +439,7 @@ def _with_id_opts(f):
               help="A training run (repeat for several).")
 @_with_id_opts
 def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
-                 as_json, out, force):
+                 water_depth, as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
@@ -438,9 +447,7 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
     for 'shipid validate'.
     """
     _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
-              simex, equation)
-
-
+              simex, equation, water_depth)
 
 
 @identify.command("realdata", context_settings=CONTEXT)
@@ -448,10 +455,10 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
               help="Training runs: --train A.csv B.csv ...")
 @_with_id_opts
 def identify_realdata(train, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
-                      as_json, out, force):
+                      water_depth, as_json, out, force):
     """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
     _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
-              simex, equation)
+              simex, equation, water_depth)
 
 
 # ----------------------------------------------------------------------------- studies

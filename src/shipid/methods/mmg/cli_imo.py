@@ -15,7 +15,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import emit, out_options
+from shipid.cli._common import emit, out_options, warn
 from shipid.errors import InputError, OutputExistsError, ShipidError
 
 
@@ -36,7 +36,7 @@ def is_model_spec(vessel: str) -> bool:
 
 def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float | None, dt: float, seed: int,
                         speed: float | None, rps: float | None, rudder_rate: float | None, noise: bool,
-                        force: bool) -> None:
+                        force: bool, water_depth: float | None = None) -> None:
     """``shipid simulate MODEL.json MANOEUVRE``: the model in calm water at the resolved test conditions."""
     from shipid.data.io import write_trial
     from shipid.methods.mmg import manoeuvres as MM
@@ -51,7 +51,8 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
     if spec_m.kind == "dp":
         raise ShipidError(f"manoeuvre {manoeuvre!r} is a DP trial; an MMG model has rudder and propeller only")
     d, model = _load(spec)
-    cond = MM.resolve_conditions(model, d, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate)
+    cond = MM.resolve_conditions(model, d, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate,
+                                 water_depth=water_depth)
     dur = MM.default_duration(model, cond) if duration is None else duration
     trial = run_manoeuvre(MM.ship_model(model, cond), manoeuvre, duration=dur, dt=dt, seed=seed, speed=cond.speed)
     trial.meta.update(rps=cond.rps, conditions=cond.to_dict(), model=model.name,
@@ -67,6 +68,8 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
                f"{cond.to_dict()['rudder_rate_deg_s']:.3g} deg/s")
     for n in cond.notes:
         click.echo(f"  {n}")
+    for w in cond.warnings:
+        warn(w)
 
 
 @cli.command("imo", context_settings=CONTEXT)
@@ -81,12 +84,15 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 @click.option("--rps", type=float, default=None, help="Propeller rate, rev/s [default: from the training data].")
 @click.option("--rudder-rate", type=float, default=None, help="Steering-gear rate, deg/s [default: training data].")
 @click.option("--dt", type=float, default=0.1, show_default=True, help="Simulation step, s.")
+@click.option("--water-depth", type=float, default=None,
+              help="Water depth, m [default: the training runs']; a depth class (h/T) other than the training "
+                   "runs' is a warning: the model has no shallow-water terms.")
 @click.option("--no-form-term", "no_form_term", is_flag=True,
               help="Draw from the estimation covariance alone, without the model-form term of a "
                    "differential-form model (diagnostics.form_check).")
 @click.option("--strict", is_flag=True, help="Exit 3 when there are warnings.")
-def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, no_form_term,
-            strict):
+def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, water_depth,
+            no_form_term, strict):
     """IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.
 
     Turning ability (35 deg, both sides: advance <= 4.5 L, tactical diameter <= 5 L),
@@ -103,7 +109,7 @@ def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, 
         raise InputError(f"--dt must be positive, got {dt:g}")
     d, _ = _load(model)
     rep = I.assess(d, samples=samples, seed=seed, ship_length=ship_length, speed=speed, rps=rps,
-                   rudder_rate_deg_s=rudder_rate, dt=dt, form_term=not no_form_term)
+                   rudder_rate_deg_s=rudder_rate, dt=dt, form_term=not no_form_term, water_depth=water_depth)
     for w in rep["warnings"]:
         click.echo(f"warning: {w}", err=True)
     emit(rep, as_json=as_json, out=out, force=force, indent=1, text=lambda: click.echo(I.format_report(rep)))

@@ -258,11 +258,14 @@ def _safe(f, *a):
 
 def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship_length: float | None = None,
            speed: float | None = None, rps: float | None = None, rudder_rate_deg_s: float | None = None,
-           dt: float = 0.1, form_term: bool = True) -> dict[str, Any]:
+           dt: float = 0.1, form_term: bool = True, water_depth: float | None = None) -> dict[str, Any]:
     """All criteria of the module docstring for the MODEL.json dict ``result``.
 
     ``form_term``: draw from the covariance with the model-form term where the model has one
-    (:func:`sample_coefficients`); False: the estimation uncertainty alone."""
+    (:func:`sample_coefficients`); False: the estimation uncertainty alone. ``water_depth`` (m): the depth
+    the criteria are asked for (default: the training runs'); the model has no shallow-water terms, so
+    a depth class other than the training runs' is a warning
+    (:func:`shipid.methods.mmg.manoeuvres.depth_check`)."""
 
     if samples < 0:
         raise InputError(f"--samples must be >= 0, got {samples}")
@@ -275,7 +278,8 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
         rudder_rate_deg_s = SOLAS_RUDDER_RATE * np.sqrt(ship_length / L)
         gear_note = (f"rudder rate {rudder_rate_deg_s:.3g} deg/s: the SOLAS minimum {SOLAS_RUDDER_RATE:.3g} deg/s "
                      f"(35 deg to 30 deg the other side in 28 s) at scale {ship_length / L:.4g} (Froude)")
-    cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s)
+    cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s,
+                                 water_depth=water_depth)
     if gear_note:
         from dataclasses import replace
         cond = replace(cond, notes=cond.notes + (gear_note,))
@@ -351,7 +355,7 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
                      else "not available: the training runs never reversed the propeller")
         crit.append(Criterion("stopping track reach", "L", float("nan"), float("nan"), (float("nan"),) * 2,
                               None, stop_note, float("nan"), 0, stop_note))
-    warnings = []
+    warnings = list(cond.warnings)
     for c in crit:
         if c.limit is None:
             continue

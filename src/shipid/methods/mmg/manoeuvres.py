@@ -20,6 +20,13 @@ approach speed. The steering-gear rate is the median rate of the training runs' 
 stopping test reverses to the most negative rate of the training runs at their
 median propeller acceleration.
 
+**Water depth** (:func:`depth_check`). The models have no shallow-water terms: a model holds at the
+depth of its training runs. The depth is a recorded condition (``training_conditions["water_depth"]``,
+from the runs' ``meta["water_depth"]``: the HSVA KVLCC2 profile reads 6.0 m from the test report, h/T =
+13.2; ``identify mmg --water-depth``); ``simulate`` and ``imo`` take ``--water-depth`` and say out loud,
+as one warning line, when the depth class of the prediction (:data:`DEPTH_CLASSES`, by h/T) is not that of
+the training runs, or is not deep water where the training depth is unknown.
+
 **Batched simulation** (:func:`simulate_rudder_batch`, :func:`simulate_stopping_batch`):
 many rows at once — one per (parameter sample, manoeuvre) — each with its own
 coefficient vector, by the same RK4 with zero-order-hold inputs and the same
@@ -85,7 +92,9 @@ def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
     median over runs of the 95th percentile of |dn/dt| where the rate changes by more
     than 0.1 rev/s² (None if constant); ``rudder_rate``: median over runs of
     :func:`rudder_rate` (rad/s); ``speed_p95``: median over runs of the 95th
-    percentile of u (m/s, for reference); rudder in the MMG convention.
+    percentile of u (m/s, for reference); ``water_depth``: median of the runs' ``meta["water_depth"]``
+    (m; None where no run records one) and ``water_depth_runs``, how many runs record it; rudder in the
+    MMG convention.
     """
     n_all, rates, nrates, speeds = [], [], [], []
     nmin = np.inf
@@ -103,11 +112,13 @@ def training_conditions(trials: Sequence[Trial]) -> dict[str, Any]:
         if "u" in tr:
             speeds.append(float(np.nanpercentile(tr["u"], 95)))
     pooled = np.concatenate(n_all) if n_all else np.array([])
+    depths = [float(tr.meta["water_depth"]) for tr in trials if (tr.meta or {}).get("water_depth") is not None]
     return {"rps_ahead": float(np.median(pooled)) if pooled.size else None,
             "rps_astern": float(nmin) if np.isfinite(nmin) and nmin < 0 else None,
             "rps_rate": float(np.median(nrates)) if nrates else None,
             "rudder_rate": float(np.median(rates)) if rates else None,
             "speed_p95": float(np.median(speeds)) if speeds else None,
+            "water_depth": float(np.median(depths)) if depths else None, "water_depth_runs": len(depths),
             "runs": len(trials)}
 
 
@@ -166,11 +177,56 @@ class Conditions:
     rps_astern: float | None = None
     rps_rate: float | None = None
     notes: tuple[str, ...] = field(default_factory=tuple)
+    water_depth: float | None = None
+    warnings: tuple[str, ...] = field(default_factory=tuple)
 
     def to_dict(self) -> dict[str, Any]:
         return {"speed": self.speed, "rps": self.rps, "rudder_rate_deg_s": float(np.degrees(self.rudder_rate)),
                 "rudder_limit_deg": float(np.degrees(self.rudder_limit)), "rps_astern": self.rps_astern,
-                "rps_rate": self.rps_rate, "notes": list(self.notes)}
+                "rps_rate": self.rps_rate, "water_depth": self.water_depth, "notes": list(self.notes),
+                "warnings": list(self.warnings)}
+
+
+#: Water-depth classes by depth over draught h/T, deepest first: (lowest h/T of the class, name). The
+#: classification of PIANC (1992) that the ITTC Manoeuvring Committee uses: deep h/T > 3, medium deep
+#: 1.5-3, shallow 1.2-1.5, very shallow below 1.2.
+DEPTH_CLASSES = ((3.0, "deep"), (1.5, "medium deep"), (1.2, "shallow"), (0.0, "very shallow"))
+
+
+def depth_class(h_over_T: float) -> str:
+    """The :data:`DEPTH_CLASSES` name of a depth-to-draught ratio."""
+    return next(name for lo, name in DEPTH_CLASSES if h_over_T > lo or lo == 0.0)
+
+
+def depth_check(draught: float, trained: float | None, target: float | None) -> tuple[list[str], list[str]]:
+    """Notes and warning lines on the water depth of a prediction (module docstring).
+
+    ``draught`` T (m) of the model; ``trained``: the training runs' depth (m, None if not recorded);
+    ``target``: the depth asked for (m, None: the training depth). A warning where the target's depth
+    class differs from the training runs', or where the training depth is unknown and the target is not
+    deep water; a note of the depth and class otherwise."""
+    notes, warns = [], []
+    if target is not None and not (np.isfinite(target) and target > draught):
+        raise InputError(f"--water-depth must exceed the model's draught {draught:g} m, got {target:g}")
+    h = trained if target is None else target
+    if h is None:
+        return notes, warns
+    ct = depth_class(h / draught)
+    if trained is not None:
+        c0 = depth_class(trained / draught)
+        if ct != c0:
+            warns.append(f"water depth {h:g} m (h/T {h / draught:.3g}, {ct} water) is not the depth class of the "
+                         f"training runs ({trained:g} m, h/T {trained / draught:.3g}, {c0}): the model has no "
+                         "shallow-water terms and is not validated there")
+        else:
+            notes.append(f"water depth {h:g} m (h/T {h / draught:.3g}, {ct} water; training runs {trained:g} m)")
+    elif ct != "deep":
+        warns.append(f"water depth {h:g} m (h/T {h / draught:.3g}, {ct} water) and the training runs' depth is not "
+                     "recorded: the model has no shallow-water terms and is not validated there")
+    else:
+        notes.append(f"water depth {h:g} m (h/T {h / draught:.3g}, deep water; the training runs' depth is not "
+                     "recorded)")
+    return notes, warns
 
 
 def recorded_conditions(d: Mapping[str, Any]) -> dict[str, Any] | None:
@@ -198,9 +254,10 @@ def recorded_conditions(d: Mapping[str, Any]) -> dict[str, Any] | None:
 
 def resolve_conditions(model: mmg.MmgModel, result: Mapping[str, Any] | None = None, *,
                        speed: float | None = None, rps: float | None = None,
-                       rudder_rate_deg_s: float | None = None) -> Conditions:
+                       rudder_rate_deg_s: float | None = None, water_depth: float | None = None) -> Conditions:
     """The test conditions from the options and the model's training data (module docstring)."""
     tc = recorded_conditions(result) if result is not None else None
+    dnotes, dwarns = depth_check(float(model.particulars["d"]), (tc or {}).get("water_depth"), water_depth)
     notes = []
     for name, v in (("--speed", speed), ("--rps", rps), ("--rudder-rate", rudder_rate_deg_s)):
         if v is not None and not (np.isfinite(v) and v > 0):
@@ -228,7 +285,8 @@ def resolve_conditions(model: mmg.MmgModel, result: Mapping[str, Any] | None = N
         raise InputError("the model records no rudder rate: give --rudder-rate (deg/s)")
     return Conditions(speed=float(speed), rps=float(rps), rudder_rate=rate,
                       rps_astern=(tc or {}).get("rps_astern"), rps_rate=(tc or {}).get("rps_rate"),
-                      notes=tuple(notes))
+                      notes=tuple(notes + dnotes), warnings=tuple(dwarns),
+                      water_depth=water_depth if water_depth is not None else (tc or {}).get("water_depth"))
 
 
 def rudder_turn_sign(model: mmg.MmgModel, cond: Conditions) -> float:
@@ -486,6 +544,7 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
     return BatchRecord(np.arange(m) * dt, X[:, :m], np.zeros((B, m)), cmd, Nn[:, :m])
 
 
-__all__ = ["Conditions", "training_conditions", "recorded_conditions", "resolve_conditions", "equilibrium_speed",
+__all__ = ["Conditions", "DEPTH_CLASSES", "depth_class", "depth_check", "training_conditions", "recorded_conditions",
+           "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
            "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_equilibrium", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH", "straight_du"]
