@@ -268,3 +268,32 @@ def test_assess_widens_the_bands_by_the_model_form_term_and_says_so():
     # a surge offset 5 % off in the other form moves the advance far more than a 1 % estimation std
     assert all(a > 2 * b > 0 for a, b in adv)
 
+
+
+def test_draws_that_never_reach_a_criterion_open_the_band_instead_of_leaving_it():
+    """A draw with no value because the simulated manoeuvre never reached the criterion (the ship never
+    stopped, never turned 90 deg) lies beyond every finite value: it enters the band's quantiles as +inf
+    (the band was formerly the quantiles of the draws that did reach it: [2.16, 3.42] L where half the draws
+    of a 4-run Esso model never stopped). A draw excluded for another reason (diverged, no equilibrium)
+    is left out, as its own warning says."""
+    rng = np.random.default_rng(5)
+    x = rng.normal(3.0, 0.2, 41)
+    c = I._criterion("a", "L", x, (4.5, 4.5))
+    np.testing.assert_array_equal(c.band, np.percentile(x[1:], I.BAND))      # all reached: unchanged
+    assert c.n_open == 0 and c.std == pytest.approx(np.std(x[1:], ddof=1))
+    y = x.copy()
+    y[1:21] = np.nan                                                          # half the draws never reach it
+    c = I._criterion("a", "L", y, (4.5, 4.5))
+    assert c.n_open == 20 and c.n_valid == 20 and c.std == np.inf
+    assert c.band[1] == np.inf and c.band[0] == pytest.approx(np.percentile(np.r_[y[21:], [1e9] * 20], 2.275))
+    assert c.p_pass == pytest.approx(np.mean(y[1:] <= 4.5)) == 0.5
+    z = rng.normal(3.0, 0.2, 101)
+    z[1] = np.nan                                         # one of 100 (< 2.275 %): the upper quantile stays finite
+    c = I._criterion("a", "L", z, (4.5, 4.5))
+    assert c.n_open == 1 and np.isfinite(c.band[1]) and c.band[1] <= np.nanmax(z[1:])
+    excl = np.zeros(41, bool)
+    excl[1:21] = True                                                         # the same 20 NaN draws, diverged
+    c = I._criterion("a", "L", y, (4.5, 4.5), excluded=excl)
+    assert c.n_open == 0 and c.n_valid == 20
+    np.testing.assert_array_equal(c.band, np.percentile(y[21:], I.BAND))
+    assert c.to_dict()["samples_not_reached"] == 0

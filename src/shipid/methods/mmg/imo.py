@@ -193,19 +193,42 @@ class Criterion:
     p_pass: float
     n_valid: int
     note: str = ""
+    n_open: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "unit": self.unit, "value": self.value, "std": self.std,
                 "band": list(self.band), "limit": None if self.limit is None else list(self.limit),
-                "verdict": self.verdict, "p_pass": self.p_pass, "samples_valid": self.n_valid, "note": self.note}
+                "verdict": self.verdict, "p_pass": self.p_pass, "samples_valid": self.n_valid,
+                "samples_not_reached": self.n_open, "note": self.note}
 
 
-def _criterion(name, unit, vals, limit, note="") -> Criterion:
+def _band(d: np.ndarray) -> tuple[float, float]:
+    """The :data:`BAND` quantiles of draws ``d`` where NaN means "not reached within the simulated time"
+    (a track, turn or stop longer than any simulated one): such draws lie beyond every finite value, so a
+    quantile that falls among them is +inf (the band is open at its upper end)."""
+    fin = d[np.isfinite(d)]
+    if fin.size == d.size:
+        return tuple(float(q) for q in np.percentile(fin, BAND))
+    top = float(fin.max()) if fin.size else 0.0
+    q = np.percentile(np.where(np.isfinite(d), d, top + 1.0), BAND)
+    return tuple(float(x) if x <= top and fin.size else float("inf") for x in q)
+
+
+def _criterion(name, unit, vals, limit, note="", excluded=None) -> Criterion:
+    """One criterion from ``vals`` (the nominal model first, then the draws; NaN: not reached).
+
+    ``excluded`` (same length, optional): rows with no value for another reason (no straight-line
+    equilibrium at the approach, a diverged simulation), left out of the band and counted by their own
+    warnings; every other NaN draw is "not reached" and enters the band as beyond every value (:func:`_band`).
+    """
     vals = np.asarray(vals, float)
     nominal = float(vals[0])
-    mc = vals[1:][np.isfinite(vals[1:])]
-    std = float(np.std(mc, ddof=1)) if mc.size > 1 else float("nan")
-    band = tuple(float(q) for q in np.percentile(mc, BAND)) if mc.size > 1 else (float("nan"), float("nan"))
+    keep = np.ones(vals.size - 1, bool) if excluded is None else ~np.asarray(excluded, bool)[1:]
+    d = vals[1:][keep]
+    mc = d[np.isfinite(d)]
+    # draws beyond every simulated value have no finite spread: the std is then infinite, the band (quantiles) not
+    std = float("nan") if mc.size <= 1 else float("inf") if mc.size < d.size else float(np.std(mc, ddof=1))
+    band = _band(d) if mc.size > 1 else (float("nan"), float("nan"))
     if limit is None:
         verdict, p = "not available", float("nan")
     elif not np.isfinite(nominal):
@@ -215,7 +238,7 @@ def _criterion(name, unit, vals, limit, note="") -> Criterion:
         verdict = "pass" if nominal <= lo else "fail" if nominal > hi else "depends on L/V (give --ship-length)"
         p = float(np.mean(vals[1:] <= lo)) if vals.size > 1 else float("nan")   # strictest limit if a range
     return Criterion(name, unit, nominal, std, band, None if limit is None else tuple(limit), verdict, p,
-                     int(mc.size), note)
+                     int(mc.size), note, int(d.size - mc.size))
 
 
 def _arc(x, y):
@@ -303,6 +326,9 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     rec = MM.simulate_rudder_batch(model, ThB, order, psw, side, cond, dt=dt, exact_reversal=True,
                                    speed=np.repeat(u0, K), rps=np.repeat(n0, K))
     diverged = ~np.isfinite(rec.x).all(axis=(1, 2)) & ~np.repeat(no_eq, K)
+    # per manoeuvre kind, the rows with no value for a reason other than "not reached" (_criterion)
+    bad = diverged.reshape(R, K) | no_eq[:, None]
+    excl = {k[0]: bad[:, j] for j, k in enumerate(kinds)}
     vals_of: dict[str, np.ndarray] = {}
 
     def put(key, i, v):
@@ -330,26 +356,31 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     crit = []
     for side_name in ("turning-35", "turning-35-port"):
         crit.append(_criterion(f"{side_name} advance", "L", vals_of.get(f"{side_name} advance", np.full(R, np.nan)),
-                               (4.5, 4.5)))
+                               (4.5, 4.5), excluded=excl[side_name]))
         crit.append(_criterion(f"{side_name} tactical diameter", "L",
-                               vals_of.get(f"{side_name} tactical diameter", np.full(R, np.nan)), (5.0, 5.0)))
-    for nm in ("initial turning", "initial turning port"):
+                               vals_of.get(f"{side_name} tactical diameter", np.full(R, np.nan)), (5.0, 5.0),
+                               excluded=excl[side_name]))
+    for nm, z in (("initial turning", "zigzag-10"), ("initial turning port", "zigzag-10-port")):
         crit.append(_criterion(nm + " (track to 10 deg heading)", "L",
-                               vals_of.get(nm, np.full(R, np.nan)), (2.5, 2.5)))
+                               vals_of.get(nm, np.full(R, np.nan)), (2.5, 2.5), excluded=excl[z]))
     for z in ("zigzag-10", "zigzag-10-port"):
-        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (f1lo, f1hi)))
-        crit.append(_criterion(f"{z} second overshoot", "deg", vals_of[f"{z} second overshoot"], (f2lo, f2hi)))
+        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (f1lo, f1hi),
+                               excluded=excl[z]))
+        crit.append(_criterion(f"{z} second overshoot", "deg", vals_of[f"{z} second overshoot"], (f2lo, f2hi),
+                               excluded=excl[z]))
     for z in ("zigzag-20", "zigzag-20-port"):
-        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (25.0, 25.0)))
+        crit.append(_criterion(f"{z} first overshoot", "deg", vals_of[f"{z} first overshoot"], (25.0, 25.0),
+                               excluded=excl[z]))
     stop_note = ""
     if model.structure.startswith("esso") and cond.rps_astern is not None:
         srec = MM.simulate_stopping_batch(model, Th, cond, dt=dt, speed=u0, rps=n0)
-        reach = np.array([stopping_reach(srec, r) / L if np.isfinite(srec.x[r]).all() else np.nan
-                          for r in range(R)])
+        sdiv = np.array([not np.isfinite(srec.x[r]).all() for r in range(R)])
+        reach = np.array([np.nan if sdiv[r] else stopping_reach(srec, r) / L for r in range(R)])
         note = (f"full astern {cond.rps_astern:g} rev/s (the training runs' most negative rate), reversed at "
                 + (f"{cond.rps_rate:.3g} rev/s^2" if cond.rps_rate else "once") + " as in the training runs; a "
                 "full-scale engine reverses far more slowly, so this is the model's, not the ship's, track reach")
-        crit.append(_criterion("stopping track reach", "L", reach, (STOPPING_LIMIT, STOPPING_LIMIT), note))
+        crit.append(_criterion("stopping track reach", "L", reach, (STOPPING_LIMIT, STOPPING_LIMIT), note,
+                               excluded=sdiv | no_eq))
     else:
         stop_note = ("not available: model has no astern propeller" if not model.structure.startswith("esso")
                      else "not available: the training runs never reversed the propeller")
@@ -361,8 +392,10 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
             continue
         if not np.isfinite(c.value):
             warnings.append(f"{c.name}: not reached by the nominal model within the simulated time")
-        elif samples and c.n_valid < samples:
-            warnings.append(f"{c.name}: {samples - c.n_valid} of {samples} draws gave no value (left out of the band)")
+        if samples and c.n_open:
+            warnings.append(f"{c.name}: {c.n_open} of {samples} draws do not reach it within the simulated time "
+                            "(in the band as beyond every value" + (": its upper end is open)"
+                                                                   if not np.isfinite(c.band[1]) else ")"))
     if no_eq.any():
         warnings.append(f"{int(no_eq.sum())} of {samples} draws have no straight-line equilibrium at the approach "
                         "(left out of the bands)")
