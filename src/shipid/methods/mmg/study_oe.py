@@ -239,6 +239,11 @@ wind (:mod:`shipid.methods.mmg.current`), ``c`` 0.01-0.03, time constant 60 or 3
 CV of the chosen candidate. Best c = 0.01, τ = 60 s: 1.2295 against 1.2335, 2 of 4 folds better, gain 0.004
 below the rule's 0.02: not adopted; 2-3 % make every fold worse (table in that module). The held-out runs
 were not scored for it.
+
+Reversed-propeller side force (2026-12-06, same CV; :func:`shipid.methods.mmg.study_ext2.cv_astern`, rule
+and diagnosis there: horizons with the propeller reversed 40 % of the time or more carry 40 % of the training
+CV's heading error). Freeing its yaw-moment terms gives 1.2426, with the side-force terms too 1.2467,
+against 1.2335: not adopted; the held-out runs were not scored for it.
 """
 
 from __future__ import annotations
