@@ -37,3 +37,48 @@ def test_retimed_cv_of_runs_without_offsets_is_the_plain_cv(esso_published, own_
     assert len(plain["fold_scores"]) == 2 and np.all(np.isfinite(plain["fold_scores"]))
     assert moved["fold_scores"] == pytest.approx(plain["fold_scores"], rel=1e-6)
     assert moved["score"] == pytest.approx(plain["score"], rel=1e-6)
+
+
+def _fake_cv(scores):
+    """A stand-in for study_ext2.cv_retimed: the summary it returns for a name (base when no '/' or '+')."""
+    calls = []
+
+    def cv(trials, name, cand, *, folds=4, inputs=False, transform=None, progress=None, **kw):
+        calls.append((name, cand, transform))
+        key = name.split(" / ")[-1] if " / " in name else name.rsplit("+", 1)[-1] if "+astern" in name else "base"
+        s, f, pos = scores[key]
+        return {"score": s, "fold_scores": f, "pos_rms": pos}
+    return cv, calls
+
+
+def test_cv_current_keeps_the_best_current_only_when_it_passes_and_the_position_is_not_worse(monkeypatch):
+    base = (1.2335, [0.908, 1.343, 1.296, 1.266], 0.515)
+    scores = {"base": base, **{f"current {c.factor:g} x wind, tau {c.tau:g} s": (1.6, [1.6] * 4, 0.7)
+                               for c in X.CURRENT_GRID}}
+    scores["current 0.01 x wind, tau 60 s"] = (1.2295, [0.857, 1.466, 1.299, 1.151], 0.506)     # as measured
+    cv, calls = _fake_cv(scores)
+    monkeypatch.setattr(X, "cv_retimed", cv)
+    res = X.cv_current([])
+    assert res["decision"]["best"] == "current 0.01 x wind, tau 60 s" and not res["decision"]["passes"]
+    assert len(calls) == 1 + len(X.CURRENT_GRID) and calls[0][2] is None and all(c[2] is not None for c in calls[1:])
+    scores["current 0.01 x wind, tau 60 s"] = (1.18, [0.86, 1.29, 1.24, 1.21], 0.52)            # better, but pos worse
+    assert not X.cv_current([])["decision"]["passes"]
+    scores["current 0.01 x wind, tau 60 s"] = (1.18, [0.86, 1.29, 1.24, 1.21], 0.50)
+    assert X.cv_current([])["decision"]["passes"]
+
+
+def test_cv_astern_frees_the_reversed_propeller_terms_and_applies_the_rule(monkeypatch):
+    base = (1.2335, [0.908, 1.343, 1.296, 1.266], 0.515)
+    scores = {"base": base, "astern-moment": (1.2426, [0.897, 1.345, 1.265, 1.343], 0.515),
+              "astern-side": (1.2467, [0.896, 1.352, 1.270, 1.348], 0.510)}
+    cv, calls = _fake_cv(scores)
+    monkeypatch.setattr(X, "cv_retimed", cv)
+    res = X.cv_astern([])
+    assert res["chosen"] is None and not any(d["passes"] for d in res["decisions"].values())
+    cands = {name.rsplit("+", 1)[-1]: cand for name, cand, _ in calls[1:]}
+    base_cand = X.chosen_candidate()
+    assert cands["astern-moment"]["N"] == base_cand["N"] + tuple(f"NP_b{i}" for i in range(5))
+    assert cands["astern-moment"]["Y"] == base_cand["Y"]
+    assert cands["astern-side"]["Y"] == base_cand["Y"] + tuple(f"YP_a{i}" for i in range(5))
+    scores["astern-side"] = (1.20, [0.88, 1.30, 1.26, 1.22], 0.51)
+    assert X.cv_astern([])["chosen"] == "astern-side"
