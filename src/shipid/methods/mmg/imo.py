@@ -206,12 +206,12 @@ def _band(d: np.ndarray) -> tuple[float, float]:
     """The :data:`BAND` quantiles of draws ``d`` where NaN means "not reached within the simulated time"
     (a track, turn or stop longer than any simulated one): such draws lie beyond every finite value, so a
     quantile that falls among them is +inf (the band is open at its upper end)."""
-    fin = d[np.isfinite(d)]
+    fin = d[np.isfinite(d)]           # at least two (_criterion)
     if fin.size == d.size:
         return tuple(float(q) for q in np.percentile(fin, BAND))
-    top = float(fin.max()) if fin.size else 0.0
+    top = float(fin.max())
     q = np.percentile(np.where(np.isfinite(d), d, top + 1.0), BAND)
-    return tuple(float(x) if x <= top and fin.size else float("inf") for x in q)
+    return tuple(float(x) if x <= top else float("inf") for x in q)
 
 
 def _criterion(name, unit, vals, limit, note="", excluded=None) -> Criterion:
