@@ -95,6 +95,17 @@ def test_imo_and_simulate_say_when_the_depth_is_outside_the_training_runs(tmp_pa
     assert main(["simulate", "esso-osaka", "zigzag-20", "--out", str(tmp_path / "z.csv"), "--water-depth", "3"]) == 2
     assert main(["identify", "mmg", "--trial", str(out), "--water-depth", "-1"]) == 2
     assert "--water-depth must be positive" in capsys.readouterr().err
+    # validate: a run that records its depth is checked against the model's training depth
+    from shipid.data import write_trial
+
+    tr = read_trial(out)
+    for depth, lines in ((6.0, 0), (0.6, 1)):
+        tr.meta["water_depth"] = depth
+        pq = tmp_path / f"run_{depth:g}.parquet"
+        write_trial(tr, pq)
+        capsys.readouterr()
+        assert main(["validate", str(mj), "--trial", str(pq)]) == 0
+        assert capsys.readouterr().err.count("not the depth class of the training runs") == lines
 
 
 def test_rudder_move_rates_ignore_quantisation_and_drift():

@@ -142,6 +142,11 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
                                    if "rudder_sign" in mv else ")"))
     if w:
         notes.append(w)
+    if tr.meta.get("water_depth") is not None:       # the run's depth against the model's training depth
+        from shipid.methods.mmg.manoeuvres import depth_check
+
+        tc = ((doc or {}).get("model") or {}).get("training_conditions") or {}
+        notes += depth_check(float(m.particulars["d"]), tc.get("water_depth"), float(tr.meta["water_depth"]))[1]
     v = V.validate(m, tr, horizon=horizon)
     warns = loud_lines(notes, trials=[tr])
     if out_path:
