@@ -104,3 +104,27 @@ def test_monitor_noise_model_option(stream, capsys):
     assert default == 0
     assert [json.loads(x) for x in capsys.readouterr().out.splitlines()] == outs["auto"]
     assert [x["m"] for x in outs["ar"]] != [x["m"] for x in outs["auto"]]
+
+
+def test_monitor_warnings_are_counted_by_the_global_and_the_command_strict(stream, capsys, monkeypatch):
+    """Each update's warnings are one 'shipid: warning:' line each; `shipid --strict monitor ...` and
+    `monitor ... --strict` both exit 3 after the stream (the global flag used to be ignored here)."""
+    import dataclasses
+
+    from shipid.methods.monitor import estimator as E
+
+    orig = E.MassCMMonitor._update
+
+    def with_warning(self, extra_warnings=()):
+        u = orig(self, extra_warnings)
+        return dataclasses.replace(u, warnings=u.warnings + (f"t = {u.t:g} s: a test warning",))
+
+    monkeypatch.setattr(E.MassCMMonitor, "_update", with_warning)
+    for args in (["--strict", *_args(stream, "--stream", str(stream / "s.csv"), "--jsonl")],
+                 _args(stream, "--stream", str(stream / "s.csv"), "--jsonl", "--strict")):
+        assert main(args) == 3
+        cap = capsys.readouterr()
+        lines = [json.loads(x) for x in cap.out.splitlines()]
+        est = sum(x["m"] is not None for x in lines)          # the updates after the start-up window
+        assert len(lines) == 40 and est > 20 and cap.err.count("shipid: warning: t = ") == est
+    assert main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl")) == 0

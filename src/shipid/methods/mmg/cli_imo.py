@@ -15,7 +15,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import emit, out_options, warn
+from shipid.cli._common import emit, loud_lines, out_options, strict_option, warn
 from shipid.errors import InputError, OutputExistsError, ShipidError
 
 
@@ -90,9 +90,9 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 @click.option("--no-form-term", "no_form_term", is_flag=True,
               help="Draw from the estimation covariance alone, without the model-form term of a "
                    "differential-form model (diagnostics.form_check).")
-@click.option("--strict", is_flag=True, help="Exit 3 when there are warnings.")
+@strict_option
 def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, water_depth,
-            no_form_term, strict):
+            no_form_term):
     """IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.
 
     Turning ability (35 deg, both sides: advance <= 4.5 L, tactical diameter <= 5 L),
@@ -110,8 +110,6 @@ def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, 
     d, _ = _load(model)
     rep = I.assess(d, samples=samples, seed=seed, ship_length=ship_length, speed=speed, rps=rps,
                    rudder_rate_deg_s=rudder_rate, dt=dt, form_term=not no_form_term, water_depth=water_depth)
-    for w in rep["warnings"]:
-        click.echo(f"warning: {w}", err=True)
+    # one line each on stderr, counted for --strict (this command's or the global one), and in the JSON
+    rep["warnings"] = loud_lines(rep["warnings"])
     emit(rep, as_json=as_json, out=out, force=force, indent=1, text=lambda: click.echo(I.format_report(rep)))
-    if strict and rep["warnings"]:
-        raise SystemExit(3)

@@ -18,7 +18,7 @@ import click
 
 from shipid.cli import CONTEXT, cli
 from shipid.cli._common import emit as emit_out
-from shipid.cli._common import out_options
+from shipid.cli._common import out_options, strict_option, warn
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -144,9 +144,9 @@ def live_panel(u, nominal_label: str):
 @click.option("--follow", is_flag=True, help="Keep reading a CSV file that is still being written (as tail -f).")
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
               help="With --follow: stop after this many seconds without new data [default: never].")
-@click.option("--strict", is_flag=True, help="Exit with status 3 if any warning was raised.")
+@strict_option
 def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, noise_model, as_json,
-                    out, force, follow, idle_timeout, strict):
+                    out, force, follow, idle_timeout):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
 
     Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
@@ -182,14 +182,10 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
         from rich.live import Live
         live = Live(refresh_per_second=4)
         live.start()
-    n_warn = 0
-
     def emit(updates):
-        nonlocal n_warn
         for u in updates:
-            for w in u.warnings:
-                n_warn += 1
-                click.echo(f"shipid: warning: {w}", err=True)
+            for w in u.warnings:        # one line each, counted for --strict (global or this command's)
+                warn(w)
             if u.alarm:
                 click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
                            f"detector T = {u.statistic:.3g} > {opts.threshold:g})", err=True)
@@ -226,5 +222,3 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
             live.stop()
     if lines is not None:
         emit_out("".join(f"{ln}\n" for ln in lines), as_json=False, out=out, force=force)
-    if strict and n_warn:
-        sys.exit(3)
