@@ -462,8 +462,8 @@ def _read_kvlcc2(p: Path, label: str) -> RawTable:
         # 300 m x 18 m x 6 m, "6.0 m water depth, ratio h/T = 13.2 (deep water)"
         facility = {"water_depth": 6.0, "water_depth_source": "HSVA SIMMAN 2008 free running test report: large "
                                                                 "towing tank, 6.0 m water depth (h/T 13.2)"}
-    meta = {"encoding": "cp1252", **facility, "title": " / ".join(" ".join(x.split()) for x in lines[:h] if x.strip()),
-            "manoeuvre": title,
+    meta = {"encoding": "cp1252", **facility,
+            "title": " / ".join(" ".join(x.split()) for x in lines[:h] if x.strip()), "manoeuvre": title,
             "assumptions": ["column 8 read as roll angle phi [deg] (shared/data/README.md: 'probably')"],
             "dataset": "kvlcc2_hsva"}
     return RawTable([c for c, _ in KVLCC2_COLUMNS], [u for _, u in KVLCC2_COLUMNS], data,

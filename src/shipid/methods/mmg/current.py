@@ -68,6 +68,12 @@ class DriftCurrent:
         return asdict(self)
 
 
+def _air_velocity(wind_speed, wind_dir) -> tuple[np.ndarray, np.ndarray]:
+    """Earth-axes velocity of the air, ``W = −U_T (cos γ_T, sin γ_T)`` (γ_T: the direction it blows from)."""
+    U = np.asarray(wind_speed, float)
+    return -U * np.cos(wind_dir), -U * np.sin(wind_dir)
+
+
 def drift_velocity(t: np.ndarray, wind_speed: np.ndarray, wind_dir: np.ndarray,
                    current: DriftCurrent) -> tuple[np.ndarray, np.ndarray]:
     """Earth-axes current ``(c_x, c_y)`` (m/s) of :class:`DriftCurrent` from the true wind.
@@ -77,8 +83,7 @@ def drift_velocity(t: np.ndarray, wind_speed: np.ndarray, wind_dir: np.ndarray,
     with a non-finite wind hold the last filtered value.
     """
     t = np.asarray(t, float)
-    wx = -np.asarray(wind_speed, float) * np.cos(wind_dir)
-    wy = -np.asarray(wind_speed, float) * np.sin(wind_dir)
+    wx, wy = _air_velocity(wind_speed, wind_dir)
     ok = np.isfinite(wx) & np.isfinite(wy)
     fx, fy = np.zeros_like(t), np.zeros_like(t)
     if not ok.any():
@@ -107,8 +112,8 @@ def to_water_frame(trial: Trial, current: DriftCurrent) -> Trial:
     dy = np.concatenate([[0.0], np.cumsum(0.5 * (cy[1:] + cy[:-1]) * dt)])
     psi = np.asarray(trial["psi"], float)
     c, s = np.cos(psi), np.sin(psi)
-    wx = -np.asarray(trial["wind_speed"], float) * np.cos(trial["wind_dir"]) - cx
-    wy = -np.asarray(trial["wind_speed"], float) * np.sin(trial["wind_dir"]) - cy
+    ax, ay = _air_velocity(trial["wind_speed"], trial["wind_dir"])
+    wx, wy = ax - cx, ay - cy                       # the air relative to the water
     out = trial.with_channels(x=np.asarray(trial["x"], float) - dx, y=np.asarray(trial["y"], float) - dy,
                               u=np.asarray(trial["u"], float) - (c * cx + s * cy),
                               v=np.asarray(trial["v"], float) - (-s * cx + c * cy),

@@ -182,6 +182,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
         from rich.live import Live
         live = Live(refresh_per_second=4)
         live.start()
+
     def emit(updates):
         for u in updates:
             for w in u.warnings:        # one line each, counted for --strict (global or this command's)
