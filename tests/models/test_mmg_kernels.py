@@ -115,3 +115,28 @@ def test_other_structures_use_the_reference(published):
     U[:, 0], U[:, 1] = 0.2, 10.0
     x0 = np.array([[0, 0, 0, 1.0, 0, 0]])
     assert np.array_equal(mmg.simulate_batch(model, t, x0, U), mmg.simulate_batch(model, t, x0, U, compiled=False))
+
+
+def test_threads_give_every_row_the_same_numbers(published, monkeypatch):
+    """Rows are independent: a batch split over 1, 2 or 3 threads gives bit-identical predictions (the
+    same seed gives the same result with any number of threads)."""
+    model = _model(published, "esso-lowspeed-ext")
+    x0, U, h = _rows(8, B=3 * mmg_kernels.MIN_ROWS_PER_THREAD + 5, L=31)
+    rng = np.random.default_rng(9)
+    Th = {m: model.theta(m)[None] * (1 + 0.05 * rng.standard_normal((x0.shape[0], model.theta(m).size)))
+          for m in mmg.MODES}
+    out = {}
+    for n in ("1", "2", "3"):
+        monkeypatch.setenv("SHIPID_THREADS", n)
+        assert mmg_kernels.threads(x0.shape[0]) == int(n)
+        out[n] = cv_fast.simulate_rows(model, Th, x0, U, h)
+    assert np.array_equal(out["1"], out["2"], equal_nan=True) and np.array_equal(out["1"], out["3"], equal_nan=True)
+
+
+def test_thread_count_follows_the_batch_and_the_environment(monkeypatch):
+    monkeypatch.setenv("SHIPID_THREADS", "8")
+    assert mmg_kernels.threads(10 * mmg_kernels.MIN_ROWS_PER_THREAD) == 8
+    assert mmg_kernels.threads(2 * mmg_kernels.MIN_ROWS_PER_THREAD) == 2     # no thread with fewer rows
+    assert mmg_kernels.threads(3) == 1
+    monkeypatch.setenv("SHIPID_THREADS", "zero")                             # not a count: the default
+    assert 1 <= mmg_kernels.threads(10 ** 6) <= mmg_kernels.MAX_THREADS

@@ -29,13 +29,17 @@ differ (``tests/models/test_mmg_kernels.py``: the predictions agree to ~1e-12 re
 A state beyond 1e6 becomes NaN after each step, as :func:`~shipid.methods.mmg.manoeuvres.rows_rk4`.
 
 Numerics: float64, no ``fastmath``, ``error_model="numpy"`` (a diverging row gives NaN, not an
-exception). Every compiled function is in this file, so numba's on-disk cache (keyed on this
+exception). Rows are independent, so :func:`simulate_rows` splits a large batch into contiguous
+blocks integrated in threads (the kernel releases the GIL): every row's numbers are the same with any
+number of threads (:func:`threads`). Every compiled function is in this file, so numba's on-disk cache (keyed on this
 file) is never stale.
 """
 
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import Mapping
 
 import numpy as np
@@ -343,6 +347,27 @@ def rows_rk4_kernel(c, code, ThX, ThY, ThN, x0, U, h, substeps, out):
                 out[b, k + 1, i] = x[i]
 
 
+#: Fewest rows per thread of :func:`simulate_rows` (below, one thread: a thread's start costs more).
+MIN_ROWS_PER_THREAD = 64
+#: Most threads :func:`threads` uses unless ``SHIPID_THREADS`` says otherwise.
+MAX_THREADS = 4
+_POOL: dict[int, ThreadPoolExecutor] = {}
+
+
+def threads(rows: int) -> int:
+    """Threads for a batch of ``rows``: ``SHIPID_THREADS`` if set, else the CPUs this process may use (at most
+    :data:`MAX_THREADS`), and no more than one per :data:`MIN_ROWS_PER_THREAD` rows."""
+    env = os.environ.get("SHIPID_THREADS", "").strip()
+    if env.isdigit() and int(env) > 0:
+        n = int(env)
+    else:
+        try:
+            n = min(len(os.sched_getaffinity(0)), MAX_THREADS)
+        except AttributeError:  # pragma: no cover - not Linux
+            n = min(os.cpu_count() or 1, MAX_THREADS)
+    return max(1, min(n, rows // MIN_ROWS_PER_THREAD))
+
+
 def simulate_rows(structure: str, particulars: Mapping[str, float], mass: tuple, Th: Mapping[str, np.ndarray],
                   x0: np.ndarray, U: np.ndarray, h: np.ndarray, substeps: int = 1) -> np.ndarray:
     """(B, L, 6) predictions of rows with coefficients ``Th[mode]`` (B, p), starts ``x0`` (B, 6), inputs
@@ -356,8 +381,20 @@ def simulate_rows(structure: str, particulars: Mapping[str, float], mass: tuple,
     out = np.empty((B, L, 6))
     Tx, Ty, Tn = (np.ascontiguousarray(np.broadcast_to(Th[m], (B, np.shape(Th[m])[-1])), dtype=float)
                   for m in ("X", "Y", "N"))
-    rows_rk4_kernel(c, code, Tx, Ty, Tn, x0, U, h, int(substeps), out)
+    nt = threads(B)
+    if nt == 1:
+        rows_rk4_kernel(c, code, Tx, Ty, Tn, x0, U, h, int(substeps), out)
+        return out
+    pool = _POOL.get(nt)
+    if pool is None:
+        pool = _POOL[nt] = ThreadPoolExecutor(max_workers=nt, thread_name_prefix="shipid-rows")
+    edges = np.linspace(0, B, nt + 1).astype(int)
+    jobs = [pool.submit(rows_rk4_kernel, c, code, Tx[a:b], Ty[a:b], Tn[a:b], x0[a:b], U[a:b], h[a:b],
+                        int(substeps), out[a:b]) for a, b in zip(edges[:-1], edges[1:])]
+    for j in jobs:
+        j.result()
     return out
 
 
-__all__ = ["CODES", "supported", "pack", "rows_rk4_kernel", "simulate_rows"]
+__all__ = ["CODES", "MIN_ROWS_PER_THREAD", "MAX_THREADS", "supported", "pack", "threads", "rows_rk4_kernel",
+           "simulate_rows"]

@@ -186,3 +186,45 @@ def test_overlapping_training_horizons_cluster_by_run(truth, runs_of_truth):
     assert auto.diagnostics["output_error"]["refined"] == []
     assert "2 runs of overlapping horizons for 15 coefficients" in auto.diagnostics["output_error"]["note"]
     np.testing.assert_array_equal(OE.cluster_index(H60, cfg), np.arange(H60.count))
+
+
+def test_huber_weights_downweight_only_horizons_beyond_k_times_the_median():
+    """Weights ``min(1, c / e_h)``, ``c = k · median(e_h)``; ``e_h`` counts only the valid samples."""
+    B, L = 5, 4
+    valid = np.ones((B, L), bool)
+    valid[4, 2:] = False                                  # a horizon cut short: 2 valid samples
+    e = np.array([1.0, 1.0, 2.0, 6.0, 3.0])
+    r = np.zeros((B, L, 3))
+    r[..., 0] = e[:, None] * valid                        # RMS over valid samples = e
+    H = OE.Horizons(x0=np.zeros((B, 6)), U=np.zeros((B, L, 4)), Z=np.zeros((B, L, 6)), valid=valid,
+                    h=np.zeros((B, L - 1)), run=np.arange(B))
+    np.testing.assert_allclose(OE.horizon_errors(r, H), e)
+    w = OE.huber_weights(r, H, 2.0)                       # median 2, c = 4
+    np.testing.assert_allclose(w, [1.0, 1.0, 1.0, 4.0 / 6.0, 1.0])
+    assert np.all(OE.huber_weights(np.zeros_like(r), H, 2.0) == 1.0)   # all exact: least squares
+
+
+def test_robust_refinement_resists_a_horizon_the_structure_cannot_follow(truth, own_run):
+    """Six noise-free runs of the truth and one of a ship whose rudder moment is 40 % weaker: least squares
+    pulls NR_arm towards the odd run, Huber's weights (``OEConfig.robust``) pull it less; the odd horizon
+    is the one down-weighted, and the costs compare under the final weights."""
+    good = [own_run(truth, 70.0, rudder_deg=a, period=p) for a, p in
+            ((10, 30), (15, 40), (20, 30), (25, 40), (30, 30), (35, 40))]
+    odd = own_run(truth.with_coef({"NR_arm": 0.6 * truth.coef["NR_arm"]}), 70.0, rudder_deg=20.0, period=35.0)
+    runs = good + [odd]
+    names = ("NR_arm",)
+    # decimate=1: integrated on the runs' own 0.1-s step, so the good runs are exact at the truth
+    ls = OE.refine(truth, names, runs, config=OE.OEConfig(robust=None, max_iter=6, rtol=1e-6, decimate=1))
+    hub = OE.refine(truth, names, runs, config=OE.OEConfig(robust=2.0, max_iter=6, rtol=1e-6, decimate=1))
+    true = truth.coef["NR_arm"]
+    assert abs(hub.theta[0] - true) < 0.5 * abs(ls.theta[0] - true), (ls.theta, hub.theta, true)
+    assert hub.cost <= hub.cost0
+    H = OE.stack_horizons(runs, 60.0, 1)
+    r = OE.residuals(OE.simulate(ls.model, (), np.zeros((1, 0)), H), H)[0]
+    w = OE.huber_weights(r, H, 2.0)
+    assert w[H.run == 6].max() < 1.0 and np.all(w[H.run < 6] == 1.0), w
+
+
+def test_robust_threshold_must_be_positive(truth, runs_of_truth):
+    with pytest.raises(InputError, match="robust"):
+        OE.refine(truth, ("N_r",), runs_of_truth, config=OE.OEConfig(robust=0.0))

@@ -82,3 +82,39 @@ def test_cv_astern_frees_the_reversed_propeller_terms_and_applies_the_rule(monke
     assert cands["astern-side"]["Y"] == base_cand["Y"] + tuple(f"YP_a{i}" for i in range(5))
     scores["astern-side"] = (1.20, [0.88, 1.30, 1.26, 1.22], 0.51)
     assert X.cv_astern([])["chosen"] == "astern-side"
+
+
+def _summary(score, folds, run_score, run_folds):
+    """A CV summary whose mean-over-runs score is ``run_score`` (ψ̄ / 10° + p̄ / 1 m with p̄ = 0.5 m)."""
+    return {"score": score, "fold_scores": folds, "psi_mean_of_runs": 10.0 * (run_score - 0.5),
+            "pos_mean_of_runs": 0.5, "run_score": run_score, "fold_run_scores": run_folds}
+
+
+def test_run_mean_score_is_the_targets_metric():
+    assert X.run_mean_score({"psi_mean_of_runs": 6.5, "pos_mean_of_runs": 0.55}) == 0.65 + 0.55
+
+
+def test_cv_robust_rule_on_the_mean_over_runs_with_a_pooled_guard(monkeypatch):
+    """cv_robust scores least squares against Huber weights with the same folds and keeps Huber only when it
+    passes rules 1-3 on the mean over left-out runs and its pooled score is not worse by more than 0.02."""
+    from shipid.methods.mmg import output_error as OE
+
+    def run(base, var):
+        calls = []
+
+        def cv(trials, name, cand, *, folds=4, inputs=False, oe_config=None, progress=None, **kw):
+            calls.append(oe_config)
+            return var if oe_config.robust is not None else base
+        monkeypatch.setattr(X, "cv_retimed", cv)
+        out = X.cv_robust([], k=2.0)
+        assert calls[0] == OE.LEAST_SQUARES and calls[1].robust == 2.0 and calls[1].robust_passes == 2
+        return out["decision"]
+
+    base = _summary(1.2335, [0.908, 1.343, 1.296, 1.266], 1.1243, [0.868, 1.072, 1.357, 1.201])
+    measured = _summary(1.2169, [0.861, 1.332, 1.285, 1.258], 1.1016, [0.809, 1.068, 1.344, 1.185])
+    assert run(base, measured)["passes"]
+    worse_pooled = dict(measured, score=1.26)
+    assert not run(base, worse_pooled)["passes"]
+    one_pass = _summary(1.2213, [0.868, 1.344, 1.286, 1.256], 1.1051, [0.817, 1.075, 1.344, 1.185])
+    d = run(base, one_pass)                                   # as measured with one pass: gain 0.019 < 0.02
+    assert not d["passes"] and d["folds_better"] == 3

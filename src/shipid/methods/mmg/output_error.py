@@ -30,6 +30,15 @@ Standard errors: the horizon-cluster sandwich ``(JᵀJ)⁻¹ (Σ_h J_hᵀ r_h r_
 horizon are strongly serially correlated and the plain ``σ² (JᵀJ)⁻¹`` would be far too
 small. With no more horizons than refined coefficients the sandwich is singular (its rank
 is at most the number of clusters) and the covariance is returned as NaN: not determined.
+
+Robust criterion (the default, ``OEConfig.robust``): after the least-squares pass each horizon's sum of
+squares is weighted by Huber's ``min(1, c / e_h)`` (``e_h`` its RMS scaled error, ``c`` twice the median
+horizon's) and the minimisation is repeated, twice, from where it stopped — iteratively reweighted least
+squares for Huber's M-estimate at the horizon level (Huber 1964; Holland & Welsch 1977). The sandwich is
+then that of the weighted criterion with the final weights held fixed (the M-estimator's sandwich up to
+the weights' own dependence on θ, which is zero for every horizon inside ``c``). Chosen by the
+training-run CV of :func:`shipid.methods.mmg.study_ext2.cv_robust`; ``robust=None``
+(:data:`LEAST_SQUARES`) is the plain criterion.
 """
 
 from __future__ import annotations
@@ -50,6 +59,9 @@ PSI_SCALE = np.deg2rad(10.0)
 POS_SCALE = 1.0
 #: Residual given to every sample of a diverged horizon (in scaled units).
 DIVERGED = 10.0
+#: Default Huber threshold of :class:`OEConfig` (multiple of the median horizon error), chosen by the
+#: training-run CV of :func:`shipid.methods.mmg.study_ext2.cv_robust` (one value, fixed before its score).
+ROBUST_K = 2.0
 
 
 @dataclass(frozen=True)
@@ -67,6 +79,14 @@ class OEConfig:
     between the training horizons' starts; None restarts every ``horizon`` seconds (non-overlapping,
     as the CV and the validation score); a shorter stride gives overlapping horizons (more shooting
     nodes from the same runs), whose sandwich covariance then takes whole runs as clusters.
+    ``robust``: None, least squares (:data:`LEAST_SQUARES`); a number ``k`` (default :data:`ROBUST_K`),
+    Huber's M-estimate at the horizon level (Huber 1964, Ann Math Stat 35:73; iteratively reweighted,
+    Holland & Welsch 1977, Commun Stat Theory Methods 6:813): each horizon's sum of
+    squares is weighted by ``min(1, c / e_h)``, ``e_h`` its RMS scaled residual and ``c = k`` times the
+    median of ``e_h`` over the horizons, the weights computed from the unweighted residuals of the
+    previous pass (``robust_passes`` reweighted passes after the least-squares one). A horizon the model
+    cannot follow (a ship at rest turning on its reversed propeller in the wind) then pulls on the
+    coefficients in proportion to its error, not to its square.
     """
 
     horizon: float = 60.0
@@ -79,6 +99,13 @@ class OEConfig:
     exclude_prefixes: tuple[str, ...] = ("YP_a", "NP_b", "XP_c")
     run_weighting: str = "pooled"
     stride: float | None = None
+    robust: float | None = ROBUST_K
+    robust_passes: int = 2
+
+
+#: The plain least-squares refinement (every horizon's sum of squares weighted alike), the default before
+#: the Huber weights; the earlier training-run CVs of :mod:`shipid.methods.mmg.study_ext2` were scored with it.
+LEAST_SQUARES = OEConfig(robust=None)
 
 
 @dataclass(frozen=True)
@@ -160,9 +187,71 @@ def residuals(P: np.ndarray, H: Horizons) -> np.ndarray:
     return r * H.valid[None, :, :, None]
 
 
+def horizon_errors(r: np.ndarray, H: Horizons) -> np.ndarray:
+    """(B,) RMS scaled residual of each horizon: ``sqrt(Σ_k |r_hk|² / n_h)``, ``n_h`` its valid samples."""
+    n = np.maximum(H.valid.sum(axis=1), 1)
+    return np.sqrt(np.sum(r * r, axis=(1, 2)) / n)
+
+
+def huber_weights(r: np.ndarray, H: Horizons, k: float) -> np.ndarray:
+    """(B,) Huber weights ``min(1, c / e_h)`` of the horizons' sums of squares, ``c = k · median(e_h)``.
+
+    ``r``: (B, L, 3) unweighted scaled residuals (:func:`residuals`). The weight of a horizon's sum of
+    squares ``S_h = n_h e_h²`` that makes the weighted least squares stationary where Huber's loss
+    ``ρ_c(e_h)`` is: ``ρ_c'(e_h) / e_h = min(1, c / e_h)`` (``OEConfig.robust``).
+    """
+    e = horizon_errors(r, H)
+    c = float(k) * float(np.median(e))
+    return np.where(e > c, c / np.where(e > 0, e, 1.0), 1.0) if c > 0 else np.ones_like(e)
+
+
+def _levenberg_marquardt(z, r, J, c, exact, fd_jacobian, res_of, th0, S, cost_of, config: OEConfig):
+    """Levenberg–Marquardt iterations of :func:`refine` from ``z`` (residuals ``r``, Jacobian ``J``, cost ``c``).
+
+    Returns ``z, r, J, c, exact, iterations, converged``; ``exact``: ``J`` is the finite-difference
+    Jacobian at ``z``.
+    """
+    mu, it, converged = config.mu0, 0, False
+    for it in range(1, config.max_iter + 1):
+        if not exact and config.jacobian == "every":
+            r, J = fd_jacobian(z, r)
+            exact = True
+        g = J.T @ r.ravel()
+        A = J.T @ J
+        dA = np.diag(np.diag(A))
+        improved, rel = False, 0.0
+        for _ in range(6):
+            try:
+                dz = -np.linalg.solve(A + mu * dA, g)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            rn = res_of((th0 + (z + dz) * S)[None])[0]
+            cn = cost_of(rn)
+            if config.jacobian == "broyden":
+                J = J + np.outer(rn.ravel() - r.ravel() - J @ dz, dz) / float(dz @ dz)
+                exact = False
+            if cn < c:
+                improved = True
+                rel = (c - cn) / c
+                z, c, r = z + dz, cn, rn
+                exact = False
+                mu = max(mu / 3.0, 1e-6)
+                break
+            mu *= 4.0
+        if not improved or rel < config.rtol:
+            converged = True
+            break
+    return z, r, J, c, exact, it, converged
+
+
 @dataclass(frozen=True)
 class OEFit:
-    """Result of :func:`refine`: the model, the refined names, values, sandwich covariance, costs."""
+    """Result of :func:`refine`: the model, the refined names, values, sandwich covariance, costs.
+
+    ``cost0`` and ``cost``: the criterion at the start and at the end, both under the final Huber weights
+    (``OEConfig.robust``), so that ``cost < cost0`` says the refinement lowered what it minimised.
+    """
 
     model: mmg.MmgModel
     names: tuple[str, ...]
@@ -204,7 +293,8 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         wh = np.ones(H.count)
     else:
         raise InputError(f"unknown run_weighting '{config.run_weighting}' (pooled, per-run)")
-    wh = wh[None, :, None, None]
+    wbase = wh[None, :, None, None]
+    wts = {"w": wbase}
     th0 = np.array([model.coef[c] for c in names], float)
     se = np.array([float((se0 or {}).get(c, 0.0)) for c in names])
     S = np.maximum(np.abs(th0), np.nan_to_num(se))
@@ -215,7 +305,7 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
         return float(np.sum(r * r))
 
     def res_of(values):
-        return residuals(simulate(model, names, values, H, compiled), H) * wh
+        return residuals(simulate(model, names, values, H, compiled), H) * wts["w"]
 
     def fd_jacobian(z, r_at_z=None):
         if compiled and r_at_z is not None:
@@ -228,41 +318,32 @@ def refine(model: mmg.MmgModel, names: Sequence[str], trials: Sequence[Trial], s
 
     if config.jacobian not in ("every", "broyden"):
         raise InputError(f"unknown jacobian '{config.jacobian}' (every, broyden)")
+    if config.robust is not None and not config.robust > 0:
+        raise InputError(f"robust must be a positive multiple of the median horizon error, not {config.robust}")
     z = np.zeros(p)
     r, J = fd_jacobian(z)
     exact = True                               # J is the finite-difference Jacobian at z
     c0 = c = cost_of(r)
-    mu, it, converged = config.mu0, 0, False
-    for it in range(1, config.max_iter + 1):
-        if not exact and config.jacobian == "every":
-            r, J = fd_jacobian(z, r)
-            exact = True
-        g = J.T @ r.ravel()
-        A = J.T @ J
-        dA = np.diag(np.diag(A))
-        improved, rel = False, 0.0
-        for _ in range(6):
-            try:
-                dz = -np.linalg.solve(A + mu * dA, g)
-            except np.linalg.LinAlgError:
-                mu *= 10.0
-                continue
-            rn = res_of((th0 + (z + dz) * S)[None])[0]
-            cn = cost_of(rn)
-            if config.jacobian == "broyden":
-                J = J + np.outer(rn.ravel() - r.ravel() - J @ dz, dz) / float(dz @ dz)
-                exact = False
-            if cn < c:
-                improved = True
-                rel = (c - cn) / c
-                z, c, r = z + dz, cn, rn
-                exact = False
-                mu = max(mu / 3.0, 1e-6)
-                break
-            mu *= 4.0
-        if not improved or rel < config.rtol:
-            converged = True
-            break
+    it_total, converged = 0, False
+    for pass_ in range(1 + (config.robust_passes if config.robust is not None else 0)):
+        if pass_:
+            if not exact:
+                r, J = fd_jacobian(z, r)
+                exact = True
+            # the weights are fixed within a pass and positive: the residuals and the Jacobian at z under the
+            # new weights are the old ones rescaled per horizon (no new simulation)
+            w_old = wts["w"][0]
+            wts["w"] = wbase * np.sqrt(huber_weights(r / w_old, H, config.robust))[None, :, None, None]
+            ratio = wts["w"][0] / w_old                                   # (B, 1, 1)
+            r = r * ratio
+            J = J * np.broadcast_to(ratio, r.shape).reshape(-1, 1)
+            c = cost_of(r)
+        z, r, J, c, exact, it, converged = _levenberg_marquardt(z, r, J, c, exact, fd_jacobian, res_of, th0, S,
+                                                                cost_of, config)
+        it_total += it
+    it = it_total
+    if config.robust is not None:
+        c0 = cost_of(res_of(th0[None])[0])       # the start under the final weights: the same objective as c
     if not exact:
         r, J = fd_jacobian(z, r)
     # sandwich covariance (clusters = horizons, or whole runs where the horizons overlap) with the
@@ -325,5 +406,5 @@ def refined_fit(f, trials: Sequence[Trial], config: OEConfig = OEConfig(), H: Ho
     return replace(f, model=oe.model.with_coef({}, name=f.model.name), fits=fits), oe
 
 
-__all__ = ["OEConfig", "OEFit", "Horizons", "stack_horizons", "cluster_index", "simulate", "residuals", "refine", "refinable",
-           "refined_fit"]
+__all__ = ["ROBUST_K", "LEAST_SQUARES", "OEConfig", "OEFit", "Horizons", "stack_horizons", "cluster_index",
+           "simulate", "residuals", "horizon_errors", "huber_weights", "refine", "refinable", "refined_fit"]

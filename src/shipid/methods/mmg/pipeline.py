@@ -407,7 +407,11 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
             "refined": list(oe.names), "cost_start": oe.cost0, "cost_end": oe.cost, "iterations": oe.iterations,
             "rtol_reached": oe.converged, "horizons": oe.horizons,
             "note": "Levenberg-Marquardt stopped after at most max_iter iterations (early stopping, the "
-                    "setting the training-run CV compared)",
+                    "setting the training-run CV compared)" + (
+                        "" if oe_config.robust is None else
+                        f" in each of 1 + {oe_config.robust_passes} passes, horizons Huber-weighted beyond "
+                        f"{oe_config.robust:g} x the median horizon error after the first; costs under the "
+                        "final weights"),
             "config": {k: (list(v) if isinstance(v, tuple) else v) for k, v in oe_config.__dict__.items()}}
         if not oe.cost < oe.cost0:
             res.diagnostics.warnings.append("output-error refinement did not lower the horizon error; the "
