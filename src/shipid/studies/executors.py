@@ -102,11 +102,13 @@ def resolve_task(ref: str) -> Callable:
 # --------------------------------------------------------------------------------------
 # What runs on a worker
 # --------------------------------------------------------------------------------------
-BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: Thread counts set to 1 in every worker process: the BLAS libraries' and shipid's own compiled row
+#: simulation's (``SHIPID_THREADS``, :func:`shipid.models.mmg_kernels.threads`): the workers are the parallelism.
+BLAS_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "SHIPID_THREADS")
 
 
 def _worker_init() -> None:
-    """Process-pool initializer: one BLAS thread per worker, and exit with the main process.
+    """Process-pool initializer: one BLAS (and row-simulation) thread per worker, and exit with the main process.
 
     BLAS libraries loaded later read the environment; those already loaded are limited
     per chunk with threadpoolctl. ``concurrent.futures`` workers otherwise outlive a

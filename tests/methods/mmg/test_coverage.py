@@ -430,3 +430,33 @@ def test_summary_warns_once_about_runs_whose_imo_criteria_could_not_be_computed(
     assert len(lines) == 1 and "1 of 3" in lines[0] and "no straight-line equilibrium speed" in lines[0]
     assert not any("IMO criteria of" in w for w in summarise([run(crit), run(crit)])["warnings"])
 
+
+
+def test_summary_of_refined_runs_gives_the_starts_error_and_the_coverage_with_the_shift():
+    """Runs refined by output error carry each coefficient's regression start: the summary gives that start's
+    relative error and the coverage of +-2 std with the shift counted as one std."""
+    from shipid.methods.mmg.coverage import summarise
+
+    def run(value, start):
+        return {"coefficients": {"N_r": {"true": -0.05, "value": value, "std": 0.001, "status": "estimated",
+                                         "start": start}}}
+
+    # errors 0.004 (4 std; with the shift 0.004: hypot 0.0041 -> covered) and 0.004 (shift 0.001 -> not)
+    s = summarise([run(-0.046, -0.050), run(-0.046, -0.047)])
+    t = s["table"]["N_r"]
+    assert t["coverage_2std"] == 0.0 and t["coverage_2std_with_shift"] == 0.5
+    assert t["bias_rel_start"] == pytest.approx((0.0 + 0.06) / 2)            # starts -0.050 and -0.047
+    assert "coverage_2std_with_shift" not in summarise([{"coefficients": {"N_r": {
+        "true": -0.05, "value": -0.048, "std": 0.001, "status": "estimated"}}}])["table"]["N_r"]
+
+
+def test_run_one_refines_when_asked_and_records_the_start(esso_published):
+    """run_one(refine='output-error'): the record holds the refinement (start values of every refined
+    coefficient, its horizons) and each refined coefficient's start."""
+    from shipid.methods.mmg.coverage import run_one
+
+    o = run_one(0, seed=5, seconds=300.0, refine="output-error", criterion="least-squares")
+    oe = o["output_error"]
+    assert oe["horizons"] == 20 and set(oe["start"]) == set(oe["refined"])
+    for nm in oe["refined"]:
+        assert o["coefficients"][nm]["start"] == oe["start"][nm]

@@ -228,3 +228,25 @@ def test_robust_refinement_resists_a_horizon_the_structure_cannot_follow(truth, 
 def test_robust_threshold_must_be_positive(truth, runs_of_truth):
     with pytest.raises(InputError, match="robust"):
         OE.refine(truth, ("N_r",), runs_of_truth, config=OE.OEConfig(robust=0.0))
+
+
+def test_refined_std_count_the_shift_from_the_regression(truth, noisy_run):
+    """identify(refine='output-error'): each refined coefficient's variance holds its shift from the regression
+    start squared (the shift counts as one std, pipeline._covariance), the start is recorded, and the
+    coefficients moved beyond 2 sandwich SE are named in one warning line."""
+    runs = [noisy_run(truth, s, 300.0) for s in (51, 52, 53, 54)]          # 20 horizons for 15 coefficients
+    ref = P.identify(runs, truth, structure="hull+rudder+thrust", select=False, refine="output-error",
+                     oe_config=OE.OEConfig(max_iter=2))
+    d = ref.diagnostics["output_error"]
+    assert set(d["start"]) == set(d["refined"]) and d["horizons"] == 20
+    names = list(ref.covariance_names)
+    cov = np.asarray(ref.covariance)
+    for c in d["refined"]:
+        shift = ref.estimates[c].value - d["start"][c]
+        k = names.index(c)
+        assert np.isfinite(cov[k, k]) and cov[k, k] >= shift * shift * (1 - 1e-12)
+        assert "shift from the regression" in ref.estimates[c].note
+    assert "shift from the regression estimate counted as one standard deviation" in ref.diagnostics["covariance"]["kind"]
+    lines = [w for w in ref.diagnostics["warnings"] if w.startswith("output-error refinement moved")]
+    assert len(lines) == (1 if d["moved_over_2se"] else 0)
+    assert set(d["moved_over_2se"]) <= set(d["refined"])

@@ -37,20 +37,25 @@ def _fmt(x, spec):
 @click.option("--rudder-rate", type=click.FloatRange(min=0.1), default=None,
               help="Rudder rate of the simulated steering gear, deg/s [default: Esso the IMO 2.32 deg/s Froude-scaled "
                    "to the 3-m model, 24.1; KVLCC2 the HSVA runs' 13]; 'inf' for instantaneous steps.")
+@click.option("--refine", type=click.Choice(["none", "output-error"]), default="none", show_default=True,
+              help="Refine each fit by output error (shipid.methods.mmg.output_error, the Esso default of "
+                   "identify mmg): its horizon-cluster sandwich std are then the ones compared.")
+@click.option("--criterion", type=click.Choice(["huber", "least-squares"]), default="huber", show_default=True,
+              help="With --refine output-error: the refinement's criterion (OEConfig.robust or LEAST_SQUARES).")
 @click.option("--imo-samples", type=click.IntRange(min=0), default=0, show_default=True,
               help="Also check the IMO criteria's bands (shipid imo) against the truth's, with this many Monte "
                    "Carlo draws per run (0: no IMO check).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
 @strict_option
-def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, imo_samples, as_json, out, force,
-                 campaign):
+def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, refine, criterion, imo_samples,
+                 as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).
 
     Per run: coefficients x (1 + 0.15 N(0,1)), noise levels drawn per run, the vessel's manoeuvres, then
     `identify mmg` with its fixed structure (Esso: hull+rudder+thrust; KVLCC2: full/symmetric-gamma_R)
-    and no refinement. Prints per free coefficient the bias and spread of the relative error and the
-    coverage of +-2 std.
+    and no refinement unless --refine says so. Prints per free coefficient the bias and spread of the
+    relative error and the coverage of +-2 std.
     """
     from shipid.methods.mmg.coverage import VESSELS, summarise
 
@@ -58,6 +63,7 @@ def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, 
     seconds = ves.seconds if seconds is None else float(seconds)
     kw = {"seconds": seconds, "equation": equation, "window_s": window_s, "simex": simex,
           **({"imo_samples": imo_samples} if imo_samples else {}),
+          **({"refine": refine, "criterion": criterion} if refine != "none" else {}),
           **({} if rudder_rate is None else {"rudder_rate": float(rudder_rate)}),
           **({} if vessel == "esso-osaka" else {"vessel": vessel})}
     res = replace(campaign, progress=not as_json).run("shipid.methods.mmg.coverage:run_one", runs, kwargs=kw,
@@ -67,7 +73,8 @@ def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, 
     s.update({"vessel": vessel, "structure": ves.structure, "seed": campaign.seed, "seconds": seconds,
               "failed": res.n_failed, "equation": equation, "window_s": window_s, "simex": simex,
               "rudder_rate": ves.rudder_rate if rudder_rate is None else float(rudder_rate),
-              "imo_samples": imo_samples, **({"imo_rps": ves.rps} if imo_samples else {})})
+              "imo_samples": imo_samples, "refine": refine,
+              **({"criterion": criterion} if refine != "none" else {}), **({"imo_rps": ves.rps} if imo_samples else {})})
     s["warnings"] = loud_lines(failure_lines(res) + s["warnings"])
     emit(s, as_json=as_json, out=out, force=force, text=lambda: _table(res, s))
 
@@ -77,14 +84,24 @@ def _table(res, s: dict) -> None:
     click.echo(f"MMG coverage study ({s['vessel']}, {s['structure']}): {s['runs']} runs, seed {s['seed']}, "
                f"{s['seconds']:g} s per manoeuvre")
     wf = any("coverage_2std_with_form" in t for t in s["table"].values())
+    ws = any("coverage_2std_with_shift" in t for t in s["table"].values())
+    if ws:
+        click.echo("refined by output error: 'start' the regression estimate it started from, 'with shift' the "
+                   "+-2 std with the refinement's shift counted as one std")
     click.echo(f"{'coefficient':<12}{'estimated':>10}{'bias %':>10}{'spread %':>10}{'cover 2sd':>10}"
-               + (f"{'with form':>10}" if wf else ""))
+               + (f"{'with form':>10}" if wf else "")
+               + (f"{'start b %':>10}{'start s %':>10}{'with shift':>11}" if ws else ""))
     for nm, t in s["table"].items():
         b = None if t["bias_rel"] is None else 100 * t["bias_rel"]
         sp = None if t["spread_rel"] is None else 100 * t["spread_rel"]
+        extra = ""
+        if ws:
+            bs, ss = t.get("bias_rel_start"), t.get("spread_rel_start")
+            extra = (_fmt(None if bs is None else 100 * bs, '10.1f') + _fmt(None if ss is None else 100 * ss, '10.1f')
+                     + _fmt(t.get("coverage_2std_with_shift"), '11.2f'))
         click.echo(f"{nm:<12}{t['estimated']:>6d}/{t['runs']:<3d}{_fmt(b, '10.1f')}{_fmt(sp, '10.1f')}"
                    f"{_fmt(t['coverage_2std'], '10.2f')}" + (_fmt(t.get("coverage_2std_with_form"), '10.2f')
-                                                              if wf else ""))
+                                                              if wf else "") + extra)
     fc = s.get("form_check")
     if fc:
         top = sorted(fc["by_coefficient"].items(), key=lambda kv: -kv[1])[:6]
