@@ -140,3 +140,31 @@ def test_thread_count_follows_the_batch_and_the_environment(monkeypatch):
     assert mmg_kernels.threads(3) == 1
     monkeypatch.setenv("SHIPID_THREADS", "zero")                             # not a count: the default
     assert 1 <= mmg_kernels.threads(10 ** 6) <= mmg_kernels.MAX_THREADS
+
+
+def _child_simulates(conn, model, Th, x0, U, h):
+    conn.send(cv_fast.simulate_rows(model, Th, x0, U, h))
+    conn.close()
+
+
+def test_a_forked_child_starts_its_own_threads(published, monkeypatch):
+    """After the parent has used its thread pool, a forked child (its threads are not copied) simulates a
+    threaded batch to the same numbers instead of waiting on the parent's dead workers."""
+    import multiprocessing
+
+    model = _model(published, "esso-lowspeed-ext")
+    x0, U, h = _rows(10, B=2 * mmg_kernels.MIN_ROWS_PER_THREAD, L=11)
+    Th = {m: np.broadcast_to(model.theta(m), (x0.shape[0], model.theta(m).size)) for m in mmg.MODES}
+    monkeypatch.setenv("SHIPID_THREADS", "2")
+    parent = cv_fast.simulate_rows(model, Th, x0, U, h)
+    ctx = multiprocessing.get_context("fork")
+    a, b = ctx.Pipe(duplex=False)
+    p = ctx.Process(target=_child_simulates, args=(b, model, Th, x0, U, h))
+    p.start()
+    ready = a.poll(60)
+    got = a.recv() if ready else None
+    p.join(10)
+    if p.is_alive():
+        p.kill()
+    assert ready, "the forked child did not finish its threaded simulation"
+    assert np.array_equal(got, parent, equal_nan=True)

@@ -352,6 +352,8 @@ MIN_ROWS_PER_THREAD = 64
 #: Most threads :func:`threads` uses unless ``SHIPID_THREADS`` says otherwise.
 MAX_THREADS = 4
 _POOL: dict[int, ThreadPoolExecutor] = {}
+if hasattr(os, "register_at_fork"):       # a forked child has none of the parent's threads: it starts its own pools
+    os.register_at_fork(after_in_child=_POOL.clear)
 
 
 def threads(rows: int) -> int:

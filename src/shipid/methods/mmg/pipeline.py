@@ -399,8 +399,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     res = build_result(f, cprior, runs, structure_name=structure, selection=selection,
                        smooth_config=smooth_config, fit_config=fit_config, extra_provenance=extra_provenance,
                        overrides=cand.get("particulars"),
-                       covariance=_covariance(f_naive, f, runs, cprior, fit_config, oe, simex_info,
-                                              start=start if oe is not None else None))
+                       covariance=_covariance(f_naive, f, runs, cprior, fit_config, oe, simex_info, start))
     res.model["training_conditions"] = training_conditions(trials)
     line = equilibrium_line(res.model)
     if line:
@@ -427,7 +426,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
                                         "sandwich SE with the shift from the regression estimate "
                                         f"{start[c]:.6g} as one std" + why)
             se = float(np.sqrt(oe.cov[j, j])) if np.isfinite(oe.cov[j, j]) and oe.cov[j, j] >= 0 else np.nan
-            if not abs(e.value - start[c]) <= 2.0 * se:
+            if np.isfinite(se) and abs(e.value - start[c]) > 2.0 * se:       # NaN sandwich: said per coefficient
                 moved.append(c)
         if moved:
             res.diagnostics.warnings.append(
