@@ -4,7 +4,7 @@ Issue 7 asks for the 10 000-run Table-3 study (seed 000, Linder et al. 2015, §5
 with 1 and 2 local workers and with a 2-worker LocalCluster, goal <= 60 s and >= 1.8x
 from 1 to 2 workers on a 2-core machine. The per-run function of that study is looked
 up in :mod:`shipid.methods.masscm.estimator` (``--task`` names another); when none exists the
-benchmark falls back to the toy task (:func:`shipid.studies.toy.toy_run`) and says so.
+benchmark falls back to the toy task (:func:`shipid.campaign.toy.toy_run`) and says so.
 
 The three executions must give identical outputs (checked here, bit for bit); the
 script prints wall times and the ratios against the 1-worker run, which is the peer
@@ -14,7 +14,7 @@ Usage::
 
     .venv/bin/python benchmarks/bench_campaign.py                 # Table-3 task if present, 10 000 runs
     .venv/bin/python benchmarks/bench_campaign.py --runs 200 --skip-dask   # a quick, extrapolated look
-    .venv/bin/python benchmarks/bench_campaign.py --runs 2000 --task shipid.studies.toy:toy_run \\
+    .venv/bin/python benchmarks/bench_campaign.py --runs 2000 --task shipid.campaign.toy:toy_run \\
         --kwargs '{"n": 20000}'
     .venv/bin/python benchmarks/bench_campaign.py --store        # also time the 2-worker run into a store
 """
@@ -29,14 +29,14 @@ import sys
 import tempfile
 import time
 
-from shipid.studies.engine import available_cpus, run_campaign
+from shipid.campaign.engine import available_cpus, run_campaign
 
 # where the Table-3 per-run function may live (first found wins), with the kwargs of
 # `shipid study mass-cm-sensitivity` defaults (z_f known, initial values as drawn, data seed 0)
 TABLE3_CANDIDATES = (("shipid.methods.masscm.study", "run_one"),
                      ("shipid.methods.masscm.estimator", "table3_run"), ("shipid.methods.masscm.estimator", "sensitivity_run"))
 TABLE3_KWARGS = {"zf_mode": "known", "data_seed": 0, "init": "given"}
-TOY = "shipid.studies.toy:toy_run"
+TOY = "shipid.campaign.toy:toy_run"
 
 
 def find_table3_task() -> str | None:

@@ -16,7 +16,7 @@ import numpy as np
 
 from shipid.methods.masscm.crlb import crlb
 from shipid.models.roll_sim import NoiseSpec
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 
 
 def main():

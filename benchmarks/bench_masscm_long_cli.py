@@ -66,7 +66,7 @@ from pathlib import Path
 
 import numpy as np
 
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 

@@ -25,7 +25,7 @@ import warnings
 
 import numpy as np
 
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 
 TASK = "shipid.methods.monitor.study:monitor_run"
 
@@ -51,7 +51,7 @@ def study(runs: int, seed: int, noise: str = "issue3", noise_model: str | None =
 
 
 def speed() -> None:
-    from shipid.data.trial import Trial
+    from shipid.io.trial import Trial
     from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
     from shipid.methods.monitor.estimator import run_monitor
     from shipid.models.roll_reduced import KnownParams

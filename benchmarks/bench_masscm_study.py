@@ -13,13 +13,13 @@ Not a test: it prints timings and ratios, asserts nothing about speed.
      the raw samples of the three datasets (no instruments, no prefilter), from the same initial values.
    Prints ms/run (wall and CPU), the ratios, and the Table-3 means/stds (fast and reference must agree
    run by run: the largest per-run difference of m is printed).
-2. The study through the campaign engine (:func:`shipid.studies.engine.run_campaign`, with the task's
+2. The study through the campaign engine (:func:`shipid.campaign.engine.run_campaign`, with the task's
    ``warm_up`` as ``shipid study mass-cm-sensitivity`` runs it): wall time of RUNS runs with 1 and 2
    local worker processes and with a 2-worker Dask ``LocalCluster``; the 1 -> 2 worker speed-up; the
    Table-3 means / stds of each; the mean CPU time per run measured inside the workers (how much two
    busy cores slow each other). With RUNS < 10 000 the 10 000-run time is extrapolated (labelled so).
    The numba kernels are compiled (or loaded from the on-disk cache) once before timing; the workers
-   are forked from a forkserver that ran the warm-up once (:mod:`shipid.studies.worker_preload`; its
+   are forked from a forkserver that ran the warm-up once (:mod:`shipid.campaign.worker_preload`; its
    start is inside the timing of the first multi-worker campaign). ROUNDS > 1 repeats the modes in
    alternating order (1,2,dask / dask,2,1 / ...) so that a drift of the shared machine's speed (it moves
    by up to ~30 % between minutes) does not favour one mode; the speed-up is printed per round and as
@@ -43,7 +43,7 @@ from threadpoolctl import threadpool_limits
 from shipid.methods.masscm.estimator import MassCMOptions
 from shipid.methods.masscm.study import prepared, draw_initial, run_one, summarise, warm_up
 from shipid.models.roll_reduced import THETA_NAMES, discrete_coeffs, from_moment, to_moment
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 
 ZF = -0.028
 TASK = "shipid.methods.masscm.study:run_one"

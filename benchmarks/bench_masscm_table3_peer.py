@@ -3,7 +3,7 @@
 Not a test: it prints timings and ratios and asserts nothing about speed.
 
 What ``shipid study mass-cm-sensitivity --runs RUNS --workers WORKERS`` runs (z_f known, init "given", data
-seed 0, campaign seed 0, the task's ``warm_up``), through :func:`shipid.studies.engine.run_campaign`, once in
+seed 0, campaign seed 0, the task's ``warm_up``), through :func:`shipid.campaign.engine.run_campaign`, once in
 this tree and once in the peer tree (default ``/tmp/peer17/src``: a checkout of the commit before issue 17's
 first change, 83c235a, made with ``git worktree add --detach /tmp/peer17 83c235a``), each in a fresh process
 with ``PYTHONPATH`` set to its ``src``. Rounds alternate the order (this, peer / peer, this, ...) so that the
@@ -40,7 +40,7 @@ CHILD = r"""
 import importlib, json, os, sys, time, warnings
 import numpy as np
 import shipid
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 warnings.simplefilter("ignore")
 runs, workers, out = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
 try:

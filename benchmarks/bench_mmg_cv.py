@@ -131,7 +131,7 @@ def _max_rel(a, b):
 
 
 def _oe_chosen():
-    from shipid.data.basins import read_esso
+    from shipid.io.basins import read_esso
     from shipid.methods.mmg import estimator as R, pipeline as P, study_oe as SO
     from shipid.methods.mmg.candidates_asym import asym_variants
     from shipid.methods.mmg.candidates_surge import surge_variants

@@ -1,7 +1,7 @@
 """Suite-wide fixtures and checks.
 
 With ``CI`` set to a true value (``.ci/run`` sets ``CI=true``), a missing real-data folder
-(``../shared/data`` or ``$SHIPID_DATA``, see :func:`shipid.data.paths.data_root`) stops the run
+(``../shared/data`` or ``$SHIPID_DATA``, see :func:`shipid.io.paths.data_root`) stops the run
 at once instead of letting the real-data tests skip: a CI run that skipped them would stay green
 while checking less than it claims.
 
@@ -36,7 +36,7 @@ import pytest
 if str(Path(__file__).parent) not in sys.path:      # `import known.<paper>` from any test module
     sys.path.insert(0, str(Path(__file__).parent))
 
-from shipid.data.paths import data_root
+from shipid.io.paths import data_root
 
 #: Python's warning format: "<file>.py:<line>: <Category>Warning: <message>" (and friends).
 RAW_WARNING = re.compile(r":\d+: \w*Warning\b|^\s*warnings\.warn\(")

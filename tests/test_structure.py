@@ -43,7 +43,7 @@ PENDING: dict[str, tuple[str, ...]] = {
 #: Modules whose ``importlib`` calls are plug-in discovery (the method registry, the demo's steps).
 PLUGIN_LOOKUPS = ("shipid.registry", "shipid.demo")
 
-SHARED = ("data", "estimate", "models", "simulate", "studies", "report", "analysis", "result", "outputs",
+SHARED = ("io", "estimate", "models", "simulate", "campaign", "report", "analysis", "result", "outputs",
           "progress", "registry")
 
 
@@ -282,18 +282,18 @@ def test_shared_layers_never_import_methods():
 # --- the checker checks itself on small made-up packages -------------------------------------------------
 
 def test_checker_resolves_relative_and_submodule_imports():
-    node = ast.parse("from .io import read_trial").body[0]
-    assert _base("shipid.data.nmea", node) == "shipid.data.io"
+    node = ast.parse("from .files import read_trial").body[0]
+    assert _base("shipid.io.nmea", node) == "shipid.io.files"
     node = ast.parse("from ..errors import InputError").body[0]
-    assert _base("shipid.data.nmea", node) == "shipid.errors"
-    node = ast.parse("from . import io").body[0]
-    assert _targets("shipid.data", node) == [("shipid.data.io", None)]
-    node = ast.parse("from shipid.data import Trial").body[0]
-    assert _targets("shipid.data.io", node) == [("shipid.data", "Trial")]
+    assert _base("shipid.io.nmea", node) == "shipid.errors"
+    node = ast.parse("from . import files").body[0]
+    assert _targets("shipid.io", node) == [("shipid.io.files", None)]
+    node = ast.parse("from shipid.io import Trial").body[0]
+    assert _targets("shipid.io.files", node) == [("shipid.io", "Trial")]
 
 
 def test_checker_sees_lazy_imports_and_spares_pep562():
-    tree = ast.parse("import importlib\ndef f():\n    from shipid.data import io\n"
+    tree = ast.parse("import importlib\ndef f():\n    from shipid.io import files\n"
                      "    return importlib.import_module('shipid.report.html')\n"
                      "def __getattr__(name):\n    from shipid.report import html\n")
     MODULES["shipid._probe"] = PKG / "_probe" / "__init__.py"
@@ -302,7 +302,7 @@ def test_checker_sees_lazy_imports_and_spares_pep562():
         found = sorted(t for _n, t, _m in _function_imports("shipid._probe"))
     finally:
         del MODULES["shipid._probe"], TREES["shipid._probe"]
-    assert found == ["shipid.data.io", "shipid.report.html"]
+    assert found == ["shipid.io.files", "shipid.report.html"]
 
 
 def test_checker_finds_a_cycle():

@@ -15,7 +15,7 @@ From Python: ``shipid.identify(method, trials, vessel=..., options=...)``, ``shi
 #: (``__version__`` too: importlib.metadata alone takes about 0.1 s to import).
 _LAZY = {
     "identify": "shipid.api", "validate": "shipid.api", "METHODS": "shipid.api",
-    "read_trial": "shipid.data.io", "write_trial": "shipid.data.io", "Trial": "shipid.data.trial",
+    "read_trial": "shipid.io.files", "write_trial": "shipid.io.files", "Trial": "shipid.io.trial",
     "Result": "shipid.result", "Estimate": "shipid.result", "load_vessel": "shipid.vessels",
 }
 

@@ -6,8 +6,8 @@ identified model; ``shipid.simulate`` runs a packaged vessel through a standard 
 methods are named as ``shipid identify --help`` lists them; :data:`METHODS` maps each name to its
 paper, its options class and the trials it takes.
 
-Trials may be :class:`~shipid.data.trial.Trial` objects or file paths (read with
-:func:`shipid.data.io.read_trial` and the channels the method needs).
+Trials may be :class:`~shipid.io.trial.Trial` objects or file paths (read with
+:func:`shipid.io.files.read_trial` and the channels the method needs).
 
 Examples
 --------

@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.errors import InputError, ShipidError
 from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
 from shipid.simulate.metrics import turning_metrics, zigzag_metrics

@@ -8,7 +8,7 @@ defect has them), no traceback, no raw Python warning, and must not write its ou
 import pytest
 
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.ebm.trials import simulate_trial
 
 ROW = 10  # the data row (0-based) a defect is put in; reported as file row 11 (header is row 0... 1-based data)

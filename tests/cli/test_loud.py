@@ -15,7 +15,7 @@ import click
 import pytest
 
 from shipid.cli import _common, cli, main
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.result import Estimate, Result
 
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root
-from shipid.data.io import read_trial
+from shipid.io import data_root
+from shipid.io.files import read_trial
 from shipid.simulate.manoeuvres import run_manoeuvre
 from shipid.simulate.nomoto import nomoto_model
 

@@ -9,7 +9,7 @@ import json
 import pytest
 
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.ebm.trials import simulate_trial
 from shipid.models.roll_sim import simulate_datasets
 

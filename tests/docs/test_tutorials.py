@@ -84,7 +84,7 @@ def test_there_is_a_tutorial_per_method():
 @pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
 def test_tutorial_runs_and_prints_what_it_shows(path, tmp_path):
     if _needs_realdata(path):
-        from shipid.data.paths import data_root
+        from shipid.io.paths import data_root
 
         if data_root() is None:
             pytest.skip("needs ../shared/data or $SHIPID_DATA")

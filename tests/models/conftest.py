@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.models import mmg
 
 

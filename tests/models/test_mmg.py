@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.models import mmg
 
 ROOT = data_root()

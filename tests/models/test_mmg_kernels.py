@@ -15,7 +15,7 @@ and in the last bits of atan2 / hypot / pow (numpy's SIMD versions against libm'
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import cv_fast
 from shipid.models import mmg, mmg_kernels
 from shipid.models.mmg_esso_ext import EXT_COEFS

@@ -314,7 +314,7 @@ def esso_mmg_report(tmp_path_factory):
     import sys
 
     from shipid.cli.report_cmds import load_result
-    from shipid.data.paths import data_root
+    from shipid.io.paths import data_root
     from shipid.report import build_report
 
     root = data_root()

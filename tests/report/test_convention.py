@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.report.convention import contour, history, matrix, overlay, signal, table, trial_summary
 from shipid.result import Estimate, Result
 

@@ -48,7 +48,7 @@ def test_fallback_result_is_saved_and_reported(tmp_path, monkeypatch):
 
 @pytest.mark.realdata
 def test_real_data_report_with_held_out_validation(tmp_path):
-    from shipid.data.paths import data_root
+    from shipid.io.paths import data_root
 
     root = data_root()
     if root is None or not (root / "kvlcc2_hsva").is_dir():

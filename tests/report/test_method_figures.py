@@ -174,7 +174,7 @@ def test_identify_ebm_figures_flag_adds_fig7(tmp_path, capsys, monkeypatch):
     import json
 
     from shipid.cli import main
-    from shipid.data.io import write_trial
+    from shipid.io.files import write_trial
     from shipid.methods.ebm import series as ebm_series
     from shipid.methods.ebm.trials import simulate_trial
 

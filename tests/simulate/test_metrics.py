@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.simulate.manoeuvres import run_manoeuvre
 from shipid.simulate.metrics import heading_overshoots, turning_metrics, zigzag_metrics

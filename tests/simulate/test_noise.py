@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.signal import welch
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.simulate.noise import (MeasurementModel, as_generator, gauss_markov, gauss_markov_process,
                                    wave_process, wave_process_model, white_noise)
 

@@ -1,6 +1,6 @@
 """Shared campaign options for ``shipid study`` commands, and the store commands.
 
-Any study that repeats work should run through :func:`shipid.studies.engine.run_campaign`
+Any study that repeats work should run through :func:`shipid.campaign.engine.run_campaign`
 and take its execution options from :func:`campaign_options`::
 
     import click
@@ -19,7 +19,7 @@ and take its execution options from :func:`campaign_options`::
 The decorator adds ``--seed S`` (default 0), ``--workers W``, ``--dask-local N``,
 ``--scheduler tcp://HOST:PORT``, ``--store FILE``, ``--resume`` and ``--retry-failed``, and hands the
 command one keyword argument ``campaign``, a
-:class:`shipid.studies.engine.CampaignOptions` (``campaign.seed``,
+:class:`shipid.campaign.engine.CampaignOptions` (``campaign.seed``,
 ``campaign.run(...)``, ``campaign.engine_kwargs()``). Use
 ``@campaign_options(seed_default=S)`` for another default seed.
 
@@ -41,7 +41,7 @@ import click
 from shipid.cli import study
 from shipid.cli._common import emit, loud_lines, out_options
 from shipid.errors import ShipidError
-from shipid.studies.engine import CampaignOptions, CampaignResult
+from shipid.campaign.engine import CampaignOptions, CampaignResult
 
 
 def campaign_options(f=None, *, seed_default: int = 0):
@@ -120,7 +120,7 @@ def toy(runs, points, fail_every, sleep, as_json, out, force, campaign):
     Useful as a smoke test of an executor or a cluster: the same --seed gives the
     same numbers with --workers, --dask-local or --scheduler.
     """
-    res = campaign.run("shipid.studies.toy:toy_run", runs, name="toy",
+    res = campaign.run("shipid.campaign.toy:toy_run", runs, name="toy",
                        kwargs={"n": points, "fail_every": fail_every, "sleep": sleep})
     slopes = [o["b"] for o in res.outputs if o is not None]
     mean = math.fsum(slopes) / len(slopes) if slopes else None
@@ -142,7 +142,7 @@ def toy(runs, points, fail_every, sleep, as_json, out, force, campaign):
 @click.option("--campaign", default=None, help="Campaign name (needed when the store holds several).")
 def export(store, as_json, out, force, campaign):
     """Export a campaign store to Parquet or CSV, one row per run."""
-    from shipid.studies.store import export_store
+    from shipid.campaign.store import export_store
 
     path, n = export_store(store, out, campaign=campaign, force=force)
     click.echo(f"wrote {n} runs to {path}", err=True)
@@ -157,7 +157,7 @@ def store_info(store, as_json, out, force):
     """List the campaigns in a store with their definition and progress."""
     from pathlib import Path
 
-    from shipid.studies.store import CampaignStore
+    from shipid.campaign.store import CampaignStore
 
     if not Path(store).is_file():
         raise ShipidError(f"{store}: no such store")

@@ -1,6 +1,6 @@
 """``shipid check`` and ``shipid convert``: the trial-data front door on the command line.
 
-Both read a trial with :func:`shipid.data.read_trial`, so every problem in the file
+Both read a trial with :func:`shipid.io.read_trial`, so every problem in the file
 is answered with one line naming file, channel and row, and exit status 2.
 """
 
@@ -11,7 +11,7 @@ import numpy as np
 
 from shipid.cli import cli
 from shipid.cli._common import emit, out_options
-from shipid.data.io import FORMATS, parse_channel_map, read_trial, write_trial
+from shipid.io.files import FORMATS, parse_channel_map, read_trial, write_trial
 
 
 def _read_options(f):

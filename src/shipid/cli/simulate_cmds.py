@@ -80,7 +80,7 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     if seed < 0:
         raise ShipidError(f"--seed must be >= 0, got {seed}")
     model = get_ship_model(vessel)
-    from shipid.data.io import write_trial
+    from shipid.io.files import write_trial
     from shipid.progress import progress_bar
 
     dur = spec.default_duration if duration is None else duration

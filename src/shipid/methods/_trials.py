@@ -5,8 +5,8 @@ from __future__ import annotations
 import os
 from typing import Any, Mapping, Sequence
 
-from shipid.data.io import read_trial
-from shipid.data.trial import Trial
+from shipid.io.files import read_trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 
 Trialish = Trial | str | os.PathLike

@@ -49,7 +49,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from shipid.data.paths import data_root
+from shipid.io.paths import data_root
 from shipid.errors import InputError
 from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa, crossflow_integrals, cubic_hull,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
@@ -350,7 +350,7 @@ def load_esso_osaka_published(root: Path | None = None) -> MmgModel:
     """The published MMG set of the 3 m Esso Osaka (mmg-1p1r-simulator, commit c54ef807).
 
     Read from ``params/esso_osaka_3m_mmg_{principal_particulars,MMG_params,model_switch}.csv``
-    under :func:`shipid.data.data_root` (or ``root``). Only the model switches of the
+    under :func:`shipid.io.data_root` (or ``root``). Only the model switches of the
     published file (all 1: Hachii thrust, Ueno side force, rudder force when reversing,
     Fujii normal force, Yoshimura inflow, uniform true wind) are implemented; other
     switch values raise :class:`InputError`.

@@ -113,7 +113,7 @@ def trial_summary(trial, name: str | None = None, *, channels: Iterable[str] | N
 
     Parameters
     ----------
-    trial : shipid.data.trial.Trial
+    trial : shipid.io.trial.Trial
     name : str, optional
         File name or label; defaults to ``trial.meta["source"]``.
     channels : iterable of str, optional

@@ -20,7 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 import shipid
-from shipid.data.trial import CHANNELS
+from shipid.io.trial import CHANNELS
 from shipid.errors import OutputExistsError
 from shipid.outputs import atomic_write_text
 from shipid import registry as method_registry

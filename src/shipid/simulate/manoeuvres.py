@@ -41,7 +41,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 import shipid
-from shipid.data.trial import CHANNELS, Trial
+from shipid.io.trial import CHANNELS, Trial
 from shipid.errors import ShipidError
 from shipid.simulate.actuators import RateLimitedActuator, steering_gear
 from shipid.simulate.integrate import rk4_step, simulate

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from shipid.data.io import write_trial
-from shipid.data.trial import Trial
+from shipid.io.files import write_trial
+from shipid.io.trial import Trial
 from shipid.errors import OutputExistsError, ShipidError
 from shipid.models.roll import imu_outputs, params_from_vessel, simulate_zoh
 from shipid.models.roll_reduced import CALIBRATION, NOMINAL, KnownParams

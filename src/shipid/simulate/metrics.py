@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 
 

@@ -53,7 +53,7 @@ class ShipModel:
     output_units : mapping of str to str
         SI units of output channels that are not standard Trial channels
         (``"u_r": "m/s"``); standard names take their unit from
-        :data:`shipid.data.trial.CHANNELS`, anything else is ``"-"``.
+        :data:`shipid.io.trial.CHANNELS`, anything else is ``"-"``.
     """
 
     name: str

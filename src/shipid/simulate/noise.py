@@ -34,7 +34,7 @@ from typing import Mapping
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 
 
 def as_generator(rng: np.random.Generator | int) -> np.random.Generator:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.simulate.manoeuvres import run_manoeuvre
 from shipid.simulate.noise import default_measurement_model
 from shipid.simulate.registry import get_ship_model

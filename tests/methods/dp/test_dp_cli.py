@@ -16,7 +16,7 @@ from shipid.cli import main
 @pytest.fixture(scope="module")
 def trial_files(tmp_path_factory):
     """Six short simulated trials (seed 3, 300 s) written as CSV, heading and azimuth in degrees."""
-    from shipid.data.io import write_trial
+    from shipid.io.files import write_trial
     from shipid.methods.dp.trials import simulate_dp_trials
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel

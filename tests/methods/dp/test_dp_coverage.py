@@ -57,7 +57,7 @@ def test_si2_std_cover_the_error_with_unknown_noise(supply):
 @pytest.mark.slow
 def test_full_pipeline_coverage_campaign():
     """12 realisations of the whole study (six 1200-s trials each) through the campaign engine."""
-    from shipid.studies.engine import run_campaign
+    from shipid.campaign.engine import run_campaign
 
     # two workers (CI has two cores); the engine's results do not depend on the number of workers
     res = run_campaign("shipid.methods.dp.coverage:run_one", 12, seed=3, workers=2, progress=False)

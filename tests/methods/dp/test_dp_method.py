@@ -137,7 +137,7 @@ def test_parallel_two_trials_beat_one_trial_of_same_total_length(supply):
 
 def test_bad_input_is_one_line_error(supply):
     from shipid.errors import InputError
-    from shipid.data.trial import Trial
+    from shipid.io.trial import Trial
 
     tr = Trial(np.arange(100.0), {"x": np.zeros(100), "y": np.zeros(100)})
     with pytest.raises(InputError, match="psi"):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data.io import read_trial, write_trial
+from shipid.io.files import read_trial, write_trial
 from shipid.methods.dp.entry import REQUIRED
 from shipid.methods.dp.estimator import fit_dp
 from shipid.methods.dp.series import with_series

@@ -14,7 +14,7 @@ import pytest
 
 import shipid
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.dp import validate as DV
 from shipid.methods.dp.estimator import identify_dp
 from shipid.methods.dp.trials import TrialNoise, simulate_dp_trial, simulate_dp_trials

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.ebm.trials import simulate_trial
 
 

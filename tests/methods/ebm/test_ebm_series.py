@@ -11,7 +11,7 @@ import pytest
 
 import shipid
 from shipid.cli import main
-from shipid.data.io import read_trial, write_trial
+from shipid.io.files import read_trial, write_trial
 from shipid.methods.ebm import estimator as ebm
 from shipid.methods.ebm.series import with_series
 from shipid.methods.ebm.trials import simulate_trial

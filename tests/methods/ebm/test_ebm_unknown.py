@@ -16,7 +16,7 @@ from types import MappingProxyType
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.ebm import estimator as ebm
 from shipid.methods.ebm.coverage import LINEAR, NAMES, draw_ship, simulate_unknown, summarise
@@ -117,7 +117,7 @@ def test_small_seeded_coverage_campaign():
     """Four perturbed ships (campaign seed 7, not used for tuning): every linear coefficient is
     `estimated`, |z| < 4 for all 24 (measured: largest 2.12), pooled ±2-std coverage >= 0.75 (a
     4-run estimate of a >= 0.9 target; measured 0.958) and the current within 0.02 m/s."""
-    from shipid.studies.engine import run_campaign
+    from shipid.campaign.engine import run_campaign
 
     res = run_campaign("shipid.methods.ebm.coverage:run_one", 4, seed=7, kwargs={"duration": 1200.0},
                        workers=1, progress=False)
@@ -138,7 +138,7 @@ def test_coverage_study_50_runs():
     """Issue 16 target, fresh campaign seed 100 (tuning used seed 1): pooled ±2-std coverage of the
     six linear coefficients >= 0.90, none below 0.80; no estimated coefficient of the wrong sign
     among the linear ones."""
-    from shipid.studies.engine import run_campaign
+    from shipid.campaign.engine import run_campaign
 
     # two workers (CI has two cores); the engine's results do not depend on the number of workers
     res = run_campaign("shipid.methods.ebm.coverage:run_one", 50, seed=100, kwargs={"duration": 1200.0},

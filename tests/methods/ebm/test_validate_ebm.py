@@ -12,7 +12,7 @@ import pytest
 
 import shipid
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.ebm import validate as EV
 from shipid.methods.ebm.estimator import EbmConfig
 from shipid.methods.ebm.trials import simulate_trial

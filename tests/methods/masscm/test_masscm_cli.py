@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.models.roll_sim import simulate_datasets
 
 KNOWN = """U = 1.0

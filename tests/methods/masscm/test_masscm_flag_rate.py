@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from shipid.cli import cli
 from shipid.methods.masscm.coverage import summarise
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 
 
 def _out(implausible, nuisance=False):

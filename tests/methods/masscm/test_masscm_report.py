@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from shipid.data.io import read_trial, write_trial
+from shipid.io.files import read_trial, write_trial
 from shipid.methods.masscm.estimator import REQUIRED, estimate_mass_cm, fit_mass_cm
 from shipid.methods.masscm.report import enrich
 from shipid.methods.masscm.series import with_series

@@ -149,7 +149,7 @@ def test_whiteness_check_rejects_no_wave_model_in_waves_and_accepts_it_with_sens
 def test_identify_cli_refine_pem_and_its_report_series(tmp_path, capsys):
     """`identify mass-cm --refine pem` writes the refined estimate with Algorithm 1's beside it, and the stored
     result's report series are made again from its files (Algorithm 1's, the refinement's start)."""
-    from shipid.data.io import write_trial
+    from shipid.io.files import write_trial
     from shipid.result import Result
 
     known, z_f, d, sets, locs = _case(regime="sensors", duration=300.0, seed=(4246, 4))

@@ -12,7 +12,7 @@ import pytest
 
 import shipid
 from shipid.cli import main
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 from shipid.methods.masscm import validate as MV
 from shipid.methods.masscm.crlb import true_theta
 from shipid.methods.masscm.estimator import estimate_mass_cm

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shipid.data import data_root
-from shipid.data.trial import Trial
+from shipid.io import data_root
+from shipid.io.trial import Trial
 from shipid.models import mmg
 
 UNITS = {"x": "m", "y": "m", "psi": "rad", "u": "m/s", "v": "m/s", "r": "rad/s", "delta": "rad", "n": "1/s"}

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import candidates as C
 from shipid.methods.mmg import candidates_asym as A
 from shipid.methods.mmg import candidates_surge as SG

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from shipid.data import data_root
-from shipid.data.basins import read_kvlcc2
+from shipid.io import data_root
+from shipid.io.basins import read_kvlcc2
 from shipid.methods.mmg import covariance as C
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P

@@ -5,7 +5,7 @@ import warnings
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 
 pytestmark = pytest.mark.skipif(not (data_root() / "params").exists(), reason="shared data (Esso Osaka params) absent")
 
@@ -46,7 +46,7 @@ def _noise_free_runs(rate_deg_s=np.inf):
     """Noise-free simulated runs of the unperturbed structure, the rudder rate-limited at ``rate_deg_s``."""
     import dataclasses
 
-    from shipid.data.trial import Trial
+    from shipid.io.trial import Trial
     from shipid.methods.mmg import coverage as C
     from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
     from shipid.methods.mmg.estimator import smooth_run
@@ -129,7 +129,7 @@ def test_simex_weights_and_noise_free_data():
     correction; forced, the correction is negligible, the path is recorded, and the same seed gives the same numbers."""
     from shipid.methods.mmg.estimator import FitConfig, fit
     from shipid.methods.mmg.simex import SimexConfig, simex_fit
-    from shipid.data.trial import Trial
+    from shipid.io.trial import Trial
     from shipid.methods.mmg import coverage as C
     from shipid.models import mmg
 

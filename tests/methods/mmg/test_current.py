@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg.current import DriftCurrent, drift_velocity, to_water_frame
 from shipid.models.mmg_forces import apparent_wind
 

@@ -4,7 +4,7 @@ import warnings
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P
 from shipid.models import mmg

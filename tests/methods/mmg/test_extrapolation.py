@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import candidates as C
 from shipid.methods.mmg import extrapolation as E
 from shipid.methods.mmg import study as S

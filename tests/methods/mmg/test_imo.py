@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.errors import InputError
 from shipid.methods.mmg import imo as I
 from shipid.models import mmg

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.estimate import numba_linalg
 from shipid.errors import ShipidError
 from shipid.methods.mmg import estimator as R

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root, read_trial
-from shipid.data.trial import Trial
+from shipid.io import data_root, read_trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.models import mmg
@@ -103,7 +103,7 @@ def test_imo_and_simulate_say_when_the_depth_is_outside_the_training_runs(tmp_pa
     assert main(["identify", "mmg", "--trial", str(out), "--water-depth", "-1"]) == 2
     assert "--water-depth must be positive" in capsys.readouterr().err
     # validate: a run that records its depth is checked against the model's training depth
-    from shipid.data import write_trial
+    from shipid.io import write_trial
 
     tr = read_trial(out)
     for depth, lines in ((6.0, 0), (0.6, 1)):
@@ -217,7 +217,7 @@ def test_batched_simulator_agrees_with_run_manoeuvre_with_air_drag():
 
 def test_conditions_of_an_older_model_file_come_from_its_training_runs(tmp_path, kv):
     """A MODEL.json without training_conditions: they are computed from the training run files it names."""
-    from shipid.data import write_trial
+    from shipid.io import write_trial
 
     t = np.arange(0.0, 30.0, 0.1)
     d = np.deg2rad(10.0) * np.clip((t - 5.0) / 1.0, 0.0, 1.0)

@@ -7,8 +7,8 @@ import json
 import pytest
 
 import shipid
-from shipid.data.io import write_trial
-from shipid.data.paths import data_root
+from shipid.io.files import write_trial
+from shipid.io.paths import data_root
 from shipid.errors import InputError
 from shipid.methods.mmg import report as mmg_report
 from shipid.methods.mmg.series import OVERLAY_CHANNELS, with_series
@@ -62,7 +62,7 @@ def test_with_series_needs_one_trial_per_training_run(made):
 def test_runs_read_with_the_hsva_rudder_flip_are_reread_with_it():
     """A result identified from read_kvlcc2 runs (δ = −δ_HSVA) records rudder sign −1, so the series made
     from the recorded files equal those made from the flipped runs themselves."""
-    from shipid.data.basins import read_kvlcc2
+    from shipid.io.basins import read_kvlcc2
     from shipid.methods.mmg.pipeline import identify as mmg_identify
 
     root = data_root()

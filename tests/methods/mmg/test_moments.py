@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.estimate.ridge import ridge
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg.moments import fit_from_moments, ridge_theta, run_moments

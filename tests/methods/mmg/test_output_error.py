@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import output_error as OE
@@ -114,7 +114,7 @@ def test_unknown_refinement_is_an_input_error(truth, runs_of_truth):
 
 
 def test_heldout9_split_is_disjoint_and_contains_both_papers_tests():
-    from shipid.data.basins import SPLITS
+    from shipid.io.basins import SPLITS
     from shipid.methods.mmg import study_oe as S
 
     if ROOT is None or not (ROOT / "esso_osaka_3m").is_dir():

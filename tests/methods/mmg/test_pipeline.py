@@ -2,7 +2,7 @@
 
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg.pipeline import undetermined_note
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root, read_trial, write_trial
-from shipid.data.trial import Trial
+from shipid.io import data_root, read_trial, write_trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import export as PE
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg

@@ -4,7 +4,7 @@ and the Nomoto check of the neutral rudder angle on synthetic records with a kno
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import propeller_side as PS
 
 
@@ -85,8 +85,8 @@ def test_bootstrap_se_is_zero_when_every_run_agrees_and_grows_with_their_disagre
 
 
 def test_hsva_neutral_angle_is_small_up_to_25_deg_and_moves_to_starboard_at_30_and_35():
-    from shipid.data import data_root
-    from shipid.data.basins import read_kvlcc2
+    from shipid.io import data_root
+    from shipid.io.basins import read_kvlcc2
     from shipid.methods.mmg.rudder_angle import RUNS, rudder_angles
 
     root = data_root()
@@ -104,8 +104,8 @@ def test_hsva_neutral_angle_is_small_up_to_25_deg_and_moves_to_starboard_at_30_a
 
 @pytest.mark.slow
 def test_resolve_sets_both_calibrated_particulars_on_the_given_runs():
-    from shipid.data import data_root
-    from shipid.data.basins import read_kvlcc2
+    from shipid.io import data_root
+    from shipid.io.basins import read_kvlcc2
     from shipid.methods.mmg import estimator as R
     from shipid.models import mmg
 

@@ -4,7 +4,7 @@ Fast checks: the pipeline recovers known coefficients from runs simulated with a
 known MMG model (no noise and with seeded measurement noise); the Result is a
 self-describing MODEL.json that ``shipid validate`` reads back; the CLI with a
 channel map on renamed columns. The full held-out studies are in
-tests/studies/test_realdata_study.py (marked slow).
+tests/campaign/test_realdata_study.py (marked slow).
 """
 
 import json
@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root, write_trial
-from shipid.data.trial import Trial
+from shipid.io import data_root, write_trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V

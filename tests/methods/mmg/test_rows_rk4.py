@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.models import mmg
 from shipid.simulate.integrate import rk4_step

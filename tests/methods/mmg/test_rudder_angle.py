@@ -4,7 +4,7 @@ the decision rule, batched replays with the new per-row particulars, calibration
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import rudder_angle as RA
 from shipid.methods.mmg import side_calibration as S

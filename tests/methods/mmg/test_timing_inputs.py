@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import timing as T
 from shipid.methods.mmg import timing_inputs as TI
 

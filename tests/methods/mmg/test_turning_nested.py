@@ -74,7 +74,7 @@ def test_decision_rule(auto_big, auto_small, expect):
 def test_nested_cv_with_two_training_runs_falls_back_to_the_default(monkeypatch):
     """Three zig-zags, one per angle: every outer fold trains on two runs, so the guard keeps the default
     choice, and the automatic procedure scores exactly as the default; no other run is read."""
-    from shipid.data.basins import read_kvlcc2
+    from shipid.io.basins import read_kvlcc2
 
     read = []
     monkeypatch.setattr(N, "read_kvlcc2", lambda f, root=None: read.append(f) or read_kvlcc2(f, root))

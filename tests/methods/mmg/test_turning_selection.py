@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import side_calibration as S
 from shipid.methods.mmg import study

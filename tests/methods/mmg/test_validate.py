@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from shipid.cli import main
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 

@@ -4,7 +4,7 @@ import pytest
 
 import shipid
 from shipid import registry
-from shipid.data import data_root
+from shipid.io import data_root
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
 from shipid.result import Result

@@ -70,7 +70,7 @@ def test_first_estimate_matches_offline_algorithm1(noise_model):
     the same noise model (AR(40), or the Box-Jenkins default)."""
     from dataclasses import replace
 
-    from shipid.data.trial import Trial
+    from shipid.io.trial import Trial
     from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 
     sim = simulate_stream(StreamSpec(duration=120.0, change_at=None), seed=7)

@@ -18,7 +18,7 @@ import numpy as np
 from shipid.cli import CONTEXT, identify, study
 from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, refuse_existing, strict_option
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
-from shipid.data.io import read_trial
+from shipid.io.files import read_trial
 from shipid.errors import ShipidError
 from shipid.methods.dp.coverage import summarise
 from shipid.methods.dp.estimator import DPOptions, fit_dp

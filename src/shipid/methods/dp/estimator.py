@@ -57,7 +57,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import ConvergenceError, InputError
 from shipid.estimate.ekf_augmented import ParallelEKFResult, parallel_augmented_ekf
 from shipid.methods.dp.stage_models import momentum_model, prepare, surge_model

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.ekf_augmented import AugmentedModel, rk4_map
 from shipid.models import dp

@@ -29,7 +29,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.models import dp
 from shipid.models.thrusters import pitch_from_control
 from shipid.simulate.integrate import rk4_step

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.analysis.openloop import Validation, check_finite, error_table, local_fit, plot_series, wrap_deg
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import dp
 from shipid.result import Result

@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.ebm.pipeline import estimate_states, fit_coefficients, sensor_positions
 from shipid.methods.ebm.trials import add_measurements
 from shipid.models import abkowitz as ab

@@ -85,7 +85,7 @@ def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figure
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
 
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
     from shipid.methods.ebm import estimator as ebm
     from shipid.methods.ebm.series import with_series
     from shipid.progress import progress_bar

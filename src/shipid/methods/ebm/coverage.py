@@ -1,6 +1,6 @@
 """Coverage study of EBM on ships it has not been told about (seed 002, Yoon & Rhee 2003; issue 16).
 
-Each run of the campaign (:func:`shipid.studies.engine.run_campaign`, task :func:`run_one`)
+Each run of the campaign (:func:`shipid.campaign.engine.run_campaign`, task :func:`run_one`)
 draws, from its own ``SeedSequence``:
 
 * an *unknown ship*: every coefficient of Table 3 (the packaged ESSO OSAKA, [abkowitz])

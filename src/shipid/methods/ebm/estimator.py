@@ -55,7 +55,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.linalg import NotPositiveDefiniteError
 from shipid.methods.ebm.bias import corrected, pipeline_bias

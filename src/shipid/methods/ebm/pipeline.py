@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 
 from shipid.analysis.observability import ebm_observability
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.cd_ekf import FilterResult, cd_ekf
 from shipid.estimate.linalg import NotPositiveDefiniteError

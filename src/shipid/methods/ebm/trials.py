@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.models import abkowitz as ab
 from shipid.simulate.manoeuvres import run_manoeuvre
 

@@ -18,7 +18,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.linalg import one_blas_thread
 from shipid.methods.masscm.data import Dataset, first_row, prepare

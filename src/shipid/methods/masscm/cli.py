@@ -38,7 +38,7 @@ def _si(name: str, entry, path: str) -> float:
     if isinstance(entry, (int, float)) and not isinstance(entry, bool):
         return float(entry)
     if isinstance(entry, dict) and "value" in entry:
-        from shipid.data.units import parse_unit, to_si
+        from shipid.io.units import parse_unit, to_si
 
         unit = entry.get("unit", _UNITS.get(name, ""))
         try:
@@ -127,7 +127,7 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     yaw rate (SNAME sign), delta [rad] rudder. Without z_f in known.toml m is NOT identifiable
     (only zm_bar and rho = m z_m/(m_c z_c) are); the tool says so.
     """
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
     from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
     from shipid.methods.masscm.refine import apply as apply_refine
     from shipid.methods.masscm.series import with_series

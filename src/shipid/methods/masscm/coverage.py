@@ -1,7 +1,7 @@
 """Coverage study of Algorithm 1 (Linder et al. 2015, seed 000) per noise regime: bias, spread, bound, coverage.
 
 Beyond the paper (whose §5 study is noise-free): Monte Carlo on the campaign engine
-(:func:`shipid.studies.engine.run_campaign`) over fresh noise realisations. Each run synthesises the
+(:func:`shipid.campaign.engine.run_campaign`) over fresh noise realisations. Each run synthesises the
 three datasets (nominal, calibration, loaded; :func:`shipid.models.roll_sim.simulate_datasets`, seed
 ``SeedSequence([seed, i])``: a new rudder and noise realisation per run) of ``duration`` s at 50 Hz in
 one regime:

@@ -1,7 +1,7 @@
 """Datasets of Algorithm 1 of Linder et al. (2015): checks, the regressors (35)/(37) and the black-box
 instruments of step A (44).
 
-Each dataset (a :class:`shipid.data.trial.Trial` with ``p`` roll rate (9a), ``a_s`` tangential acceleration (9b),
+Each dataset (a :class:`shipid.io.trial.Trial` with ``p`` roll rate (9a), ``a_s`` tangential acceleration (9b),
 ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta`` rudder) becomes a :class:`Dataset` with
 
     Phi_t = [-y_{t-1}, -y_{t-2}, a_t - a_{t-2}, r_t - r_{t-2}, delta_t - delta_{t-2}]      (37)
@@ -16,7 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.estimate.iv import arx_fit, arx_simulate
 from shipid.methods.masscm.options import REQUIRED, MassCMOptions

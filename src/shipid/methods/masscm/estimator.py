@@ -86,7 +86,7 @@ eigen-decomposition and rank rule with a compiled projection/QR, and the search
 (:mod:`shipid.methods.masscm.search`: the same Gauss–Newton; the cold search by a bounded Levenberg–Marquardt to
 trf's tolerances, trf the fallback). Tests compare every piece with the reference path and the study run by run.
 
-Channels per dataset (a :class:`shipid.data.trial.Trial`): ``p`` roll rate (y of 9a), ``a_s`` tangential
+Channels per dataset (a :class:`shipid.io.trial.Trial`): ``p`` roll rate (y of 9a), ``a_s`` tangential
 acceleration (9b), ``r`` yaw rate (SNAME sign; ERRATA on 9c), ``delta`` rudder.
 
 This module gathers the public names of the method; the code lives in the modules named above.

@@ -4,7 +4,7 @@ Each run draws the datasets of :func:`shipid.methods.masscm.coverage.run_one` fo
 roll, noise-free sensors; ``SeedSequence([seed, i])``), runs Algorithm 1 (``refine="none"``, z_f known) and starts
 :func:`shipid.methods.masscm.crlb_free.estimate_free` from its estimate. The summary is
 :func:`shipid.methods.masscm.coverage.summarise` against :func:`shipid.methods.masscm.crlb_free.crlb_free`, through
-the campaign engine (:func:`shipid.studies.engine.run_campaign`). Measured figures: the docstring of
+the campaign engine (:func:`shipid.campaign.engine.run_campaign`). Measured figures: the docstring of
 :mod:`shipid.methods.masscm.crlb_free`. The estimator needs the exact states (``how="exact"``, an oracle); it is
 not an estimator for sampled data.
 """
@@ -21,7 +21,7 @@ from shipid.methods.masscm.crlb_free import FREE, crlb_free, estimate_free, real
 from shipid.methods.masscm.estimator import MassCMOptions, estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import simulate_datasets
-from shipid.studies.engine import run_campaign
+from shipid.campaign.engine import run_campaign
 from shipid.vessels import load_vessel
 
 

@@ -35,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.methods._series import noted, recorded_call
-from shipid.data.io import read_trial
+from shipid.io.files import read_trial
 from shipid.methods._trials import as_trial, grouped
 from shipid.methods.masscm.assemble import MassCMFit, fit_mass_cm
 from shipid.models.roll_reduced import KnownParams

@@ -38,7 +38,7 @@ Timings are printed by ``benchmarks/bench_masscm_study.py``. The numba kernels a
 (cached on disk, ``cache=True``) and loaded by each worker; :func:`warm_up` does that before a campaign.
 
 :func:`run_one` is the per-run task, with the campaign-engine signature
-``run_one(i, seedseq, **kwargs) -> dict`` (:mod:`shipid.studies.engine`).
+``run_one(i, seedseq, **kwargs) -> dict`` (:mod:`shipid.campaign.engine`).
 """
 
 from __future__ import annotations
@@ -167,7 +167,7 @@ def warm_up(data_seed: int = 0, vessel: str = "fishing-vessel", **_run_kwargs) -
     """Compile the numba kernels of the fast path (or load them from numba's on-disk cache) and build this
     process's dataset cache, by one run; returns the seconds it took.
 
-    The campaign's ``warm_up`` (:func:`shipid.studies.engine.run_campaign`; it passes the campaign's
+    The campaign's ``warm_up`` (:func:`shipid.campaign.engine.run_campaign`; it passes the campaign's
     kwargs, of which only ``data_seed`` and ``vessel`` matter here): it runs in the parent first, so the
     first compilation (tens of seconds) happens once and writes the cache, then once in the forkserver
     the workers are forked from, so that no worker pays the ~1.6 s of imports, cache loading and dataset

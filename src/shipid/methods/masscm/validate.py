@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.analysis.openloop import Validation, check_finite, error_table, local_fit, plot_series
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models.roll_reduced import LOADED, THETA_NAMES, KnownParams, discrete_coeffs
 from shipid.result import Result

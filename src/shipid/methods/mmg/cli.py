@@ -25,7 +25,7 @@ import click
 
 from shipid.cli import CONTEXT, cli, identify, study
 from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, strict_option
-from shipid.data.io import FORMATS
+from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
 
 
@@ -37,7 +37,7 @@ READ_SETTINGS = {"trim_empty_rows": True, "interpolate_gaps": 1.0}
 
 
 def _read_run(path, fmt=None, channels=None):
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
 
     return read_trial(path, fmt=fmt, channel_map=channels, method="shipid validate/identify", **READ_SETTINGS)
 
@@ -197,7 +197,7 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
     """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
     from shipid import registry
     from shipid.analysis.openloop import format_table, write_csv
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
     from shipid.errors import InputError
     from shipid.result import Result
 

@@ -30,7 +30,7 @@ def mmg_covariance_cmd(case, splits, seed, draws, as_json, out, force):
     The runs are split at random into halves, each fitted, and every coefficient's
     difference divided by the std each covariance (ridge, HAC, run bootstrap) states:
     RMS z near 1 is honest."""
-    from shipid.data.basins import SPLITS, read_esso, read_kvlcc2
+    from shipid.io.basins import SPLITS, read_esso, read_kvlcc2
     from shipid.methods.mmg import covariance as C
     from shipid.methods.mmg import estimator as R
     from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config

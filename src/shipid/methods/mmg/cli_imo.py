@@ -38,7 +38,7 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
                         speed: float | None, rps: float | None, rudder_rate: float | None, noise: bool,
                         force: bool, water_depth: float | None = None) -> None:
     """``shipid simulate MODEL.json MANOEUVRE``: the model in calm water at the resolved test conditions."""
-    from shipid.data.io import write_trial
+    from shipid.io.files import write_trial
     from shipid.methods.mmg import manoeuvres as MM
     from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
 

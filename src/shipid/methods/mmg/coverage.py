@@ -1,6 +1,6 @@
 """Simulated coverage study of ``identify mmg`` (fixed structure, ``refine='none'`` unless asked).
 
-Each campaign run (:func:`shipid.studies.engine.run_campaign`, task :func:`run_one`) draws from its own
+Each campaign run (:func:`shipid.campaign.engine.run_campaign`, task :func:`run_one`) draws from its own
 ``SeedSequence``: a TRUE model, the published Esso Osaka 3-m MMG set
 (:func:`shipid.models.mmg.load_published`) with every coefficient of ``coef`` multiplied by
 ``1 + 0.15 N(0, 1)`` (the coefficients free in the structure below; the fixed ones stay) clipped to [0.05, 1.95] (sign kept); measurement noise on x, y, psi, u, v, r
@@ -121,7 +121,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import ShipidError
 from shipid.methods.mmg import imo
 from shipid.methods.mmg import manoeuvres as M

@@ -54,7 +54,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import ShipidError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import estimator as R

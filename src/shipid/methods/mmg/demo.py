@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from shipid.data.basins import read_kvlcc2
-from shipid.data.paths import data_root
+from shipid.io.basins import read_kvlcc2
+from shipid.io.paths import data_root
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import validate as V

@@ -63,7 +63,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.cd_ekf import cd_ekf
 from shipid.estimate.ridge import RidgeFit, ridge

@@ -3,7 +3,7 @@
 :func:`prediction_trial` turns a :class:`shipid.methods.mmg.validate.Validation` (one
 simulation from the run's measured initial state, driven by its measured rudder,
 propeller revolutions and true wind held over each sample) into a
-:class:`shipid.data.trial.Trial` on the run's own time base:
+:class:`shipid.io.trial.Trial` on the run's own time base:
 
 * every measured channel of the run, under the column name and in the unit of the
   file it was read from (``x_position_mid [m]``, ``psi_hat [rad]`` for the Esso Osaka
@@ -18,7 +18,7 @@ propeller revolutions and true wind held over each sample) into a
 Channels derived by the reader (the HSVA ``u, v`` from the earth-fixed velocities)
 keep their standard names and SI units. A diverged prediction is written as empty
 cells (``nan``) from the sample it diverged; :func:`write_prediction` reports it.
-The file reads back with :func:`shipid.data.io.read_trial` (the Esso profile is
+The file reads back with :func:`shipid.io.files.read_trial` (the Esso profile is
 recognised from its column names, the ``_pred`` channels come back under their own names).
 """
 
@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
-from shipid.data.io import write_trial
+from shipid.io.files import write_trial
 
 #: Suffix of the predicted channels.
 PRED_SUFFIX = "_pred"

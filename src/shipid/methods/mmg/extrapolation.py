@@ -43,8 +43,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_kvlcc2
-from shipid.data.trial import Trial
+from shipid.io.basins import read_kvlcc2
+from shipid.io.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.candidates import CANDIDATES

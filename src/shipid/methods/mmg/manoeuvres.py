@@ -42,10 +42,10 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.models import mmg
-from shipid.data.io import read_trial
+from shipid.io.files import read_trial
 from shipid.simulate.integrate import rk4_propagate
 from shipid.simulate.model import ShipModel
 

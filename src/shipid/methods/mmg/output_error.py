@@ -48,7 +48,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg.cv_fast import run_horizons, simulate_rows

@@ -15,7 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.methods.mmg.covariance import honest_covariance, ridge_covariance

@@ -126,7 +126,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_kvlcc2
+from shipid.io.basins import read_kvlcc2
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import turning_selection as TS
 from shipid.methods.mmg.candidates import CANDIDATES

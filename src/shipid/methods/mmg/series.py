@@ -20,8 +20,8 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from shipid.report.render import short_path
-from shipid.data.io import read_trial
-from shipid.data.trial import Trial
+from shipid.io.files import read_trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.report.convention import overlay, signal, trial_summary
 from shipid.methods.mmg import validate as V

@@ -53,7 +53,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg.candidates import apply_candidate, candidate_config
 from shipid.methods.mmg.extrapolation import TRAIN, VALIDATE, candidates, large_angle_split, replay, score_validation

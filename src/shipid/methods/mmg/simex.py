@@ -58,7 +58,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg import estimator as R
 from shipid.models import mmg
 

@@ -7,7 +7,7 @@ Protocol (why the held-out numbers can be trusted)
    physics and from the training runs only, for the reasons below.
 2. The choice among the candidates is made by cross-validation **within the training
    runs only** (leave-one-run-out); the selection functions receive the training runs
-   and nothing else (``tests/studies/test_realdata_study.py`` checks that they never
+   and nothing else (``tests/campaign/test_realdata_study.py`` checks that they never
    see a test-run name and that every selection happens before the first test run is
    read).
 3. The configuration was committed (its fingerprint :data:`FROZEN_FINGERPRINT`, checked
@@ -95,7 +95,7 @@ zig-zags; a predicted overshoot that never happens (the model does not reach the
 switch heading) counts as a predicted overshoot of 0.
 
 Nothing here is copied from the data: the runs are read from
-:func:`shipid.data.data_root` at run time.
+:func:`shipid.io.data_root` at run time.
 
 Cross-validation tables (training runs only; computed before the freeze)
 ------------------------------------------------------------------------
@@ -177,9 +177,9 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from shipid.data.basins import SPLITS, read_esso, read_kvlcc2
-from shipid.data.basins import esso_dir as _esso_dir  # noqa: F401  (kept for callers of the old name)
-from shipid.data.trial import Trial
+from shipid.io.basins import SPLITS, read_esso, read_kvlcc2
+from shipid.io.basins import esso_dir as _esso_dir  # noqa: F401  (kept for callers of the old name)
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P

@@ -15,8 +15,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import read_esso
-from shipid.data.trial import Trial
+from shipid.io.basins import read_esso
+from shipid.io.trial import Trial
 from shipid.methods.mmg import candidates_ext2 as E2
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import output_error as OE

@@ -1,7 +1,7 @@
 """Esso Osaka held-out study on the 9-run split, with the output-error refinement chosen by training-run CV.
 
 Split (:func:`heldout9_split`): the test runs are the union of both papers' test runs
-(:data:`shipid.data.basins.SPLITS`, 8 runs) plus one random run — 9 runs; the other 32
+(:data:`shipid.io.basins.SPLITS`, 8 runs) plus one random run — 9 runs; the other 32
 runs of the data set are the training runs. The ninth run (:data:`NINTH`): ``"issue"``
 (default) ``random_03-Aug-2020_11_04_37``, the split of issue 19, recognised by the
 published set's figure the issue quotes (12.20° / 0.842 m: only this ninth run gives it;
@@ -279,8 +279,8 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.basins import SPLITS, esso_dir, read_esso
-from shipid.data.trial import Trial
+from shipid.io.basins import SPLITS, esso_dir, read_esso
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import output_error as OE

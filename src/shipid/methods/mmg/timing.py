@@ -30,7 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 
 #: Width (samples) of the centred moving average applied to both velocity estimates.
 SMOOTH = 11

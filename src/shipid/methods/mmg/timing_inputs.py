@@ -78,7 +78,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.methods.mmg.timing import SMOOTH, Lags
 
 #: Default grid of input offsets (s). Up to 3 s since 2026-12-04: on the 1.5-s end of the earlier grid the

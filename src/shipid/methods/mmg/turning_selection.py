@@ -89,7 +89,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import manoeuvres as MM

@@ -26,7 +26,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from shipid.analysis.openloop import Validation, format_table, horizon_starts, plot_series, summarise
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
 from shipid.result import Result

@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg

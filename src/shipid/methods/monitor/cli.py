@@ -36,7 +36,7 @@ def _csv_chunks(fh, header: list[str], label: str, lines_per_chunk: int, follow:
     With ``follow`` the end of the file is not the end of the stream: wait for more lines (as ``tail -f``)
     until ``idle_timeout`` seconds pass without a new line (never, when None).
     """
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
 
     buf: list[str] = []
     partial = ""
@@ -159,7 +159,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
     from dataclasses import replace
 
     from shipid.methods.masscm.cli import read_known
-    from shipid.data.io import read_trial
+    from shipid.io.files import read_trial
     from shipid.methods.masscm.estimator import REQUIRED
     from shipid.methods.monitor.estimator import MassCMMonitor, MonitorOptions
 

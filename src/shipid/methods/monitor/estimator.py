@@ -88,7 +88,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
-from shipid.data.trial import Trial
+from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen

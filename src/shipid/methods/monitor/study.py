@@ -1,6 +1,6 @@
 """Monte Carlo study of the online mass / CM monitor (:mod:`shipid.methods.monitor.estimator`).
 
-One run (:func:`monitor_run`, a task of :func:`shipid.studies.engine.run_campaign`): a fresh stream of
+One run (:func:`monitor_run`, a task of :func:`shipid.campaign.engine.run_campaign`): a fresh stream of
 :func:`shipid.simulate.masscm_stream.simulate_stream` (its own nominal and calibration datasets, noise and
 load truth, none of which the monitor is told beyond ``known.toml`` and z_f) through the monitor; returns
 the alarm times, the detection delay, the located change time, the coverage of the ±2 std intervals of

@@ -1,0 +1,1 @@
+"""shipid.campaign."""

@@ -1,0 +1,586 @@
+"""Reading and writing trials: CSV with ``name [unit]`` headers, Parquet, and two real data sets.
+
+Formats
+-------
+``csv``
+    Comma-, semicolon- or tab-separated text (a decimal comma with the latter two;
+    :mod:`shipid.io.csv_dialect`, recorded in ``meta["csv_dialect"]``), UTF-8
+    (a BOM is accepted; cp1252 is tried when the bytes are not UTF-8), ``\\n``,
+    ``\\r\\n`` or ``\\r`` line ends. The first line is the header; every cell is
+    ``name [unit]`` (the convention of the Esso Osaka 3 m data set). A header cell
+    *without* a unit is an error unless the unit is supplied by a format profile or
+    by the channel map (``'psi=heading[deg]'``). Each following line is one data
+    row (row 1 is the first line after the header); blank lines at the very end of
+    the file are ignored, any other line must have as many fields as the header.
+    Empty cells are missing values (see :mod:`shipid.io.validate`).
+``parquet``
+    One numeric column per channel; units in the schema metadata key
+    ``shipid.units`` (JSON ``{name: unit}``), or in column names ``name [unit]``.
+    :func:`write_trial` also stores the trial metadata under ``shipid.meta``.
+``esso``
+    A CSV of the Esso Osaka 3 m free-running data set (Wakita et al. 2022): the
+    columns are mapped onto standard names (:data:`PROFILES`). Chosen automatically
+    for a ``.csv`` whose header holds ``x_position_mid`` and ``psi_hat``.
+``kvlcc2``
+    An HSVA KVLCC2 ``.dat`` zig-zag (SIMMAN 2008): four header lines (cp1252) and
+    twelve whitespace-separated columns in the order of ``shared/data/README.md``.
+    Heading, yaw rate, rudder and the 8th column (read as roll angle ``phi``; the
+    README says "probably", so the assumption is recorded in ``meta``) are in
+    degrees. Body velocities are derived from the earth-fixed ones:
+    ``u = ẋ cos ψ + ẏ sin ψ``, ``v = −ẋ sin ψ + ẏ cos ψ`` (Fossen 1994, eq. 2.18 with
+    z down). Chosen automatically for ``.dat`` files.
+``nmea``
+    An NMEA 0183 log (:mod:`shipid.io.nmea`): ``.nmea``, or a ``.txt``/``.log``
+    whose first lines are sentences (``$``, ``!``, a tag block ``\\`` or a time
+    stamp and ``$``); interpolated onto a uniform grid; ``skip_bad`` skips corrupt
+    sentences.
+
+Channel maps
+------------
+``channel_map={"x": "x_position_mid", "u": "u_velo"}`` (or the string
+``'x=x_position_mid,u=u_velo'``, see :func:`parse_channel_map`) renames columns onto
+standard names (:data:`shipid.io.trial.CHANNELS`); a column keeps its own name when
+nothing maps it. A standard channel's unit must have the dimension of its SI unit
+(``psi [m]`` is an error).
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import os
+import re
+from pathlib import Path
+from typing import Iterable, Mapping
+
+import numpy as np
+
+from shipid.io.csv_dialect import detect_dialect
+from shipid.io.nmea import looks_like_nmea, read_nmea
+from shipid.io.table import RawTable, decode_text, split_lines
+from shipid.io.trial import CHANNELS, Trial
+from shipid.io.units import from_si, parse_unit, split_header, to_si
+from shipid.io.validate import validate_arrays
+from shipid.errors import InputError, ShipidError
+from shipid.outputs import atomic_write, jsonable
+
+FORMATS = ("csv", "parquet", "esso", "kvlcc2", "nmea")
+
+#: Column maps of the named format profiles: standard name -> column name in the file.
+PROFILES: dict[str, dict[str, str]] = {
+    "esso": {
+        "t": "t",
+        "x": "x_position_mid", "y": "y_position_mid", "psi": "psi_hat",
+        "u": "u_velo", "v": "vm_velo", "r": "r_angvelo",
+        "n": "n_prop", "delta": "delta_rudder",
+        "wind_speed_rel": "wind_velo_relative_mid", "wind_dir_rel": "wind_dir_relative_mid",
+        "wind_speed": "wind_velo_true", "wind_dir": "wind_dir_true",
+    },
+    "kvlcc2": {
+        "t": "t", "x": "x0", "y": "y0", "psi": "psi", "x_dot": "dx0/dt", "y_dot": "dy0/dt",
+        "r": "r", "phi": "col8", "delta": "delta", "n": "n", "thrust": "thrust", "torque": "torque",
+    },
+}
+
+#: Column names and units of the HSVA KVLCC2 ``.dat`` files (shared/data/README.md).
+KVLCC2_COLUMNS: list[tuple[str, str]] = [
+    ("t", "s"), ("x0", "m"), ("y0", "m"), ("psi", "deg"), ("dx0/dt", "m/s"), ("dy0/dt", "m/s"),
+    ("r", "deg/s"), ("col8", "deg"), ("delta", "deg"), ("n", "rps"), ("thrust", "N"), ("torque", "N*m"),
+]
+KVLCC2_HEADER_LINES = 4
+
+#: Folders of the Esso Osaka data set; a run's folder names its manoeuvre.
+ESSO_MANOEUVRES = ("turning", "zigzag", "random", "berthing")
+
+_EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2",
+               ".nmea": "nmea", ".log": "csv"}  # .txt/.log: NMEA when the content looks like it (shipid.io.nmea)
+
+
+# --------------------------------------------------------------------------- channel maps
+def parse_channel_map(text: str | Mapping[str, str] | None) -> dict[str, str]:
+    """Parse ``'x=x_position_mid, u=u_velo'`` into ``{"x": "x_position_mid", "u": "u_velo"}``.
+
+    A value may carry a unit in brackets, ``'psi=heading [deg]'``, declaring the unit of
+    a column whose header has none. A mapping is returned as a plain dict.
+
+    Raises
+    ------
+    InputError
+        For an entry without ``=`` or with an empty side, or a name given twice.
+    """
+    if text is None:
+        return {}
+    if isinstance(text, Mapping):
+        return {str(k).strip(): str(v).strip() for k, v in text.items()}
+    out: dict[str, str] = {}
+    for part in str(text).split(","):
+        part = part.strip()
+        if not part:
+            continue
+        if "=" not in part:
+            raise InputError(f"channel map entry '{part}' is not NAME=COLUMN")
+        name, col = (s.strip() for s in part.split("=", 1))
+        if not name or not col:
+            raise InputError(f"channel map entry '{part}' is not NAME=COLUMN")
+        if name in out:
+            raise InputError(f"channel map names '{name}' twice")
+        out[name] = col
+    return out
+
+
+# --------------------------------------------------------------------------- reading
+def read_trial(
+    path: str | os.PathLike,
+    *,
+    fmt: str | None = None,
+    channel_map: Mapping[str, str] | str | None = None,
+    required: Iterable[str] | None = None,
+    interpolate_gaps: float | None = None,
+    resample: float | None = None,
+    vessel: str | None = None,
+    manoeuvre: str | None = None,
+    trim_empty_rows: bool = False,
+    method: str | None = None,
+    skip_bad: bool = False,
+) -> Trial:
+    """Read a trial file, convert it to SI and validate it.
+
+    Parameters
+    ----------
+    path : path-like
+        CSV, Parquet, Esso Osaka CSV or KVLCC2 ``.dat`` file.
+    fmt : {"csv", "parquet", "esso", "kvlcc2"}, optional
+        Format; by default from the extension (``.csv``, ``.parquet``/``.pq``, ``.dat``),
+        and ``esso`` for a CSV whose header has the Esso Osaka columns.
+    channel_map : mapping or str, optional
+        Standard name -> column name (:func:`parse_channel_map`), applied on top of the
+        format profile.
+    required : iterable of str, optional
+        Channels the caller needs (checked before the values).
+    interpolate_gaps : float, optional
+        Fill missing values and time gaps up to this many seconds by linear
+        interpolation (recorded in ``trial.meta["repairs"]``).
+    resample : float, optional
+        Resample onto a uniform grid with this step, in seconds.
+    vessel, manoeuvre : str, optional
+        Stored in ``trial.meta``.
+    trim_empty_rows : bool
+        Remove rows without any value at the start and the end of the file (recorded).
+    method : str, optional
+        Name of the method asking for ``required`` (for the message: "required by ...").
+    skip_bad : bool
+        NMEA logs only: skip corrupt sentences, counted in ``meta["skipped"]``
+        (:func:`shipid.io.nmea.read_nmea`).
+
+    Returns
+    -------
+    Trial
+        Channels in SI units; ``meta`` holds ``source``, ``format``, ``profile``,
+        ``units_in`` (the units found in the file), ``columns`` (standard name ->
+        column) and ``repairs``.
+
+    Raises
+    ------
+    InputError
+        One line naming the file, channel and row of the first problem.
+    """
+    label = os.fspath(path)
+    p = Path(path)
+    if not p.exists():
+        raise InputError("no such file", file=label)
+    if p.is_dir():
+        raise InputError("is a directory, not a trial file", file=label)
+    fmt = _resolve_format(p, fmt, label)
+    user_map = parse_channel_map(channel_map)
+    try:
+        if fmt == "parquet":
+            table = _read_parquet(p, label)
+        elif fmt == "kvlcc2":
+            table = _read_kvlcc2(p, label)
+        elif fmt == "nmea":
+            table = read_nmea(p, label, skip_bad=skip_bad, resample=resample, interpolate_gaps=interpolate_gaps)
+            resample = None  # already on its uniform grid
+        else:
+            table = _read_csv(p, label)
+    except InputError:
+        raise
+    except (OSError, MemoryError) as err:
+        raise InputError(f"cannot read: {err.strerror or err}", file=label) from None
+
+    profile = None
+    if fmt in PROFILES:
+        profile = fmt
+    elif fmt == "csv" and {"x_position_mid", "psi_hat"} <= set(table.names):
+        profile = "esso"
+    if profile is not None:
+        missing = [c for c in PROFILES[profile].values() if c not in table.names]
+        if missing:
+            raise InputError(f"not in the {profile} format: column '{missing[0]}' missing "
+                             f"(has: {', '.join(table.names)})", file=label)
+    t, chans, units, units_in, columns = _map_columns(table, profile, user_map, label)
+
+    if profile == "kvlcc2" and {"psi", "x_dot", "y_dot"} <= set(chans):
+        c, s = np.cos(chans["psi"]), np.sin(chans["psi"])
+        chans["u"] = chans["x_dot"] * c + chans["y_dot"] * s
+        chans["v"] = -chans["x_dot"] * s + chans["y_dot"] * c
+        units["u"] = units["v"] = "m/s"
+        table.meta["derived"] = {"u": "x_dot*cos(psi) + y_dot*sin(psi)",
+                                 "v": "-x_dot*sin(psi) + y_dot*cos(psi)"}
+
+    t, chans, repairs = validate_arrays(
+        t, chans, file=label, rows=table.rows, units=units, required=required,
+        interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows,
+        method=method)
+
+    meta: dict = {"source": label, "format": fmt, "profile": profile}
+    meta.update(table.meta)
+    if vessel is not None:
+        meta["vessel"] = vessel
+    if manoeuvre is not None:
+        meta["manoeuvre"] = manoeuvre
+    elif profile == "esso" and p.parent.name in ESSO_MANOEUVRES:
+        meta["manoeuvre"] = p.parent.name  # the data set's folders name the manoeuvre
+    meta["units_in"] = units_in
+    meta["columns"] = columns
+    meta["repairs"] = list(table.meta.get("repairs", [])) + repairs
+    return Trial(t, chans, units, meta)
+
+
+def _resolve_format(p: Path, fmt: str | None, label: str) -> str:
+    if fmt is not None:
+        f = str(fmt).lower()
+        if f not in FORMATS:
+            raise InputError(f"unknown format '{fmt}' (choose from {', '.join(FORMATS)})", file=label)
+        return f
+    ext = p.suffix.lower()
+    if ext in (".txt", ".log"):
+        try:
+            with open(p, "rb") as fh:
+                if looks_like_nmea(fh.read(4096)):
+                    return "nmea"
+        except OSError:
+            pass
+    if ext in _EXTENSIONS:
+        return _EXTENSIONS[ext]
+    raise InputError(f"cannot tell the format from the extension '{p.suffix}' "
+                     f"(use .csv or .parquet, or --format {'|'.join(FORMATS)})", file=label)
+
+
+def _map_columns(table: RawTable, profile: str | None, user_map: dict[str, str], label: str):
+    names = table.names
+    mapping: dict[str, str] = {}          # standard name -> column
+    map_units: dict[str, str] = {}        # column -> unit declared in the map
+    if profile is not None:
+        mapping.update(PROFILES[profile])
+    for std, col in user_map.items():
+        try:
+            col_name, col_unit = split_header(col)
+        except ValueError as err:
+            raise InputError(f"channel map: {err}", file=label, channel=std) from None
+        if col_name not in names:
+            raise InputError(f"channel map: no column '{col_name}' (has: {', '.join(names)})",
+                             file=label, channel=std)
+        # a user entry replaces any profile entry for the same name or the same column
+        mapping = {k: v for k, v in mapping.items() if k != std and v != col_name}
+        mapping[std] = col_name
+        if col_unit is not None:
+            map_units[col_name] = col_unit
+    col_to_std = {}
+    for std, col in mapping.items():
+        if col in col_to_std:
+            raise InputError(f"channel map sends column '{col}' to both '{col_to_std[col]}' and '{std}'",
+                             file=label)
+        col_to_std[col] = std
+    profile_cols = set(PROFILES[profile].values()) if profile else set()
+
+    chans: dict[str, np.ndarray] = {}
+    units: dict[str, str] = {}
+    units_in: dict[str, str] = {}
+    columns: dict[str, str] = {}
+    t = None
+    for j, (col, unit) in enumerate(zip(names, table.units)):
+        std = col_to_std.get(col, col)
+        if col in map_units:
+            if unit is not None and parse_unit(unit, file=label, channel=col) != \
+                    parse_unit(map_units[col], file=label, channel=col):
+                raise InputError(f"channel map gives unit '{map_units[col]}' but the header says '{unit}'",
+                                 file=label, channel=col)
+            unit = map_units[col]
+        if unit is None:
+            why = "" if col in profile_cols else "; write the header cell as 'name [unit]' or map it as NAME=COLUMN[unit]"
+            raise InputError(f"no unit in header cell '{col}'{why}", file=label, channel=col)
+        if std in chans or (std == "t" and t is not None):
+            raise InputError(f"two columns give channel '{std}' (rename one with --channels)", file=label,
+                             channel=std)
+        values, si = to_si(table.data[:, j], unit, file=label, channel=col)
+        want = CHANNELS.get(std)
+        if want is not None and si != want:
+            raise InputError(f"unit '{unit}' is not a unit of {want} as channel '{std}' needs",
+                             file=label, channel=col)
+        units_in[std] = unit
+        columns[std] = col
+        if std == "t":
+            t = values
+        else:
+            chans[std] = values
+            units[std] = si
+    if t is None:
+        raise InputError(f"no time column 't' (columns: {', '.join(names)}); map one with --channels t=COLUMN",
+                         file=label, channel="t")
+    if not chans:
+        raise InputError("no channels besides time", file=label)
+    return t, chans, units, units_in, columns
+
+
+# --- CSV -------------------------------------------------------------------------------
+_NUMBER_LIKE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
+
+
+def _check_text(lines: list[str], label: str) -> None:
+    for i, line in enumerate(lines[:200]):
+        if any(ord(ch) < 32 and ch != "\t" for ch in line):
+            raise InputError("binary content (control characters), not CSV text", file=label,
+                             row=i if i else None)
+
+
+def _read_csv(p: Path, label: str) -> RawTable:
+    raw = p.read_bytes()
+    if not raw.strip():
+        raise InputError("empty file", file=label)
+    text, enc = decode_text(raw, label)
+    lines = split_lines(text, label)
+    _check_text(lines, label)
+    quoted = '"' in text
+    dialect = detect_dialect(lines[0], lines[1:], label)   # ',' ';' or tab, decimal comma (shipid.io.csv_dialect)
+    sep = dialect.delimiter
+    header = next(csv.reader([lines[0]], delimiter=sep)) if quoted else lines[0].split(sep)
+    header = [h.strip() for h in header]
+    if len(header) == 1:
+        for other, name in ((";", "';'"), ("\t", "tab"), ("|", "'|'")):
+            if other in lines[0]:
+                raise InputError(f"header has one column only: the file seems to be separated by {name}; "
+                                 "shipid reads comma-, semicolon- or tab-separated values", file=label)
+    if all(_NUMBER_LIKE.match(h) for h in header if h) and any(header):
+        raise InputError("no header line: the first line holds numbers; expected 'name [unit]' cells",
+                         file=label)
+    names, units = [], []
+    for k, cell in enumerate(header, start=1):
+        if not cell:
+            raise InputError(f"empty header cell in column {k}", file=label)
+        try:
+            name, unit = split_header(cell)
+        except ValueError as err:
+            raise InputError(str(err), file=label) from None
+        if not name:
+            raise InputError(f"header cell '{cell}' in column {k} has a unit but no name", file=label)
+        if name in names:
+            raise InputError(f"duplicate column name (columns {names.index(name) + 1} and {k})",
+                             file=label, channel=name)
+        names.append(name)
+        units.append(unit)
+    data_lines = lines[1:]
+    if not data_lines:
+        raise InputError("header only, no data rows", file=label)
+    if dialect.decimal == ",":
+        data_lines = [line.replace(",", ".") for line in data_lines]
+    ncol = len(names)
+    meta = {"encoding": enc, "csv_dialect": dialect.as_meta()}
+    if not quoted and ncol > 1:
+        # numpy's compiled reader, whose float parsing is correctly rounded as float() is (the same doubles),
+        # kept when it read every row with the header's field count: it refuses (ValueError) a row whose field
+        # count differs from the first row's and any cell it cannot parse (empty, '1_0', text), and skips empty
+        # lines (then it has fewer rows); all of these fall through to the cell-by-cell path below, which
+        # names the file, channel and row
+        try:
+            data = np.loadtxt(data_lines, delimiter=sep, dtype=np.float64, ndmin=2, comments=None)
+        except ValueError:
+            pass
+        else:
+            if data.shape == (len(data_lines), ncol):
+                return RawTable(names, units, data, np.arange(1, len(data_lines) + 1), meta)
+    if quoted:
+        cells = list(csv.reader(data_lines, delimiter=sep))
+    else:
+        cells = [line.split(sep) for line in data_lines]
+    data = np.empty((len(cells), ncol), dtype=np.float64)
+    for i, row in enumerate(cells):
+        if len(row) != ncol:
+            if len(row) == 1 and ncol > 1 and not row[0].strip():
+                row = [""] * ncol  # a blank line inside the data: a row of empty cells
+            else:
+                raise InputError(f"has {len(row)} fields, the header has {ncol}", file=label, row=i + 1)
+        try:
+            data[i] = [float(c) for c in row]
+        except ValueError:
+            data[i] = [_cell(c, label, names[j], i + 1) for j, c in enumerate(row)]
+    return RawTable(names, units, data, np.arange(1, len(cells) + 1), meta)
+
+
+def _cell(c: str, label: str, channel: str, row: int) -> float:
+    s = c.strip()
+    if not s:
+        return np.nan
+    if "_" not in s:
+        try:
+            return float(s)
+        except ValueError:
+            pass
+    shown = s if len(s) <= 30 else s[:27] + "..."
+    if not shown.isprintable():
+        shown = shown.encode("unicode_escape").decode("ascii")
+    raise InputError(f"not a number: '{shown}'", file=label, channel=channel, row=row)
+
+
+# --- KVLCC2 HSVA .dat ----------------------------------------------------------------------
+def _read_kvlcc2(p: Path, label: str) -> RawTable:
+    raw = p.read_bytes()
+    if not raw.strip():
+        raise InputError("empty file", file=label)
+    if raw.startswith(b"PAR1") or b"\x00" in raw[:65536]:
+        raise InputError("binary content, not an HSVA .dat text file", file=label)
+    text = raw.decode("cp1252", errors="replace")
+    lines = split_lines(text, label)
+    h = KVLCC2_HEADER_LINES
+    if len(lines) <= h:
+        raise InputError(f"header only: an HSVA .dat file has {h} header lines and then data", file=label)
+    ncol = len(KVLCC2_COLUMNS)
+    data = np.empty((len(lines) - h, ncol), dtype=np.float64)
+    for i, line in enumerate(lines[h:]):
+        fields = line.split()
+        if len(fields) != ncol:
+            raise InputError(f"has {len(fields)} fields, an HSVA KVLCC2 .dat row has {ncol} "
+                             f"(line {i + h + 1})", file=label, row=i + 1)
+        try:
+            data[i] = [float(c) for c in fields]
+        except ValueError:
+            data[i] = [_cell(c, label, KVLCC2_COLUMNS[j][0], i + 1) for j, c in enumerate(fields)]
+    title = " ".join(lines[2].split())
+    facility = {}
+    if "HSVA" in lines[0] and "CPMC" in lines[0]:
+        # HSVA_SIMMAN_free_running_report.pdf (Cura Hochbaum 2006): the CPMC runs of the large towing tank,
+        # 300 m x 18 m x 6 m, "6.0 m water depth, ratio h/T = 13.2 (deep water)"
+        facility = {"water_depth": 6.0, "water_depth_source": "HSVA SIMMAN 2008 free running test report: large "
+                                                                "towing tank, 6.0 m water depth (h/T 13.2)"}
+    meta = {"encoding": "cp1252", **facility,
+            "title": " / ".join(" ".join(x.split()) for x in lines[:h] if x.strip()), "manoeuvre": title,
+            "assumptions": ["column 8 read as roll angle phi [deg] (shared/data/README.md: 'probably')"],
+            "dataset": "kvlcc2_hsva"}
+    return RawTable([c for c, _ in KVLCC2_COLUMNS], [u for _, u in KVLCC2_COLUMNS], data,
+                  np.arange(1, data.shape[0] + 1), meta)
+
+
+# --- Parquet ---------------------------------------------------------------------------
+def _read_parquet(p: Path, label: str) -> RawTable:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if p.stat().st_size == 0:
+        raise InputError("empty file", file=label)
+    try:
+        table = pq.read_table(p)
+    except (pa.ArrowException, OSError, ValueError) as err:
+        msg = " ".join(str(err).split())
+        msg = re.sub(r"^Could not open Parquet input source '[^']*': ", "", msg).split(". ")[0].rstrip(".")
+        raise InputError(f"not a readable Parquet file ({msg[:100]})", file=label) from None
+    md = table.schema.metadata or {}
+    try:
+        units_md = json.loads(md.get(b"shipid.units", b"{}").decode("utf-8"))
+        meta_md = json.loads(md.get(b"shipid.meta", b"{}").decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise InputError("corrupt shipid metadata in the Parquet schema", file=label) from None
+    if table.num_columns == 0:
+        raise InputError("no columns", file=label)
+    if table.num_rows == 0:
+        raise InputError("header only, no data rows", file=label)
+    names, units, cols = [], [], []
+    for j, col in enumerate(table.column_names):
+        try:
+            name, unit = split_header(col)
+        except ValueError as err:
+            raise InputError(str(err), file=label) from None
+        if unit is None:
+            unit = units_md.get(col)
+        if name in names:
+            raise InputError(f"duplicate column name (columns {names.index(name) + 1} and {j + 1})",
+                             file=label, channel=name)
+        arr = table.column(j)
+        typ = arr.type
+        if pa.types.is_integer(typ) or pa.types.is_floating(typ) or pa.types.is_boolean(typ) \
+                or pa.types.is_decimal(typ):
+            values = np.array(arr.cast(pa.float64()).to_numpy(zero_copy_only=False), dtype=np.float64)
+        elif pa.types.is_string(typ) or pa.types.is_large_string(typ):
+            strs = arr.to_pylist()
+            values = np.array([np.nan if s is None else _cell(s, label, name, i + 1)
+                               for i, s in enumerate(strs)], dtype=np.float64)
+        else:
+            raise InputError(f"column of type {typ} is not numeric", file=label, channel=name)
+        names.append(name)
+        units.append(unit)
+        cols.append(values)
+    meta = {k: v for k, v in meta_md.items() if k not in ("source", "format", "profile", "units_in", "columns")}
+    return RawTable(names, units, np.column_stack(cols), np.arange(1, table.num_rows + 1), meta)
+
+
+# --------------------------------------------------------------------------- writing
+def write_trial(trial: Trial, path: str | os.PathLike, *, units: Mapping[str, str] | None = None,
+                force: bool = False, fmt: str | None = None) -> Path:
+    """Write a trial as CSV (``name [unit]`` headers) or Parquet, atomically.
+
+    Parameters
+    ----------
+    trial : Trial
+    path : path-like
+        ``.csv`` or ``.parquet``/``.pq`` (or give ``fmt``).
+    units : mapping, optional
+        Units to write channels in instead of SI, e.g. ``{"psi": "deg", "n": "rpm"}``.
+    force : bool
+        Overwrite an existing file; without it an existing file is an error and nothing
+        is written.
+    fmt : {"csv", "parquet"}, optional
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
+    p = Path(path)
+    fmt = (fmt or _EXTENSIONS.get(p.suffix.lower(), "")).lower()
+    if fmt not in ("csv", "parquet"):
+        raise ShipidError(f"{os.fspath(path)}: cannot write format '{fmt or p.suffix}' (use .csv or .parquet)")
+    units = dict(units or {})
+    unknown = [k for k in units if k != "t" and k not in trial.channels]
+    if unknown:
+        raise InputError(f"no such channel to write in '{units[unknown[0]]}'", channel=unknown[0])
+    cols: dict[str, np.ndarray] = {}
+    col_units: dict[str, str] = {}
+    t_unit = units.get("t", "s")
+    cols["t"] = from_si(trial.t, t_unit, channel="t", si="s")
+    col_units["t"] = t_unit
+    for name, values in trial.channels.items():
+        si = trial.units.get(name, "-")
+        u = units.get(name, si)
+        cols[name] = from_si(values, u, channel=name, si=si) if u != si else np.asarray(values, dtype=np.float64)
+        col_units[name] = u
+    if fmt == "csv":
+        return atomic_write(p, lambda tmp: _write_csv(tmp, cols, col_units), force=force)
+    return atomic_write(p, lambda tmp: _write_parquet(tmp, cols, col_units, trial.meta), force=force)
+
+
+def _write_csv(tmp: Path, cols: dict[str, np.ndarray], col_units: dict[str, str]) -> None:
+    buf = _io.StringIO()
+    buf.write(",".join(f"{k} [{col_units[k]}]" for k in cols) + "\n")
+    matrix = np.column_stack(list(cols.values()))
+    for row in matrix.tolist():
+        buf.write(",".join(map(repr, row)) + "\n")
+    tmp.write_text(buf.getvalue(), encoding="utf-8")
+
+
+def _write_parquet(tmp: Path, cols: dict[str, np.ndarray], col_units: dict[str, str], meta) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.table({k: pa.array(v, type=pa.float64()) for k, v in cols.items()})
+    md = {b"shipid.units": json.dumps(col_units).encode("utf-8"),
+          b"shipid.meta": json.dumps(jsonable(dict(meta))).encode("utf-8")}
+    pq.write_table(table.replace_schema_metadata(md), tmp)

@@ -1,1 +1,0 @@
-"""shipid.studies."""
