@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '8aa4f8ef778b3b81'
+SOURCES = '76869de9cd2eca5b'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -21,6 +21,16 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.cli.simulate_cmds', 'Run shipid on its bundled vessels and print what it did.', False),
     ('design', 'prbs'):
         ('shipid.methods.ebm.cli', "D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7).", False),
+    ('export',):
+        ('shipid.cli.export_cmds', 'Export a model: state space, Nomoto K and T, parameter file, shipmmg parameters.', False),
+    ('export', 'nomoto'):
+        ('shipid.cli.export_cmds', 'Nomoto K, T (first order) and K, T1, T2, T3 (second order) of a manoeuvring MODEL, with std.', False),
+    ('export', 'params'):
+        ('shipid.cli.export_cmds', "Write MODEL's coefficients as a plain TOML/YAML parameter file with units and sources.", False),
+    ('export', 'shipmmg'):
+        ('shipid.cli.export_cmds', 'An MMG MODEL (structure yasukawa2015) as the parameters of shipmmg, naming the terms it lacks.', False),
+    ('export', 'state-space'):
+        ('shipid.cli.export_cmds', 'Linear state space A, B, C, D of MODEL, with named states and inputs.', False),
     ('identify', 'dp'):
         ('shipid.methods.dp.cli', "Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).", False),
     ('identify', 'ebm'):

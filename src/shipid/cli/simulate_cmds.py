@@ -46,8 +46,9 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     """Simulate VESSEL through MANOEUVRE and write the trial.
 
     \b
-    VESSEL     a packaged vessel (see `shipid vessels`), `nomoto`, or an identified
-               MMG model: MODEL.json of `shipid identify mmg` (or published:NAME)
+    VESSEL     a packaged vessel (see `shipid vessels`), `nomoto`, an identified
+               MMG model: MODEL.json of `shipid identify mmg` (or published:NAME),
+               or a parameter file of `shipid export params` (.toml, .yaml)
     MANOEUVRE  straight | turning-35[-port] | zigzag-20 | zigzag-10-5 | prbs-10[-T]
                | dp-surge | dp-sway-yaw | dp-azimuth
                | mass-cm-stream (fishing-vessel: a 50-Hz loaded IMU + rudder stream with a load
@@ -58,6 +59,10 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
         from shipid.simulate.masscm_stream import simulate_stream_cmd
         simulate_stream_cmd(vessel, out, duration=duration, seed=seed, change_at=change_at, to=to, force=force)
         return
+    if Path(vessel).suffix.lower() in (".toml", ".yaml", ".yml"):     # a parameter file of `shipid export params`
+        from shipid.cli.export_cmds import simulate_params_cmd
+        return simulate_params_cmd(vessel, manoeuvre, out, duration=duration, dt=dt, seed=seed, speed=speed, rps=rps,
+                                   rudder_rate=rudder_rate, noise=noise, force=force, water_depth=water_depth)
     from shipid.methods.mmg.cli_imo import is_model_spec, simulate_identified
 
     if is_model_spec(vessel):

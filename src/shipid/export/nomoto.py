@@ -123,10 +123,35 @@ class Nomoto:
                              "unit": [UNITS[k] for k in QUANTITIES],
                              "meaning": [MEANING[k] for k in QUANTITIES]}, index=list(QUANTITIES))
 
+    def summary(self) -> str:
+        """A table of the quantities with std, unit and meaning (what ``shipid export nomoto`` prints)."""
+        lines = [f"{self.model}: Nomoto models at {self.speed:.4g} m/s, propeller {self.rps:.4g} rev/s, "
+                 f"L {self.length:.4g} m",
+                 f"{'':10s} {'value':>12s} {'std':>10s}  {'unit':6s} meaning"]
+        for k in QUANTITIES:
+            sd = self.std[k]
+            lines.append(f"{k:10s} {self.values[k]:12.5g} {('-' if not np.isfinite(sd) else f'{sd:.3g}'):>10s}  "
+                         f"{UNITS[k]:6s} {MEANING[k]}")
+        lines.append(f"std: {self.note}")
+        lines += [f"note: {n}" for n in self.extra.get("notes", [])]
+        return "\n".join(lines)
+
     def to_dict(self) -> dict[str, Any]:
         return {"model": self.model, "speed": self.speed, "rps": self.rps, "length": self.length,
                 "values": dict(self.values), "std": dict(self.std), "units": dict(UNITS), "method": self.method,
                 "note": self.note, "samples": self.samples, "seed": self.seed, **self.extra}
+
+
+def _notes(vals: np.ndarray) -> list[str]:
+    v = dict(zip(QUANTITIES, vals))
+    out = []
+    if np.isfinite(v["T2"]) and v["T2"] < 0:
+        out.append("course-unstable at this speed (T2 < 0): K and T describe an unstable yaw mode")
+    elif np.isfinite(v["T2"]) and v["T2"] > 20 * max(abs(v["T1"]), abs(v["T3"])):
+        out.append("T2 is much longer than T1 and T3 (nearly course-unstable): the first-order T holds for "
+                   "responses slower than T2; a first-order fit to a zig-zag gives a smaller K and T with about "
+                   "the same K/T")
+    return out
 
 
 def _evaluate(src: Source, speed: float) -> tuple[np.ndarray, Any]:
@@ -151,13 +176,13 @@ def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int 
     """
     src = load(src)
     if src.family not in ("mmg", "abkowitz"):
-        raise InputError(f"Nomoto models are for manoeuvring models (MMG, EBM); {src.name!r} is a {src.family} model")
+        raise InputError(f"Nomoto models are for manoeuvring models (MMG, EBM); {src.name!r} is a model of the {src.family} family")
     vals, tr = _evaluate(src, speed)
     U = tr.speed
     nan = {k: float("nan") for k in QUANTITIES}
     if src.cov is None or not src.cov_names:
         return Nomoto(dict(zip(QUANTITIES, map(float, vals))), nan, U, tr.rps, src.length, src.name, "none",
-                      f"no std: {src.cov_note}")
+                      f"none ({src.cov_note})", extra={"notes": _notes(vals)})
     names = list(src.cov_names)
     theta = np.array([src.coef[k] for k in names])
     C = 0.5 * (src.cov + src.cov.T)
@@ -179,7 +204,7 @@ def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int 
                 + (f"; {failed} draws without a straight run left out" if failed else ""))
         return Nomoto(dict(zip(QUANTITIES, map(float, vals))), dict(zip(QUANTITIES, map(float, sd))), U, tr.rps,
                       src.length, src.name, "monte-carlo", note, int(samples), int(seed),
-                      {"draws_left_out": failed})
+                      {"draws_left_out": failed, "notes": _notes(vals)})
     sd_theta = np.sqrt(np.clip(np.diag(C), 0, None))
     J = np.zeros((len(QUANTITIES), len(names)))
     for j, nm in enumerate(names):
@@ -192,7 +217,7 @@ def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int 
     V = J @ C @ J.T
     sd = np.sqrt(np.clip(np.diag(V), 0, None))
     return Nomoto(dict(zip(QUANTITIES, map(float, vals))), dict(zip(QUANTITIES, map(float, sd))), U, tr.rps,
-                  src.length, src.name, "delta", f"delta method; Sigma: {src.cov_note}")
+                  src.length, src.name, "delta", f"delta method; Sigma: {src.cov_note}", extra={"notes": _notes(vals)})
 
 
 __all__ = ["Nomoto", "nomoto", "nomoto_from_matrices", "QUANTITIES", "UNITS", "MEANING"]

@@ -105,6 +105,20 @@ class ShipmmgExport:
         u, v, r, x, y, psi = sol.sol(np.asarray(t))[:6]
         return np.column_stack([x, y, psi, u, v, r])
 
+    def summary(self) -> str:
+        """The parameters and the differing terms (what ``shipid export shipmmg`` prints)."""
+        lines = [f"{self.model}: shipmmg.mmg_3dof parameters (rho {self.rho:g} kg/m^3)", "Mmg3DofBasicParams:"]
+        lines += [f"  {k:10s} {v: .6g}" for k, v in self.basic.items()]
+        lines.append("Mmg3DofManeuveringParams:")
+        lines += [f"  {k:12s} {v: .6g}" for k, v in self.maneuvering.items()]
+        if self.differences:
+            lines.append("terms where shipmmg differs from shipid:")
+            lines += [f"  - {d}" for d in self.differences]
+        else:
+            lines.append("no term differs: shipmmg computes the same forces")
+        lines += [f"note: {n}" for n in self.notes]
+        return "\n".join(lines)
+
     def to_dict(self) -> dict[str, Any]:
         return {"model": self.model, "basic": dict(self.basic), "maneuvering": dict(self.maneuvering), "rho": self.rho,
                 "differences": list(self.differences), "notes": list(self.notes)}
@@ -125,7 +139,7 @@ def to_shipmmg(spec: Any) -> ShipmmgExport:
     """
     src: Source = load(spec)
     if src.family != "mmg":
-        raise InputError(f"{src.name!r} is a {src.family} model; shipmmg takes MMG models")
+        raise InputError(f"{src.name!r} is a model of the {src.family} family; shipmmg takes MMG models")
     model = src.model
     if model.structure not in ("yasukawa2015", "yasukawa2015-asym"):
         raise InputError(f"MMG structure {model.structure!r} has no shipmmg form: shipmmg codes the MMG standard "

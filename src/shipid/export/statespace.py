@@ -91,6 +91,19 @@ class StateSpace:
         rows = [f"d{s}/dt" for s in self.states] + [f"out {o}" for o in self.outputs]
         return pd.DataFrame(M, index=rows, columns=[lab(s) for s in self.states] + [lab(i) for i in self.inputs])
 
+    def summary(self) -> str:
+        """The matrices as a table with the operating point and notes (what ``shipid export state-space`` prints)."""
+        lines = [f"{self.model}: {self.form}"]
+        op = ", ".join(f"{k} {v:.6g}" if isinstance(v, float) else f"{k} {v}" for k, v in self.operating_point.items())
+        lines.append(f"operating point: {op}")
+        lines += [f"note: {n}" for n in self.notes]
+        ev = self.eigenvalues()
+        lines.append("eigenvalues of A: " + ", ".join(f"{z.real:.4g}" + (f"{z.imag:+.4g}j" if z.imag else "")
+                                                      for z in ev))
+        with pd.option_context("display.width", 200, "display.max_columns", 50):
+            lines.append(self.to_frame().to_string(float_format=lambda v: f"{v:.5g}"))
+        return "\n".join(lines)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (matrices as nested lists)."""
         return {"model": self.model, "form": self.form, "states": list(self.states), "inputs": list(self.inputs),
@@ -154,11 +167,12 @@ def dp_state_space(vessel: dp.DPVessel, *, units: str = "bis", alpha: float = np
         B = np.vstack([np.zeros((3, B.shape[1])), B])
     inputs = tuple(f"u{i}" for i in range(1, 7))
     units_all = {s: unit[s] for s in states}
-    units_all.update({i: "- (|p - p0|(p - p0), eq. 5)" for i in inputs})
+    units_all.update({i: "-" for i in inputs})
     n = len(states)
     return StateSpace(A, B, np.eye(n), np.zeros((n, len(inputs))), states, inputs, states, units_all,
                       {"alpha6_deg": float(np.degrees(alpha)), "nu": [0.0, 0.0, 0.0]}, vessel.name, form,
-                      ("C_h(h) = 0: the Coriolis term is left out, as eq. 50 does",))
+                      ("C_h(h) = 0: the Coriolis term is left out, as eq. 50 does",
+                       "inputs u_i = |p_i - p_i0| (p_i - p_i0), the control vector of eq. 5"))
 
 
 # ----------------------------------------------------------------------------- manoeuvring models
