@@ -1,0 +1,129 @@
+"""Nomoto K, T (and T1, T2, T3) of manoeuvring models, with standard errors."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares
+from scipy.signal import ss2tf
+
+from shipid.errors import InputError
+from shipid.export import load, nomoto, state_space
+from shipid.export.nomoto import nomoto_from_matrices
+from shipid.simulate.manoeuvres import run_manoeuvre
+from shipid.simulate.registry import get_ship_model
+
+
+def test_second_order_nomoto_is_the_transfer_function_of_the_state_space():
+    """K (1 + T3 s) / ((1 + T1 s)(1 + T2 s)) equals r/delta of the sway-yaw rows, from scipy's ss2tf."""
+    ss = state_space("esso-osaka")
+    a, b = ss.A[1:3, 1:3], ss.B[1:3, :1]
+    num, den = ss2tf(a, b, np.array([[0.0, 1.0]]), np.zeros((1, 1)))
+    K, T, T1, T2, T3 = nomoto_from_matrices(a, b[:, 0], 325.0, 5.144)[:5]
+    # scipy: (n1 s + n0) / (s^2 + d1 s + d0); Nomoto: K T3 s + K over T1 T2 s^2 + (T1 + T2) s + 1
+    np.testing.assert_allclose([K * T3 / (T1 * T2), K / (T1 * T2)], num[0, 1:], rtol=1e-9)
+    np.testing.assert_allclose([(T1 + T2) / (T1 * T2), 1 / (T1 * T2)], den[1:], rtol=1e-9)
+    assert T == pytest.approx(T1 + T2 - T3, rel=1e-12)
+
+
+def _zigzag_fit(trial, K0, T0):
+    """First-order Nomoto T r' + r = K delta fitted to the yaw rate of a trial (scipy least squares; the
+    measured rudder held over each sample, the exact solution over each step)."""
+    t, r, d = trial.t, trial["r"], trial["delta"]
+    h = np.diff(t)
+
+    def response(q):
+        K, T = q
+        out = np.empty_like(r)
+        out[0] = r[0]
+        a = np.exp(-h / T)
+        for k in range(t.size - 1):
+            out[k + 1] = a[k] * out[k] + (1 - a[k]) * K * d[k]
+        return out
+
+    sol = least_squares(lambda q: response(q) - r, [K0, T0], x_scale=[abs(K0), abs(T0)])
+    return sol.x
+
+
+def test_packaged_esso_osaka_nomoto_against_a_10_10_zigzag_fit():
+    """Nomoto K, T of the packaged Esso Osaka model (Yoon & Rhee 2003, Table 3) against a first-order fit to a
+    10/10 zig-zag simulated by the same model.
+
+    The packaged model has no covariance, so there is no std to compare within. What the linearisation and the
+    zig-zag both determine is K/T, the yaw acceleration per rudder angle: they agree within 10 % (measured
+    4.8 %). K and T separately do not agree, and the export says why: the ship is nearly course-unstable
+    (T2 = 5753 s, T' = 91), so the first-order T = T1 + T2 - T3 holds only for responses slower than T2, while
+    a 10/10 zig-zag (1500 s here) fits K = -0.11 1/s, T = 990 s against the export's -0.67 1/s, 5726 s.
+    """
+    src = load("esso-osaka")
+    nm = nomoto(src)
+    assert np.isnan(nm.std["K"]) and "no covariance" in nm.note
+    trial = run_manoeuvre(get_ship_model("esso-osaka"), "zigzag-10", duration=1500.0, dt=1.0)
+    K_fit, T_fit = _zigzag_fit(trial, nm.K, nm.T)
+    assert K_fit / T_fit == pytest.approx(nm.values["K_over_T"], rel=0.10)
+    assert nm.values["T2"] > 20 * nm.values["T1"]
+    assert any("nearly course-unstable" in n for n in nm.extra["notes"])
+
+
+def _with_cov(rel: float):
+    """The packaged Esso Osaka model with independent coefficient errors of ``rel`` times each value."""
+    src = load("esso-osaka")
+    names = tuple(src.coef)
+    sd = np.array([rel * abs(src.coef[k]) for k in names])
+    return dataclasses.replace(src, cov_names=names, cov=np.diag(sd ** 2), cov_note="test: 2 % independent")
+
+
+def test_delta_method_and_monte_carlo_agree_where_the_model_is_nearly_linear_in_the_coefficients():
+    """With 2 % independent coefficient errors, the delta-method std of T1, T3 and K/T (smooth in the
+    coefficients) is within 25 % of the Monte Carlo std of 400 seeded draws (sampling error of a std from 400
+    draws: 3.5 %; the rest is the curvature the delta method leaves out)."""
+    src = _with_cov(0.02)
+    d = nomoto(src)
+    mc = nomoto(src, samples=400, seed=11)
+    assert d.method == "delta" and mc.method == "monte-carlo" and mc.seed == 11
+    for k in ("T1", "T3", "K_over_T"):
+        assert np.isfinite(d.std[k]) and d.std[k] > 0
+        assert mc.std[k] == pytest.approx(d.std[k], rel=0.25)
+    again = nomoto(src, samples=400, seed=11)
+    assert again.std == mc.std
+
+
+def test_monte_carlo_needs_a_seed():
+    with pytest.raises(InputError, match="seed"):
+        nomoto(_with_cov(0.02), samples=10)
+
+
+def test_dp_model_has_no_nomoto():
+    with pytest.raises(InputError, match="manoeuvring"):
+        nomoto("supply")
+
+
+def test_frame_and_summary():
+    nm = nomoto("esso-osaka")
+    f = nm.to_frame()
+    assert list(f.columns) == ["value", "std", "unit", "meaning"] and f.loc["T", "unit"] == "s"
+    text = nm.summary()
+    assert "K'" in text and len(text.splitlines()) < 20 and max(map(len, text.splitlines())) <= 200
+    assert "T = 5726" in repr(nm) or "T = 5.726e+03" in repr(nm)
+
+
+@pytest.mark.slow
+def test_ebm_identified_esso_osaka_nomoto_covers_the_zigzag_fit():
+    """An EBM model identified from a simulated 20/20 zig-zag and 35 deg turn of the Esso Osaka (Yoon & Rhee
+    2003 §5.1, noise of eq. 19) carries standard errors; its Nomoto K and T agree with the 10/10 zig-zag fit of
+    the packaged model within 2 std. They do because the std of K and T is large: T2 depends on the small
+    determinant of the sway-yaw matrix, whose coefficients EBM determines to a few per cent (the delta-method
+    std of T is several times T itself)."""
+    from shipid.methods.ebm import estimator as ebm
+    from shipid.methods.ebm import trials as ebm_trials
+
+    trials = [ebm_trials.simulate_trial("zigzag-20", 600.0, seed=1), ebm_trials.simulate_trial("turning-35", 600.0, seed=2)]
+    res = ebm.identify(trials)
+    nm = nomoto(res)
+    assert nm.method == "delta"
+    trial = run_manoeuvre(get_ship_model("esso-osaka"), "zigzag-10", duration=1500.0, dt=1.0)
+    K_fit, T_fit = _zigzag_fit(trial, nm.K, nm.T)
+    assert abs(K_fit - nm.K) < 2 * nm.std["K"]
+    assert abs(T_fit - nm.T) < 2 * nm.std["T"]
