@@ -60,9 +60,12 @@ state_space_cmd.help += MODEL_HELP
 @click.option("--samples", type=int, default=0, show_default=True,
               help="Monte Carlo draws from the coefficients' covariance for the std (0: delta method).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Monte Carlo draws.")
+@click.option("--no-form-term", "no_form_term", is_flag=True,
+              help="MMG models of step 2's differential form: the estimation covariance alone, without the "
+                   "model-form term (as shipid imo --no-form-term).")
 @out_options(json_help="Print K, T, T1, T2, T3 with their std as JSON on stdout.")
 @strict_option
-def nomoto_cmd(model, speed, samples, seed, as_json, out, force):
+def nomoto_cmd(model, speed, samples, seed, no_form_term, as_json, out, force):
     """Nomoto K, T (first order) and K, T1, T2, T3 (second order) of a manoeuvring MODEL, with std.
 
     From the sway-yaw rows of the linearisation about the straight run (Nomoto 1957;
@@ -74,7 +77,7 @@ def nomoto_cmd(model, speed, samples, seed, as_json, out, force):
 
     if samples < 0 or seed < 0:
         raise InputError("--samples and --seed must be >= 0")
-    src = load(model)
+    src = load(model, form_term=not no_form_term)
     res = nomoto(src, speed=speed, samples=samples, seed=seed if samples else None)
     if res.method == "none" and src.method:
         warn(f"Nomoto of {src.name}: no standard errors ({src.cov_note})")

@@ -270,11 +270,12 @@ def _replace(src: Source, **kw) -> Source:
     return replace(src, **kw)
 
 
-def load(spec: Any) -> Source:
-    """:func:`read_params` for a parameter file, else :func:`shipid.export.source.load_source`."""
+def load(spec: Any, *, form_term: bool = True) -> Source:
+    """:func:`read_params` for a parameter file, else :func:`shipid.export.source.load_source` (``form_term``
+    there)."""
     if isinstance(spec, (str, Path)) and is_params_file(str(spec)):
         return read_params(spec)
-    return load_source(spec)
+    return load_source(spec, form_term=form_term)
 
 
 # ----------------------------------------------------------------------------- simulating it

@@ -36,6 +36,7 @@ import numpy as np
 from shipid.errors import InputError
 from shipid.methods.dp import validate as dp_validate
 from shipid.methods.ebm import validate as ebm_validate
+from shipid.methods.mmg import imo as mmg_imo
 from shipid.methods.mmg import validate as mmg_validate
 from shipid.models import abkowitz as ab
 from shipid.models import dp
@@ -180,8 +181,13 @@ def _covariance(result: Result, names: tuple[str, ...]) -> tuple[tuple, np.ndarr
                                      "correlation between coefficients")
 
 
-def from_result(result: Result | Mapping[str, Any], origin: str = "result") -> Source:
-    """A :class:`Source` from an identified result (``Result`` or its dict)."""
+def from_result(result: Result | Mapping[str, Any], origin: str = "result", *, form_term: bool = True) -> Source:
+    """A :class:`Source` from an identified result (``Result`` or its dict).
+
+    ``form_term``: for an MMG model identified with step 2's differential form, the covariance is
+    ``Σ + δδᵀ`` with ``δ`` the difference from the integral form (one standard deviation of model-form
+    error, :func:`shipid.methods.mmg.imo.form_delta`), as ``shipid imo`` draws its bands.
+    """
     doc = result.to_dict() if isinstance(result, Result) else dict(result)
     res = result if isinstance(result, Result) else Result.from_dict(doc)
     fam_of_model = (doc.get("model") or {}).get("family")
@@ -202,6 +208,12 @@ def from_result(result: Result | Mapping[str, Any], origin: str = "result") -> S
     status = {k: res.estimates[k].status if k in res.estimates else "fixed" for k in names}
     units = {k: res.estimates[k].unit if k in res.estimates else coefficient_unit(family, k) for k in names}
     cn, cov, note = _covariance(res, names)
+    if family == "mmg" and form_term and cov is not None:
+        d = mmg_imo.form_delta(doc, list(cn))
+        if d is not None and np.any(d):
+            cov = cov + np.outer(d, d)
+            note += (" plus the model-form term dd^T (difference of step 2's differential and integral forms, "
+                     "as shipid imo)")
     src = {"identified": f"shipid identify {res.method} ({origin})"}
     src.update({f"model {k}": str(v) for k, v in (getattr(model, "sources", None) or {}).items()})
     per = {k: f"shipid identify {res.method}" if status[k] != "fixed" else "fixed (not identified)" for k in names}
@@ -239,12 +251,12 @@ def _packaged(name: str) -> Source:
                      "published:NAME (an MMG set), a parameter file, or a packaged vessel (supply, esso-osaka)")
 
 
-def load_source(spec: Any) -> Source:
+def load_source(spec: Any, *, form_term: bool = True) -> Source:
     """A :class:`Source` from a result, a MODEL.json path, ``published:NAME``, a parameter file or a vessel."""
     if isinstance(spec, Source):
         return spec
     if isinstance(spec, (Result, Mapping)):
-        return from_result(spec)
+        return from_result(spec, form_term=form_term)
     s = str(spec)
     if s.startswith("published:"):
         model = mmg.load_published(s.split(":", 1)[1])
@@ -262,7 +274,7 @@ def load_source(spec: Any) -> Source:
         if not isinstance(doc, dict) or "method" not in doc:
             raise InputError("not a MODEL.json of 'shipid identify' (no 'method')", file=s)
         try:
-            return from_result(doc, origin=s)
+            return from_result(doc, origin=s, form_term=form_term)
         except (KeyError, TypeError, ValueError) as err:
             raise InputError(f"malformed model ({type(err).__name__}: {err})", file=s) from None
     return _packaged(s)
