@@ -56,6 +56,13 @@ def test_mmg_result_with_covariance_gives_nomoto_std():
     nm = nomoto(src)
     assert nm.method == "delta" and all(np.isfinite(nm.std[k]) and nm.std[k] > 0 for k in ("K", "T1", "T3"))
     assert nm.rps == pytest.approx(10.23, rel=1e-9)          # the speed the training rate holds
+    # a model of step 2's differential form: the integral form's difference counts as model-form error
+    res.diagnostics["form_check"] = {"integral": {k: 0.9 * model.coef[k] for k in free}}
+    with_form = load(json.loads(res.to_json()))
+    assert "model-form" in with_form.cov_note
+    np.testing.assert_allclose(np.diag(with_form.cov) - np.diag(src.cov),
+                               [(0.1 * model.coef[k]) ** 2 for k in free], rtol=1e-12)
+    assert load(json.loads(res.to_json()), form_term=False).cov_note == src.cov_note
 
 
 def test_unknown_model_is_refused():
