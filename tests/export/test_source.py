@@ -62,6 +62,7 @@ def test_mmg_result_with_covariance_gives_nomoto_std():
     assert "model-form" in with_form.cov_note
     np.testing.assert_allclose(np.diag(with_form.cov) - np.diag(src.cov),
                                [(0.1 * model.coef[k]) ** 2 for k in free], rtol=1e-12)
+    assert with_form.std["Y_v"] == pytest.approx(np.hypot(sd["Y_v"], 0.1 * model.coef["Y_v"]), rel=1e-12)
     assert load(json.loads(res.to_json()), form_term=False).cov_note == src.cov_note
 
 

@@ -214,6 +214,7 @@ def from_result(result: Result | Mapping[str, Any], origin: str = "result", *, f
             cov = cov + np.outer(d, d)
             note += (" plus the model-form term dd^T (difference of step 2's differential and integral forms, "
                      "as shipid imo)")
+            std.update({k: float(np.sqrt(cov[i, i])) for i, k in enumerate(cn)})
     src = {"identified": f"shipid identify {res.method} ({origin})"}
     src.update({f"model {k}": str(v) for k, v in (getattr(model, "sources", None) or {}).items()})
     per = {k: f"shipid identify {res.method}" if status[k] != "fixed" else "fixed (not identified)" for k in names}
