@@ -83,7 +83,7 @@ the one with a sensor floor of 1e-3 of each signal; it falls as the floor goes t
 0.0095 / 0.0091, rho 0.0053 / 0.0031 for 1e-2 / 1e-3; at 1e-4 the information is numerically singular), and the
 simulator's own noise is float64 rounding, so the noise-free limit has no finite bound: for rho in particular the
 ratio measures how far rudder instruments are from an estimator that reconstructs the wave moment from the
-noise-free channels. The time-domain IV scale of :mod:`shipid.methods.masscm.crlb_iv` (not a floor) is m 0.0251,
+noise-free channels. The time-domain IV scale of rudder-instrument IV bound (not a floor; docs/validation/mass-cm.md) is m 0.0251,
 zm_bar 0.0119, rho 0.0203 in waves and 0.0332 / 0.0153 / 0.0375 with both: Algorithm 1's spreads are 1.36 / 1.29
 / 1.70 and 1.11 / 1.11 / 1.07 of it.
 
@@ -113,7 +113,7 @@ target (spread <= 1.3 x bound) is not met: besides the runs far out, the MAD rat
 8–9 for rho are what rudder instruments leave of the information that noise-free channels carry. Generalised least
 squares (the regression prefiltered by the fitted Box–Jenkins noise model, which would use the wave-driven
 variation of the regressors) is not an alternative there: ``a_t`` in (37) carries the current wave moment, and LS
-runs to the kinematic-identity minimum (:mod:`shipid.methods.masscm.gls`; its Durbin–Wu–Hausman test rejects LS in
+runs to the kinematic-identity minimum (docs/validation/mass-cm.md; its Durbin–Wu–Hausman test rejects LS in
 every waves, sensors and both run tried).
 
 With the maximum-likelihood refinement (``--refine pem``, :mod:`shipid.methods.masscm.pem`: the exact
