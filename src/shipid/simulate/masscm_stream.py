@@ -1,6 +1,6 @@
 """A loaded-condition IMU + rudder stream with a load change, for the online mass / CM monitor.
 
-The ship is the linear model (11) of :mod:`shipid.models.roll` (Linder et al. 2015, seed 000), simulated
+The ship is the linear model (11) of :mod:`shipid.models.roll` (Linder et al. 2015), simulated
 exactly on the sample grid (:func:`shipid.models.roll.simulate_zoh`). Up to ``change_at`` the load is
 ``(m0, zm0)``; from there on ``(m1, zm1)``: the state (roll, heading, sway, roll and yaw rate) carries over
 and the system matrices switch, as for a load shifted in one sample. The rudder is the rate-limited PRBS of

@@ -1,4 +1,4 @@
-"""D-optimal PRBS rudder input for EBM identification (seed 002, Yoon & Rhee 2003, §5.1.4, Figs. 7–8).
+"""D-optimal PRBS rudder input for EBM identification (Yoon & Rhee 2003, §5.1.4, Figs. 7–8).
 
 The regression of step 2 is best conditioned when the unit-length-scaled regressor
 matrix W (eq. 16) has the largest ``|WᵀW|`` (D-optimality; ``WᵀW`` is the

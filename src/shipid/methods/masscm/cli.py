@@ -1,4 +1,4 @@
-"""Commands of seed 000 (Linder et al. 2015): mass and centre of mass from IMU and rudder.
+"""Commands of Linder et al. (2015): mass and centre of mass from IMU and rudder.
 
 * ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json] [-o R.json]``
 * ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR]
