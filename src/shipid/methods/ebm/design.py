@@ -149,7 +149,7 @@ def prbs_grid(amplitudes=DEFAULT_AMPLITUDES, periods=DEFAULT_PERIODS,
                       sway_seeds=Ws, surge_seeds=Ss)
 
 
-#: The optimum of seed 002's Fig. 7 (Yoon & Rhee 2003 §5.1.4): amplitude 35°, clock period 105 s.
+#: The optimum of Fig. 7 of Yoon & Rhee (2003, §5.1.4): amplitude 35°, clock period 105 s.
 PAPER_FIG7 = (35.0, 105.0)
 
 

@@ -73,8 +73,8 @@ Known limitations (measured; reproduced by ``tests/methods/masscm/test_masscm_li
   converge to a wrong m with a small standard error. ``"ar-structured"`` (c = 0.99) handles that regime but its m
   is biased (+3 standard errors of the mean) under the combined wave and sensor noise; the default ``"auto"`` chooses c from the
   data. With ``noise_model="ar"`` :func:`estimate_mass_cm` estimates again with ``ar-structured`` and warns when
-  the two m differ by more than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (threshold chosen on seeds
-  [11, 0..9], checked on fresh seeds [11, 100..119]).
+  the two m differ by more than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (threshold chosen on ten
+  simulated realisations and checked on twenty others).
 
 Computation (``MassCMOptions.compute``; how, not what): ``"reference"`` (default) is the straightforward
 numpy/scipy path, except two compiled pieces that both modes share: the prefilter

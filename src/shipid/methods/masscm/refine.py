@@ -86,12 +86,12 @@ WAVE_LAGS = 8
 #: Lag window (s) of the portmanteau statistic of test (b).
 WAVE_LAG_WINDOW = (0.2, 3.0)
 
-#: Test (b) threshold on the standardised portmanteau statistic. On seeds 100..199 (300-s records): sensor noise
+#: Test (b) threshold on the standardised portmanteau statistic. Over 100 simulated 300-s records per regime: sensor noise
 #: alone -1.2 to 3.5; waves and sensor noise 89 to 157 (waves with noise-free sensors 7 to 62, noise-free 245 to
 #: 310: there test (a) decides). 10 is ten standard deviations of the white-residual null.
 WAVE_Z_MIN = 10.0
 
-#: Test (a) threshold on the relative one-step prediction residual. On seeds 100..199 (300-s records): noise-free
+#: Test (a) threshold on the relative one-step prediction residual. Over 100 simulated 300-s records per regime: noise-free
 #: sensors give levels 1.03e-3 to 1.17e-3 with waves, 3.3e-4 to 3.7e-4 without; the sensors and both regimes (gyro
 #: noise 0.002 rad/s) 1.51e-2 to 1.77e-2 and 1.81e-2 to 1.97e-2. The threshold is near the geometric mean of
 #: 1.2e-3 and 1.5e-2.
