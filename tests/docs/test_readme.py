@@ -73,8 +73,10 @@ def _resolve(args: list[str]) -> tuple[click.Command, list[str], list[str]]:
         if tok.startswith("-"):
             opts.append(tok.split("=")[0])
             continue
-        if re.fullmatch(r"[A-Z][A-Z_]*|.*\*.*", tok):      # a placeholder (CMD, FILE) or a pattern: stop here
-            break
+        if re.fullmatch(r"[A-Z][A-Z_.]*|.*\*.*|\.\.\.", tok):   # a placeholder (CMD, FILE, ...) or a pattern
+            if isinstance(cmd, click.Group):
+                break                                        # the command itself is left open: nothing to check
+            continue                                         # an argument of the command
         if isinstance(cmd, click.Group):
             sub = cmd.get_command(click.Context(cmd), tok)
             assert sub is not None, f"README: `shipid {' '.join(path + [tok])}` is not a command"
