@@ -86,7 +86,6 @@ PENDING_UNREACHED: tuple[str, ...] = (
     "shipid.methods.mmg.candidates_ext2", "shipid.methods.mmg.current", "shipid.methods.mmg.study_ext2",
     "shipid.methods.monitor.study",          # the monitor campaign of benchmarks/bench_masscm_monitor.py
     "shipid.report.examples",                # fully populated example results for report development
-    "shipid.methods.masscm.identifiability",  # the exact-fit family m(z_f); tests only, no command yet
 )
 
 #: Submodules of a method package that the registry, the report and the demo find by name.

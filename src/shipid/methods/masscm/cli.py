@@ -307,3 +307,45 @@ def _crlb_table(b: dict, vessel: str, duration: float, fs: float, rudder_deg: fl
     for k in ("zm_bar", "rho", "m"):
         e = b["bounds"][k]
         click.echo(f"  {k:7s} true {e['true']:.5g}  std >= {e['std']:.3g}  ({100 * e['rel']:.2f} %)")
+
+
+@analyse.group("identifiability")
+def identifiability_group():
+    """Which unknowns the data of an experiment determine (structural identifiability)."""
+
+
+@identifiability_group.command("mass-cm")
+@click.option("--vessel", default="fishing-vessel", show_default=True,
+              help="Packaged vessel giving the known particulars and the parameters at which to analyse.")
+@click.option("--dt", type=float, default=0.02, show_default=True, help="Sample interval (s) of the discrete model.")
+@out_options(json_help="Print the analysis as JSON on stdout.")
+def identifiability_mass_cm(vessel, dt, as_json, out, force):
+    """Rank of the map from the 9 unknowns to the transfer functions of the three datasets (Linder et al. 2015).
+
+    Prints the rank of the Jacobian of the 15 discrete coefficients (nominal, calibration, loaded) with respect
+    to theta = [k, A_x, d, K_r, K_vdot, K_delta, z_f, m, zm_bar], its singular values and the direction it
+    cannot see: z_f is not identifiable, zm_bar and rho = m z_m/(m_c z_c) are, and m needs z_f from elsewhere
+    (dm/dz_f is printed).
+    """
+    from shipid.methods.masscm.crlb import true_theta
+    from shipid.methods.masscm.identifiability import report
+    from shipid.models.roll_reduced import KnownParams
+
+    if not dt > 0:
+        raise ShipidError("--dt must be positive")
+    try:
+        theta, known = true_theta(vessel), KnownParams.from_vessel(vessel)
+    except (KeyError, ValueError) as exc:
+        raise ShipidError(f"identifiability mass-cm: {vessel}: no mass-cm parameters ({exc})") from None
+    r = report(theta, known, T=dt)
+    payload = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+    payload["vessel"] = vessel
+
+    def text() -> None:
+        click.echo(f"identifiability of mass-cm ({vessel}, dt {dt:g} s): rank {r['rank']} of 9")
+        click.echo("  identifiable: " + (", ".join(r["identifiable"]) or "-") +
+                   "; not identifiable: " + (", ".join(r["not_identifiable"]) or "-"))
+        click.echo(f"  dm/dz_f = {r['dm_dzf']:.4g} kg/m")
+        click.echo("  " + r["statement"])
+
+    emit(payload, as_json=as_json, out=out, force=force, text=text)
