@@ -18,6 +18,11 @@ fails a test when
 It is used automatically by every test module that imports ``shipid.cli.main`` and by
 every test under ``tests/cli/``.
 
+Real data: a test that reads the shared data sets is marked ``@pytest.mark.realdata`` and takes the
+``data_root`` fixture (the folder, a :class:`pathlib.Path`). Without the folder every ``realdata`` test is
+skipped with one reason (and, with ``CI`` true, the whole run stops, above); a test that asks for
+``data_root`` is marked ``realdata`` automatically.
+
 ``tests/`` is put on ``sys.path`` so that test modules import the known answers of the papers
 (``from known.linder2015 import TABLE3_TRUE``, :mod:`known`) under ``--import-mode=importlib``.
 """
@@ -36,7 +41,7 @@ import pytest
 if str(Path(__file__).parent) not in sys.path:      # `import known.<paper>` from any test module
     sys.path.insert(0, str(Path(__file__).parent))
 
-from shipid.io.paths import data_root
+from shipid.io.paths import data_root as _data_root
 
 #: Python's warning format: "<file>.py:<line>: <Category>Warning: <message>" (and friends).
 RAW_WARNING = re.compile(r":\d+: \w*Warning\b|^\s*warnings\.warn\(")
@@ -128,8 +133,28 @@ def _ci() -> bool:
     return os.environ.get("CI", "").strip().lower() in {"1", "true", "yes", "on"}
 
 
+def pytest_collection_modifyitems(config, items):
+    """Mark every test that takes ``data_root`` as ``realdata``; skip the ``realdata`` tests without the data."""
+    root = _data_root()
+    skip = pytest.mark.skip(reason="real data absent: ../shared/data or $SHIPID_DATA not found")
+    for item in items:
+        if "data_root" in getattr(item, "fixturenames", ()) and "realdata" not in item.keywords:
+            item.add_marker(pytest.mark.realdata)
+        if root is None and "realdata" in item.keywords:
+            item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def data_root() -> Path:
+    """The folder of the shared real data sets (``../shared/data`` or ``$SHIPID_DATA``); skips when absent."""
+    root = _data_root()
+    if root is None:
+        pytest.skip("real data absent: ../shared/data or $SHIPID_DATA not found")
+    return Path(root)
+
+
 def pytest_sessionstart(session):
-    if _ci() and data_root() is None:
+    if _ci() and _data_root() is None:
         where = os.environ.get("SHIPID_DATA") or "../shared/data"
         pytest.exit(f"CI: the real data are missing ({where} not found); set SHIPID_DATA or place "
                     "../shared/data beside the checkout", returncode=4)

@@ -1,11 +1,14 @@
 """shipid: identify ship dynamics from motion data.
 
-Three methods, each reproduced from its paper and extended:
+Four identification methods, registered in :mod:`shipid.registry`, and an online monitor:
 
-* mass and centre of mass from an IMU and the rudder (Linder et al. 2015);
-* DP low-frequency model identification with a parallel state-augmented EKF
+* ``mass-cm``: load mass and centre of mass from an IMU and the rudder (Linder et al. 2015);
+* ``dp``: DP low-frequency model identification with a parallel state-augmented EKF
   (Fossen, Sagatun & Sørensen 1996);
-* Estimation-Before-Modelling of manoeuvring coefficients (Yoon & Rhee 2003).
+* ``ebm``: Estimation-Before-Modelling of Abkowitz manoeuvring coefficients (Yoon & Rhee 2003);
+* ``mmg``: an MMG manoeuvring model from free-running model tests (EBM on the MMG structure);
+* ``shipid monitor mass-cm`` (:mod:`shipid.methods.monitor`): mass and centre of mass online, with change
+  detection.
 
 From Python: ``shipid.identify(method, trials, vessel=..., options=...)``, ``shipid.validate``,
 ``shipid.simulate``, ``shipid.read_trial``, ``shipid.load_vessel`` (:mod:`shipid.api`).

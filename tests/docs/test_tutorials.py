@@ -10,8 +10,8 @@ The shown outputs are written by running the code, never by hand::
 
     python tests/docs/test_tutorials.py docs/ebm.md      # rewrite the text blocks of one tutorial
 
-Tutorials that read the real data sets (``needs: realdata`` in their first lines) are skipped when
-``../shared/data`` (or ``$SHIPID_DATA``) is absent.
+Tutorials that read the real data sets (``needs: realdata`` in their first lines) are marked ``realdata``
+(skipped when ``../shared/data`` or ``$SHIPID_DATA`` is absent, tests/conftest.py).
 """
 
 from __future__ import annotations
@@ -26,7 +26,9 @@ from pathlib import Path
 import pytest
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
-TUTORIALS = sorted(p for p in DOCS.glob("*.md") if p.name != "README.md")
+#: Pages of docs/ that are not tutorials (the site's index, the CLI page, the API reference).
+NOT_TUTORIALS = {"README.md", "index.md", "cli.md", "api.md"}
+TUTORIALS = sorted(p for p in DOCS.glob("*.md") if p.name not in NOT_TUTORIALS)
 FENCE = re.compile(r"^```(\w*)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
 
 
@@ -81,13 +83,12 @@ def test_there_is_a_tutorial_per_method():
     assert {p.stem for p in TUTORIALS} >= {"mass-cm", "dp", "ebm", "mmg", "monitor"}
 
 
-@pytest.mark.parametrize("path", TUTORIALS, ids=[p.stem for p in TUTORIALS])
-def test_tutorial_runs_and_prints_what_it_shows(path, tmp_path):
-    if _needs_realdata(path):
-        from shipid.io.paths import data_root
+def _param(path: Path):
+    return pytest.param(path, id=path.stem, marks=[pytest.mark.realdata] if _needs_realdata(path) else [])
 
-        if data_root() is None:
-            pytest.skip("needs ../shared/data or $SHIPID_DATA")
+
+@pytest.mark.parametrize("path", [_param(p) for p in TUTORIALS])
+def test_tutorial_runs_and_prints_what_it_shows(path, tmp_path):
     code_blocks = pairs(path.read_text(encoding="utf-8"))
     assert code_blocks, f"{path.name}: no python block"
     assert "import shipid" in code_blocks[0][0], f"{path.name}: the first block must import shipid"

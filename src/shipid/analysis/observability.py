@@ -1,4 +1,4 @@
-"""Observability rank test along a trajectory (seed 002, Yoon & Rhee 2003, §3.2, eq. 11).
+"""Observability rank test along a trajectory (Yoon & Rhee 2003, §3.2, eq. 11).
 
 At each sample t_k the linearised model (F = ∂f/∂x, H = ∂h/∂x at the estimate) is
 observable when the observability matrix (eq. 11)::

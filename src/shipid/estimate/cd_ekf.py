@@ -1,4 +1,4 @@
-"""Continuous–discrete extended Kalman filter (seed 002, Yoon & Rhee 2003, §3.1, eq. 9, Fig. 3).
+"""Continuous–discrete extended Kalman filter (Yoon & Rhee 2003, §3.1, eq. 9, Fig. 3).
 
 Continuous state equation ``ẋ = f(t, x, u, θ) + w(t)`` (the package's one dynamics signature),
 ``E[w wᵀ] = Q δ(t−s)``, with the input ``u`` held over each sample interval and parameters ``θ``

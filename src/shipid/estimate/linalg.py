@@ -30,7 +30,7 @@ def one_blas_thread():
     OpenBLAS splits the reductions of ``dot``/``gemv`` (and LAPACK built on them) between
     its threads, so the last bits of a result depend on how many threads it runs, i.e. on
     the machine's core count and on ``OPENBLAS_NUM_THREADS``. Iterative estimators
-    (Algorithm 1 of seed 000, the EKFs) amplify such differences to ~1e-9 relative. Every
+    (Algorithm 1 of Linder et al. 2015, the EKFs) amplify such differences to ~1e-9 relative. Every
     number shipid reports is computed under this limit, so a result is the same in one
     process, in N campaign workers (which run one thread each) and on any core count.
     The matrices are small (tens of columns), so threads only cost here. The controller

@@ -3,7 +3,7 @@
 The compiled EBM loops (:mod:`shipid.methods.ebm.kernels`) and the compiled MMG step 1
 (:mod:`shipid.methods.mmg.kernels`) call these without allocating: the Cholesky factor of
 a leading block, the Cholesky solve and the symmetrisation that the batch EKF update of
-Yoon & Rhee 2003 (seed 002, eq. 9) and the RTS gain need. float64, no ``fastmath``; a
+Yoon & Rhee 2003 (eq. 9) and the RTS gain need. float64, no ``fastmath``; a
 matrix that is not positive definite (or holds NaN) is reported by a False return, never
 factored.
 

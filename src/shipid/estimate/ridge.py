@@ -1,4 +1,4 @@
-"""Ridge regression on unit-length-scaled regressors (seed 002, Yoon & Rhee 2003, §4, eqs. 16–18).
+"""Ridge regression on unit-length-scaled regressors (Yoon & Rhee 2003, §4, eqs. 16–18).
 
 For one mode (surge, sway or yaw) with regressor matrix ``H`` (N × p) and
 response ``y`` (N):

@@ -1,4 +1,4 @@
-"""Modified Abkowitz manoeuvring model of Hwang (1980) with current (seed 002, Yoon & Rhee 2003).
+"""Modified Abkowitz manoeuvring model of Hwang (1980) with current (Yoon & Rhee 2003).
 
 Equations of motion (eq. 1, written in relative velocities after eq. 2)::
 
@@ -277,7 +277,7 @@ def particulars_from_vessel(vessel: Vessel | str = "esso-osaka") -> AbkowitzPara
     """What a user knows of the ship, without any hydrodynamic coefficient of eq. 13.
 
     Mass, inertia and centre of gravity ([particulars]), the added masses of eq. 6
-    ([added_mass]; EBM takes M as known, seed 002 §2) and the propeller particulars
+    ([added_mass]; EBM takes M as known, Yoon & Rhee 2003, §2) and the propeller particulars
     used by the rudder-inflow model ([propulsion]). ``theta_X/Y/N`` are NaN and so are
     the approach condition ``U0, n0, c0``: identification must take those from the
     trial (:func:`with_approach`), never from the packaged Table 3 — any use of a

@@ -1,4 +1,4 @@
-"""The 17-state model of step 1 of Estimation-Before-Modelling (seed 002, Yoon & Rhee 2003, eqs. 4–8).
+"""The 17-state model of step 1 of Estimation-Before-Modelling (Yoon & Rhee 2003, eqs. 4–8).
 
 State (eq. 7)::
 

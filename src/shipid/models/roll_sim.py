@@ -2,7 +2,7 @@
 
 The ship is the linear model (11) of :mod:`shipid.models.roll`, simulated exactly (zero-order hold)
 at 50 Hz for 60 s by default. The paper's study has no disturbances; :class:`NoiseSpec` adds what
-the paper left out (issue 3, "beyond the paper"): white gyro / accelerometer noise, constant sensor
+the paper left out ("beyond the paper"): white gyro / accelerometer noise, constant sensor
 biases (9) and a wave-like coloured roll moment ``tau`` scaled to a chosen roll standard deviation.
 
 Rudder excitation: the paper only shows the nominal rudder signal (Fig. 3). We use a pseudo-random
@@ -53,7 +53,7 @@ class NoiseSpec:
 
     @classmethod
     def issue3(cls) -> "NoiseSpec":
-        """The noise of issue 3's efficiency target: 0.002 rad/s, 0.02 m/s^2, biases 0.001 / 0.01, 0.5 deg waves."""
+        """The combined noise of the efficiency check: 0.002 rad/s, 0.02 m/s^2, biases 0.001 / 0.01, 0.5 deg waves."""
         return cls(gyro_std=0.002, acc_std=0.02, gyro_bias=0.001, acc_bias=0.01, wave_roll_deg=0.5)
 
     @property

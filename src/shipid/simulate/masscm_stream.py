@@ -1,6 +1,6 @@
 """A loaded-condition IMU + rudder stream with a load change, for the online mass / CM monitor.
 
-The ship is the linear model (11) of :mod:`shipid.models.roll` (Linder et al. 2015, seed 000), simulated
+The ship is the linear model (11) of :mod:`shipid.models.roll` (Linder et al. 2015), simulated
 exactly on the sample grid (:func:`shipid.models.roll.simulate_zoh`). Up to ``change_at`` the load is
 ``(m0, zm0)``; from there on ``(m1, zm1)``: the state (roll, heading, sway, roll and yaw rate) carries over
 and the system matrices switch, as for a load shifted in one sample. The rudder is the rate-limited PRBS of
@@ -107,7 +107,7 @@ def truth_at(truth: dict, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def known_toml(vessel: str = "fishing-vessel", z_f: bool = True) -> str:
-    """``known.toml`` text of :func:`shipid.methods.masscm.cli.read_known` for a packaged vessel."""
+    """``known.toml`` text of :func:`shipid.methods.masscm.known.read_known` for a packaged vessel."""
     kn = KnownParams.from_vessel(vessel)
     lines = [f"{k} = {getattr(kn, k)!r}" for k in ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")]
     if z_f:

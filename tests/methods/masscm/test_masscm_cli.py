@@ -126,3 +126,27 @@ def test_coverage_study_json(capsys):
         assert np.isfinite(q["spread"]) and q["spread"] > 0 and q["bound"] > 0
         assert q["spread_over_bound"] == pytest.approx(q["spread"] / q["bound"])
         assert 0.0 <= q["coverage_2std"] <= 1.0
+
+
+def test_identifiability_json(capsys):
+    """``shipid analyse identifiability mass-cm``: rank 8 of 9, z_f the blind direction, and dm/dz_f equal to the
+    closed form rho m_c (zm_bar - zc_bar) / (zm_bar + z_f)^2 of the vessel's own values."""
+    from shipid.models.roll_reduced import KnownParams
+    from shipid.vessels import load_vessel
+
+    rc = main(["analyse", "identifiability", "mass-cm", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0
+    assert d["rank"] == 8 and d["not_identifiable"] == ["z_f"] and set(d["identifiable"]) == {"zm_bar", "rho"}
+    t = load_vessel("fishing-vessel").values("table3_true")
+    kn = KnownParams.from_vessel("fishing-vessel")
+    z_f, m, zm = t["z_f"], t["m"], t["zm_bar"]
+    rho = m * (zm + z_f) / (kn.m_c * (kn.zc_bar + z_f))
+    assert d["dm_dzf"] == pytest.approx(rho * kn.m_c * (zm - kn.zc_bar) / (zm + z_f) ** 2, rel=1e-9)
+    assert abs(d["null_direction"]["zm_bar"]) < 1e-9 * abs(d["null_direction"]["z_f"])
+
+
+def test_identifiability_refuses_a_vessel_without_the_model(capsys):
+    rc = main(["analyse", "identifiability", "mass-cm", "--vessel", "esso-osaka"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("shipid: error:") and len(err.strip().splitlines()) == 1

@@ -1,4 +1,4 @@
-"""Estimation-Before-Modelling of Abkowitz coefficients (Yoon & Rhee 2003, seed 002).
+"""Estimation-Before-Modelling of Abkowitz coefficients (Yoon & Rhee 2003).
 
 ``identify`` runs the EKF and modified Bryson–Frazier smoother, then the ridge regressions of the
 hydrodynamic forces; ``Options`` is :class:`~shipid.methods.ebm.estimator.EbmConfig`.

@@ -1,4 +1,4 @@
-"""Bias correction of the EBM coefficients by re-identifying the identified ship (seed 002).
+"""Bias correction of the EBM coefficients by re-identifying the identified ship (Yoon & Rhee 2003).
 
 Step 1 of EBM (Yoon & Rhee 2003, §3) models each force as a third-order Gauss–Markov
 process (eq. 4). Where the true force jumps — when the rudder is put over — the smoothed

@@ -1,4 +1,4 @@
-"""EBM commands (seed 002, Yoon & Rhee 2003).
+"""EBM commands (Yoon & Rhee 2003).
 
 * ``shipid identify ebm --trial T1.csv [--trial T2.csv ...] --vessel esso-osaka [--antenna X,Y --log-offset Y]
   [--json] [-o RESULT.json [--force]]``

@@ -1,4 +1,4 @@
-"""``shipid study ebm-coverage``: EBM on perturbed, unknown ships (seed 002; issue 16).
+"""``shipid study ebm-coverage``: EBM on perturbed, unknown ships (Yoon & Rhee 2003).
 
 * ``shipid study ebm-coverage --runs N [--seed S] [--workers W ...] [--duration T] [--json] [-o R.json]``
 """

@@ -1,4 +1,4 @@
-"""Compiled (numba) continuous–discrete EKF and fixed-interval smoothers (seed 002, Yoon & Rhee 2003).
+"""Compiled (numba) continuous–discrete EKF and fixed-interval smoothers (Yoon & Rhee 2003).
 
 The same algorithms as the reference pure-Python path — :func:`shipid.estimate.cd_ekf.cd_ekf`
 (eq. 9, Fig. 3), :func:`shipid.estimate.smoothers.mbf_smoother` (eq. 10, Bierman 1973) and

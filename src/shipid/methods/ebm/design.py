@@ -1,4 +1,4 @@
-"""D-optimal PRBS rudder input for EBM identification (seed 002, Yoon & Rhee 2003, §5.1.4, Figs. 7–8).
+"""D-optimal PRBS rudder input for EBM identification (Yoon & Rhee 2003, §5.1.4, Figs. 7–8).
 
 The regression of step 2 is best conditioned when the unit-length-scaled regressor
 matrix W (eq. 16) has the largest ``|WᵀW|`` (D-optimality; ``WᵀW`` is the
@@ -149,7 +149,7 @@ def prbs_grid(amplitudes=DEFAULT_AMPLITUDES, periods=DEFAULT_PERIODS,
                       sway_seeds=Ws, surge_seeds=Ss)
 
 
-#: The optimum of seed 002's Fig. 7 (Yoon & Rhee 2003 §5.1.4): amplitude 35°, clock period 105 s.
+#: The optimum of Fig. 7 of Yoon & Rhee (2003, §5.1.4): amplitude 35°, clock period 105 s.
 PAPER_FIG7 = (35.0, 105.0)
 
 

@@ -1,4 +1,4 @@
-"""Estimation-Before-Modelling (EBM), end to end (seed 002, Yoon & Rhee 2003).
+"""Estimation-Before-Modelling (EBM), end to end (Yoon & Rhee 2003).
 
 The steps themselves live in :mod:`shipid.methods.ebm.pipeline`.
 

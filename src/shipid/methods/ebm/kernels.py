@@ -1,4 +1,4 @@
-"""The numba loops of the compiled EBM filter and smoothers (seed 002, Yoon & Rhee 2003, eqs. 9–10).
+"""The numba loops of the compiled EBM filter and smoothers (Yoon & Rhee 2003, eqs. 9–10).
 
 What they compute, and the numerics, are described in :mod:`shipid.methods.ebm.compiled`, whose
 functions call these loops and turn their status codes into results or errors.

@@ -1,4 +1,4 @@
-"""The 17-state EBM model of :mod:`shipid.models.ebm_state` as numba kernels (seed 002, eqs. 4–8).
+"""The 17-state EBM model of :mod:`shipid.models.ebm_state` as numba kernels (Yoon & Rhee 2003, eqs. 4–8).
 
 :class:`shipid.models.ebm_state.EbmModel` is the one statement of the equations (``f`` eq. 6,
 ``F = ∂f/∂x``, ``h`` eq. 8, ``H = ∂h/∂x``); the kernels here compute the same values without

@@ -1,4 +1,4 @@
-"""The two steps of Estimation-Before-Modelling for given particulars (seed 002, Yoon & Rhee 2003).
+"""The two steps of Estimation-Before-Modelling for given particulars (Yoon & Rhee 2003).
 
 Step 1 (§3), :func:`estimate_states`: for one trial, the continuous–discrete EKF
 (:mod:`shipid.estimate.cd_ekf`, or its compiled twin :mod:`shipid.methods.ebm.compiled`) and the

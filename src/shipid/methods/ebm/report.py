@@ -1,4 +1,4 @@
-"""Default report section for ``ebm`` (Yoon & Rhee 2003, seed 002).
+"""Default report section for ``ebm`` (Yoon & Rhee 2003).
 
 Draws, when the result carries them: smoothed motion, forces and current
 (``signals``, paper Figs 4 and 9), the regressor correlation heat maps

@@ -1,4 +1,4 @@
-"""Report series of Estimation-Before-Modelling (Yoon & Rhee 2003, seed 002; issue 8).
+"""Report series of Estimation-Before-Modelling (Yoon & Rhee 2003).
 
 On request (:func:`with_series`; ``identify`` never does this work), :func:`build` turns the step-1
 state estimates and the step-2 ridge fits into the :mod:`shipid.report.convention` entries that

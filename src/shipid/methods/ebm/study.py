@@ -1,4 +1,4 @@
-"""Reproduction of seed 002's simulation study (Yoon & Rhee 2003, §5.1, Tables 3–5, Figs. 4 and 6).
+"""Reproduction of the simulation study of Yoon & Rhee (2003, §5.1, Tables 3–5, Figs. 4 and 6).
 
 ``study("standard")``: identify from the 35° turning circles to both sides and the
 20°/20° zig-zag (Table 3/4; target: the combined coefficients of eq. 21 within 5 %).

@@ -1,4 +1,4 @@
-"""Simulated sea trials of ESSO OSAKA as in seed 002 §5.1 (Yoon & Rhee 2003).
+"""Simulated sea trials of ESSO OSAKA as in Yoon & Rhee (2003), §5.1.
 
 Manoeuvres (through :func:`shipid.simulate.manoeuvres.run_manoeuvre`): 35° turning
 circles to both sides, a 20°/20° zig-zag and a ±10° PRBS rudder run, with a current

@@ -1,4 +1,4 @@
-"""Open-loop validation of an identified Abkowitz model (Yoon & Rhee 2003, seed 002) on a held-out run.
+"""Open-loop validation of an identified Abkowitz model (Yoon & Rhee 2003) on a held-out run.
 
 The model of eqs. 1–3 and 12–15 (:mod:`shipid.models.abkowitz`) with the identified coefficient
 vectors θ_X, θ_Y, θ_N of eq. 13, the approach condition (U0, n0, c0) and the current (U_c, ψ_c)

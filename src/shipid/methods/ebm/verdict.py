@@ -1,4 +1,4 @@
-"""Which EBM coefficients the data determine, and which trials cannot be used (seed 002).
+"""Which EBM coefficients the data determine, and which trials cannot be used (Yoon & Rhee 2003).
 
 Yoon & Rhee (2003) identify every coefficient of eq. 13 from whatever the trials hold;
 their Table 3 shows what that gives on the standard manoeuvres (Y'_vvv ten times too

@@ -1,4 +1,4 @@
-"""Mass and centre of mass of a load from an IMU and the rudder (Linder et al. 2015, seed 000).
+"""Mass and centre of mass of a load from an IMU and the rudder (Linder et al. 2015).
 
 ``identify`` runs Algorithm 1 (iterative instrumental variables over the nominal, calibration and
 loaded datasets); ``Options`` is :class:`~shipid.methods.masscm.estimator.MassCMOptions`.

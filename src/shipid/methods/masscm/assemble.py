@@ -284,7 +284,7 @@ def to_result(core, prep, known, z_f, z_f_prior, options, wall) -> Result:
         estimates=est,
         model={"structure": "reduced roll model (23)-(26), bilinear discretisation (32)-(37)",
                "known": known.__dict__, "conditions": conds, "theta_names": list(THETA_NAMES),
-               "paper": "Linder et al. 2015 (seed 000)"},
+               "paper": "Linder et al. 2015"},
         covariance=cov, covariance_names=names,
         diagnostics={"converged": bool(core["converged"]), "iterations": int(core["iterations"]),
                      "z_f_mode": zf_mode, "covariance_conditional_on_z_f": conditional,

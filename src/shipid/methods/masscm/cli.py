@@ -1,4 +1,4 @@
-"""Commands of seed 000 (Linder et al. 2015): mass and centre of mass from IMU and rudder.
+"""Commands of Linder et al. (2015): mass and centre of mass from IMU and rudder.
 
 * ``shipid identify mass-cm --nominal N.csv --calibration C.csv --loaded L.csv --known known.toml [--json] [-o R.json]``
 * ``shipid study mass-cm-sensitivity --runs N [--seed S] [--workers W | --dask-local N | --scheduler ADDR]
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 import time
-import tomllib
 from pathlib import Path
 
 import click
@@ -26,66 +25,8 @@ from shipid.cli import analyse, identify, study
 from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
 from shipid.cli.campaign_cmds import campaign_options, failure_lines
 from shipid.errors import InputError, ShipidError
+from shipid.methods.masscm.known import KNOWN_KEYS, read_known  # noqa: F401  (read_known re-exported for monitor)
 from shipid.methods.masscm.refine_modes import REFINE_MODES
-
-KNOWN_KEYS = ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")
-_UNITS = {"U": "m/s", "M": "kg", "zg_bar": "m", "m_c": "kg", "zc_bar": "m", "zs_bar": "m", "g": "m/s^2",
-          "z_f": "m"}
-
-
-def _si(name: str, entry, path: str) -> float:
-    """A known value: a bare number (SI) or ``{value, unit}`` converted with pint."""
-    if isinstance(entry, (int, float)) and not isinstance(entry, bool):
-        return float(entry)
-    if isinstance(entry, dict) and "value" in entry:
-        from shipid.io.units import parse_unit, to_si
-
-        unit = entry.get("unit", _UNITS.get(name, ""))
-        try:
-            value, si = to_si(float(entry["value"]), unit)
-            if si != parse_unit(_UNITS[name]):
-                raise ValueError(f"{unit} is {si}, not {parse_unit(_UNITS[name])}")
-        except (ValueError, TypeError, InputError) as err:  # one line for any unit problem
-            raise InputError(f"{name}: cannot convert {entry['value']} {unit} to {_UNITS[name]} ({err})",
-                             file=path) from None
-        return float(value)
-    raise InputError(f"{name} must be a number or {{ value = ..., unit = \"...\" }}", file=path)
-
-
-def read_known(path: str) -> dict:
-    """Parse ``known.toml`` into KnownParams plus the optional z_f / prior / theta0."""
-    from shipid.models.roll_reduced import THETA_NAMES, KnownParams
-    try:
-        raw = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as err:
-        raise InputError(f"not valid TOML ({err})", file=path) from None
-    raw = raw.get("known", raw)
-    missing = [k for k in KNOWN_KEYS if k not in raw]
-    if missing:
-        raise InputError(f"missing known parameter(s): {', '.join(missing)} (need {', '.join(KNOWN_KEYS)})",
-                         file=path)
-    vals = {k: _si(k, raw[k], path) for k in KNOWN_KEYS}
-    bad = [k for k in ("U", "M", "m_c", "g") if not vals[k] > 0]
-    if bad:
-        why = {"U": "U is the ship's speed through the water, which scales the rudder force", "g": "g the gravity",
-               "M": "M the nominal mass", "m_c": "m_c the calibration load"}
-        raise InputError(f"{', '.join(f'{k} = {vals[k]:g}' for k in bad)}: must be positive "
-                         f"({'; '.join(why[k] for k in bad)})", file=path)
-    out = {"known": KnownParams(**vals), "z_f": None, "z_f_prior": None, "theta0": None}
-    if "z_f" in raw:
-        out["z_f"] = _si("z_f", raw["z_f"], path)
-    if "z_f_prior" in raw:
-        pr = raw["z_f_prior"]
-        if not (isinstance(pr, list) and len(pr) == 2 and float(pr[1]) > 0):
-            raise InputError("z_f_prior must be [mean, std] in m with std > 0", file=path)
-        out["z_f_prior"] = (float(pr[0]), float(pr[1]))
-    if "theta0" in raw:
-        th = raw["theta0"]
-        if not (isinstance(th, list) and len(th) == len(THETA_NAMES)):
-            raise InputError(f"theta0 must list {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})", file=path)
-        out["theta0"] = [float(x) for x in th]
-    return out
-
 
 def _fmt(v: float) -> str:
     return "inf" if math.isinf(v) else ("nan" if math.isnan(v) else f"{v:.5g}")
@@ -366,3 +307,45 @@ def _crlb_table(b: dict, vessel: str, duration: float, fs: float, rudder_deg: fl
     for k in ("zm_bar", "rho", "m"):
         e = b["bounds"][k]
         click.echo(f"  {k:7s} true {e['true']:.5g}  std >= {e['std']:.3g}  ({100 * e['rel']:.2f} %)")
+
+
+@analyse.group("identifiability")
+def identifiability_group():
+    """Which unknowns the data of an experiment determine (structural identifiability)."""
+
+
+@identifiability_group.command("mass-cm")
+@click.option("--vessel", default="fishing-vessel", show_default=True,
+              help="Packaged vessel giving the known particulars and the parameters at which to analyse.")
+@click.option("--dt", type=float, default=0.02, show_default=True, help="Sample interval (s) of the discrete model.")
+@out_options(json_help="Print the analysis as JSON on stdout.")
+def identifiability_mass_cm(vessel, dt, as_json, out, force):
+    """Rank of the map from the 9 unknowns to the transfer functions of the three datasets (Linder et al. 2015).
+
+    Prints the rank of the Jacobian of the 15 discrete coefficients (nominal, calibration, loaded) with respect
+    to theta = [k, A_x, d, K_r, K_vdot, K_delta, z_f, m, zm_bar], its singular values and the direction it
+    cannot see: z_f is not identifiable, zm_bar and rho = m z_m/(m_c z_c) are, and m needs z_f from elsewhere
+    (dm/dz_f is printed).
+    """
+    from shipid.methods.masscm.crlb import true_theta
+    from shipid.methods.masscm.identifiability import report
+    from shipid.models.roll_reduced import KnownParams
+
+    if not dt > 0:
+        raise ShipidError("--dt must be positive")
+    try:
+        theta, known = true_theta(vessel), KnownParams.from_vessel(vessel)
+    except (KeyError, ValueError) as exc:
+        raise ShipidError(f"identifiability mass-cm: {vessel}: no mass-cm parameters ({exc})") from None
+    r = report(theta, known, T=dt)
+    payload = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+    payload["vessel"] = vessel
+
+    def text() -> None:
+        click.echo(f"identifiability of mass-cm ({vessel}, dt {dt:g} s): rank {r['rank']} of 9")
+        click.echo("  identifiable: " + (", ".join(r["identifiable"]) or "-") +
+                   "; not identifiable: " + (", ".join(r["not_identifiable"]) or "-"))
+        click.echo(f"  dm/dz_f = {r['dm_dzf']:.4g} kg/m")
+        click.echo("  " + r["statement"])
+
+    emit(payload, as_json=as_json, out=out, force=force, text=text)

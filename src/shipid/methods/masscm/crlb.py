@@ -1,4 +1,4 @@
-"""Cramér–Rao-type lower bounds for the mass / centre-of-mass experiment (Linder et al. 2015, issue 3).
+"""Cramér–Rao-type lower bounds for the mass / centre-of-mass experiment (Linder et al. 2015).
 
 Model: each dataset obeys (35) ``y_t = phi_t^T g_i(theta) + v_t`` where ``v_t = H_i(q) e_t`` is the
 equation error caused by the waves and the sensor noise, ``e_t`` white with variance ``lam_i``. The
@@ -29,16 +29,9 @@ evaluates the information in Whittle's frequency-domain form; ``"ar"`` (the form
 to a simulated noise record, which cannot represent the unit-circle zeros of the wave-roll equation error.
 The spectrum agrees with simulated noise records (variance and band powers, tests); with white sensor noise
 only (no unit-circle zeros) both forms agree to < 1 %; with wave roll the exact form is larger (300 s,
-0.5 deg waves, noise-free sensors: m 0.064 vs 0.046; issue-3 noise: 0.076 vs 0.059).
+0.5 deg waves, noise-free sensors: m 0.064 vs 0.046; combined wave and sensor noise: 0.076 vs 0.059).
 
-**Not a floor for Algorithm 1.** Monte Carlo (``shipid study mass-cm-coverage``, 300-s records, seed 1800,
-100 realisations per regime, default noise model) puts the estimator's spread *below* this bound in every
-regime (module :mod:`shipid.methods.masscm.coverage` has the numbers), most in sensor noise (~0.7) where
-the noise spectrum is exact and both forms agree. So the information used here — the rudder-driven
-regressors only, the optimal-IV covariance — is not the Cramér–Rao bound of the data-generating model;
-the bound from the exact likelihood of the ship model with the wave filter and sensor noise is
-:mod:`shipid.methods.masscm.crlb_kf` (``method="kf"``). Read the number of these two forms as the asymptotic
-optimal-IV covariance, not a floor.
+Measured figures, with the commands that regenerate them: ``docs/validation/mass-cm.md``.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Cramér–Rao bound of the data-generating model of the mass / CM experiment (Linder et al. 2015, seed 000).
+"""Cramér–Rao bound of the data-generating model of the mass / CM experiment (Linder et al. 2015).
 
 The data of each dataset ``c`` (nominal, calibration, loaded) are the sampled outputs ``y = [p, a_s, r]`` of the
 linear ship (11) driven by the measured rudder ``delta`` (a known, deterministic input) and the wave roll moment

@@ -1,4 +1,4 @@
-"""Mass and centre of mass from IMU and rudder data: Algorithm 1 of Linder et al. (2015, seed 000).
+"""Mass and centre of mass from IMU and rudder data: Algorithm 1 of Linder et al. (2015).
 
 The iterative joint instrumental-variable method over the nominal, calibration and loaded datasets
 (eqs. 38–47). Each dataset obeys the discretised roll model (35)
@@ -71,10 +71,10 @@ Known limitations (measured; reproduced by ``tests/methods/masscm/test_masscm_li
 * **Narrow-band wave roll without sensor noise** with ``noise_model="ar"``: the AR(40) prefilter does not whiten
   the equation error (zeros of the bilinear numerator on the unit circle and a narrow peak) and Algorithm 1 can
   converge to a wrong m with a small standard error. ``"ar-structured"`` (c = 0.99) handles that regime but its m
-  is biased (+3 standard errors of the mean) under the issue-3 noise; the default ``"auto"`` chooses c from the
+  is biased (+3 standard errors of the mean) under the combined wave and sensor noise; the default ``"auto"`` chooses c from the
   data. With ``noise_model="ar"`` :func:`estimate_mass_cm` estimates again with ``ar-structured`` and warns when
-  the two m differ by more than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (threshold chosen on seeds
-  [11, 0..9], checked on fresh seeds [11, 100..119]).
+  the two m differ by more than :data:`NOISE_CHECK_Z` = 1.5 combined standard errors (threshold chosen on ten
+  simulated realisations and checked on twenty others).
 
 Computation (``MassCMOptions.compute``; how, not what): ``"reference"`` (default) is the straightforward
 numpy/scipy path, except two compiled pieces that both modes share: the prefilter

@@ -111,7 +111,7 @@ def ar_polynomial(x: np.ndarray, p: int) -> np.ndarray:
 #: sensor noise, re-fitting ``D`` to the residuals of every iterate lets the refined-IV iteration drift, iterate by
 #: iterate, towards the degenerate minimum of :func:`shipid.methods.masscm.iteration.left_physical_region` (m growing
 #: from 0.4 to 30 over 18 iterations); the later iterations are then IV with a fixed prefilter and updated
-#: instruments. Chosen on the tuning seeds ``SeedSequence([100, 0..24])``.
+#: instruments (docs/validation/mass-cm.md).
 FREEZE_AFTER = 3
 
 

@@ -1,4 +1,4 @@
-"""Options and constants of Algorithm 1 of Linder et al. (2015, seed 000): the tuning dataclass, the channels a
+"""Options and constants of Algorithm 1 of Linder et al. (2015): the tuning dataclass, the channels a
 dataset needs and the default initial values of the nine parameters (30)."""
 
 from __future__ import annotations

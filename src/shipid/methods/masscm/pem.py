@@ -1,4 +1,4 @@
-"""Prediction-error (maximum-likelihood) refinement of the mass / CM estimate (Linder et al. 2015, seed 000).
+"""Prediction-error (maximum-likelihood) refinement of the mass / CM estimate (Linder et al. 2015).
 
 Beyond the paper: Algorithm 1 (a rudder-instrument IV) leaves information unused that only a full-model
 estimator can exploit. This module maximises the exact Gaussian likelihood of the data-generating state-space

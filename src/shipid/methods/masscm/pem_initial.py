@@ -1,4 +1,4 @@
-"""The initial noise state of the prediction-error likelihood, concentrated out (Linder et al. 2015, seed 000).
+"""The initial noise state of the prediction-error likelihood, concentrated out (Linder et al. 2015).
 
 Beyond the paper, for :mod:`shipid.methods.masscm.pem` with a sensor floor (``PEMOptions.sensor_floor``): the
 steady-state Kalman predictor starts from a zero noise state; with noise-free channels the predictor's error dynamics

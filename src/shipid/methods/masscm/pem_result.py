@@ -1,6 +1,6 @@
 """The maximum-likelihood refinement (:mod:`shipid.methods.masscm.pem`) applied to an Algorithm 1 result.
 
-``MassCMOptions(refine="pem")`` (Linder et al. 2015, seed 000, beyond the paper): with ``z_f`` known, the free
+``MassCMOptions(refine="pem")`` (Linder et al. 2015, beyond the paper): with ``z_f`` known, the free
 parameters of (30), ``rho`` and the covariance of the result are replaced by the refinement's, started from
 Algorithm 1's estimate; ``diagnostics["refine"]`` records the method, the wave structure chosen, iterations and the
 log-likelihood, and Algorithm 1's ``m, zm_bar, rho`` with their standard errors. Where the refinement does not

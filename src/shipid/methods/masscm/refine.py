@@ -1,4 +1,4 @@
-"""When to refine Algorithm 1's mass / CM estimate: the ``refine="auto"`` rule (Linder et al. 2015, seed 000).
+"""When to refine Algorithm 1's mass / CM estimate: the ``refine="auto"`` rule (Linder et al. 2015).
 
 Beyond the paper. Algorithm 1 (the rudder-instrument refined IV) is at the Cramér–Rao bound of
 :mod:`shipid.methods.masscm.crlb_kf` with sensor noise alone (spread / bound ~0.9) but 1.5–1.7 x it with waves and
@@ -18,7 +18,7 @@ both sensor noise and coloured (wave) equation error, by two cheap tests:
         s = rms(residual) / std(x),
 
     which is what the discretisation and model leave with noise-free sensors (~1e-3 here) and is raised to the white
-    gyro noise over the signal (~0.02 at the issue-3 noise) by sensor noise. The level is the smallest ``s`` over
+    gyro noise over the signal (~0.02 at the combined wave and sensor noise) by sensor noise. The level is the smallest ``s`` over
     the datasets and channels; sensor noise is detected when it exceeds :data:`SENSOR_NOISE_MIN`.
 (b) **Coloured (wave) roll disturbance** (:func:`wave_colour`; a few ms). The roll rate is predicted one step
     ahead from lags ``1..WAVE_LAGS`` of ``(p, r, delta)`` only (``a_s``, which carries the wave moment, left out),
@@ -34,12 +34,9 @@ both sensor noise and coloured (wave) equation error, by two cheap tests:
 Engine (:func:`auto_engine`): the exact time-domain likelihood of :mod:`shipid.methods.masscm.pem` for records of
 up to :data:`EXACT_MAX_SAMPLES` samples per dataset, the banded Whittle likelihood of
 :mod:`shipid.methods.masscm.whittle` beyond (the same model, start and search; the two likelihoods differ by O(1)
-against O(N), and Whittle's cost per iteration does not grow with the record length). Measured on 300-s "both"
-records at fresh seeds, 100 runs each: pem spread / bound 0.98 / 0.99 / 0.95, coverage 0.97 / 0.98 / 0.98 (seed
-9501, 0 failed); Whittle 1.08 / 1.05 / 1.06, coverage 0.95 / 0.93 / 0.94 (seed 9401, 1 failed) and 1.08 / 1.06 / 1.20,
-coverage 0.94 / 0.95 / **0.87** (seed 9701, 5 failed): at this length Whittle's rho standard error is ~15 % short
-of its spread, so the exact likelihood is used where its cost (5-11 s per three 300-s datasets, linear in the
-length) is affordable.
+against O(N), and Whittle's cost per iteration does not grow with the record length). On 300-s records
+Whittle's rho standard error falls short of its spread (docs/validation/mass-cm.md), so the exact likelihood is
+used where its cost (linear in the length) is affordable.
 
 Rule: refine (with :func:`auto_engine`) iff z_f is known, (a) and (b). With noise-free sensors (a) fails
 whatever (b) says (the noise-free rudder response leaves a small but coloured residual, so (b) alone would
@@ -48,13 +45,7 @@ answer and no warning is written (a skipped refinement is the rule's decision, n
 runs and fails keeps Algorithm 1's estimate with one warning line (:mod:`shipid.methods.masscm.pem_result`). The
 decision and both statistics are in ``diagnostics["refine"]``.
 
-Thresholds, chosen on ``SeedSequence([s, 0])``, ``s = 100..199`` only (300-s records, the regimes of
-:mod:`shipid.methods.masscm.coverage`; ``python benchmarks/diag_masscm_refine_rule.py 100 199``): see
-:data:`SENSOR_NOISE_MIN` and :data:`WAVE_Z_MIN`. On those seeds the rule refines 100 of 100 realisations with
-waves and sensor noise and none of 100 in each of sensors alone, waves alone and noise-free. The two tests take
-17–32 ms for three 300-s datasets on this (shared) machine; Table 3's study calls the iteration directly and does
-not run them. Scope: the tests are calibrated on the simulator's 50-Hz records; a sensor noise far below 0.4 % of
-the gyro signal counts as none (Algorithm 1 is kept).
+Measured figures, with the commands that regenerate them: ``docs/validation/mass-cm.md``.
 """
 
 from __future__ import annotations
@@ -95,12 +86,12 @@ WAVE_LAGS = 8
 #: Lag window (s) of the portmanteau statistic of test (b).
 WAVE_LAG_WINDOW = (0.2, 3.0)
 
-#: Test (b) threshold on the standardised portmanteau statistic. On seeds 100..199 (300-s records): sensor noise
+#: Test (b) threshold on the standardised portmanteau statistic. Over 100 simulated 300-s records per regime: sensor noise
 #: alone -1.2 to 3.5; waves and sensor noise 89 to 157 (waves with noise-free sensors 7 to 62, noise-free 245 to
 #: 310: there test (a) decides). 10 is ten standard deviations of the white-residual null.
 WAVE_Z_MIN = 10.0
 
-#: Test (a) threshold on the relative one-step prediction residual. On seeds 100..199 (300-s records): noise-free
+#: Test (a) threshold on the relative one-step prediction residual. Over 100 simulated 300-s records per regime: noise-free
 #: sensors give levels 1.03e-3 to 1.17e-3 with waves, 3.3e-4 to 3.7e-4 without; the sensors and both regimes (gyro
 #: noise 0.002 rad/s) 1.51e-2 to 1.77e-2 and 1.81e-2 to 1.97e-2. The threshold is near the geometric mean of
 #: 1.2e-3 and 1.5e-2.

@@ -1,4 +1,4 @@
-"""The values of ``MassCMOptions.refine`` (Linder et al. 2015, seed 000; the refinement of
+"""The values of ``MassCMOptions.refine`` (Linder et al. 2015; the refinement of
 :mod:`shipid.methods.masscm.refine`), in a module without dependencies so that the CLI's option list can name them
 without importing the refinement engines.
 """

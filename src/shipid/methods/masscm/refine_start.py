@@ -1,4 +1,4 @@
-"""Start values of the sway and yaw rows for the maximum-likelihood refinements (Linder et al. 2015, seed 000;
+"""Start values of the sway and yaw rows for the maximum-likelihood refinements (Linder et al. 2015;
 beyond the paper).
 
 :func:`initial_rows` is the start of :mod:`shipid.methods.masscm.pem` and :mod:`shipid.methods.masscm.whittle`:

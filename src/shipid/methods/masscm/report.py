@@ -1,4 +1,4 @@
-"""Report material of ``mass-cm`` results (Linder et al. 2015, seed 000).
+"""Report material of ``mass-cm`` results (Linder et al. 2015).
 
 Default section: draws, when the result carries them, the cost over (m, z̄_m) (``contours["cost"]``,
 paper Fig. 4) and the spread of the estimates over repeated runs (``tables["spread"]`` and ``xy["spread"]``,

@@ -1,4 +1,4 @@
-"""Levenberg-damped Fisher scoring of a refinement likelihood (Linder et al. 2015, seed 000; beyond the paper).
+"""Levenberg-damped Fisher scoring of a refinement likelihood (Linder et al. 2015; beyond the paper).
 
 The one search of the maximum-likelihood refinements :mod:`shipid.methods.masscm.pem` (exact time-domain
 likelihood) and :mod:`shipid.methods.masscm.whittle` (banded Whittle likelihood), which differ only in the

@@ -1,4 +1,4 @@
-"""Report series of the mass / centre-of-mass method (Linder et al. 2015, seed 000).
+"""Report series of the mass / centre-of-mass method (Linder et al. 2015).
 
 Builds the :mod:`shipid.report.convention` entries that ``shipid report`` draws for a
 ``mass-cm`` result, on request (:func:`with_series`), from what Algorithm 1 computed (no extra estimation):

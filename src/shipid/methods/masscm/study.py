@@ -19,17 +19,7 @@ that did not converge. The summary counts ``flagged_reasons`` (how often each ru
 ``not_converged_settled`` (runs flagged only as not converged whose zm_bar and rho vary by less than 1e-4 relative
 over the last 10 iterates, :func:`_identifiable_drift`).
 
-Measured (data seed 0, campaign seed 1; ``shipid study mass-cm-sensitivity --json``):
-
-* z_f known, 10 000 runs: 0 flagged; m 0.3997776 (std 9.6e-8), zm_bar -0.1820948 (std 4.2e-8), 6.42 iterations
-  on average; every run reaches the same solution (the 0.05 % offsets are the bilinear-discretisation error of
-  (32)). Table 3: m 0.4007 ± 0.0018, zm_bar -0.1821 ± 0.0004.
-* z_f free, the paper's protocol (``--z-f free --init given --runs 10000``): 11 of 10 000 flagged (the paper: 5);
-  over the 9 989 others m 0.40255 ± 0.0012 (Table 3: 0.4007 ± 0.0018), zm_bar -0.18207 ± 1.3e-5
-  (-0.1821 ± 0.0004), z_f -0.0617 ± 0.0147 (-0.0403 ± 0.0225), k 18.4 ± 3.5 (13.3 ± 5.4), K_vdot 0.76 ± 0.29
-  (0.34 ± 0.44): the Table 3 pattern, tight m and zm_bar, wide k, K_vdot and z_f, explained by the exact-fit
-  family in z_f (dm/dz_f ~ -0.08 kg/m), with our search stopping further along it than the paper's.
-  ``--runs 200``: 0 flagged; ``--init linear --runs 400``: 0 flagged (m 0.40132 ± 0.0029).
+Measured figures, with the commands that regenerate them: ``docs/validation/mass-cm.md``.
 
 :func:`run_one` uses the compiled path (``compute="fast"``: :mod:`shipid.methods.masscm.step`,
 :mod:`shipid.methods.masscm.search`, :mod:`shipid.estimate.fir_kernels`); the same Algorithm 1 as the reference
@@ -212,7 +202,7 @@ def summarise(outputs: list[dict], *, vessel: str = "fishing-vessel", zf_mode: s
 
 def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool = True,
                    instruments: str = "lags", vessel: str = "fishing-vessel") -> dict:
-    """One noise realisation of the issue-3 efficiency check of Algorithm 1 (beyond the paper; no refinement).
+    """One noise realisation of the efficiency check (combined wave and sensor noise) of Algorithm 1 (beyond the paper; no refinement).
 
     Three datasets of ``duration`` s with :meth:`NoiseSpec.issue3` noise (white gyro / accelerometer
     noise, constant biases, 0.5 deg wave roll), z_f known, linear initialisation; returns the

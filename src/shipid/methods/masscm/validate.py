@@ -1,4 +1,4 @@
-"""Open-loop validation of an identified roll model (Linder et al. 2015, seed 000) on a held-out run.
+"""Open-loop validation of an identified roll model (Linder et al. 2015) on a held-out run.
 
 The reduced roll model (23)–(26) of the run's loading condition, with the estimated physical
 parameters (30) (``k, A_x, d, K_r, K_vdot, K_delta, z_f`` and the load ``m, zm_bar``) and the

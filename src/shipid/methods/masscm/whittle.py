@@ -1,4 +1,4 @@
-"""Frequency-domain (Whittle) maximum-likelihood refinement of the mass / CM estimate (Linder et al. 2015, seed 000).
+"""Frequency-domain (Whittle) maximum-likelihood refinement of the mass / CM estimate (Linder et al. 2015).
 
 The same model, parameterisation, start, search and failure rules as :mod:`shipid.methods.masscm.pem` (beyond the
 paper), with the exact time-domain likelihood replaced by Whittle's frequency-domain one, so that an iteration
@@ -35,20 +35,17 @@ model's curves (``log |G_u|``, the phase of ``G_u`` and ``log S_ii`` of the thre
 model's transfer or spectrum changes quickly (the roll resonance, the wave peak), of constant relative width
 elsewhere, and their number is bounded by the model's curves, not the record length. They are designed on the
 start model and again on the wave start (the likelihood-ratio test of the wave structure compares both structures
-on the second set). Defaults ``band_tol = band_rel = 0.1``, chosen on seeds 100 and 101 (two "both" realisations:
-estimates within 0.03-0.07 SE of one bin per band at 0.1 and at 0.2, where band-constant ``A`` was 0.3-0.75 SE
-off) and on one sensor-noise realisation (9401, 30): there the high signal-to-noise ratio makes the banding error
-of 0.2 visible (the no-wave log-likelihood 380 below that at 0.05, and the wave structure, absorbing it, chosen by
-2 x 135 log-likelihood units), at 0.1 the wave structure loses (-1.3).
+on the second set). Defaults ``band_tol = band_rel = 0.1``: the estimates are then within a small fraction of a
+standard error of one bin per band, and the banding error stays below what decides the wave structure with
+sensor noise alone (how they were chosen: docs/validation/mass-cm.md).
 
 **Noise-state transient.** The noise states do not start stationary (the simulator starts waves and ship at rest);
 their DFT carries ``z H (zI - F)^-1 (s_0 - s_N) / sqrt(N)`` (as the rudder path's), large at low frequency where the
 slow sway and yaw poles amplify it and the wave spectrum has its zero. Its real 6-vector is profiled out in closed
 form (generalised least squares over the bands, :func:`~shipid.methods.masscm.whittle_kernels.transient_normal`);
-ignored, the likelihood of a 300-s "both" record (``SeedSequence([100, 0])``) peaked at m = 2.99 where pem's is at
-0.44 +- 0.03. The model without waves gets the same over the ship states (an initial state not at rest), so that the
-likelihood-ratio test of the wave structure compares like with like: with the transient in the wave model only, the
-wave structure was chosen (and then did not converge) in 30 of 30 sensor-noise runs at seed 9401. The Ljung-Box
+ignored, it moves the likelihood's peak far from pem's. The model without waves gets the same over the ship states
+(an initial state not at rest), so that the likelihood-ratio test of the wave structure compares like with like
+(with the transient in the wave model only, the wave structure is chosen with sensor noise alone). The Ljung-Box
 residuals of the model without waves leave this transient out (it decays within the ship's memory).
 
 **Search, errors, failure.** Fisher scoring with Levenberg damping as :mod:`~shipid.methods.masscm.pem`: the
@@ -58,18 +55,7 @@ errors from its inverse at the optimum (asymptotically the exact information's),
 A model without waves is checked for white residuals (Ljung-Box, as pem's ``whiteness_reason``, on the time-domain
 residual obtained by the inverse DFT of ``E_j`` at every bin, once).
 
-Measured (300-s "both" records, issue-3 noise, start Algorithm 1, default bands): against pem on
-``SeedSequence([9402, i])``, i = 0, 1, 2, the estimates of m / zm_bar / rho differ by +0.05 / +0.04 / +0.04, +0.07 /
-+0.07 / +0.06 and -0.02 / -0.01 / -0.05 of pem's standard errors, the standard errors by 0.997-1.008 of pem's, at
-2.6-5.9 s CPU against pem's 5.2-6.6 s (load ~8 on 2 cores; the cost of an iteration is set by the ~400 bands, not by
-the 15 000 samples). One hour at 50 Hz x three datasets (the files of ``benchmarks/bench_masscm_long_cli.py``, default
-``refine="auto"``, which runs this refinement there; 2026-12-02, load 2.5-3.1, 2 rounds): the whole command 7.90 /
-7.79 s CPU and 357.6 MB against 5.57 / 5.53 s and 307.2 MB with ``--refine none`` (the refinement ~2.3 s) and 9.11 /
-8.68 s, 362.4 MB for the numpy form of the band matrices before (~3.3 s); in-process, on the same data, the
-refinement itself is 1.1-1.7 s CPU, of which the band matrices (``matrices``, compiled loops of
-:mod:`~shipid.methods.masscm.whittle_kernels`) ~55 % and the information's algebra ~25 %; the first call of the
-compiled kernels loads them from numba's cache (~0.3 s; ~5 s to compile them where there is no cache yet).
-Coverage: :mod:`shipid.methods.masscm.coverage`.
+Measured figures, with the commands that regenerate them: ``docs/validation/mass-cm.md``.
 """
 
 from __future__ import annotations

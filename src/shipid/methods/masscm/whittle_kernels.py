@@ -1,5 +1,5 @@
 """Compiled per-band kernels of the Whittle refinement (:mod:`shipid.methods.masscm.whittle`; Linder et al. 2015,
-seed 000, beyond the paper).
+beyond the paper).
 
 The band matrices of :meth:`shipid.methods.masscm.whittle._FSet.matrices` evaluated band by band in one compiled
 loop instead of stacks of small numpy matrix products (the same formulas, see that module's docstring; the results

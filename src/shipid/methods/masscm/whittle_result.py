@@ -1,6 +1,6 @@
 """The Whittle maximum-likelihood refinement (:mod:`shipid.methods.masscm.whittle`) applied to an Algorithm 1 result.
 
-``MassCMOptions(refine="whittle")`` (Linder et al. 2015, seed 000, beyond the paper): as ``refine="pem"``
+``MassCMOptions(refine="whittle")`` (Linder et al. 2015, beyond the paper): as ``refine="pem"``
 (:mod:`shipid.methods.masscm.pem_result`), with the frequency-domain likelihood, whose iterations cost the same
 whatever the record length. With ``z_f`` known, the free parameters of (30), ``rho`` and the covariance of the
 result are replaced by the refinement's, started from Algorithm 1's estimate; ``diagnostics["refine"]`` records the
