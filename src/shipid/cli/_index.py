@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '6fac48151bd75c02'
+SOURCES = 'd345f181fc582410'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -13,6 +13,10 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.masscm.cli', 'Cramér–Rao lower bounds for planned experiments.', False),
     ('analyse', 'crlb', 'mass-cm'):
         ('shipid.methods.masscm.cli', 'Bounds on zm_bar, rho and m (z_f known) for a ship, excitation, noise and record length.', False),
+    ('analyse', 'identifiability'):
+        ('shipid.methods.masscm.cli', 'Which unknowns the data of an experiment determine (structural identifiability).', False),
+    ('analyse', 'identifiability', 'mass-cm'):
+        ('shipid.methods.masscm.cli', 'Rank of the map from the 9 unknowns to the transfer functions of the three datasets (Linder et al. 2015).', False),
     ('check',):
         ('shipid.cli.data_cmds', 'Read and validate a trial FILE; print what it holds (exit 2 with one line if it is bad).', False),
     ('convert',):
