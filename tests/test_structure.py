@@ -69,7 +69,7 @@ LAYERS = {
     "simulate": 4, "estimate": 4,
     "analysis": 5, "campaign": 5,
     "methods": 6,
-    "api": 7, "report": 7, "demo": 7,
+    "api": 7, "report": 7, "demo": 7, "export": 7,
     "cli": 8,
     "__main__": 9,
 }
