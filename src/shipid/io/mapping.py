@@ -37,7 +37,7 @@ import numpy as np
 from shipid.errors import InputError
 from shipid.io.table import RawTable
 from shipid.io.trial import CHANNELS
-from shipid.io.units import parse_unit, split_header
+from shipid.io.units import parse_unit, split_header, to_si_view
 
 #: Names users give the standard channels (lower case, ``_``/``-`` read as spaces), for the suggestions.
 SYNONYMS: dict[str, tuple[str, ...]] = {
@@ -221,7 +221,7 @@ def map_columns(table: RawTable, profile_map: Mapping[str, str] | None, profile_
             problems.add(f"unit '{unit}' is not a unit of {want} as channel '{std}' needs{also}", channel=col)
             spare[col] = (unit, si)
             continue
-        values = _to_si(table.data[:, j], unit)
+        values = to_si_view(table.data[:, j], unit)
         units_in[std] = unit
         columns[std] = col
         if std == "t":
@@ -249,17 +249,6 @@ def described(table: RawTable, columns: Mapping[str, str]) -> list[str]:
         std = std_of.get(col, col)
         out.append(f"{col}{u}" if std == col else f"{std} from {col}{u}")
     return out
-
-
-def _to_si(column: np.ndarray, unit: str) -> np.ndarray:
-    """A column converted to SI: the contiguous column itself at factor 1 (no copy), else a new array."""
-    from shipid.io.units import _parse, to_si
-
-    _, _, factor, offset = _parse(str(unit))
-    if offset:
-        return to_si(column, unit)[0]
-    x = np.ascontiguousarray(column, dtype=np.float64)
-    return x * factor if factor != 1.0 else x
 
 
 def _could_be(std: str, spare: Mapping[str, tuple[str, str]], problems: Problems) -> str:

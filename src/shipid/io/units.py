@@ -29,6 +29,7 @@ from functools import lru_cache
 import numpy as np
 
 from shipid.errors import InputError
+from shipid.io.trial import CHANNELS
 
 _ALIASES: dict[str, str] = {
     "-": "dimensionless", "": "dimensionless", "1": "dimensionless", "none": "dimensionless",
@@ -179,6 +180,16 @@ def to_si(values, unit: str, *, file: str | None = None,
     return x * factor if factor != 1.0 else x.copy(), si
 
 
+def to_si_view(values, unit: str) -> np.ndarray:
+    """:func:`to_si` without a copy where none is needed: contiguous float64 ``values`` in an SI unit come back
+    themselves (a reader's fresh column, not copied again); any conversion gives a new array."""
+    expr, si, factor, offset = _parse(str(unit))
+    if offset:
+        return to_si(values, unit)[0]
+    x = np.ascontiguousarray(values, dtype=np.float64)
+    return x * factor if factor != 1.0 else x
+
+
 def from_si(values, unit: str, *, file: str | None = None,
             channel: str | None = None, si: str | None = None) -> np.ndarray:
     """Convert SI ``values`` into ``unit`` (the inverse of :func:`to_si`).
@@ -235,8 +246,6 @@ def split_header(cell: str) -> tuple[str, str | None]:
     name = cell.strip()
     head, sep, tail = name.rpartition("_")
     if sep and head.strip() and tail in UNDERSCORE_UNITS:
-        from shipid.io.trial import CHANNELS
-
         if name not in CHANNELS:
             return head.strip(), _UNDERSCORE_SPELLING.get(tail, tail)
     return name, None
