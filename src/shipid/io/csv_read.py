@@ -45,25 +45,50 @@ def _check_text(lines: list[str], label: str) -> None:
                              row=i if i else None)
 
 
-def _header_end(raw: bytes) -> int:
-    """Offset of the first byte after the header line (its CR, LF or CRLF included); -1 without a line end."""
-    cut = [i for i in (raw.find(b"\n"), raw.find(b"\r")) if i >= 0]
-    if not cut:
-        return -1
-    i = min(cut)
-    return i + 2 if raw[i:i + 2] == b"\r\n" else i + 1
+def _head(p: Path, lines: int) -> tuple[bytes, bool]:
+    """The first bytes of the file, through its first ``lines`` line ends (or all of it); True when all."""
+    out = bytearray()
+    with open(p, "rb") as fh:
+        while True:
+            chunk = fh.read(1 << 16)
+            out += chunk
+            if not chunk:
+                return bytes(out), True
+            if out.count(b"\n") + out.count(b"\r") > 2 * lines + 2:
+                return bytes(out[:_cut(out, lines)]), False
 
 
-def _count_lines(data: bytes) -> int:
-    """Lines in ``data`` (no trailing line end), split at CRLF, CR or LF as :func:`split_lines` does."""
-    n = data.count(b"\n") + 1
-    if b"\r" in data:
-        n += data.count(b"\r") - data.count(b"\r\n")
-    return n
+def _cut(buf: bytearray, lines: int) -> int:
+    """Offset just after the ``lines``-th line end (CR, LF or CRLF) of ``buf``."""
+    i = 0
+    for _ in range(lines):
+        n, r = buf.find(b"\n", i), buf.find(b"\r", i)
+        j = min(x for x in (n, r) if x >= 0) if (n >= 0 or r >= 0) else len(buf)
+        i = j + 2 if buf[j:j + 2] == b"\r\n" else j + 1
+    return i
 
 
-def _fast(data: bytes, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
-    """The data rows parsed by pyarrow's CSV reader, or None when it cannot vouch for every cell."""
+def _clean_end(p: Path) -> bool:
+    """True when the file ends in one line end at most (no trailing blank lines, which the checked path drops)."""
+    with open(p, "rb") as fh:
+        fh.seek(0, 2)
+        size = fh.tell()
+        fh.seek(max(0, size - 4096))
+        tail = fh.read()
+    rest = tail[len(tail.rstrip()):]
+    return rest in (b"", b"\n", b"\r\n", b"\r")
+
+
+def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
+    """The data rows parsed by pyarrow's CSV reader from the file, or None when it cannot vouch for every cell.
+
+    One thread, 256-KiB blocks, the system allocator: about ``pandas.read_csv``'s CPU time, and
+    the transient memory of a few blocks plus the table (the file itself is not held in Python).
+    A blank line inside is a row of missing values to it (``ignore_empty_lines=False``), as to the
+    checked path; a file with blank lines at its end is left to the checked path, which drops them.
+    """
+    if not _clean_end(p):
+        return None
     try:
         import pyarrow as pa
         import pyarrow.csv as pacsv
@@ -72,18 +97,19 @@ def _fast(data: bytes, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
     names = [f"c{j}" for j in range(ncol)]
     try:
         table = pacsv.read_csv(
-            pa.py_buffer(data),
-            read_options=pacsv.ReadOptions(column_names=names, block_size=1 << 22),
+            p,
+            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1, block_size=1 << 18, use_threads=False),
             parse_options=pacsv.ParseOptions(delimiter=sep, quote_char=False, double_quote=False,
                                              escape_char=False, newlines_in_values=False,
                                              ignore_empty_lines=False),
             convert_options=pacsv.ConvertOptions(column_types={c: pa.float64() for c in names},
                                                  null_values=[""], true_values=[], false_values=[],
                                                  strings_can_be_null=False, decimal_point=decimal,
-                                                 check_utf8=False))
+                                                 check_utf8=False),
+            memory_pool=pa.system_memory_pool())
     except (pa.ArrowException, ValueError, OSError):
         return None
-    if table.num_rows != _count_lines(data):   # every line a row (blank ones are refused above): a safeguard
+    if table.num_columns != ncol or table.num_rows == 0:
         return None
     out = np.empty((table.num_rows, ncol), dtype=np.float64, order="F")   # each column contiguous
     for j in range(ncol):
@@ -101,48 +127,43 @@ def _fast(data: bytes, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
 
 def read_csv_table(p: Path, label: str) -> RawTable:
     """Read a CSV trial file into raw columns (names and units from its header), or raise one InputError."""
-    raw = p.read_bytes()
-    if not raw[:4096].strip() and not raw.strip():
+    head, whole = _head(p, CHECK_LINES + 1)
+    raw = head if whole else None
+    if whole and not head.strip():
         raise InputError("empty file", file=label)
-    end = _header_end(raw)
-    head_raw = raw if end < 0 else raw[:end]
-    quoted = b'"' in raw
-    # the header, the first lines and the dialect from a decoded head; the whole text only when needed
-    sample_end = end
-    for _ in range(CHECK_LINES):
-        if sample_end < 0 or sample_end >= len(raw):
-            break
-        nxt = _header_end(raw[sample_end:sample_end + 65536])
-        sample_end = -1 if nxt < 0 else sample_end + nxt
-    text, enc = decode_text(raw if sample_end < 0 else raw[:sample_end], label)
+    text, enc = decode_text(head, label)
+    if not whole and enc != "utf-8":            # decided on the whole file, as the careful path does
+        raw = p.read_bytes()
+        text, enc = decode_text(raw, label)
     lines = split_lines(text, label)
     _check_text(lines, label)
     header_line = lines[0]
-    sep_guess = detect_dialect(header_line, lines[1:], label)
-    if sep_guess.delimiter != "," or sample_end >= 0 and enc != "utf-8":
-        # a decimal comma is decided on every data line; a non-UTF-8 head on the whole text
+    dialect = detect_dialect(header_line, lines[1:], label)
+    if dialect.delimiter != "," and raw is None:
+        # a decimal comma is decided on every data line
+        raw = p.read_bytes()
         text, enc = decode_text(raw, label)
         lines = split_lines(text, label)
-    dialect = detect_dialect(header_line, lines[1:], label)
+        dialect = detect_dialect(header_line, lines[1:], label)
     sep = dialect.delimiter
-    names, units, cells = _header(header_line, sep, quoted, label)
+    names, units, cells = _header(header_line, sep, '"' in header_line, label)
     if len(lines) < 2:
         raise InputError("header only, no data rows", file=label)
     ncol = len(names)
     meta = {"encoding": enc, "csv_dialect": dialect.as_meta()}
-    if not quoted and ncol > 1 and end >= 0:
-        data = raw[end:].rstrip(b"\r\n")
-        fast = _fast(data, ncol, sep, dialect.decimal) if data else None
+    if ncol > 1 and (raw is None or b'"' not in raw):
+        fast = _fast(p, ncol, sep, dialect.decimal)
         if fast is not None:
             return RawTable(names, units, fast, np.arange(1, fast.shape[0] + 1), meta, header_cells=cells)
-    if sample_end >= 0:
+    if raw is None:
+        raw = p.read_bytes()
         text, enc = decode_text(raw, label)
         lines = split_lines(text, label)
         meta["encoding"] = enc
     data_lines = lines[1:]
     if not data_lines:
         raise InputError("header only, no data rows", file=label)
-    data = _checked(data_lines, names, sep, dialect.decimal, quoted, label)
+    data = _checked(data_lines, names, sep, dialect.decimal, '"' in text, label)
     return RawTable(names, units, data, np.arange(1, data.shape[0] + 1), meta, header_cells=cells)
 
 
