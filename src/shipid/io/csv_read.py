@@ -38,9 +38,12 @@ _NUMBER_LIKE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
 CHECK_LINES = 200
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0a-\x1f]")
+
+
 def _check_text(lines: list[str], label: str) -> None:
     for i, line in enumerate(lines[:CHECK_LINES]):
-        if any(ord(ch) < 32 and ch != "\t" for ch in line):
+        if _CONTROL.search(line):
             raise InputError("binary content (control characters), not CSV text", file=label,
                              row=i if i else None)
 
@@ -72,31 +75,30 @@ def _clean_end(p: Path) -> bool:
     """True when the file ends in one line end at most (no trailing blank lines, which the checked path drops)."""
     with open(p, "rb") as fh:
         fh.seek(0, 2)
-        size = fh.tell()
-        fh.seek(max(0, size - 4096))
+        fh.seek(max(0, fh.tell() - 4096))
         tail = fh.read()
-    rest = tail[len(tail.rstrip()):]
-    return rest in (b"", b"\n", b"\r\n", b"\r")
+    return tail[len(tail.rstrip()):] in (b"", b"\n", b"\r\n", b"\r")
 
 
 def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
     """The data rows parsed by pyarrow's CSV reader from the file, or None when it cannot vouch for every cell.
 
-    One thread, 256-KiB blocks, the system allocator: about ``pandas.read_csv``'s CPU time, and
-    the transient memory of a few blocks plus the table (the file itself is not held in Python).
-    A blank line inside is a row of missing values to it (``ignore_empty_lines=False``), as to the
-    checked path; a file with blank lines at its end is left to the checked path, which drops them.
+    One thread, 256-KiB blocks, the system allocator, the blocks copied once into one Fortran-order
+    array (each column contiguous): about ``pandas.read_csv``'s CPU time (the file is not held in
+    Python). A blank line inside is a row of missing values to it (``ignore_empty_lines=False``), as
+    to the checked path; a file with blank lines at its end is left to the checked path.
     """
-    if not _clean_end(p):
-        return None
     try:
         import pyarrow as pa
         import pyarrow.csv as pacsv
     except ImportError:  # pragma: no cover - pyarrow is a dependency
         return None
+    if not _clean_end(p):
+        return None
     names = [f"c{j}" for j in range(ncol)]
+    batches = []
     try:
-        table = pacsv.read_csv(
+        reader = pacsv.open_csv(
             p,
             read_options=pacsv.ReadOptions(column_names=names, skip_rows=1, block_size=1 << 18, use_threads=False),
             parse_options=pacsv.ParseOptions(delimiter=sep, quote_char=False, double_quote=False,
@@ -107,21 +109,22 @@ def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
                                                  strings_can_be_null=False, decimal_point=decimal,
                                                  check_utf8=False),
             memory_pool=pa.system_memory_pool())
+        for batch in reader:
+            if batch.num_columns != ncol:
+                return None
+            batches.append(batch)
     except (pa.ArrowException, ValueError, OSError):
         return None
-    if table.num_columns != ncol or table.num_rows == 0:
+    n = sum(b.num_rows for b in batches)
+    if n == 0:
         return None
-    out = np.empty((table.num_rows, ncol), dtype=np.float64, order="F")   # each column contiguous
-    for j in range(ncol):
-        col = table.column(j)
-        if col.null_count:
-            out[:, j] = col.to_numpy(zero_copy_only=False)     # nulls (empty cells) -> NaN
-        else:
-            pos = 0
-            for chunk in col.chunks:                           # copied once, straight into the block
-                k = len(chunk)
-                out[pos:pos + k, j] = chunk.to_numpy(zero_copy_only=True)
-                pos += k
+    out = np.empty((n, ncol), dtype=np.float64, order="F")   # each column contiguous
+    pos = 0
+    for batch in batches:
+        k = batch.num_rows
+        for j in range(ncol):
+            out[pos:pos + k, j] = batch.column(j).to_numpy(zero_copy_only=False)   # nulls (empty cells) -> NaN
+        pos += k
     return out
 
 
