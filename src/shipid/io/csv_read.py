@@ -83,7 +83,7 @@ def _clean_end(p: Path) -> bool:
 def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
     """The data rows parsed by pyarrow's CSV reader from the file, or None when it cannot vouch for every cell.
 
-    One thread, 256-KiB blocks, the system allocator, the blocks copied once into one Fortran-order
+    One thread, 256-KiB blocks (their memory released after the read), the blocks copied once into one Fortran-order
     array (each column contiguous): about ``pandas.read_csv``'s CPU time (the file is not held in
     Python). A blank line inside is a row of missing values to it (``ignore_empty_lines=False``), as
     to the checked path; a file with blank lines at its end is left to the checked path.
@@ -96,6 +96,7 @@ def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
     if not _clean_end(p):
         return None
     names = [f"c{j}" for j in range(ncol)]
+    pool = pa.default_memory_pool()
     batches = []
     try:
         reader = pacsv.open_csv(
@@ -108,7 +109,7 @@ def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
                                                  null_values=[""], true_values=[], false_values=[],
                                                  strings_can_be_null=False, decimal_point=decimal,
                                                  check_utf8=False),
-            memory_pool=pa.system_memory_pool())
+            memory_pool=pool)
         for batch in reader:
             if batch.num_columns != ncol:
                 return None
@@ -123,9 +124,23 @@ def _fast(p: Path, ncol: int, sep: str, decimal: str) -> np.ndarray | None:
     for batch in batches:
         k = batch.num_rows
         for j in range(ncol):
-            out[pos:pos + k, j] = batch.column(j).to_numpy(zero_copy_only=False)   # nulls (empty cells) -> NaN
+            out[pos:pos + k, j] = _values(batch.column(j))
         pos += k
+    del batches, reader
+    pool.release_unused()        # the blocks' memory back to the system, not kept for the next read
     return out
+
+
+def _values(arr) -> np.ndarray:
+    """A float64 Arrow array as numpy, read from its buffers (``Array.to_numpy`` would import pandas);
+    nulls (empty cells) are NaN."""
+    validity, data = arr.buffers()[:2]
+    n, off = len(arr), arr.offset
+    vals = np.frombuffer(data, dtype=np.float64, count=off + n)[off:]
+    if arr.null_count:
+        valid = np.unpackbits(np.frombuffer(validity, dtype=np.uint8), bitorder="little")[off:off + n]
+        vals = np.where(valid.astype(bool), vals, np.nan)
+    return vals
 
 
 def read_csv_table(p: Path, label: str) -> RawTable:
