@@ -7,9 +7,12 @@ Formats
     :mod:`shipid.io.csv_dialect`, recorded in ``meta["csv_dialect"]``), UTF-8
     (a BOM is accepted; cp1252 is tried when the bytes are not UTF-8), ``\\n``,
     ``\\r\\n`` or ``\\r`` line ends. The first line is the header; every cell is
-    ``name [unit]`` (the convention of the Esso Osaka 3 m data set). A header cell
-    *without* a unit is an error unless the unit is supplied by a format profile or
-    by the channel map (``'psi=heading[deg]'``). Each following line is one data
+    ``name [unit]`` (the convention of the Esso Osaka 3 m data set and of what shipid
+    writes), ``name (unit)`` (``Time (ms)``, ``Heading (deg)``) or ``name_unit``
+    (``speed_kn``; :func:`shipid.io.units.split_header`). A header cell *without* a unit
+    is an error unless the unit is supplied by a format profile or by the channel map
+    (``'psi=heading[deg]'``). Parsed by pyarrow's CSV reader, with a cell-by-cell
+    check where it has any doubt (:mod:`shipid.io.csv_read`). Each following line is one data
     row (row 1 is the first line after the header); blank lines at the very end of
     the file are ignored, any other line must have as many fields as the header.
     Empty cells are missing values (see :mod:`shipid.io.validate`).
@@ -35,13 +38,16 @@ Formats
     stamp and ``$``); interpolated onto a uniform grid; ``skip_bad`` skips corrupt
     sentences.
 
-Channel maps
-------------
+Channel maps and problems
+-------------------------
 ``channel_map={"x": "x_position_mid", "u": "u_velo"}`` (or the string
 ``'x=x_position_mid,u=u_velo'``, see :func:`parse_channel_map`) renames columns onto
 standard names (:data:`shipid.io.trial.CHANNELS`); a column keeps its own name when
 nothing maps it. A standard channel's unit must have the dimension of its SI unit
-(``psi [m]`` is an error).
+(``psi [m]`` is an error). Every problem of a file's columns, and every channel the
+caller requires and the file lacks (with the columns that could give it), is reported
+in one :class:`~shipid.errors.InputError` (:mod:`shipid.io.mapping`); a value problem
+(a bad cell, time not increasing) names its row.
 """
 
 from __future__ import annotations
@@ -151,7 +157,9 @@ def read_trial(
     Raises
     ------
     InputError
-        One line naming the file, channel and row of the first problem.
+        One line: every problem of the columns and every required channel the file lacks
+        (``N problems: ...; ...``, with the columns that could give each missing channel and
+        a ``--channels`` map to try), else the first value problem with its channel and row.
     """
     label = os.fspath(path)
     p = Path(path)
@@ -199,6 +207,8 @@ def read_trial(
         table.meta["derived"] = {"u": "x_dot*cos(psi) + y_dot*sin(psi)",
                                  "v": "-x_dot*sin(psi) + y_dot*cos(psi)"}
     derived = speed_from_sog(chans, units, required, method)
+    if derived:
+        table.meta["derived"] = {**table.meta.get("derived", {}), "U": "sog (speed over ground)"}
     check_required(chans, required, method, spare, problems)
     problems.raise_all(has=described(table, columns))
 
