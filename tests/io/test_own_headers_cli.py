@@ -105,3 +105,39 @@ def test_identify_mmg_runs_on_the_hand_written_file(files, tmp_path, capsys):
                "--prior", "esso_osaka_3m", "--structure", "hull+rudder+thrust", "-o", str(out)])
     assert rc == 0, capsys.readouterr().err
     assert out.stat().st_size > 1000
+
+
+READERS = [("check",), ("convert",), ("validate",), ("identify", "mmg"), ("identify", "realdata"),
+           ("identify", "ebm"), ("identify", "dp"), ("identify", "mass-cm"), ("monitor", "mass-cm")]
+
+
+@pytest.mark.parametrize("path", READERS, ids=" ".join)
+def test_every_command_that_reads_trials_has_the_same_channels_option(path):
+    import click
+
+    from shipid.cli import cli
+    from shipid.cli._common import CHANNELS_HELP
+
+    ctx = click.Context(cli)
+    cmd = cli
+    for name in path:
+        cmd = cmd.get_command(ctx, name)
+        ctx = click.Context(cmd, parent=ctx)
+    opt = next(p for p in cmd.params if "--channels" in getattr(p, "opts", ()))
+    assert opt.name == "channels" and opt.metavar == "MAP" and opt.help.startswith(CHANNELS_HELP)
+
+
+def test_identify_mass_cm_refuses_a_file_without_its_channels_in_one_line(tmp_path, capsys):
+    p = tmp_path / "roll.csv"
+    p.write_text("time_s,roll rate (deg/s),acc (m/s2),yaw rate (deg/s),rudder (deg)\n"
+                 + "".join(f"{0.02 * i:.2f},0.1,0.2,0.3,0.4\n" for i in range(50)))
+    known = tmp_path / "known.toml"
+    known.write_text("U = 5.0\nM = 100.0\nzg_bar = 0.1\nm_c = 1.0\nzc_bar = 0.2\nzs_bar = 0.0\ng = 9.81\n")
+    argv = ["identify", "mass-cm", "--nominal", str(p), "--calibration", str(p), "--loaded", str(p),
+            "--known", str(known)]
+    assert main(argv) == 2
+    err = _one_line_error(capsys)
+    for ch in ("p", "a_s", "r", "delta"):
+        assert f"channel '{ch}': required by mass-cm but missing" in err
+    assert "could be column 'roll rate' [deg/s]" in err and "could be column 'acc' [m/s2]" in err
+    assert err.endswith("try --channels 't=time,p=roll rate,a_s=acc,r=yaw rate,delta=rudder'")

@@ -54,7 +54,7 @@ SYNONYMS: dict[str, tuple[str, ...]] = {
     "p": ("roll rate",), "phi": ("roll", "roll angle", "heel"),
     "x_dot": ("vx", "vn", "north velocity", "velocity north", "x velocity"),
     "y_dot": ("vy", "ve", "east velocity", "velocity east", "y velocity"),
-    "a_s": ("acceleration", "accel", "tangential acceleration"),
+    "a_s": ("acceleration", "accel", "acc", "tangential acceleration"),
     "wind_speed": ("wind speed", "true wind speed"), "wind_dir": ("wind direction", "true wind direction"),
 }
 
