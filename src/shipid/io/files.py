@@ -65,7 +65,7 @@ from shipid.io.csv_read import cell_value, read_csv_table
 from shipid.io.mapping import Problems, check_required, described, map_columns, parse_channel_map, speed_from_sog
 from shipid.io.nmea import looks_like_nmea, read_nmea
 from shipid.io.table import RawTable, split_lines
-from shipid.io.trial import CHANNELS, Trial
+from shipid.io.trial import Trial
 from shipid.io.units import from_si, split_header
 from shipid.io.validate import validate_arrays
 from shipid.errors import InputError, ShipidError
