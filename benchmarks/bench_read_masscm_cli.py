@@ -17,7 +17,7 @@ temporary folder, or an existing folder holding ``nominal.csv``, ``calibration.c
 
 Printed: each, the ratio command / peer (target <= 5), the peak RSS against 300 MB, and the split.
 
-Usage:  python benchmarks/bench_read_masscm_cli.py [ROUNDS=3] [FOLDER]
+Usage:  python benchmarks/bench_read_masscm_cli.py [ROUNDS=3] [FOLDER or - for a new one] [DURATION_S=3600]
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def child(cmd: list[str], stdout=subprocess.PIPE) -> tuple[dict, str]:
     return {"cpu_s": ru.ru_utime + ru.ru_stime, "maxrss_mib": ru.ru_maxrss / 1024}, out
 
 
-def make_files(folder: Path) -> None:
+def make_files(folder: Path, duration: float = 3600.0) -> None:
     from shipid.io.files import write_trial
     from shipid.models.roll_reduced import KnownParams
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
@@ -99,7 +99,7 @@ def make_files(folder: Path) -> None:
     sys.path.insert(0, str(Path(__file__).parent))
     from bench_masscm_long_cli import KNOWN
 
-    d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=3600.0,
+    d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,
                           noise=NoiseSpec.issue3())
     for cond, tr in d.items():
         write_trial(tr, folder / f"{cond}.csv", force=True)
@@ -110,12 +110,14 @@ def make_files(folder: Path) -> None:
 
 def main() -> None:
     rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 3
-    folder = Path(sys.argv[2]) if len(sys.argv) > 2 else Path(tempfile.mkdtemp(prefix="bench_read_masscm_"))
+    folder = Path(sys.argv[2]) if len(sys.argv) > 2 and sys.argv[2] != "-" else \
+        Path(tempfile.mkdtemp(prefix="bench_read_masscm_"))
+    duration = float(sys.argv[3]) if len(sys.argv) > 3 else 3600.0
     if not (folder / "loaded.csv").is_file():
-        make_files(folder)
+        make_files(folder, duration)
     files = [str(folder / f"{k}.csv") for k in ("nominal", "calibration", "loaded")]
     mb = sum(Path(f).stat().st_size for f in files) / 1e6
-    print(f"shipid identify mass-cm vs pandas.read_csv, 3 files x 3600 s at 50 Hz ({mb:.0f} MB), one thread, "
+    print(f"shipid identify mass-cm vs pandas.read_csv, 3 files at 50 Hz ({mb:.0f} MB), one thread, "
           f"{rounds} rounds")
     cmd = [sys.executable, "-m", "shipid", "identify", "mass-cm", "--nominal", files[0], "--calibration", files[1],
            "--loaded", files[2], "--known", str(folder / "known.toml"), "-o", str(folder / "result.json"),
