@@ -78,3 +78,17 @@ def test_a_good_file_takes_the_fast_path_and_its_columns_are_contiguous(tmp_path
     tr = read_trial(p)
     assert calls and tr["x"].flags.c_contiguous and tr.t.flags.c_contiguous
     assert tr["psi"][3] == np.deg2rad(float(ROWS[3].split(",")[2]))
+
+
+def test_underscore_units_read_where_nothing_else_names_the_unit(tmp_path):
+    from shipid.io.files import write_trial
+    from shipid.io.trial import Trial
+
+    t = np.arange(5) * 0.1
+    tr = Trial(t, {"true_N": np.ones(5), "a_s": np.zeros(5)}, {"true_N": "N*m", "a_s": "m/s^2"})
+    write_trial(tr, tmp_path / "t.parquet")          # the unit in the schema metadata keeps 'true_N' whole
+    back = read_trial(tmp_path / "t.parquet")
+    assert back.names == ["true_N", "a_s"] and back.units["true_N"] == "N*m"
+    (tmp_path / "u.csv").write_text("time_s,speed_kn,a_s [m/s^2]\n0,1,0\n0.5,2,0\n")
+    u = read_trial(tmp_path / "u.csv", channel_map="t=time")
+    assert u.names == ["speed", "a_s"] and u["speed"][1] == pytest.approx(2 * 1852 / 3600)

@@ -316,11 +316,10 @@ def _read_parquet(p: Path, label: str) -> RawTable:
     names, units, cols = [], [], []
     for j, col in enumerate(table.column_names):
         try:
-            name, unit = split_header(col)
+            # a unit in the schema metadata keeps the column name whole ('true_N' is not 'true' in N)
+            name, unit = (col, units_md[col]) if col in units_md and "[" not in col else split_header(col)
         except ValueError as err:
             raise InputError(str(err), file=label) from None
-        if unit is None:
-            unit = units_md.get(col)
         if name in names:
             raise InputError(f"duplicate column name (columns {names.index(name) + 1} and {j + 1})",
                              file=label, channel=name)
