@@ -381,3 +381,16 @@ def test_fuzz_mutated_log(tmp_path, cut, length, insert, skip):
     v = _valid()
     cut = cut % (len(v) + 1)
     _answer(tmp_path / "m.nmea", v[:cut] + insert.encode() + v[cut + length:], skip_bad=skip)
+
+
+def test_speed_over_ground_gives_u_when_a_method_needs_it(tmp_path, capsys):
+    """No speed log (no VHW): a method that needs U gets the speed over ground, and says so."""
+    log = write_log(tmp_path / "nolog.nmea", "tag", [(t, s) for t, s in sentences() if "VHW" not in s])
+    plain = read_trial(log)
+    assert "sog" in plain and "U" not in plain
+    tr = read_trial(log, required=["x", "y", "psi", "U"], method="ebm")
+    np.testing.assert_array_equal(tr["U"], tr["sog"])
+    assert any(r.get("channel") == "U" and "speed over ground" in r["text"] for r in tr.meta["repairs"])
+    assert main(["check", str(log), "--require", "U"]) == 0
+    out = capsys.readouterr().out
+    assert "repaired: U, the speed through the water" in out and "derived: sog (speed over ground)" in out

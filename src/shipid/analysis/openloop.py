@@ -25,6 +25,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from shipid.errors import InputError
+from shipid.io.trial import CHANNELS
 from shipid.outputs import atomic_write, atomic_write_text
 
 
@@ -209,8 +210,13 @@ def plot_series(v: Validation, path: str | Path, panels: Sequence[tuple[int, Cal
 
 
 def write_csv(v: Validation, path: str | Path, *, force: bool = False) -> Path:
-    """The whole-run prediction beside the measured columns (``t, <c>, <c>_pred``), CSV, atomically."""
-    cols = ["t"] + [c for name in v.columns for c in (name, f"{name}_pred")]
+    """The whole-run prediction beside the measured columns, CSV, atomically.
+
+    Header ``t [s], <c> [unit], <c>_pred [unit], ...``: each column in the SI unit of its
+    channel (:data:`shipid.io.trial.CHANNELS`; ``-`` for a name it does not list), so that
+    :func:`shipid.io.files.read_trial` reads the file back.
+    """
+    cols = ["t [s]"] + [f"{c} [{CHANNELS.get(name, '-')}]" for name in v.columns for c in (name, f"{name}_pred")]
     data = np.column_stack([v.t] + [a for j in range(len(v.columns))
                                     for a in (v.measured[:, j], v.predicted[:, j])])
     lines = [",".join(cols)] + [",".join("" if not np.isfinite(x) else repr(float(x)) for x in row)

@@ -208,6 +208,22 @@ def emitted() -> list[str]:
     return list(_S.emitted)
 
 
+# ----------------------------------------------------------------------------- reading trials
+CHANNELS_HELP = ("Map the files' columns onto standard channels, NAME=COLUMN,... (e.g. "
+                 "'t=Time,psi=Heading,U=Speed'); COLUMN as in the header, with or without its unit; "
+                 "'psi=hdg[deg]' gives a unit the header lacks. Applies to every trial file of the command.")
+
+
+def channels_option(f: Callable | None = None, *, help: str = CHANNELS_HELP):
+    """Click decorator: ``--channels MAP`` (``channels``), the column map of every command that reads trials.
+
+    The value is the text :func:`shipid.io.files.read_trial` takes as ``channel_map``
+    (:func:`shipid.io.mapping.parse_channel_map`); one syntax on every command.
+    """
+    opt = click.option("--channels", "channels", default=None, metavar="MAP", help=help)
+    return opt(f) if f is not None else opt
+
+
 # ----------------------------------------------------------------------------- outputs
 OUT_HELP = "Write the result as JSON to FILE (atomically; an existing FILE needs --force)."
 JSON_HELP = "Print the result as JSON on stdout."

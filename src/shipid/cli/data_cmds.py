@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from shipid.cli import cli
-from shipid.cli._common import emit, out_options
+from shipid.cli._common import channels_option, emit, out_options
 from shipid.io.files import FORMATS, parse_channel_map, read_trial, write_trial
 
 
@@ -25,8 +25,7 @@ def _read_options(f):
                      help="Fill missing values and time gaps up to S seconds by linear interpolation.")(f)
     f = click.option("--require", default=None, metavar="NAMES",
                      help="Comma-separated channels that must be present, e.g. 'u,v,r,delta'.")(f)
-    f = click.option("--channels", default=None, metavar="MAP",
-                     help="Map columns onto standard names: 'x=x_position_mid,psi=heading[deg]'.")(f)
+    f = channels_option(f)
     f = click.option("--format", "fmt", type=click.Choice(FORMATS, case_sensitive=False), default=None,
                      help="File format (default: from the extension).")(f)
     return f

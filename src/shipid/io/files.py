@@ -7,9 +7,12 @@ Formats
     :mod:`shipid.io.csv_dialect`, recorded in ``meta["csv_dialect"]``), UTF-8
     (a BOM is accepted; cp1252 is tried when the bytes are not UTF-8), ``\\n``,
     ``\\r\\n`` or ``\\r`` line ends. The first line is the header; every cell is
-    ``name [unit]`` (the convention of the Esso Osaka 3 m data set). A header cell
-    *without* a unit is an error unless the unit is supplied by a format profile or
-    by the channel map (``'psi=heading[deg]'``). Each following line is one data
+    ``name [unit]`` (the convention of the Esso Osaka 3 m data set and of what shipid
+    writes), ``name (unit)`` (``Time (ms)``, ``Heading (deg)``) or ``name_unit``
+    (``speed_kn``; :func:`shipid.io.units.split_header`). A header cell *without* a unit
+    is an error unless the unit is supplied by a format profile or by the channel map
+    (``'psi=heading[deg]'``). Parsed by pyarrow's CSV reader, with a cell-by-cell
+    check where it has any doubt (:mod:`shipid.io.csv_read`). Each following line is one data
     row (row 1 is the first line after the header); blank lines at the very end of
     the file are ignored, any other line must have as many fields as the header.
     Empty cells are missing values (see :mod:`shipid.io.validate`).
@@ -35,18 +38,20 @@ Formats
     stamp and ``$``); interpolated onto a uniform grid; ``skip_bad`` skips corrupt
     sentences.
 
-Channel maps
-------------
+Channel maps and problems
+-------------------------
 ``channel_map={"x": "x_position_mid", "u": "u_velo"}`` (or the string
 ``'x=x_position_mid,u=u_velo'``, see :func:`parse_channel_map`) renames columns onto
 standard names (:data:`shipid.io.trial.CHANNELS`); a column keeps its own name when
 nothing maps it. A standard channel's unit must have the dimension of its SI unit
-(``psi [m]`` is an error).
+(``psi [m]`` is an error). Every problem of a file's columns, and every channel the
+caller requires and the file lacks (with the columns that could give it), is reported
+in one :class:`~shipid.errors.InputError` (:mod:`shipid.io.mapping`); a value problem
+(a bad cell, time not increasing) names its row.
 """
 
 from __future__ import annotations
 
-import csv
 import io as _io
 import json
 import os
@@ -56,11 +61,12 @@ from typing import Iterable, Mapping
 
 import numpy as np
 
-from shipid.io.csv_dialect import detect_dialect
+from shipid.io.csv_read import cell_value, read_csv_table
+from shipid.io.mapping import Problems, check_required, described, map_columns, parse_channel_map, speed_from_sog
 from shipid.io.nmea import looks_like_nmea, read_nmea
-from shipid.io.table import RawTable, decode_text, split_lines
-from shipid.io.trial import CHANNELS, Trial
-from shipid.io.units import from_si, parse_unit, split_header, to_si
+from shipid.io.table import RawTable, split_lines
+from shipid.io.trial import Trial
+from shipid.io.units import from_si, split_header
 from shipid.io.validate import validate_arrays
 from shipid.errors import InputError, ShipidError
 from shipid.outputs import atomic_write, jsonable
@@ -95,38 +101,6 @@ ESSO_MANOEUVRES = ("turning", "zigzag", "random", "berthing")
 
 _EXTENSIONS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".dat": "kvlcc2",
                ".nmea": "nmea", ".log": "csv"}  # .txt/.log: NMEA when the content looks like it (shipid.io.nmea)
-
-
-# --------------------------------------------------------------------------- channel maps
-def parse_channel_map(text: str | Mapping[str, str] | None) -> dict[str, str]:
-    """Parse ``'x=x_position_mid, u=u_velo'`` into ``{"x": "x_position_mid", "u": "u_velo"}``.
-
-    A value may carry a unit in brackets, ``'psi=heading [deg]'``, declaring the unit of
-    a column whose header has none. A mapping is returned as a plain dict.
-
-    Raises
-    ------
-    InputError
-        For an entry without ``=`` or with an empty side, or a name given twice.
-    """
-    if text is None:
-        return {}
-    if isinstance(text, Mapping):
-        return {str(k).strip(): str(v).strip() for k, v in text.items()}
-    out: dict[str, str] = {}
-    for part in str(text).split(","):
-        part = part.strip()
-        if not part:
-            continue
-        if "=" not in part:
-            raise InputError(f"channel map entry '{part}' is not NAME=COLUMN")
-        name, col = (s.strip() for s in part.split("=", 1))
-        if not name or not col:
-            raise InputError(f"channel map entry '{part}' is not NAME=COLUMN")
-        if name in out:
-            raise InputError(f"channel map names '{name}' twice")
-        out[name] = col
-    return out
 
 
 # --------------------------------------------------------------------------- reading
@@ -183,7 +157,9 @@ def read_trial(
     Raises
     ------
     InputError
-        One line naming the file, channel and row of the first problem.
+        One line: every problem of the columns and every required channel the file lacks
+        (``N problems: ...; ...``, with the columns that could give each missing channel and
+        a ``--channels`` map to try), else the first value problem with its channel and row.
     """
     label = os.fspath(path)
     p = Path(path)
@@ -202,7 +178,7 @@ def read_trial(
             table = read_nmea(p, label, skip_bad=skip_bad, resample=resample, interpolate_gaps=interpolate_gaps)
             resample = None  # already on its uniform grid
         else:
-            table = _read_csv(p, label)
+            table = read_csv_table(p, label)
     except InputError:
         raise
     except (OSError, MemoryError) as err:
@@ -218,7 +194,10 @@ def read_trial(
         if missing:
             raise InputError(f"not in the {profile} format: column '{missing[0]}' missing "
                              f"(has: {', '.join(table.names)})", file=label)
-    t, chans, units, units_in, columns = _map_columns(table, profile, user_map, label)
+    problems = Problems(label)
+    t, chans, units, units_in, columns, spare = map_columns(
+        table, PROFILES.get(profile), set(PROFILES[profile].values()) if profile else set(), user_map, label,
+        problems)
 
     if profile == "kvlcc2" and {"psi", "x_dot", "y_dot"} <= set(chans):
         c, s = np.cos(chans["psi"]), np.sin(chans["psi"])
@@ -227,11 +206,17 @@ def read_trial(
         units["u"] = units["v"] = "m/s"
         table.meta["derived"] = {"u": "x_dot*cos(psi) + y_dot*sin(psi)",
                                  "v": "-x_dot*sin(psi) + y_dot*cos(psi)"}
+    derived = speed_from_sog(chans, units, required, method)
+    if derived:
+        table.meta["derived"] = {**table.meta.get("derived", {}), "U": "sog (speed over ground)"}
+    check_required(chans, required, method, spare, problems)
+    problems.raise_all(has=described(table, columns))
 
     t, chans, repairs = validate_arrays(
         t, chans, file=label, rows=table.rows, units=units, required=required,
         interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows,
-        method=method)
+        method=method, copy=False)
+    repairs = derived + repairs
 
     meta: dict = {"source": label, "format": fmt, "profile": profile}
     meta.update(table.meta)
@@ -267,171 +252,6 @@ def _resolve_format(p: Path, fmt: str | None, label: str) -> str:
                      f"(use .csv or .parquet, or --format {'|'.join(FORMATS)})", file=label)
 
 
-def _map_columns(table: RawTable, profile: str | None, user_map: dict[str, str], label: str):
-    names = table.names
-    mapping: dict[str, str] = {}          # standard name -> column
-    map_units: dict[str, str] = {}        # column -> unit declared in the map
-    if profile is not None:
-        mapping.update(PROFILES[profile])
-    for std, col in user_map.items():
-        try:
-            col_name, col_unit = split_header(col)
-        except ValueError as err:
-            raise InputError(f"channel map: {err}", file=label, channel=std) from None
-        if col_name not in names:
-            raise InputError(f"channel map: no column '{col_name}' (has: {', '.join(names)})",
-                             file=label, channel=std)
-        # a user entry replaces any profile entry for the same name or the same column
-        mapping = {k: v for k, v in mapping.items() if k != std and v != col_name}
-        mapping[std] = col_name
-        if col_unit is not None:
-            map_units[col_name] = col_unit
-    col_to_std = {}
-    for std, col in mapping.items():
-        if col in col_to_std:
-            raise InputError(f"channel map sends column '{col}' to both '{col_to_std[col]}' and '{std}'",
-                             file=label)
-        col_to_std[col] = std
-    profile_cols = set(PROFILES[profile].values()) if profile else set()
-
-    chans: dict[str, np.ndarray] = {}
-    units: dict[str, str] = {}
-    units_in: dict[str, str] = {}
-    columns: dict[str, str] = {}
-    t = None
-    for j, (col, unit) in enumerate(zip(names, table.units)):
-        std = col_to_std.get(col, col)
-        if col in map_units:
-            if unit is not None and parse_unit(unit, file=label, channel=col) != \
-                    parse_unit(map_units[col], file=label, channel=col):
-                raise InputError(f"channel map gives unit '{map_units[col]}' but the header says '{unit}'",
-                                 file=label, channel=col)
-            unit = map_units[col]
-        if unit is None:
-            why = "" if col in profile_cols else "; write the header cell as 'name [unit]' or map it as NAME=COLUMN[unit]"
-            raise InputError(f"no unit in header cell '{col}'{why}", file=label, channel=col)
-        if std in chans or (std == "t" and t is not None):
-            raise InputError(f"two columns give channel '{std}' (rename one with --channels)", file=label,
-                             channel=std)
-        values, si = to_si(table.data[:, j], unit, file=label, channel=col)
-        want = CHANNELS.get(std)
-        if want is not None and si != want:
-            raise InputError(f"unit '{unit}' is not a unit of {want} as channel '{std}' needs",
-                             file=label, channel=col)
-        units_in[std] = unit
-        columns[std] = col
-        if std == "t":
-            t = values
-        else:
-            chans[std] = values
-            units[std] = si
-    if t is None:
-        raise InputError(f"no time column 't' (columns: {', '.join(names)}); map one with --channels t=COLUMN",
-                         file=label, channel="t")
-    if not chans:
-        raise InputError("no channels besides time", file=label)
-    return t, chans, units, units_in, columns
-
-
-# --- CSV -------------------------------------------------------------------------------
-_NUMBER_LIKE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
-
-
-def _check_text(lines: list[str], label: str) -> None:
-    for i, line in enumerate(lines[:200]):
-        if any(ord(ch) < 32 and ch != "\t" for ch in line):
-            raise InputError("binary content (control characters), not CSV text", file=label,
-                             row=i if i else None)
-
-
-def _read_csv(p: Path, label: str) -> RawTable:
-    raw = p.read_bytes()
-    if not raw.strip():
-        raise InputError("empty file", file=label)
-    text, enc = decode_text(raw, label)
-    lines = split_lines(text, label)
-    _check_text(lines, label)
-    quoted = '"' in text
-    dialect = detect_dialect(lines[0], lines[1:], label)   # ',' ';' or tab, decimal comma (shipid.io.csv_dialect)
-    sep = dialect.delimiter
-    header = next(csv.reader([lines[0]], delimiter=sep)) if quoted else lines[0].split(sep)
-    header = [h.strip() for h in header]
-    if len(header) == 1:
-        for other, name in ((";", "';'"), ("\t", "tab"), ("|", "'|'")):
-            if other in lines[0]:
-                raise InputError(f"header has one column only: the file seems to be separated by {name}; "
-                                 "shipid reads comma-, semicolon- or tab-separated values", file=label)
-    if all(_NUMBER_LIKE.match(h) for h in header if h) and any(header):
-        raise InputError("no header line: the first line holds numbers; expected 'name [unit]' cells",
-                         file=label)
-    names, units = [], []
-    for k, cell in enumerate(header, start=1):
-        if not cell:
-            raise InputError(f"empty header cell in column {k}", file=label)
-        try:
-            name, unit = split_header(cell)
-        except ValueError as err:
-            raise InputError(str(err), file=label) from None
-        if not name:
-            raise InputError(f"header cell '{cell}' in column {k} has a unit but no name", file=label)
-        if name in names:
-            raise InputError(f"duplicate column name (columns {names.index(name) + 1} and {k})",
-                             file=label, channel=name)
-        names.append(name)
-        units.append(unit)
-    data_lines = lines[1:]
-    if not data_lines:
-        raise InputError("header only, no data rows", file=label)
-    if dialect.decimal == ",":
-        data_lines = [line.replace(",", ".") for line in data_lines]
-    ncol = len(names)
-    meta = {"encoding": enc, "csv_dialect": dialect.as_meta()}
-    if not quoted and ncol > 1:
-        # numpy's compiled reader, whose float parsing is correctly rounded as float() is (the same doubles),
-        # kept when it read every row with the header's field count: it refuses (ValueError) a row whose field
-        # count differs from the first row's and any cell it cannot parse (empty, '1_0', text), and skips empty
-        # lines (then it has fewer rows); all of these fall through to the cell-by-cell path below, which
-        # names the file, channel and row
-        try:
-            data = np.loadtxt(data_lines, delimiter=sep, dtype=np.float64, ndmin=2, comments=None)
-        except ValueError:
-            pass
-        else:
-            if data.shape == (len(data_lines), ncol):
-                return RawTable(names, units, data, np.arange(1, len(data_lines) + 1), meta)
-    if quoted:
-        cells = list(csv.reader(data_lines, delimiter=sep))
-    else:
-        cells = [line.split(sep) for line in data_lines]
-    data = np.empty((len(cells), ncol), dtype=np.float64)
-    for i, row in enumerate(cells):
-        if len(row) != ncol:
-            if len(row) == 1 and ncol > 1 and not row[0].strip():
-                row = [""] * ncol  # a blank line inside the data: a row of empty cells
-            else:
-                raise InputError(f"has {len(row)} fields, the header has {ncol}", file=label, row=i + 1)
-        try:
-            data[i] = [float(c) for c in row]
-        except ValueError:
-            data[i] = [_cell(c, label, names[j], i + 1) for j, c in enumerate(row)]
-    return RawTable(names, units, data, np.arange(1, len(cells) + 1), meta)
-
-
-def _cell(c: str, label: str, channel: str, row: int) -> float:
-    s = c.strip()
-    if not s:
-        return np.nan
-    if "_" not in s:
-        try:
-            return float(s)
-        except ValueError:
-            pass
-    shown = s if len(s) <= 30 else s[:27] + "..."
-    if not shown.isprintable():
-        shown = shown.encode("unicode_escape").decode("ascii")
-    raise InputError(f"not a number: '{shown}'", file=label, channel=channel, row=row)
-
-
 # --- KVLCC2 HSVA .dat ----------------------------------------------------------------------
 def _read_kvlcc2(p: Path, label: str) -> RawTable:
     raw = p.read_bytes()
@@ -454,7 +274,7 @@ def _read_kvlcc2(p: Path, label: str) -> RawTable:
         try:
             data[i] = [float(c) for c in fields]
         except ValueError:
-            data[i] = [_cell(c, label, KVLCC2_COLUMNS[j][0], i + 1) for j, c in enumerate(fields)]
+            data[i] = [cell_value(c, label, KVLCC2_COLUMNS[j][0], i + 1) for j, c in enumerate(fields)]
     title = " ".join(lines[2].split())
     facility = {}
     if "HSVA" in lines[0] and "CPMC" in lines[0]:
@@ -496,11 +316,10 @@ def _read_parquet(p: Path, label: str) -> RawTable:
     names, units, cols = [], [], []
     for j, col in enumerate(table.column_names):
         try:
-            name, unit = split_header(col)
+            # a unit in the schema metadata keeps the column name whole ('true_N' is not 'true' in N)
+            name, unit = (col, units_md[col]) if col in units_md and "[" not in col else split_header(col)
         except ValueError as err:
             raise InputError(str(err), file=label) from None
-        if unit is None:
-            unit = units_md.get(col)
         if name in names:
             raise InputError(f"duplicate column name (columns {names.index(name) + 1} and {j + 1})",
                              file=label, channel=name)
@@ -511,7 +330,7 @@ def _read_parquet(p: Path, label: str) -> RawTable:
             values = np.array(arr.cast(pa.float64()).to_numpy(zero_copy_only=False), dtype=np.float64)
         elif pa.types.is_string(typ) or pa.types.is_large_string(typ):
             strs = arr.to_pylist()
-            values = np.array([np.nan if s is None else _cell(s, label, name, i + 1)
+            values = np.array([np.nan if s is None else cell_value(s, label, name, i + 1)
                                for i, s in enumerate(strs)], dtype=np.float64)
         else:
             raise InputError(f"column of type {typ} is not numeric", file=label, channel=name)

@@ -24,6 +24,7 @@ class RawTable:
     data: np.ndarray                     # (n_rows, n_cols) float64, NaN where empty
     rows: np.ndarray                     # 1-based data row numbers
     meta: dict = field(default_factory=dict)
+    header_cells: list[str] | None = None  # the header cells as written ("Time (ms)"), where there is a header
 
 
 def decode_text(raw: bytes, label: str, what: str = "CSV") -> tuple[str, str]:

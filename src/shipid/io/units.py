@@ -29,6 +29,7 @@ from functools import lru_cache
 import numpy as np
 
 from shipid.errors import InputError
+from shipid.io.trial import CHANNELS
 
 _ALIASES: dict[str, str] = {
     "-": "dimensionless", "": "dimensionless", "1": "dimensionless", "none": "dimensionless",
@@ -179,6 +180,16 @@ def to_si(values, unit: str, *, file: str | None = None,
     return x * factor if factor != 1.0 else x.copy(), si
 
 
+def to_si_view(values, unit: str) -> np.ndarray:
+    """:func:`to_si` without a copy where none is needed: contiguous float64 ``values`` in an SI unit come back
+    themselves (a reader's fresh column, not copied again); any conversion gives a new array."""
+    expr, si, factor, offset = _parse(str(unit))
+    if offset:
+        return to_si(values, unit)[0]
+    x = np.ascontiguousarray(values, dtype=np.float64)
+    return x * factor if factor != 1.0 else x
+
+
 def from_si(values, unit: str, *, file: str | None = None,
             channel: str | None = None, si: str | None = None) -> np.ndarray:
     """Convert SI ``values`` into ``unit`` (the inverse of :func:`to_si`).
@@ -204,10 +215,23 @@ def from_si(values, unit: str, *, file: str | None = None,
 
 
 _HEADER = re.compile(r"^\s*(?P<name>[^\[\]]*?)\s*\[(?P<unit>[^\[\]]*)\]\s*$")
+_PAREN = re.compile(r"^\s*(?P<name>[^\[\]()]*?)\s*\((?P<unit>[^\[\]()]*)\)\s*$")
+#: Unit spellings read from a ``name_unit`` header cell (``time_s``, ``heading_deg``, ``speed_kn``): only
+#: these, so that names such as ``x_position_mid`` or ``psi_hat`` stay whole.
+UNDERSCORE_UNITS = ("s", "ms", "min", "h", "m", "km", "mm", "deg", "rad", "degs", "kn", "kt", "kts", "knots",
+                    "rpm", "rps", "hz", "Hz", "N", "kN", "Nm", "kNm", "degps", "mps", "m/s", "deg/s", "rad/s",
+                    "m/s2", "m/s^2", "pct")
+_UNDERSCORE_SPELLING = {"degps": "deg/s", "mps": "m/s", "pct": "%"}
 
 
 def split_header(cell: str) -> tuple[str, str | None]:
-    """Split a header cell ``"name [unit]"`` into ``(name, unit)``; unit is None without brackets.
+    """Split a header cell into ``(name, unit)``; unit is None when the cell names none.
+
+    Read, in this order: ``name [unit]`` (the convention shipid writes), ``name (unit)``
+    (``Time (ms)``, ``Heading (deg)``) and ``name_unit`` where the part after the last
+    underscore is one of :data:`UNDERSCORE_UNITS` (``speed_kn``, ``time_s``) and the cell is
+    not a standard channel name itself (``a_s``, ``x_dot`` stay whole). Anything else is a
+    name without a unit.
 
     Raises ValueError for a cell with unbalanced or repeated brackets.
     """
@@ -216,4 +240,12 @@ def split_header(cell: str) -> tuple[str, str | None]:
         return m.group("name"), m.group("unit").strip()
     if "[" in cell or "]" in cell:
         raise ValueError(f"malformed header cell '{cell.strip()}' (expected 'name [unit]')")
-    return cell.strip(), None
+    m = _PAREN.match(cell)
+    if m and m.group("name") and m.group("unit").strip():
+        return m.group("name"), m.group("unit").strip()
+    name = cell.strip()
+    head, sep, tail = name.rpartition("_")
+    if sep and head.strip() and tail in UNDERSCORE_UNITS:
+        if name not in CHANNELS:
+            return head.strip(), _UNDERSCORE_SPELLING.get(tail, tail)
+    return name, None

@@ -97,6 +97,7 @@ def validate_arrays(
     trim_empty_rows: bool = False,
     time_name: str = "t",
     method: str | None = None,
+    copy: bool = True,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], list[dict]]:
     """Check (and, where asked, repair) a time vector and its channels.
 
@@ -124,22 +125,27 @@ def validate_arrays(
         Name of the time channel in the messages.
     method : str, optional
         Who needs the ``required`` channels, for the message.
+    copy : bool
+        False: return the given float64 arrays themselves where nothing was repaired (a
+        reader's fresh arrays, not copied again); a repaired array is always a new one.
 
     Returns
     -------
     t, channels, repairs
-        Validated arrays (float64, copies) and the list of repairs made, each a dict
-        with ``kind`` and a one-line ``text``.
+        Validated arrays (float64; copies unless ``copy=False``) and the list of repairs
+        made, each a dict with ``kind`` and a one-line ``text``.
 
     Raises
     ------
     InputError
         At the first problem, naming file, channel and row.
     """
-    t = np.array(t, dtype=np.float64)
-    chans = {k: np.array(v, dtype=np.float64) for k, v in channels.items()}
+    as_f8 = np.array if copy else np.asarray
+    t = as_f8(t, dtype=np.float64)
+    chans = {k: as_f8(v, dtype=np.float64) for k, v in channels.items()}
     n = t.size
-    rows = np.arange(1, n + 1) if rows is None else np.asarray(list(rows), dtype=np.int64)
+    rows = (np.arange(1, n + 1) if rows is None else np.asarray(rows, dtype=np.int64) if isinstance(rows, np.ndarray)
+            else np.asarray(list(rows), dtype=np.int64))
     units = dict(units or {})
     repairs: list[dict] = []
     if interpolate_gaps is not None and not (np.isfinite(interpolate_gaps) and interpolate_gaps > 0):
@@ -187,6 +193,7 @@ def validate_arrays(
             _check_run(i, j, t, None, file, time_name, rows, interpolate_gaps, t[i])
         good = np.flatnonzero(~bad_t)
         idx = np.flatnonzero(bad_t)
+        t = t.copy()
         t[idx] = np.interp(idx, good, t[good])
         for i, j in _runs(bad_t):
             repairs.append(_repair_text("interpolated", time_name, rows, i, j, t))
@@ -211,6 +218,7 @@ def validate_arrays(
         for i, j in runs:
             _check_run(i, j, t, v, file, name, rows, interpolate_gaps, v[i])
         good = ~bad
+        v = chans[name] = v.copy()
         v[bad] = interpolate(t[bad], t[good], v[good], angle=units.get(name) == "rad")
         for i, j in runs:
             repairs.append(_repair_text("interpolated", name, rows, i, j, t))

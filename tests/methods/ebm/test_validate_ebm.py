@@ -12,7 +12,7 @@ import pytest
 
 import shipid
 from shipid.cli import main
-from shipid.io.files import write_trial
+from shipid.io.files import read_trial, write_trial
 from shipid.methods.ebm import validate as EV
 from shipid.methods.ebm.estimator import EbmConfig
 from shipid.methods.ebm.trials import simulate_trial
@@ -77,7 +77,8 @@ def test_cli_prints_the_table_json_plot_and_prediction(identified, held_out, tmp
     assert "psi [deg]" in out and "60-s horizons (n=5)" in out and "whole" in out
     assert png.stat().st_size > 1000
     head = pred.read_text().splitlines()[0].split(",")
-    assert head[:3] == ["t", "x", "x_pred"] and "U_pred" in head
+    assert head[:3] == ["t [s]", "x [m]", "x_pred [m]"] and "U_pred [m/s]" in head
+    assert read_trial(pred).units["U_pred"] == "m/s"        # units in the header: shipid reads it back
     rc = main(["validate", str(model), "--trial", str(run), "--json"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["method"] == "ebm" and d["settings"]["levers_from"] == "the model's training runs"

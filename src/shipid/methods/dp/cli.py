@@ -16,7 +16,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
-from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, refuse_existing, strict_option
+from shipid.cli._common import ManyValues, channels_option, emit, loud, loud_lines, out_options, refuse_existing, strict_option
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 from shipid.io.files import read_trial
 from shipid.errors import ShipidError
@@ -34,10 +34,11 @@ REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
 
 
 
-def _read(paths, kind):
+def _read(paths, kind, channels=None):
     if not paths:
         raise ShipidError(f"no {kind} trials given (--{kind} FILE [FILE ...])")
-    return [read_trial(p, required=REQUIRED, manoeuvre=f"dp-{kind}") for p in paths]
+    return [read_trial(p, required=REQUIRED, manoeuvre=f"dp-{kind}", method="identify dp", channel_map=channels)
+            for p in paths]
 
 
 def _print_table(result, theta_true=None) -> None:
@@ -79,6 +80,7 @@ def _print_table(result, theta_true=None) -> None:
 @click.option("--sway-yaw", "sway_yaw", cls=ManyValues, type=click.Path(),
               help="Coupled sway-yaw trial files (SI2).")
 @click.option("--azimuth", cls=ManyValues, type=click.Path(), help="Azimuth trial files (SI3).")
+@channels_option
 @click.option("--vessel", default="supply", show_default=True,
               help="Packaged vessel giving M'', the thruster arms, L and m.")
 @click.option("--sigma-pos", type=float, default=None, help="Position noise, m: the starting value (the level is estimated from the data) [default 0.5].")
@@ -87,7 +89,7 @@ def _print_table(result, theta_true=None) -> None:
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
 @strict_option
-def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
+def identify_dp_cmd(surge, sway_yaw, azimuth, channels, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
     """Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).
 
     \b
@@ -98,7 +100,7 @@ def identify_dp_cmd(surge, sway_yaw, azimuth, vessel, sigma_pos, sigma_psi, as_j
     Example: shipid identify dp --surge s1.csv s2.csv --sway-yaw y1.csv y2.csv --azimuth a1.csv a2.csv
     """
     v = dp_vessel(load_vessel(vessel))
-    trials = {k: _read(p, k) for k, p in (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}
+    trials = {k: _read(p, k, channels) for k, p in (("surge", surge), ("sway-yaw", sway_yaw), ("azimuth", azimuth))}
     opt = DPOptions()
     if sigma_pos is not None:
         opt = replace(opt, sigma_pos=sigma_pos)

@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
-from shipid.cli._common import emit, loud, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, out_options, strict_option
 from shipid.errors import ShipidError
 
 
@@ -70,6 +70,7 @@ def _print_coefficients(res) -> None:
 @identify.command("ebm", context_settings=CONTEXT)
 @click.option("--trial", "trials", multiple=True, required=True, type=click.Path(dir_okay=False),
               help="Trial file (CSV or Parquet) with x, y, x_dot, y_dot, psi, U, delta, n; repeatable.")
+@channels_option
 @click.option("--vessel", default="esso-osaka", show_default=True, help="Packaged vessel.")
 @out_options(json_help="Print the Result as JSON on stdout.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper (no rudder-aware noise).")
@@ -81,7 +82,7 @@ def _print_coefficients(res) -> None:
 @click.option("--log-offset", "log_offset", default=None, type=float, metavar="Y",
               help="Speed-log athwartship position [m] for trials that do not state it [default: 0].")
 @strict_option
-def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figures, antenna, log_offset):
+def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_variant, figures, antenna, log_offset):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
 
@@ -91,7 +92,7 @@ def identify_ebm(trials, vessel, as_json, out, force, paper, yaw_variant, figure
     from shipid.progress import progress_bar
 
     vessel = _check_vessel(vessel)
-    data = [read_trial(p, required=list(ebm.REQUIRED), method="ebm", vessel=vessel) for p in trials]
+    data = [read_trial(p, required=list(ebm.REQUIRED), method="ebm", vessel=vessel, channel_map=channels) for p in trials]
     cfg = replace(_config(paper), yaw_rudder_variant=yaw_variant)
     if antenna is not None or log_offset is not None:
         try:

@@ -22,7 +22,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
-from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, loud_lines, out_options, strict_option
 from shipid.cli.campaign_cmds import campaign_options, failure_lines
 from shipid.errors import InputError, ShipidError
 from shipid.methods.masscm.known import KNOWN_KEYS, read_known  # noqa: F401  (read_known re-exported for monitor)
@@ -41,6 +41,7 @@ def _fmt(v: float) -> str:
               help="Loaded trial(s): the unknown load m at zm_bar.")
 @click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False),
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
+@channels_option
 @click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
 @click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma", "bj"]), default="auto",
@@ -60,7 +61,7 @@ def _fmt(v: float) -> str:
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
 @strict_option
-def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_prefilter, noise_model, refine,
+def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_iter, no_prefilter, noise_model, refine,
                      cost_map, as_json, out, force):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
 
@@ -77,7 +78,8 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, max_iter, no_pref
     datasets = []
     for cond, paths in (("nominal", nominal), ("calibration", calibration), ("loaded", loaded)):
         for p in paths:
-            datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm")))
+            datasets.append((cond, read_trial(p, required=["t", *REQUIRED], method="mass-cm",
+                                                        channel_map=channels)))
     opts = MassCMOptions(max_iter=max_iter, prefilter=not no_prefilter, noise_model=noise_model, refine=refine)
     fit = fit_mass_cm(datasets, kn["known"], theta0=kn["theta0"], z_f=kn["z_f"], z_f_prior=kn["z_f_prior"],
                       options=opts, init="given" if kn["theta0"] is not None else "linear")

@@ -24,7 +24,7 @@ import math
 import click
 
 from shipid.cli import CONTEXT, cli, identify, study
-from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import CHANNELS_HELP, ManyValues, channels_option, emit, loud, loud_lines, out_options, strict_option
 from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
 
@@ -36,10 +36,10 @@ PROFILE_DEFAULTS = {"kvlcc2": ("kvlcc2_hsva", -1), "esso": ("esso_osaka_3m", 1)}
 READ_SETTINGS = {"trim_empty_rows": True, "interpolate_gaps": 1.0}
 
 
-def _read_run(path, fmt=None, channels=None):
+def _read_run(path, fmt=None, channels=None, required=None, method="shipid validate/identify"):
     from shipid.io.files import read_trial
 
-    return read_trial(path, fmt=fmt, channel_map=channels, method="shipid validate/identify", **READ_SETTINGS)
+    return read_trial(path, fmt=fmt, channel_map=channels, required=required, method=method, **READ_SETTINGS)
 
 
 def _flip(tr, sign):
@@ -70,8 +70,7 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
               help="Measured run (CSV/Parquet/Esso CSV/KVLCC2 .dat).")
 @click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
               help="Trial format [default: from the file, else MODEL.json's].")
-@click.option("--channels", default=None,
-              help="Column map 'x=COL,u=COL,...' for own column names [default: MODEL.json's, if any].")
+@channels_option(help=CHANNELS_HELP + " [default: MODEL.json's, if any]")
 @click.option("--horizon", default=None, type=float,
               help="Length of restarted horizons, s [default: MODEL.json's, else the method's: 60, mass-cm 10].")
 @click.option("--rudder-sign", default=None, type=int,
@@ -313,7 +312,8 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
         raise ShipidError("--rudder-sign must be 1 or -1")
     if water_depth is not None and not (math.isfinite(water_depth) and water_depth > 0):
         raise ShipidError(f"--water-depth must be positive, got {water_depth:g}")
-    raw = [_read_run(p, fmt, channels) for p in paths]
+    raw = [_read_run(p, fmt, channels, ["x", "y", "psi", "u", "v", "r", "delta", "n"], "identify mmg")
+           for p in paths]     # the channels of shipid.methods.mmg.estimator.smooth_run
     if water_depth is not None:   # the runs' depth as given, over what a data profile records
         for tr in raw:
             tr.meta.update(water_depth=float(water_depth), water_depth_source="--water-depth")
@@ -379,8 +379,7 @@ def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_jso
 _ID_OPTS = [
     click.option("--format", "fmt", default=None, type=click.Choice(FORMATS, case_sensitive=False),
                  help="Trial format [default: from the file]."),
-    click.option("--channels", default=None,
-                 help="Column map for own column names, e.g. 'x=x_position_mid,u=u_velo,psi=hdg[deg]'."),
+    channels_option(),
     click.option("--prior", default=None,
                  help="Structure and fixed constants: esso_osaka_3m, kvlcc2_hsva, kvlcc2_L7 or MODEL.json "
                       "[default: from the data profile (Esso CSV: esso_osaka_3m, HSVA .dat: kvlcc2_hsva); "

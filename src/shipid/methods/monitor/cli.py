@@ -18,7 +18,7 @@ import click
 
 from shipid.cli import CONTEXT, cli
 from shipid.cli._common import emit as emit_out
-from shipid.cli._common import out_options, strict_option, warn
+from shipid.cli._common import channels_option, out_options, strict_option, warn
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -30,7 +30,7 @@ def monitor() -> None:
 
 
 def _csv_chunks(fh, header: list[str], label: str, lines_per_chunk: int, follow: bool, poll: float,
-                idle_timeout: float | None):
+                idle_timeout: float | None, channels: str | None = None):
     """Trials of consecutive complete CSV lines of ``fh`` (after ``header``), parsed by ``read_trial``.
 
     With ``follow`` the end of the file is not the end of the stream: wait for more lines (as ``tail -f``)
@@ -49,7 +49,7 @@ def _csv_chunks(fh, header: list[str], label: str, lines_per_chunk: int, follow:
             nonlocal row0
             tmpf.write_text("".join(header + lines), encoding="utf-8")
             try:
-                tr = read_trial(tmpf, fmt="csv", required=_CHANNELS, method="mass-cm")
+                tr = read_trial(tmpf, fmt="csv", required=_CHANNELS, method="mass-cm", channel_map=channels)
             except InputError as err:
                 raise InputError(f"{label}: rows {row0 + 1}-{row0 + len(lines)}: {err}") from None
             row0 += len(lines)
@@ -126,6 +126,7 @@ def live_panel(u, nominal_label: str):
 @click.option("--stream", required=True, type=str,
               help="Loaded-condition stream: a trial file, '-' for standard input (CSV), or with --follow a "
                    "CSV file still being written.")
+@channels_option
 @click.option("--window", type=click.FloatRange(min=30), default=300.0, show_default=True,
               help="Sliding window of the loaded-stream moments (s).")
 @click.option("--every", type=click.FloatRange(min=1), default=10.0, show_default=True,
@@ -145,7 +146,7 @@ def live_panel(u, nominal_label: str):
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
               help="With --follow: stop after this many seconds without new data [default: never].")
 @strict_option
-def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, init_s, threshold, noise_model, as_json,
+def monitor_mass_cm(nominal, calibration, known_path, stream, channels, window, every, init_s, threshold, noise_model, as_json,
                     out, force, follow, idle_timeout):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
 
@@ -171,8 +172,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
         opts = replace(opts, threshold=threshold)
     if noise_model is not None:
         opts = replace(opts, masscm=replace(opts.masscm, noise_model=noise_model))
-    nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm")
-    cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm")
+    nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
+    cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
     mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)
     mon.keep_updates = False
     live = None
@@ -206,7 +207,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
             try:
                 label = "stdin" if stream == "-" else stream
                 hdr = _header(fh, label)
-                for tr in _csv_chunks(fh, hdr, label, chunk_lines, follow, 0.2, idle_timeout):
+                for tr in _csv_chunks(fh, hdr, label, chunk_lines, follow, 0.2, idle_timeout, channels):
                     emit(mon.feed(tr.t, tr["p"], tr["a_s"], tr["r"], tr["delta"]))
             finally:
                 if fh is not sys.stdin:
@@ -214,7 +215,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, window, every, ini
         else:
             if not os.path.exists(stream):
                 raise InputError("no such file", file=stream)
-            tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm")
+            tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
             for a in range(0, len(tr.t), chunk_lines):
                 s = slice(a, a + chunk_lines)
                 emit(mon.feed(tr.t[s], tr["p"][s], tr["a_s"][s], tr["r"][s], tr["delta"][s]))
