@@ -245,7 +245,7 @@ def _row(cells) -> str:
 def _grade_cell(g: str, e) -> str:
     r = rel_se(e)
     if g != NOT_DETERMINED and math.isfinite(r):
-        return f"{g} ({100 * r:.2g} %)"
+        return f"{g} ({100 * r:.2g} %)" if r < 0.1 else f"{g} ({100 * r:.0f} %)"
     return g
 
 

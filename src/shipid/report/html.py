@@ -30,6 +30,7 @@ from shipid.report.registry import load_method_sections, sections_for
 from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
                                   residual_stats_table)
 from shipid.report import figures as F
+from shipid.report.page import page
 from shipid.report.units import pretty_unit
 from shipid.report.values import flatten, si_table, with_units
 from shipid.report.verdict import NOT_DETERMINED, verdict_html
@@ -45,103 +46,6 @@ GENERIC_TITLES = {
     "matrices": "Matrices", "xy": "Other plots", "tables": "Further tables",
 }
 
-CSS = """
-:root{--ink:#1d2330;--muted:#5b6474;--line:#d9dde5;--soft:#f4f6f9;--accent:#1f6fb4;--bad:#b3261e;--ok:#1e7a46;}
-*{box-sizing:border-box}
-html{font-size:15px}
-body{margin:0;color:var(--ink);background:#fff;font-family:"Source Sans Pro","Segoe UI",Roboto,"Helvetica Neue",
- Arial,sans-serif;line-height:1.45}
-main{max-width:1020px;margin:0 auto;padding:24px 28px 60px}
-header.top{border-bottom:3px solid var(--accent);padding-bottom:12px;margin-bottom:8px}
-header.top h1{font-size:1.65rem;margin:0 0 2px;font-weight:600;letter-spacing:-.01em}
-header.top .sub{color:var(--muted);font-size:.98rem}
-h2{font-size:1.22rem;margin:34px 0 10px;padding-bottom:4px;border-bottom:1px solid var(--line);font-weight:600}
-h3{font-size:1.02rem;margin:22px 0 8px;font-weight:600;color:#2b3445}
-p{margin:6px 0}
-.small{font-size:.86rem;color:var(--muted)}
-nav.toc{font-size:.88rem;color:var(--muted);margin:10px 0 4px}
-nav.toc a{color:var(--accent);text-decoration:none;margin-right:14px;white-space:nowrap}
-.badges{display:flex;flex-wrap:wrap;gap:8px;margin:14px 0 6px}
-.badge{border:1px solid var(--line);border-radius:6px;padding:6px 12px;background:var(--soft);font-size:.9rem}
-.badge b{display:block;font-size:1.05rem}
-.badge.ok b{color:var(--ok)} .badge.bad b{color:var(--bad)}
-.note{border-left:4px solid var(--accent);background:var(--soft);padding:8px 12px;margin:10px 0;font-size:.92rem}
-.note.bad{border-left-color:var(--bad);background:#fdf0ef}
-.warnings{border:1px solid #e3a9a4;background:#fdf0ef;border-left:5px solid var(--bad);padding:10px 14px;
- margin:14px 0;border-radius:4px}
-.warnings h2{border:0;margin:0 0 4px;font-size:1.05rem;color:var(--bad);padding:0}
-.warnings ul{margin:4px 0 0 18px;padding:0}
-table{border-collapse:collapse;margin:10px 0 16px;font-size:.9rem;font-variant-numeric:tabular-nums}
-caption{caption-side:top;text-align:left;font-size:.88rem;color:var(--muted);padding:0 0 6px}
-table.est{width:100%}
-table.data{min-width:50%}
-td code{white-space:nowrap}
-th,td{padding:5px 9px;border-bottom:1px solid var(--line);vertical-align:top}
-thead th{text-align:left;background:var(--soft);border-bottom:2px solid #c4cad6;font-weight:600;white-space:nowrap}
-td.num,th.num{text-align:right;white-space:nowrap}
-td.flag{color:var(--bad);font-weight:600}
-table.kv th{text-align:left;font-weight:600;color:#39424f;width:34%;background:none}
-table.kv td.num{text-align:left}
-.unit{color:var(--muted);font-weight:400}
-table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
-table.mat td{border:0;padding:1px 8px;text-align:right}
-table.rec{margin:0;font-size:.82rem}
-table.rec th{white-space:normal;overflow-wrap:anywhere;background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
-table.rec td{padding:1px 8px;border:0}
-table.rec.nv td,table.rec.nv th{padding:1px 3px;font-size:.76rem;white-space:nowrap}
-table.rec td:first-child{max-width:280px;overflow-wrap:break-word}
-.scroll{overflow-x:auto;max-width:100%}
-table.kv th{overflow-wrap:break-word}
-table.kv td{overflow-wrap:break-word}
-table.kv{table-layout:fixed;width:100%}
-table.kv th{width:30%}
-main{overflow-wrap:break-word}
-.status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
-.status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
-.status.notdet{color:#fff;background:#8a5a00;border-color:#8a5a00}
-tr.notid td{color:var(--bad)}
-tr.notdet td{color:#8a5a00;background:#fff8ec}
-tr.notdet td.num{text-decoration:line-through;text-decoration-color:#d6b27a}
-.verdict{border:1px solid var(--line);border-left:5px solid var(--accent);background:var(--soft);padding:10px 14px;
- margin:14px 0;border-radius:4px}
-.verdict h2{border:0;margin:0 0 4px;font-size:1.05rem;padding:0}
-.verdict ul{margin:4px 0 0 0;padding:0;list-style:none}
-.verdict li{margin:3px 0;padding-left:18px;position:relative}
-.verdict li:before{content:"•";position:absolute;left:4px;color:var(--muted)}
-.verdict li.ok:before{content:"✓";color:var(--ok)} .verdict li.bad:before{content:"✗";color:var(--bad)}
-.verdict li.warn:before{content:"!";color:#8a5a00;font-weight:700}
-.vec{display:flex;flex-wrap:wrap;gap:2px 0;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2;
- padding:0 4px;width:fit-content;max-width:100%;font-size:.82rem}
-.vec .vi{display:inline-block;min-width:6.2em;text-align:right;padding:0 4px;white-space:nowrap}
-.chan{white-space:nowrap;display:inline-block;margin-right:6px}
-table.data{width:100%} table.data.si{width:auto;min-width:60%}
-figure{margin:14px 0 22px;padding:0}
-figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
-figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}
-code{font-family:"DejaVu Sans Mono",Menlo,Consolas,monospace;font-size:.84rem;background:var(--soft);
- padding:1px 4px;border-radius:3px;word-break:break-all}
-footer{margin-top:40px;border-top:1px solid var(--line);padding-top:8px;font-size:.82rem;color:var(--muted)}
-details.sec{margin:18px 0 0}
-details.sec>summary{cursor:pointer;list-style:none}
-details.sec>summary::-webkit-details-marker{display:none}
-details.sec>summary h2{display:inline-block;width:100%;margin:14px 0 6px}
-details.sec>summary h2:before{content:"▸ ";color:var(--accent)}
-details.sec[open]>summary h2:before{content:"▾ "}
-details>summary{cursor:pointer;color:var(--accent);font-size:.92rem;margin:8px 0}
-.headline{font-size:1.08rem;font-weight:600;margin:4px 0 10px}
-.headline.bad{color:var(--bad)} .headline.ok{color:var(--ok)} .headline.warn{color:#8a5a00}
-.vcols{display:grid;grid-template-columns:minmax(0,1fr) minmax(0,1.25fr);gap:18px}
-@media (max-width:800px){.vcols{grid-template-columns:1fr}}
-.verdict code{word-break:normal;white-space:nowrap}
-.verdict h3{margin:4px 0 6px;font-size:.98rem}
-table.found{margin:0 0 6px;font-size:.86rem;width:100%}
-table.found td,table.found th{padding:2px 6px}
-.grade{font-size:.8rem;padding:1px 6px;border-radius:3px;background:#fff;border:1px solid var(--line);white-space:nowrap}
-.grade.well{color:var(--ok)} .grade.poor,.grade.flagged,.grade.noSE{color:#8a5a00}
-.grade.notdet,.grade.notdetermined{color:#fff;background:#8a5a00;border-color:#8a5a00}
-.grade.fixed,.grade.known{color:var(--muted)} .grade.derived{color:#6a4c93}
-@media print{details{display:block}main{max-width:none;padding:0} h2{break-after:avoid} figure{break-inside:avoid}}
-"""
 
 
 def _fmt_duration(s: float) -> str:
@@ -490,12 +394,35 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
         try:
             fig = F.signals_figure(items)
             fig.axes[-1].set_xlabel(xlabel)
+            moved = _final_differs(result, part, fig)
+            note = ""
+            if moved:
+                note = (" The dashed line is the final estimate of the estimates table, which differs from the "
+                        "last iterate (a later stage, such as a refinement, moved it): "
+                        + "; ".join(f"{k} {fmt_num(a, 3)} → {fmt_num(b, 3)}" for k, a, b in moved) + ".")
             html_parts.append(ctx.figure(fig, f"{', '.join(k for k, _ in part)} versus {xkey} "
                                               "(stored outside the report convention; units from the "
-                                              "estimate with that name or the standard channel names)."))
+                                              "estimate with that name or the standard channel names)." + note))
         except Exception as err:  # noqa: BLE001
             html_parts.append(ctx.problem(f"series {', '.join(k for k, _ in part)}", err))
     return "".join(html_parts), {xkey, *(k for k, _ in cols)}
+
+
+def _final_differs(result, part, fig) -> list[tuple[str, float, float]]:
+    """For iterate histories drawn in ``fig`` (one axes per entry of ``part``): the entries whose last
+    iterate differs from the estimate of the same name by more than 1 % of it or of its SE; the
+    estimate is drawn there as a dashed line. Returns ``(name, last iterate, estimate)``."""
+    out = []
+    axes = [ax for ax in fig.axes if ax.has_data()]
+    for ax, (k, v) in zip(axes, part):
+        e = result.estimates.get(k)
+        if e is None or _summary.grade(e) == NOT_DETERMINED or not v.size or not np.isfinite(v[-1]):
+            continue
+        tol = 0.01 * max(abs(float(e.value)), float(e.std) if np.isfinite(e.std) else 0.0)
+        if abs(float(v[-1]) - float(e.value)) > tol:
+            ax.axhline(float(e.value), color="#b3261e", ls="--", lw=1.0)
+            out.append((k, float(v[-1]), float(e.value)))
+    return out
 
 
 def _enriched(result):
@@ -549,18 +476,13 @@ def build_report(result) -> str:
     title = METHOD_TITLES.get(result.method, (result.method, ""))[0]
     vessel = (result.model or {}).get("vessel")
     doc_title = f"shipid report — {result.method}" + (f" — {vessel}" if vessel else "")
-    return (
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-        f"<meta name=\"generator\" content=\"shipid {esc(shipid.__version__)}\">"
-        f"<title>{esc(doc_title)}</title><style>{CSS}</style></head>\n<body><main>\n"
+    return page(doc_title, (
         f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result, len(warns))}"
         f"{verdict_html(result, warns)}{warnings}\n"
         '<p class="small">The sections below are folded: click a heading to open it.</p>\n'
         + folded
         + f"\n<footer>Report written by shipid {esc(shipid.__version__)} at {esc(now)} · {esc(title)} · "
-          "self-contained: no network needed to view.</footer>\n</main></body></html>\n"
-    )
+          "self-contained: no network needed to view.</footer>"))
 
 
 def write_report(result, path, *, force: bool = False) -> Path:
