@@ -177,11 +177,11 @@ def in_degrees(entry: Mapping) -> Mapping:
     out = dict(entry)
     out["unit"] = unit.replace("rad", "deg")
     for k in ("measured", "model", "values", "std"):
-        if out.get(k) is not None:
-            out[k] = np.degrees(np.asarray(out[k], dtype=float))
+        if out.get(k) is not None and not isinstance(out[k], Mapping):
+            out[k] = np.degrees(np.asarray(out[k], dtype=float)).tolist()
     for k in ("lines", "std"):
         if isinstance(entry.get(k), Mapping):
-            out[k] = {n: np.degrees(np.asarray(v, dtype=float)) for n, v in entry[k].items()}
+            out[k] = {n: np.degrees(np.asarray(v, dtype=float)).tolist() for n, v in entry[k].items()}
     return out
 
 

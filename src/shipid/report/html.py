@@ -215,8 +215,8 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             f"<span class='grade {esc(g.replace(' ', ''))}'>{esc(g)}</span> {esc(_summary.GRADE_TEXT[g])}"
             for g in used if g in _summary.GRADE_TEXT) + ".</p>")
         foot += si_table(ctx, result)
-        body = (f'<table class="est">{cap}'
-                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
+        body = (f'<div class="scroll"><table class="est">{cap}'
+                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table></div>{foot}")
     cov_html = ""
     if result.covariance is not None and len(result.covariance_names) >= 2:
         try:
