@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -193,9 +194,8 @@ def result_findings(name: str, res, width: int = 100) -> list[str]:
     out = [f"{name} ({res.method}): {det} of {det + und} estimated quantities determined"
            + ("; DID NOT CONVERGE" if v.converged is False else "")]
     if und:
-        names = ", ".join(v.not_determined)
-        text = f"    not determined ({und}, not estimates): {names}"
-        out.append(text if len(text) <= width else text[:width - 1] + "…")
+        out += textwrap.wrap(f"not determined ({und}, not estimates): {', '.join(v.not_determined)}", width,
+                             initial_indent="    ", subsequent_indent="        ", break_on_hyphens=False)
     for w in v.warnings:
         text = f"    warning: {' '.join(str(w).split())}"
         out.append(text if len(text) <= 2 * width else text[:2 * width - 1] + "…")

@@ -5,6 +5,13 @@ validate`` can work from its JSON alone: it names the method and model
 structure, lists each estimate with its standard error and unit, carries the
 covariance of the free parameters, the diagnostics of the estimator (iterations,
 convergence, residual checks) and the provenance (inputs, seed, version, time).
+
+It shows itself as the statistical packages do: ``res.summary()`` (a table of every estimate with
+its unit, standard error, 95 % interval and verdict, the not-determined ones named, the warnings;
+at most 100 columns by 40 lines), a short ``repr``/``print``, ``_repr_html_`` in a notebook,
+``res.to_frame()`` (pandas, one row per estimate), ``res.conf_int(alpha)``, ``res.params`` and
+``res.bse`` / ``res.std()``. The verdict on each estimate comes from :mod:`shipid.summary`, the
+same that the HTML report shows.
 """
 
 from __future__ import annotations

@@ -264,6 +264,11 @@ def _diagnostics_section(ctx: RenderContext, result) -> str:
     d = {k: v for k, v in (result.diagnostics or {}).items() if k != "warnings"}
     if not d:
         return ""
+    sx = d.get("simex")
+    if isinstance(sx, Mapping) and not sx.get("applied", True):   # a correction not made: one line, no zeros
+        move = sx.get("pilot_largest_move_in_se")
+        d["simex"] = "not applied" + (f" (the pilot run moved no estimate by more than {fmt_num(move, 2)} SE)"
+                                      if isinstance(move, (int, float)) else "")
     return kv_table(ctx, _shown(with_units(result, flatten(d))), "Estimator diagnostics.")
 
 

@@ -185,7 +185,7 @@ def _headline(v: Verdict, n_warn: int) -> str:
         bits.append(f"{und} not determined")
     weak = len(v.names("poor", "flagged", "no SE"))
     if weak:
-        bits.append(f"{weak} of those determined flagged or poorly determined")
+        bits.append(f"{weak} of them poorly determined or flagged")
     bits.append({True: "the estimator converged", False: "the estimator DID NOT converge",
                  None: "convergence not recorded"}[v.converged])
     bits.append(f"{n_warn} warning{'' if n_warn == 1 else 's'}")
