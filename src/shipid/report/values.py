@@ -86,6 +86,19 @@ def _plain(v: Any) -> Any:
     return v
 
 
+def _squeeze(x):
+    x = _plain(x)
+    return x[0] if isinstance(x, (list, tuple)) and len(x) == 1 else x
+
+
+def _named_numbers(v) -> bool:
+    """A mapping of 3 to 40 names to numbers (or one-element lists of a number)."""
+    if not isinstance(v, Mapping) or not 3 <= len(v) <= 40:
+        return False
+    vals = [_squeeze(x) for x in v.values()]
+    return all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in vals)
+
+
 def flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
     rows = []
     for k, v in d.items():
@@ -99,6 +112,10 @@ def flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any
             rows.append((key, v))
         elif _records_map(v):
             rows.append((key, RecordsValue([{"": str(n), **r} for n, r in v.items()])))
+        elif _named_numbers(v):           # one number per coefficient: one row, a two-row table
+            nv = NamedVector([_squeeze(x) for x in v.values()])
+            nv.names = [str(n) for n in v]
+            rows.append((key, nv))
         elif isinstance(v, Mapping) and depth > 0:
             rows.extend(flatten(v, key + ".", depth - 1))
         elif isinstance(v, (list, tuple)) and not v:
