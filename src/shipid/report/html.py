@@ -269,7 +269,7 @@ def _diagnostics_section(ctx: RenderContext, result) -> str:
         move = sx.get("pilot_largest_move_in_se")
         d["simex"] = "not applied" + (f" (the pilot run moved no estimate by more than {fmt_num(move, 2)} SE)"
                                       if isinstance(move, (int, float)) else "")
-    return kv_table(ctx, _shown(with_units(result, flatten(d))), "Estimator diagnostics.")
+    return kv_table(ctx, _shown(with_units(result, flatten(d, names=result.estimates))), "Estimator diagnostics.")
 
 
 def _provenance_section(ctx: RenderContext, result) -> str:
