@@ -249,6 +249,16 @@ def _grade_cell(g: str, e) -> str:
     return g
 
 
+class Text(str):
+    """A text table that shows as itself at the prompt and in a notebook (not as a quoted string)."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+    def _repr_html_(self) -> str:
+        return f"<pre>{html.escape(str(self))}</pre>"
+
+
 def summary_text(result, *, width: int = WIDTH, height: int = HEIGHT) -> str:
     """The statsmodels-style summary (module docstring): at most ``width`` × ``height`` characters.
 
@@ -289,7 +299,7 @@ def summary_text(result, *, width: int = WIDTH, height: int = HEIGHT) -> str:
     room = height - len(head) - len(rows) - len(tail)
     if len(wl) > room:
         wl = wl[:max(room - 1, 1)] + [f"  … and {len(warns) - max(room - 2, 0)} more (res.warnings)"]
-    return "\n".join(head + rows + tail + wl)
+    return Text("\n".join(head + rows + tail + wl))
 
 
 def _est_cells(name: str, e, g: str) -> list[str]:
@@ -386,6 +396,6 @@ def estimates_from_frame(df) -> dict[str, Mapping]:
     return out
 
 
-__all__ = ["grade", "effective_status", "rel_se", "verdict", "Verdict", "summary_text", "short_repr",
+__all__ = ["Text", "grade", "effective_status", "rel_se", "verdict", "Verdict", "summary_text", "short_repr",
            "html_repr", "frame", "frame_rows", "estimates_from_frame", "warnings_of", "method_title",
            "NOT_DETERMINED", "GRADES", "GRADE_TEXT", "REL_SE_UNDETERMINED", "WELL", "LOOSE"]

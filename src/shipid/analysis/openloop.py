@@ -84,7 +84,7 @@ class Validation:
 
         Quantities that do not fit one block go to a second block below.
         """
-        return summary_text(self, width)
+        return _Text(summary_text(self, width))
 
     def to_frame(self):
         """pandas DataFrame, one row per (window, quantity): ``rms``, ``max``, ``unit``."""
@@ -258,6 +258,13 @@ def plot_series(v: Validation, path: str | Path, panels: Sequence[tuple[int, Cal
         return atomic_write(path, lambda tmp: fig.savefig(tmp, format=fmt, dpi=110), force=force)
     finally:
         plt.close(fig)
+
+
+class _Text(str):
+    """A text table that shows as itself at the prompt (not as a quoted string)."""
+
+    def __repr__(self) -> str:
+        return str(self)
 
 
 _ANGLES = {"psi", "r", "phi", "p", "delta", "beta", "theta", "q", "heading", "chi", "yaw"}
