@@ -61,7 +61,7 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
     assert "Not determined" in v and "c." in v and "c (500 %)" not in v   # named, not given a value
     # EBM publishes its last coverage study (shipid.methods.ebm.estimator.COVERAGE): the verdict quotes it with its source
     assert "ebm-coverage" in v and "No coverage study" not in v
-    assert "1 warning" in v
+    assert "2 warnings" in v        # the method's, and the report's line naming c (estimated, rel. SE 500 %)
     html = build_report(_result(est, method="toy", converged=True))     # a method with no published study
     assert "No coverage study" in _text(re.search(r'<section class="verdict".*?</section>', html, re.S).group(0))
     cov = build_report(_result(est, converged=True, coverage={"coverage": 0.80, "n": 200, "nominal": 0.954}))

@@ -103,8 +103,17 @@ def _badges(result, n_warnings: int) -> str:
 
 
 def report_warnings(result, extra: list[str]) -> list[str]:
-    """The warnings the report shows, once: the method's, then the report's own problems."""
-    return [plain_text(w) for w in _summary.warnings_of(result)] + [f"report: {p}" for p in extra]
+    """The warnings the report shows, once: the method's; a line naming the quantities the method called
+    estimated that the report shows as not determined (relative SE above 100 %), so that a count in the
+    method's own words is explained; then the report's own problems."""
+    out = [plain_text(w) for w in _summary.warnings_of(result)]
+    relabelled = [n for n, e in result.estimates.items()
+                  if _summary.grade(e) == NOT_DETERMINED and str(e.status) == "estimated"]
+    if relabelled:
+        out.append(f"report: {len(relabelled)} quantit{'y' if len(relabelled) == 1 else 'ies'} the method reports "
+                   f"as estimated {'has' if len(relabelled) == 1 else 'have'} a relative SE above 100 % and "
+                   f"{'is' if len(relabelled) == 1 else 'are'} shown as not determined: {', '.join(relabelled)}")
+    return out + [f"report: {p}" for p in extra]
 
 
 def _warnings(warns: list[str]) -> str:
