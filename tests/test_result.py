@@ -206,6 +206,7 @@ def test_validation_summary_frame_plot_and_repr():
     assert df.loc[("whole", "pos"), "rms"] == 3.0 and df.loc[("first_30s", "psi"), "unit"] == "deg"
     assert len(df) == 6
     r = repr(v)
+    assert "<pre>" in v._repr_html_() and "psi [deg]" in v._repr_html_()
     assert len(r) < 500 and "run.csv" in r and "/somewhere" not in r and "array(" not in r and "psi 2 deg" in r
     fig = v.plot()
     assert len(fig.axes) == 2 and fig.axes[0].get_ylabel() == "psi [deg]"

@@ -117,6 +117,11 @@ class Validation:
 
     __str__ = __repr__
 
+    def _repr_html_(self) -> str:
+        import html as _html
+
+        return f"<pre>{_html.escape(summary_text(self))}</pre>"
+
     def to_dict(self) -> dict[str, Any]:
         d = {"model": self.model_name, "trial": self.source, "duration_s": float(self.t[-1] - self.t[0]),
              "windows": self.windows, "horizons": self.horizons}
