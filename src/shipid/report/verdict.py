@@ -202,9 +202,11 @@ def _next_steps(result, v: Verdict, n_warn: int) -> list[tuple[str, str]]:
                            "warnings and run again."))
     und = v.not_determined
     if und:
-        out.append(("bad", f"The {len(und)} not-determined quantities are not estimates: fix them from a prior or a "
-                           "published set, or add trials that excite them (other rudder angles, speed changes, "
-                           "longer runs) and identify again."))
+        what = (f"{esc(und[0])} is not determined and is not an estimate: fix it" if len(und) == 1 else
+                f"The {len(und)} not-determined quantities are not estimates: fix them")
+        out.append(("bad", f"{what} from a prior or a published set, or add trials that excite "
+                           f"{'it' if len(und) == 1 else 'them'} (other rudder angles, speed changes, longer runs) "
+                           "and identify again."))
     weak = v.names("poor", "flagged", "no SE")
     if weak:
         out.append(("warn", f"Use {', '.join(esc(x) for x in weak[:6])}{' …' if len(weak) > 6 else ''} with care: "
