@@ -27,12 +27,14 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import textwrap
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from shipid import summary as _summary
 from shipid.io.files import write_trial
 from shipid.errors import InputError, ShipidError
 from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
@@ -53,6 +55,8 @@ class DemoContext:
     files: list[Path] = field(default_factory=list)
     #: (what, why) of every part a step did not run; ``shipid demo`` lists them at the end.
     skipped: list[tuple[str, str]] = field(default_factory=list)
+    #: What each result of the run says of itself (:func:`result_findings`); listed at the end.
+    findings: list[str] = field(default_factory=list)
 
     def skip(self, what: str, why: str) -> None:
         """Record that ``what`` was not run and why (printed in the demo's summary, never silent)."""
@@ -170,6 +174,46 @@ def manoeuvre_measures(trial, manoeuvre: str) -> str:
     except InputError:
         pass
     return "-"
+
+
+def result_row(res) -> dict[str, str]:
+    """Summary-table cells of one result: converged, how many quantities were determined, how many
+    were not, how many warnings (the verdict of :func:`shipid.summary.verdict`, as its report shows it)."""
+    v = _summary.verdict(res)
+    det, und = len(v.determined), len(v.not_determined)
+    return {"converged": {True: "yes", False: "NO"}.get(v.converged, "-"),
+            "determined": f"{det} of {det + und}", "not determined": str(und), "warnings": str(len(v.warnings))}
+
+
+def result_findings(name: str, res, width: int = 100) -> list[str]:
+    """Lines naming what ``res`` did not determine and every warning it raised (empty when neither)."""
+    v = _summary.verdict(res)
+    if not v.not_determined and not v.warnings and v.converged is not False:
+        return []
+    det, und = len(v.determined), len(v.not_determined)
+    out = [f"{name} ({res.method}): {det} of {det + und} estimated quantities determined"
+           + ("; DID NOT CONVERGE" if v.converged is False else "")]
+    if und:
+        out += textwrap.wrap(f"not determined ({und}, not estimates): {', '.join(v.not_determined)}", width,
+                             initial_indent="    ", subsequent_indent="        ", break_on_hyphens=False)
+    for w in v.warnings:
+        text = f"    warning: {' '.join(str(w).split())}"
+        out.append(text if len(text) <= 2 * width else text[:2 * width - 1] + "…")
+    return out
+
+
+def closing_line(ctx: DemoContext, seconds: float, target) -> str:
+    """The last line of ``shipid demo``: time, files, and whether anything was skipped or found wanting."""
+    n = len(ctx.skipped)
+    bits = [f"demo done in {seconds:.1f} s; {len(ctx.files)} files in {target}"]
+    flagged = sum(1 for x in ctx.findings if not x.startswith(" "))
+    if flagged:
+        bits.append(f"{flagged} result{'s' if flagged > 1 else ''} with undetermined quantities or warnings "
+                    "(findings above: read their reports before using them)")
+    else:
+        bits.append("no result has an undetermined quantity or a warning")
+    bits.append(f"{n} part{'s' if n > 1 else ''} skipped (listed above)" if n else "every step ran in full")
+    return "; ".join(bits)
 
 
 def format_table(rows: list[dict]) -> list[str]:

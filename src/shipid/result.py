@@ -5,6 +5,13 @@ validate`` can work from its JSON alone: it names the method and model
 structure, lists each estimate with its standard error and unit, carries the
 covariance of the free parameters, the diagnostics of the estimator (iterations,
 convergence, residual checks) and the provenance (inputs, seed, version, time).
+
+It shows itself as the statistical packages do: ``res.summary()`` (a table of every estimate with
+its unit, standard error, 95 % interval and verdict, the not-determined ones named, the warnings;
+at most 100 columns by 40 lines), a short ``repr``/``print``, ``_repr_html_`` in a notebook,
+``res.to_frame()`` (pandas, one row per estimate), ``res.conf_int(alpha)``, ``res.params`` and
+``res.bse`` / ``res.std()``. The verdict on each estimate comes from :mod:`shipid.summary`, the
+same that the HTML report shows.
 """
 
 from __future__ import annotations
@@ -19,6 +26,7 @@ import numpy as np
 
 import shipid
 from shipid import registry
+from shipid import summary as _summary
 from shipid.outputs import atomic_write_text
 
 
@@ -215,9 +223,69 @@ class Result:
         """The estimate called ``name``."""
         return self.estimates[name].value
 
-    def std(self, name: str) -> float:
-        """Its standard error."""
+    def std(self, name: str | None = None):
+        """The standard error of ``name``; without a name, every one as a pandas Series (as :attr:`bse`)."""
+        if name is None:
+            return self.bse
         return self.estimates[name].std
+
+    # -- the faces of statistical packages (verdicts from :mod:`shipid.summary`) ----------------------
+
+    def summary(self) -> str:
+        """The table of every estimate (unit, SE, 95 % interval, verdict), the verdict and the warnings.
+
+        At most 100 columns and 40 lines for any method: long lists are folded with a count
+        (:meth:`to_frame` has every row). Not-determined quantities are named, never shown with a value.
+        """
+        return _summary.summary_text(self)
+
+    def __repr__(self) -> str:
+        return _summary.short_repr(self)
+
+    __str__ = __repr__
+
+    def _repr_html_(self) -> str:
+        return _summary.html_repr(self)
+
+    def to_frame(self, alpha: float = 0.05):
+        """pandas DataFrame, one row per estimate, indexed by name.
+
+        Columns ``value, std, unit, status, note`` (the stored estimate: :meth:`from_frame` rebuilds
+        the estimates from them), ``estimate, lower, upper`` (the value and its ``1 - alpha``
+        normal interval, NaN when not determined), ``rel_se`` and ``verdict``
+        (:func:`shipid.summary.grade`).
+        """
+        return _summary.frame(self, alpha)
+
+    @staticmethod
+    def estimates_from_frame(df) -> dict[str, Estimate]:
+        """The estimates of a :meth:`to_frame` table (its ``value, std, unit, status, note`` columns)."""
+        return {k: Estimate(**v) for k, v in _summary.estimates_from_frame(df).items()}
+
+    def conf_int(self, alpha: float = 0.05):
+        """``1 - alpha`` normal-approximation intervals (DataFrame ``lower``, ``upper``; NaN when not
+        determined or without SE)."""
+        return self.to_frame(alpha)[["lower", "upper"]]
+
+    @property
+    def params(self):
+        """Estimates as a pandas Series (NaN where not determined: those are not estimates)."""
+        s = self.to_frame()["estimate"]
+        s.name = "estimate"
+        return s
+
+    @property
+    def bse(self):
+        """Standard errors as a pandas Series (NaN where not determined)."""
+        f = self.to_frame()
+        s = f["std"].where(f["estimate"].notna())
+        s.name = "std"
+        return s
+
+    @property
+    def verdict(self) -> "_summary.Verdict":
+        """One verdict per estimate (:func:`shipid.summary.verdict`), as the report and summary show it."""
+        return _summary.verdict(self)
 
     @property
     def cov(self) -> Covariance | None:

@@ -173,6 +173,22 @@ def open_and_check(browser: Browser, html_path: Path, screenshot: Path, width: i
             height: document.documentElement.scrollHeight,
             width: document.documentElement.scrollWidth, viewport: window.innerWidth})""")
         info = json.loads(info)
+        first = page.evaluate("""JSON.stringify({
+            verdict_top: (() => { const v = document.querySelector('.verdict');
+                                  return v ? v.getBoundingClientRect().top : null; })(),
+            headline: (() => { const h = document.querySelector('.verdict .headline');
+                               return h ? {top: h.getBoundingClientRect().top, text: h.textContent} : null; })(),
+            sideways: Array.from(document.querySelectorAll('body *')).filter(e => {
+                const r = e.getBoundingClientRect();
+                return r.top < window.innerHeight && r.width > 0 && r.right > window.innerWidth + 1; })
+                .map(e => e.tagName + ' "' + (e.textContent || '').trim().slice(0, 60) + '"'),
+            scroll_x: document.documentElement.scrollWidth - window.innerWidth})""")
+        info["first_screen"] = json.loads(first)
+        shot = page.send("Page.captureScreenshot", format="png")
+        first_png = screenshot.with_name(screenshot.stem + "-first.png")
+        first_png.parent.mkdir(parents=True, exist_ok=True)
+        first_png.write_bytes(base64.b64decode(shot["data"]))
+        info["first_screenshot"] = str(first_png)
         height = min(int(info["height"]), 30000)
         page.send("Emulation.setDeviceMetricsOverride", width=width, height=height, deviceScaleFactor=1,
                   mobile=False)

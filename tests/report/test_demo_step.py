@@ -65,3 +65,31 @@ def test_real_data_report_with_held_out_validation(tmp_path):
     from shipid.report import build_report
     html = build_report(res)
     assert "Validation: heading ψ" in html and "held out: validation only" in html
+
+
+def test_the_demo_says_what_was_not_determined_and_every_warning(tmp_path, monkeypatch):
+    """Per result: determined / not determined / warnings in the table, the names and warnings in the
+    findings, and the closing line says results need reading (not only that every step ran)."""
+    from shipid.demo import closing_line
+    from shipid.result import Estimate, Result
+
+    res = Result("ebm", {"Y_v": Estimate(-0.03, 0.001), "Y_vvv": Estimate(0.1, 0.5, status="not determined"),
+                         "N_rrr": Estimate(0.01, 0.05)},
+                 diagnostics={"converged": True, "warnings": ["EBM: 2 of 3 coefficients not determined"]})
+    ctx = DemoContext(out_dir=tmp_path, echo=lambda s: None)
+    ctx.results = {"ebm-run": res, "fine": EXAMPLES["dp"]()}
+    monkeypatch.setattr(demo_step, "FALLBACKS", {})
+    monkeypatch.setattr(demo_step, "REAL_DATA", {})
+    monkeypatch.setattr(demo_step, "fallbacks", lambda: {})
+    monkeypatch.setattr(demo_step, "real_data_runs", lambda: {})
+    rows = {r["result"]: r for r in demo_step.report_step(ctx)}
+    assert rows["ebm-run"]["converged"] == "yes" and rows["ebm-run"]["determined"] == "1 of 3"
+    assert rows["ebm-run"]["not determined"] == "2" and rows["ebm-run"]["warnings"] == "1"
+    assert rows["fine"]["not determined"] == "0"
+    text = "\n".join(ctx.findings)
+    assert ctx.findings[0].startswith("ebm-run (ebm): 1 of 3 estimated quantities determined")
+    assert "not determined (2, not estimates): Y_vvv, N_rrr" in text
+    assert "warning: EBM: 2 of 3 coefficients not determined" in text
+    line = closing_line(ctx, 1.0, tmp_path)
+    assert "1 result with undetermined quantities or warnings" in line and line.endswith("every step ran in full")
+    assert "no result has" in closing_line(DemoContext(out_dir=tmp_path), 1.0, tmp_path)

@@ -43,9 +43,10 @@ def test_relative_se_above_100_percent_is_not_determined():
     assert effective_status(e_fixed) == "fixed"
     html = build_report(_result({"Y_vvr": e_bad, "Y_v": e_ok, "N_x": e_flag, "L": e_fixed}, converged=True))
     rows = {m.group(1): m.group(0) for m in re.finditer(r"<tr[^>]*><td><b>([^<]+)</b>.*?</tr>", html, re.S)}
-    assert 'class="notdet"' in rows["Y_vvr"] and "status notdet" in rows["Y_vvr"] and "estimated" not in rows["Y_vvr"]
+    assert 'class="notdet"' in rows["Y_vvr"] and "grade notdet" in rows["Y_vvr"] and "estimated" not in rows["Y_vvr"]
+    assert "0.009" not in rows["Y_vvr"] and "1.00" not in rows["N_x"]     # never shown as an estimate
     assert 'class="notdet"' in rows["N_x"]
-    assert "status estimated" in rows["Y_v"] and "notdet" not in rows["Y_v"]
+    assert "grade well" in rows["Y_v"] and "notdet" not in rows["Y_v"]
 
 
 def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
@@ -57,10 +58,10 @@ def test_verdict_panel_says_convergence_determination_coverage_and_warnings():
     assert "Did not converge" in v
     assert "Well determined" in v and "a (1 %)" in v
     assert "Loosely determined" in v and "b (30 %)" in v
-    assert "Not determined" in v and "c (500 %)" in v
+    assert "Not determined" in v and "c." in v and "c (500 %)" not in v   # named, not given a value
     # EBM publishes its last coverage study (shipid.methods.ebm.estimator.COVERAGE): the verdict quotes it with its source
     assert "ebm-coverage" in v and "No coverage study" not in v
-    assert "1 warning" in v
+    assert "2 warnings" in v        # the method's, and the report's line naming c (estimated, rel. SE 500 %)
     html = build_report(_result(est, method="toy", converged=True))     # a method with no published study
     assert "No coverage study" in _text(re.search(r'<section class="verdict".*?</section>', html, re.S).group(0))
     cov = build_report(_result(est, converged=True, coverage={"coverage": 0.80, "n": 200, "nominal": 0.954}))
@@ -196,7 +197,7 @@ def test_label_check_can_fail():
 @pytest.mark.slow
 def test_esso_identify_mmg_report_has_data_and_time_histories(esso_mmg_report):
     _, html, _, runs = esso_mmg_report
-    data = re.search(r'<h2 id="data">.*?</table>', html, re.S).group(0)
+    data = re.search(r'<details class="sec" id="data">.*?</table>', html, re.S).group(0)
     for r in runs:
         assert r.name in data
     rows = re.findall(r"<tr><td><code>.*?</tr>", data, re.S)

@@ -24,6 +24,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from shipid import registry as method_registry
 from shipid.errors import InputError
 from shipid.io.trial import CHANNELS
 from shipid.outputs import atomic_write, atomic_write_text
@@ -65,6 +66,62 @@ class Validation:
     method: str = ""
     columns: tuple[str, ...] = ()
     settings: dict = field(default_factory=dict)
+
+    # -- the faces a user reads: table, frame, figure, short repr -----------------------------------
+
+    def rows(self) -> list[tuple[str, str, float, float, str]]:
+        """``(window, quantity, rms, max, unit)`` for every window and the pooled horizons."""
+        out = []
+        hz = f"{self.horizons.get('length_s', 0):g}-s horizons (n={self.horizons.get('count', 0)})"
+        for name, s in list(self.windows.items()) + [(hz, self.horizons)]:
+            for q in self.quantities:
+                if isinstance(s.get(q), Mapping):
+                    out.append((name, q, float(s[q]["rms"]), float(s[q]["max"]),
+                                str(s[q].get("unit", self.units.get(q, "")))))
+        return out
+
+    def summary(self, width: int = 100) -> str:
+        """RMS / max error per window (rows) and quantity (columns), at most ``width`` columns.
+
+        Quantities that do not fit one block go to a second block below.
+        """
+        return _Text(summary_text(self, width))
+
+    def to_frame(self):
+        """pandas DataFrame, one row per (window, quantity): ``rms``, ``max``, ``unit``."""
+        import pandas as pd
+
+        return pd.DataFrame(self.rows(), columns=["window", "quantity", "rms", "max", "unit"]) \
+            .set_index(["window", "quantity"])
+
+    def plot(self, path: str | Path | None = None, *, force: bool = False):
+        """Measured against predicted. With ``path``: the method's figure, written there (returns the
+        path); without: a matplotlib Figure of every column against time (angles in deg)."""
+        if path is not None:
+            info = method_registry.for_result(self.method)
+            fn = getattr(info.submodule("validate"), "plot", None) if (
+                info is not None and info.has_module("validate")) else None
+            if callable(fn):
+                return fn(self, path, force=force)
+            panels = [(j, *_display(c)) for j, c in enumerate(self.columns)]
+            return plot_series(self, path, panels, force=force)
+        return figure(self)
+
+    def __repr__(self) -> str:
+        head = f"<shipid Validation of {self.model_name} on {Path(self.source).name}>"
+        whole = self.windows.get("whole") or {}
+        bits = [f"{q} {float(whole[q]['rms']):.3g} {whole[q].get('unit', '')}".rstrip()
+                for q in self.quantities if isinstance(whole.get(q), Mapping)]
+        line = ("  whole-run RMS error: " + ", ".join(bits)) if bits else ""
+        return "\n".join(x for x in (head, line, "  .summary() for the table, .to_frame() for pandas, .plot()")
+                         if x)
+
+    __str__ = __repr__
+
+    def _repr_html_(self) -> str:
+        import html as _html
+
+        return f"<pre>{_html.escape(summary_text(self))}</pre>"
 
     def to_dict(self) -> dict[str, Any]:
         d = {"model": self.model_name, "trial": self.source, "duration_s": float(self.t[-1] - self.t[0]),
@@ -209,6 +266,75 @@ def plot_series(v: Validation, path: str | Path, panels: Sequence[tuple[int, Cal
         plt.close(fig)
 
 
+class _Text(str):
+    """A text table that shows as itself at the prompt (not as a quoted string)."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+
+_ANGLES = {"psi", "r", "phi", "p", "delta", "beta", "theta", "q", "heading", "chi", "yaw"}
+
+
+def _display(column: str) -> tuple[Callable, str]:
+    """(transform, axis label) of a predicted column: angles and rates in deg, the rest as stored."""
+    base = column.split("_")[0]
+    if base in _ANGLES:
+        return np.degrees, f"{column} [deg{'/s' if base in ('r', 'p', 'q') else ''}]"
+    unit = "m/s" if base in ("u", "v", "w", "U", "sog") else ("m" if base in ("x", "y", "z", "n", "e") else "")
+    return (lambda a: a), (f"{column} [{unit}]" if unit else column)
+
+
+def figure(v: Validation):
+    """Every predicted column against the measured one over time, as a matplotlib Figure (Agg)."""
+    from matplotlib.figure import Figure
+
+    cols = list(v.columns)
+    fig = Figure(figsize=(8, max(1.8 * len(cols), 3.0)))
+    axes = fig.subplots(max(len(cols), 1), 1, sharex=True, squeeze=False)[:, 0]
+    step = max(len(v.t) // 4000, 1)
+    for ax, (j, c) in zip(axes, enumerate(cols)):
+        f, lab = _display(c)
+        ax.plot(v.t[::step], f(v.measured[::step, j]), "k-", lw=0.8, label="measured")
+        ax.plot(v.t[::step], f(v.predicted[::step, j]), "r--", lw=0.8, label="predicted")
+        ax.set_ylabel(lab)
+    axes[0].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{v.model_name} on {Path(v.source).name}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _g(x: float) -> str:
+    """Three significant digits in at most 8 characters (``9.95e-8``)."""
+    return f"{x:.3g}".replace("e+0", "e").replace("e-0", "e-").replace("e+", "e")
+
+
+def summary_text(v: Validation, width: int = 100) -> str:
+    """:meth:`Validation.summary` (rows: windows and pooled horizons; columns: quantities)."""
+    rows = v.rows()
+    windows = list(dict.fromkeys(r[0] for r in rows))
+    cell = {(w, q): (rms, mx) for w, q, rms, mx, _ in rows}
+    units = {q: u for _, q, _, _, u in rows}
+    qs = [q for q in v.quantities if q in units]
+    name_w = min(max([len(w) for w in windows] + [6]), 30)
+    col_w = 19
+    per = max((width - name_w) // (col_w + 1), 1)
+    what = v.model_name if (not v.method or v.method in v.model_name) else f"{v.model_name} ({v.method})"
+    lines = [f"shipid validate: {what} on {Path(v.source).name}"[:width],
+             "open-loop error RMS / max; horizons restart from the measured state"[:width]]
+    for k in range(0, len(qs), per):
+        block = qs[k:k + per]
+        lines.append("-" * min(width, name_w + (col_w + 1) * len(block)))
+        lines.append(f"{'window':<{name_w}}" + "".join(f" {(q + ' [' + units[q] + ']')[:col_w]:>{col_w}}"
+                                                        for q in block))
+        for w in windows:
+            vals = [cell.get((w, q)) for q in block]
+            lines.append(f"{w[:name_w]:<{name_w}}" + "".join(
+                f" {'-':>{col_w}}" if x is None else f" {_g(x[0]) + ' / ' + _g(x[1]):>{col_w}}" for x in vals))
+    return "\n".join(lines)
+
+
 def write_csv(v: Validation, path: str | Path, *, force: bool = False) -> Path:
     """The whole-run prediction beside the measured columns, CSV, atomically.
 
@@ -259,5 +385,5 @@ def check_finite(trial_source: str | None, arrays: Mapping[str, np.ndarray]) -> 
                              file=trial_source, channel=name, row=k + 1)
 
 
-__all__ = ["Validation", "summarise", "horizon_starts", "error_table", "format_table", "plot_series",
+__all__ = ["Validation", "summarise", "summary_text", "figure", "horizon_starts", "error_table", "format_table", "plot_series",
            "write_csv", "local_fit", "wrap_deg", "check_finite"]

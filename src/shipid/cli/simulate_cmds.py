@@ -140,7 +140,7 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     with other jobs (load average about 8): 41 s without the real data (16 s CPU),
     69 s with ../shared/data present, which adds the KVLCC2 real-data step (25 s CPU).
     """
-    from shipid.demo import SKIPPED, DemoContext, demo_steps, format_table
+    from shipid.demo import SKIPPED, DemoContext, closing_line, demo_steps, format_table
 
     if out_dir is None:
         base = Path("shipid-demo")
@@ -170,6 +170,8 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
         rows += got
     for what, why in ctx.skipped:
         click.echo(f"[skipped] {what}: {why}")
-    n = len(ctx.skipped)
-    click.echo(f"demo done in {time.perf_counter() - t0:.1f} s; {len(ctx.files)} files in {target}"
-               + (f"; {n} part{'s' if n > 1 else ''} skipped (listed above)" if n else "; every step ran in full"))
+    if ctx.findings:
+        click.echo("[findings] what the results did not determine, and their warnings")
+        for line in ctx.findings:
+            click.echo("    " + line)
+    click.echo(closing_line(ctx, time.perf_counter() - t0, target))

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Callable
 
 from shipid import registry
-from shipid.demo import DemoContext, demo_step
+from shipid.demo import DemoContext, demo_step, result_findings, result_row
 from shipid.report.html import write_report
 from shipid.result import Result
 
@@ -118,8 +118,6 @@ def report_step(ctx: DemoContext) -> list[dict]:
         path = ctx.out_dir / f"report-{stem}.html"
         write_report(res, path, force=ctx.force)
         ctx.files.append(path)
-        d = res.diagnostics or {}
-        rows.append({"result": name, "method": res.method, "estimates": str(len(res.estimates)),
-                     "converged": {True: "yes", False: "NO"}.get(d.get("converged"), "-"),
-                     "report": str(path)})
+        rows.append({"result": name, "method": res.method, **result_row(res), "report": path.name})
+        ctx.findings.extend(result_findings(name, res))
     return rows

@@ -167,6 +167,44 @@ def decimate(n: int, max_points: int = MAX_POINTS) -> slice:
     return slice(None, None, step)
 
 
+def in_degrees(entry: Mapping) -> Mapping:
+    """A time-history entry with unit ``rad`` or ``rad/s`` converted to ``deg`` / ``deg/s`` (the unit of
+    every table of angles); other entries unchanged. Converts ``measured``, ``model``, ``values``,
+    ``std`` and each of ``lines``."""
+    unit = str(entry.get("unit", "") or "")
+    if unit not in ("rad", "rad/s", "rad/s^2", "rad/s²"):
+        return entry
+    out = dict(entry)
+    out["unit"] = unit.replace("rad", "deg")
+    for k in ("measured", "model", "values", "std"):
+        if out.get(k) is not None and not isinstance(out[k], Mapping):
+            out[k] = np.degrees(np.asarray(out[k], dtype=float)).tolist()
+    for k in ("lines", "std"):
+        if isinstance(entry.get(k), Mapping):
+            out[k] = {n: np.degrees(np.asarray(v, dtype=float)).tolist() for n, v in entry[k].items()}
+    return out
+
+
+#: Zero crossings above which a whole-record overlay is a solid block: the top panel then zooms in.
+MAX_CROSSINGS = 60
+
+
+def zoom_window(t: np.ndarray, y: np.ndarray, crossings: int = MAX_CROSSINGS // 2) -> tuple[int, int] | None:
+    """Index range ``(i0, i1)`` of about ``crossings`` zero crossings of ``y − mean`` in the middle of the
+    record, when the whole record has more than :data:`MAX_CROSSINGS`; else ``None`` (draw it all)."""
+    y = np.asarray(y, dtype=float)
+    ok = np.isfinite(y)
+    if y.size < 100 or not ok.any():
+        return None
+    d = np.where(ok, y - np.nanmean(y), 0.0)
+    idx = np.flatnonzero(np.signbit(d[1:]) != np.signbit(d[:-1]))
+    if idx.size <= MAX_CROSSINGS:
+        return None
+    mid = idx.size // 2
+    a, b = idx[max(mid - crossings // 2, 0)], idx[min(mid + crossings // 2, idx.size - 1)]
+    return int(a), int(b) + 1
+
+
 def _dt(t: np.ndarray) -> float | None:
     """Median sample interval when the record is (nearly) uniform, else None (lags stay in samples)."""
     if t.size < 3:
@@ -179,9 +217,10 @@ def _dt(t: np.ndarray) -> float | None:
 
 
 def _short(label: str) -> str:
-    """Axis label without a trailing parenthetical (the caption carries it)."""
+    """Axis label without a trailing parenthetical (the caption carries it), file paths as file names."""
     import re
 
+    label = re.sub(r"(?:[\w.\-+@~]*/)+([\w.\-+@]+)", r"\1", str(label))
     return re.sub(r"\s*\(.*\)\s*$", "", label) or label
 
 
@@ -212,19 +251,27 @@ def overlay_figure(name: str, entry: Mapping, resid: np.ndarray, acf_vals: np.nd
     ax = fig.add_subplot(gs[0, :])
     sl = decimate(t.size)
     k, su = eng_scale(meas, mod, unit=unit)
-    ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
-    ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
+    zoom = zoom_window(t, meas)
+    if zoom is not None:   # a long record of many cycles: the top panel shows a window, legibly
+        zs = slice(*zoom)
+        ax.plot(t[zs], meas[zs] / k, color=C_MEAS, lw=0.9, label="measured")
+        ax.plot(t[zs], mod[zs] / k, color=C_MODEL, lw=1.3, label="model")
+        title = f"{_short(label)}: t = {t[zoom[0]]:.0f}–{t[zoom[1] - 1]:.0f} s of {t[-1] - t[0]:.0f} s"
+    else:
+        ax.plot(t[sl], meas[sl] / k, color=C_MEAS, lw=0.9, label="measured")
+        ax.plot(t[sl], mod[sl] / k, color=C_MODEL, lw=1.3, label="model")
+        title = f"{_short(label)}: measured and model"
     ax.set_xlabel("t [s]")
     ax.set_ylabel(_ylabel(label, su))
     ax.legend(loc="upper right", ncols=2)
-    ax.set_title(f"{label}: measured and model", loc="left")
+    ax.set_title(title if len(title) <= 70 else title[:69] + "…", loc="left")
     ax_r = fig.add_subplot(gs[1, :2])
     kr, sur = eng_scale(resid, unit=unit)
     ax_r.plot(t[sl], resid[sl] / kr, color=C_MODEL, lw=0.8)
     ax_r.axhline(0.0, color="#888888", lw=0.7)
     ax_r.set_xlabel("t [s]")
     ax_r.set_ylabel(axis_label("residual", sur))
-    ax_r.set_title("residual = measured − model", loc="left")
+    ax_r.set_title("residual = measured − model" + (", whole record" if zoom is not None else ""), loc="left")
     _acf_axes(fig.add_subplot(gs[1, 2]), acf_vals, bound, _dt(t))
     return fig
 
@@ -257,7 +304,8 @@ def residual_figure(name: str, entry: Mapping, acf_vals: np.ndarray, bound: floa
     ax.axhline(0.0, color="#888888", lw=0.7)
     ax.set_xlabel("t [s]")
     ax.set_ylabel(_ylabel(label, su))
-    ax.set_title(f"{label}", loc="left")
+    title = _short(label)
+    ax.set_title(title if len(title) <= 60 else title[:59] + "…", loc="left")
     _acf_axes(fig.add_subplot(gs[0, 2]), acf_vals, bound, _dt(t))
     return fig
 

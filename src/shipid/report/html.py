@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import re
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -29,21 +30,14 @@ from shipid.report.registry import load_method_sections, sections_for
 from shipid.report.render import (RenderContext, esc, kv_table, paper_sort_key, render_entry, render_group,
                                   residual_stats_table)
 from shipid.report import figures as F
+from shipid.report.page import page
 from shipid.report.units import pretty_unit
 from shipid.report.values import flatten, si_table, with_units
-from shipid.report.verdict import NOT_DETERMINED, effective_status, verdict_html
+from shipid.report.verdict import NOT_DETERMINED, verdict_html
+from shipid import summary as _summary
 from shipid.report.render import plain_text, short_paths
 
-METHOD_TITLES = {
-    "mass-cm": ("Mass and centre of mass from IMU and rudder", "after Linder et al. (2015)"),
-    "dp": ("DP low-frequency model, parallel EKF", "after Fossen, Sagatun & Sørensen (1996)"),
-    "ebm": ("Manoeuvring coefficients by Estimation-Before-Modelling", "after Yoon & Rhee (2003)"),
-    "ebm-study": ("Manoeuvring coefficients by EBM: paper reproduction study",
-                  "after Yoon & Rhee (2003), Tables 3 and 5"),
-    "mmg-ebm": ("MMG manoeuvring model from free-running tests (EBM)",
-                "after Yoon & Rhee (2003), adapted to the MMG model"),
-    "ebm-design": ("D-optimal PRBS input design for EBM", "after Yoon & Rhee (2003), Figs 7–8"),
-}
+METHOD_TITLES = _summary.METHOD_TITLES
 
 GENERIC_ORDER = ("overlays", "residuals", "histories", "signals", "contours", "matrices", "xy", "tables")
 GENERIC_TITLES = {
@@ -52,84 +46,6 @@ GENERIC_TITLES = {
     "matrices": "Matrices", "xy": "Other plots", "tables": "Further tables",
 }
 
-CSS = """
-:root{--ink:#1d2330;--muted:#5b6474;--line:#d9dde5;--soft:#f4f6f9;--accent:#1f6fb4;--bad:#b3261e;--ok:#1e7a46;}
-*{box-sizing:border-box}
-html{font-size:15px}
-body{margin:0;color:var(--ink);background:#fff;font-family:"Source Sans Pro","Segoe UI",Roboto,"Helvetica Neue",
- Arial,sans-serif;line-height:1.45}
-main{max-width:1020px;margin:0 auto;padding:24px 28px 60px}
-header.top{border-bottom:3px solid var(--accent);padding-bottom:12px;margin-bottom:8px}
-header.top h1{font-size:1.65rem;margin:0 0 2px;font-weight:600;letter-spacing:-.01em}
-header.top .sub{color:var(--muted);font-size:.98rem}
-h2{font-size:1.22rem;margin:34px 0 10px;padding-bottom:4px;border-bottom:1px solid var(--line);font-weight:600}
-h3{font-size:1.02rem;margin:22px 0 8px;font-weight:600;color:#2b3445}
-p{margin:6px 0}
-.small{font-size:.86rem;color:var(--muted)}
-nav.toc{font-size:.88rem;color:var(--muted);margin:10px 0 4px}
-nav.toc a{color:var(--accent);text-decoration:none;margin-right:14px;white-space:nowrap}
-.badges{display:flex;flex-wrap:wrap;gap:8px;margin:14px 0 6px}
-.badge{border:1px solid var(--line);border-radius:6px;padding:6px 12px;background:var(--soft);font-size:.9rem}
-.badge b{display:block;font-size:1.05rem}
-.badge.ok b{color:var(--ok)} .badge.bad b{color:var(--bad)}
-.note{border-left:4px solid var(--accent);background:var(--soft);padding:8px 12px;margin:10px 0;font-size:.92rem}
-.note.bad{border-left-color:var(--bad);background:#fdf0ef}
-.warnings{border:1px solid #e3a9a4;background:#fdf0ef;border-left:5px solid var(--bad);padding:10px 14px;
- margin:14px 0;border-radius:4px}
-.warnings h2{border:0;margin:0 0 4px;font-size:1.05rem;color:var(--bad);padding:0}
-.warnings ul{margin:4px 0 0 18px;padding:0}
-table{border-collapse:collapse;margin:10px 0 16px;font-size:.9rem;font-variant-numeric:tabular-nums}
-caption{caption-side:top;text-align:left;font-size:.88rem;color:var(--muted);padding:0 0 6px}
-table.est{width:100%}
-table.data{min-width:50%}
-td code{white-space:nowrap}
-th,td{padding:5px 9px;border-bottom:1px solid var(--line);vertical-align:top}
-thead th{text-align:left;background:var(--soft);border-bottom:2px solid #c4cad6;font-weight:600;white-space:nowrap}
-td.num,th.num{text-align:right;white-space:nowrap}
-td.flag{color:var(--bad);font-weight:600}
-table.kv th{text-align:left;font-weight:600;color:#39424f;width:34%;background:none}
-table.kv td.num{text-align:left}
-.unit{color:var(--muted);font-weight:400}
-table.mat{margin:0;font-size:.82rem;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2}
-table.mat td{border:0;padding:1px 8px;text-align:right}
-table.rec{margin:0;font-size:.82rem}
-table.rec th{white-space:normal;overflow-wrap:anywhere;background:none;font-weight:600;color:var(--muted);padding:1px 8px;border-bottom:1px solid var(--line)}
-table.rec td{padding:1px 8px;border:0}
-table.rec.nv td,table.rec.nv th{padding:1px 3px;font-size:.76rem;white-space:nowrap}
-table.rec td:first-child{max-width:280px;overflow-wrap:break-word}
-.scroll{overflow-x:auto;max-width:100%}
-table.kv th{overflow-wrap:break-word}
-table.kv td{overflow-wrap:break-word}
-table.kv{table-layout:fixed;width:100%}
-table.kv th{width:30%}
-main{overflow-wrap:break-word}
-.status{font-size:.82rem;padding:1px 6px;border-radius:3px;background:var(--soft);border:1px solid var(--line)}
-.status.fixed{color:var(--muted)} .status.derived{color:#6a4c93}
-.status.notdet{color:#fff;background:#8a5a00;border-color:#8a5a00}
-tr.notid td{color:var(--bad)}
-tr.notdet td{color:#8a5a00;background:#fff8ec}
-tr.notdet td.num{text-decoration:line-through;text-decoration-color:#d6b27a}
-.verdict{border:1px solid var(--line);border-left:5px solid var(--accent);background:var(--soft);padding:10px 14px;
- margin:14px 0;border-radius:4px}
-.verdict h2{border:0;margin:0 0 4px;font-size:1.05rem;padding:0}
-.verdict ul{margin:4px 0 0 0;padding:0;list-style:none}
-.verdict li{margin:3px 0;padding-left:18px;position:relative}
-.verdict li:before{content:"•";position:absolute;left:4px;color:var(--muted)}
-.verdict li.ok:before{content:"✓";color:var(--ok)} .verdict li.bad:before{content:"✗";color:var(--bad)}
-.verdict li.warn:before{content:"!";color:#8a5a00;font-weight:700}
-.vec{display:flex;flex-wrap:wrap;gap:2px 0;border-left:1px solid #9aa3b2;border-right:1px solid #9aa3b2;
- padding:0 4px;width:fit-content;max-width:100%;font-size:.82rem}
-.vec .vi{display:inline-block;min-width:6.2em;text-align:right;padding:0 4px;white-space:nowrap}
-.chan{white-space:nowrap;display:inline-block;margin-right:6px}
-table.data{width:100%} table.data.si{width:auto;min-width:60%}
-figure{margin:14px 0 22px;padding:0}
-figure img{display:block;max-width:100%;height:auto;border:1px solid var(--line);border-radius:3px}
-figcaption{font-size:.86rem;color:var(--muted);margin-top:6px}
-code{font-family:"DejaVu Sans Mono",Menlo,Consolas,monospace;font-size:.84rem;background:var(--soft);
- padding:1px 4px;border-radius:3px;word-break:break-all}
-footer{margin-top:40px;border-top:1px solid var(--line);padding-top:8px;font-size:.82rem;color:var(--muted)}
-@media print{main{max-width:none;padding:0} h2{break-after:avoid} figure{break-inside:avoid}}
-"""
 
 
 def _fmt_duration(s: float) -> str:
@@ -161,8 +77,9 @@ def _header(result) -> str:
     return (f'<header class="top"><h1>{esc(title)}</h1><div class="sub">{" · ".join(bits)}</div></header>')
 
 
-def _badges(result) -> str:
+def _badges(result, n_warnings: int) -> str:
     d = result.diagnostics or {}
+    v = _summary.verdict(result)
     out = []
     if "converged" in d:
         ok = bool(d["converged"])
@@ -174,38 +91,43 @@ def _badges(result) -> str:
         else:
             it = fmt_num(it)
         out.append(f'<div class="badge">iterations<b>{esc(it)}</b></div>')
-    n_est = sum(1 for e in result.estimates.values() if effective_status(e) == "estimated")
-    out.append(f'<div class="badge">estimated parameters<b>{n_est}</b></div>')
-    n_und = sum(1 for e in result.estimates.values() if effective_status(e) == NOT_DETERMINED)
-    if n_und:
-        out.append(f'<div class="badge bad">not determined<b>{n_und}</b></div>')
-    n_notid = sum(1 for e in result.estimates.values() if math.isinf(float(e.std)))
-    if n_notid:
-        out.append(f'<div class="badge bad">not identifiable<b>{n_notid}</b></div>')
+    out.append(f'<div class="badge">determined<b>{len(v.determined)}</b></div>')
+    if v.not_determined:
+        out.append(f'<div class="badge bad">not determined<b>{len(v.not_determined)}</b></div>')
+    out.append(f'<div class="badge {"bad" if n_warnings else "ok"}">warnings<b>{n_warnings}</b></div>')
     prov0 = result.provenance or {}
     ins = prov0.get("inputs") or prov0.get("training_runs") or prov0.get("trials") or []
     if isinstance(ins, (list, tuple)):
         out.append(f'<div class="badge">input trials<b>{len(ins)}</b></div>')
-    prov = result.provenance or {}
-    if "seed" in prov:
-        out.append(f'<div class="badge">random seed<b>{esc(str(prov["seed"]))}</b></div>')
     return f'<div class="badges">{"".join(out)}</div>'
 
 
-def _warnings(result, extra: list[str]) -> str:
-    d = result.diagnostics or {}
-    warns = d.get("warnings") or []
-    if isinstance(warns, str):
-        warns = [warns]
-    warns = [plain_text(str(w)) for w in warns]
-    if "converged" in d and not d["converged"]:
-        warns.insert(0, "The estimator did NOT converge: the estimates below are the last iterate and "
-                        "must not be trusted.")
-    warns += [f"report: {p}" for p in extra]
+def report_warnings(result, extra: list[str]) -> list[str]:
+    """The warnings the report shows, once: the method's; a line naming the quantities the method called
+    estimated that the report shows as not determined (relative SE above 100 %), so that a count in the
+    method's own words is explained; then the report's own problems."""
+    out = [plain_text(w) for w in _summary.warnings_of(result)]
+    relabelled = [n for n, e in result.estimates.items()
+                  if _summary.grade(e) == NOT_DETERMINED and str(e.status) == "estimated"]
+    if relabelled:
+        out.append(f"report: {len(relabelled)} quantit{'y' if len(relabelled) == 1 else 'ies'} the method reports "
+                   f"as estimated {'has' if len(relabelled) == 1 else 'have'} a relative SE above 100 % and "
+                   f"{'is' if len(relabelled) == 1 else 'are'} shown as not determined: {', '.join(relabelled)}")
+    return out + [f"report: {p}" for p in extra]
+
+
+def _warnings(warns: list[str]) -> str:
     if not warns:
         return ""
     items = "".join(f"<li>{esc(w)}</li>" for w in warns)
     return f'<section class="warnings" id="warnings"><h2>Warnings ({len(warns)})</h2><ul>{items}</ul></section>'
+
+
+def _fold(key: str, title: str, body: str, *, open_: bool = False, note: str = "") -> str:
+    """A section under a ``<details>`` whose summary is its heading (``id`` = ``key``)."""
+    extra = f' <span class="small">{esc(note)}</span>' if note else ""
+    return (f'<details class="sec" id="{key}"{" open" if open_ else ""}><summary><h2>{esc(title)}{extra}</h2>'
+            f"</summary>{body}</details>")
 
 
 def _data_section(ctx: RenderContext, result) -> str:
@@ -219,7 +141,7 @@ def _data_section(ctx: RenderContext, result) -> str:
         if isinstance(m_in, (list, tuple)) and m_in and all(isinstance(x, Mapping) for x in m_in):
             ins = m_in
     if ins is None:
-        return '<h2 id="data">Data used</h2><p class="small">The result does not record its inputs.</p>'
+        return '<p class="small">The result does not record its inputs.</p>'
     if isinstance(ins, (str, Mapping)):
         ins = [ins]
     head = ("<tr><th>trial</th><th class='num'>samples</th><th class='num'>duration</th>"
@@ -253,14 +175,17 @@ def _data_section(ctx: RenderContext, result) -> str:
         rows.append(f"<tr><td><code>{esc(str(name))}</code></td><td class='num'>{fmt_num(n) if n is not None else '—'}"
                     f"</td><td class='num'>{_fmt_duration(float(dur)) if dur is not None else '—'}</td>"
                     f"<td class='num'>{samp}</td><td>{chs}</td><td>{esc('; '.join(note_bits))}</td></tr>")
-    return (f'<h2 id="data">Data used</h2><table class="data">{ctx.table_caption("Trials the estimates come from.")}'
+    return (f'<table class="data">{ctx.table_caption("Trials the estimates come from.")}'
             f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>")
+
+
+TR_NOTDET = '<tr class="notdet">'
 
 
 def _estimates_section(ctx: RenderContext, result) -> str:
     head = ("<tr><th>parameter</th><th class='num'>estimate</th><th class='num'>standard error</th>"
             "<th class='num'>95 % confidence interval</th><th class='num'>rel. SE</th><th>unit</th>"
-            "<th>status</th><th>note</th></tr>")
+            "<th>verdict</th><th>note</th></tr>")
     rows = []
     # a note repeated on many rows is shown once under the table, with a marker in the rows
     counts: dict[str, int] = {}
@@ -269,21 +194,23 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             counts[e.note] = counts.get(e.note, 0) + 1
     common = [n for n, c in counts.items() if c >= 3]
     marks = {n: "abcdefghijklmnopqrstuvwxyz"[i % 26] for i, n in enumerate(common)}
+    grades = _summary.verdict(result).grades
     for name, e in result.estimates.items():
         f = format_estimate(e.value, e.std)
-        notid = math.isinf(float(e.std)) if e.std is not None else False
-        st = effective_status(e)
+        g = grades[name]
+        und = g == NOT_DETERMINED
         ci = "—" if f.ci_low == "—" else f"[{f.ci_low}, {f.ci_high}]"
         scale = f' <span class="unit">{f.scale}</span>' if f.scale else ""
-        tr = '<tr class="notid">' if notid else ('<tr class="notdet">' if st == NOT_DETERMINED else "<tr>")
-        st_cls = "notdet" if st == NOT_DETERMINED else st
-        st_title = (f' title="relative SE {f.rel}: the data do not determine it"' if st == NOT_DETERMINED
-                    and st != e.status else "")
+        if und:   # never shown as an estimate: the stored value is in the JSON and to_frame()
+            cells = ("<td class='num'>—</td>" * 4)
+        else:
+            cells = (f"<td class='num'>{f.value}{scale}</td>"
+                     f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
+                     f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>")
+        st_cls = "notdet" if und else g.replace(" ", "")
         rows.append(
-            f"{tr}<td><b>{esc(name)}</b></td><td class='num'>{f.value}{scale}</td>"
-            f"<td class='num'>{f.std}{scale if f.std not in ('—', 'not identifiable') else ''}</td>"
-            f"<td class='num'>{ci}{scale if ci != '—' else ''}</td><td class='num'>{f.rel}</td>"
-            f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='status {esc(st_cls)}'{st_title}>{esc(st)}</span></td>"
+            f"{TR_NOTDET if und else '<tr>'}<td><b>{esc(name)}</b></td>{cells}"
+            f"<td>{esc(pretty_unit(e.unit))}</td><td><span class='grade {esc(st_cls)}'>{esc(g)}</span></td>"
             + (f"<td><sup>({marks[e.note]})</sup></td></tr>" if e.note in marks
                else f"<td>{esc(plain_text(e.note))}</td></tr>"))
     if not rows:
@@ -292,13 +219,13 @@ def _estimates_section(ctx: RenderContext, result) -> str:
         cap = ctx.table_caption("Estimates with standard errors; 95 % intervals are value ± 1.96 SE (normal "
                                 "approximation). Digits follow the SE.")
         foot = "".join(f'<p class="small"><sup>({m})</sup> {esc(plain_text(n))}</p>' for n, m in marks.items())
-        if any(effective_status(e) == NOT_DETERMINED for e in result.estimates.values()):
-            foot += ('<p class="small"><span class="status notdet">not determined</span> relative SE above '
-                     '100 % (or flagged by the method): the 95 % interval spans zero widely, the data do not fix '
-                     'the value; the number is the last iterate, not an estimate.</p>')
+        used = list(dict.fromkeys(grades.values()))
+        foot += ('<p class="small">Verdict: ' + "; ".join(
+            f"<span class='grade {esc(g.replace(' ', ''))}'>{esc(g)}</span> {esc(_summary.GRADE_TEXT[g])}"
+            for g in used if g in _summary.GRADE_TEXT) + ".</p>")
         foot += si_table(ctx, result)
-        body = (f'<table class="est">{cap}'
-                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table>{foot}")
+        body = (f'<div class="scroll"><table class="est">{cap}'
+                f"<thead>{head}</thead><tbody>{''.join(rows)}</tbody></table></div>{foot}")
     cov_html = ""
     if result.covariance is not None and len(result.covariance_names) >= 2:
         try:
@@ -307,32 +234,62 @@ def _estimates_section(ctx: RenderContext, result) -> str:
             off = np.abs(r - np.diag(np.diag(r)))
             high = [(result.covariance_names[i], result.covariance_names[j], r[i, j])
                     for i in range(r.shape[0]) for j in range(i + 1, r.shape[1]) if off[i, j] > 0.95]
-            cov_html = ctx.figure(F.matrix_figure(entry), "Correlation of the estimates (from the covariance).")
+            cov_html = ctx.figure(F.matrix_figure(entry), "Correlation of the estimates (from the covariance), "
+                                                          "labelled by estimate.")
             if high:
                 pairs = ", ".join(f"{a}–{b} ({v:+.3f})" for a, b, v in high)
                 cov_html += (f'<div class="note bad">Strongly correlated estimates (|ρ| &gt; 0.95): {esc(pairs)}. '
                              "They are hard to separate with these data.</div>")
         except Exception as err:  # noqa: BLE001
             cov_html = ctx.problem("the correlation matrix", err)
-    return f'<h2 id="estimates">Estimates</h2>{body}{cov_html}'
+    if cov_html:
+        cov_html = f"<details><summary>Correlation of the estimates</summary>{cov_html}</details>"
+    return f"{body}{cov_html}"
+
+
+def _zero(v) -> bool:
+    try:
+        return float(v) == 0.0
+    except (TypeError, ValueError):
+        return False
+
+
+def _shown(rows: list[tuple]) -> list[tuple]:
+    """Rows worth a reader's time: no ``options.*`` dump, no all-zero ``simex.*`` rows, no correlation or
+    covariance matrix without row and column names (the estimates' correlation is drawn labelled; the
+    rest stay in the result JSON)."""
+    out = []
+    for row in rows:
+        k, v = str(row[0]), row[1]
+        if k.startswith("options.") or (k.startswith("simex") and (_zero(v) or v in ("none", "", None))):
+            continue
+        if type(v).__name__ == "MatrixValue" and re.search(r"corr|cov", k, re.I):
+            continue
+        out.append(row)
+    return out
 
 
 def _diagnostics_section(ctx: RenderContext, result) -> str:
     d = {k: v for k, v in (result.diagnostics or {}).items() if k != "warnings"}
     if not d:
         return ""
-    return (f'<h2 id="diagnostics">Diagnostics</h2>'
-            f'{kv_table(ctx, with_units(result, flatten(d)), "Estimator diagnostics.")}')
+    sx = d.get("simex")
+    if isinstance(sx, Mapping) and not sx.get("applied", True):   # a correction not made: one line, no zeros
+        move = sx.get("pilot_largest_move_in_se")
+        d["simex"] = "not applied" + (f" (the pilot run moved no estimate by more than {fmt_num(move, 2)} SE)"
+                                      if isinstance(move, (int, float)) else "")
+    return kv_table(ctx, _shown(with_units(result, flatten(d, names=result.estimates))), "Estimator diagnostics.")
 
 
 def _provenance_section(ctx: RenderContext, result) -> str:
     prov = {k: v for k, v in (result.provenance or {}).items() if k != "inputs"}
     model = result.model or {}
-    out = '<h2 id="provenance">Model and provenance</h2>'
+    prov = {k: v for k, v in prov.items() if k != "options"}   # the options are in the result JSON
+    out = ""
     if model:
-        out += kv_table(ctx, with_units(result, flatten(model)), "Model structure and vessel particulars.")
+        out += kv_table(ctx, _shown(with_units(result, flatten(model))), "Model structure and vessel particulars.")
     if prov:
-        out += kv_table(ctx, with_units(result, flatten(prov)), "Provenance.")
+        out += kv_table(ctx, _shown(with_units(result, flatten(prov))), "Provenance.")
     return out
 
 
@@ -358,7 +315,7 @@ def _method_sections(ctx: RenderContext, result, load_problems: list[str]) -> st
         out.append(render_entry(ctx, kind, name, entry))
     if not out:
         return ""
-    return f'<h2 id="method">Figures and tables of the method</h2>{"".join(out)}{residual_stats_table(ctx)}'
+    return f'{"".join(out)}{residual_stats_table(ctx)}'
 
 
 def _generic_sections(ctx: RenderContext, result) -> str:
@@ -394,7 +351,7 @@ def _generic_sections(ctx: RenderContext, result) -> str:
                    f'{esc(", ".join(sorted(map(str, unknown))))}.</p>')
     if not out:
         return ""
-    return f'<h2 id="series">Time histories and checks</h2>{"".join(out)}'
+    return "".join(out)
 
 
 def _guess_unit(name: str) -> str | None:
@@ -451,12 +408,35 @@ def _loose_series(ctx: RenderContext, result, keys: list[str]) -> tuple[str, set
         try:
             fig = F.signals_figure(items)
             fig.axes[-1].set_xlabel(xlabel)
+            moved = _final_differs(result, part, fig)
+            note = ""
+            if moved:
+                note = (" The dashed line is the final estimate of the estimates table, which differs from the "
+                        "last iterate (a later stage, such as a refinement, moved it): "
+                        + "; ".join(f"{k} {fmt_num(a, 3)} → {fmt_num(b, 3)}" for k, a, b in moved) + ".")
             html_parts.append(ctx.figure(fig, f"{', '.join(k for k, _ in part)} versus {xkey} "
                                               "(stored outside the report convention; units from the "
-                                              "estimate with that name or the standard channel names)."))
+                                              "estimate with that name or the standard channel names)." + note))
         except Exception as err:  # noqa: BLE001
             html_parts.append(ctx.problem(f"series {', '.join(k for k, _ in part)}", err))
     return "".join(html_parts), {xkey, *(k for k, _ in cols)}
+
+
+def _final_differs(result, part, fig) -> list[tuple[str, float, float]]:
+    """For iterate histories drawn in ``fig`` (one axes per entry of ``part``): the entries whose last
+    iterate differs from the estimate of the same name by more than 1 % of it or of its SE; the
+    estimate is drawn there as a dashed line. Returns ``(name, last iterate, estimate)``."""
+    out = []
+    axes = [ax for ax in fig.axes if ax.has_data()]
+    for ax, (k, v) in zip(axes, part):
+        e = result.estimates.get(k)
+        if e is None or _summary.grade(e) == NOT_DETERMINED or not v.size or not np.isfinite(v[-1]):
+            continue
+        tol = 0.01 * max(abs(float(e.value)), float(e.std) if np.isfinite(e.std) else 0.0)
+        if abs(float(v[-1]) - float(e.value)) > tol:
+            ax.axhline(float(e.value), color="#b3261e", ls="--", lw=1.0)
+            out.append((k, float(v[-1]), float(e.value)))
+    return out
 
 
 def _enriched(result):
@@ -491,26 +471,32 @@ def build_report(result) -> str:
         "series": _generic_sections(ctx, result),
         "provenance": _provenance_section(ctx, result),
     }
+    titles = {"data": "Data used", "estimates": "Estimates", "diagnostics": "Diagnostics",
+              "method": "Figures and tables of the method", "series": "Time histories and checks",
+              "provenance": "Model and provenance"}
     toc_names = {"verdict": "Verdict", "warnings": "Warnings", "data": "Data", "estimates": "Estimates",
                  "diagnostics": "Diagnostics",
                  "method": "Method figures", "series": "Time histories", "provenance": "Provenance"}
-    warnings = _warnings(result, ctx.problems)
+    warns = report_warnings(result, ctx.problems)
+    warnings = _warnings(warns)
     present = ["verdict"] + (["warnings"] if warnings else []) + [k for k, v in parts.items() if v]
     toc = "".join(f'<a href="#{k}">{toc_names[k]}</a>' for k in present)
+    n_fig = {k: v.count("<img") for k, v in parts.items()}
+    folded = "\n".join(
+        _fold(k, titles[k], v, open_=k in ("estimates",),
+              note=f"({n_fig[k]} figure{'s' if n_fig[k] != 1 else ''})" if n_fig[k] else "")
+        for k, v in parts.items() if v)
     now = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
     title = METHOD_TITLES.get(result.method, (result.method, ""))[0]
     vessel = (result.model or {}).get("vessel")
     doc_title = f"shipid report — {result.method}" + (f" — {vessel}" if vessel else "")
-    return (
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-        f"<meta name=\"generator\" content=\"shipid {esc(shipid.__version__)}\">"
-        f"<title>{esc(doc_title)}</title><style>{CSS}</style></head>\n<body><main>\n"
-        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result)}{verdict_html(result)}{warnings}\n"
-        + "\n".join(v for v in parts.values() if v)
+    return page(doc_title, (
+        f"{_header(result)}<nav class=\"toc\">{toc}</nav>{_badges(result, len(warns))}"
+        f"{verdict_html(result, warns)}{warnings}\n"
+        '<p class="small">The sections below are folded: click a heading to open it.</p>\n'
+        + folded
         + f"\n<footer>Report written by shipid {esc(shipid.__version__)} at {esc(now)} · {esc(title)} · "
-          "self-contained: no network needed to view.</footer>\n</main></body></html>\n"
-    )
+          "self-contained: no network needed to view.</footer>"))
 
 
 def write_report(result, path, *, force: bool = False) -> Path:

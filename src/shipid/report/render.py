@@ -319,10 +319,14 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
         if not isinstance(entry, Mapping):
             raise TypeError(f"series['{kind}']['{name}'] is a {type(entry).__name__}, expected a dict")
         label = entry.get("label", name)
+        if kind in ("overlays", "residuals", "signals"):
+            entry = F.in_degrees(entry)       # angles in deg, as every table shows them
         if kind == "overlays":
             t = np.asarray(entry["t"], float)
             meas, mod = np.asarray(entry["measured"], float), np.asarray(entry["model"], float)
             res_entry = ctx.series("residuals").get(name)
+            if isinstance(res_entry, Mapping):
+                res_entry = F.in_degrees(res_entry)
             if isinstance(res_entry, Mapping) and len(res_entry.get("values", [])) == t.size:
                 resid = np.asarray(res_entry["values"], float)
                 std = res_entry.get("std")
@@ -334,9 +338,13 @@ def render_entry(ctx: RenderContext, kind: str, name: str, entry: Mapping, *, pa
                           and len(res_entry.get("values", [])) == t.size)
             what = "validation data, not used for estimation" if entry.get("kind") == "validation" else \
                 "data used for estimation"
+            zoom = F.zoom_window(t, meas)
+            span = (f" The top panel shows t = {t[zoom[0]]:.0f}–{t[zoom[1] - 1]:.0f} s of the "
+                    f"{t[-1] - t[0]:.0f}-s record (the whole record is too dense to read); the residual "
+                    "panel and the statistics use every sample." if zoom else "")
             cap = caption_of(name, entry, (f"{default_title} " if default_title else "") +
                              f"{label}: measured and model ({what}); residual and its "
-                             f"autocorrelation with 95 % white-noise bounds.", paper, ctx.result.method)
+                             f"autocorrelation with 95 % white-noise bounds.{span}", paper, ctx.result.method)
             return ctx.figure(F.overlay_figure(name, entry, resid, r, st.acf_bound), cap)
         if kind == "residuals":
             st, r = residual_stats(entry["values"], entry.get("std"))
@@ -376,7 +384,8 @@ def render_group(ctx: RenderContext, kind: str, items: list[tuple[str, Mapping]]
     for name, _ in items:
         ctx.claim(kind, name)
     try:
-        fig = F.histories_figure(items) if kind == "histories" else F.signals_figure(items)
+        fig = F.histories_figure(items) if kind == "histories" else \
+            F.signals_figure([(n, F.in_degrees(e)) for n, e in items])
         return ctx.figure(fig, caption)
     except Exception as err:  # noqa: BLE001
         return ctx.problem(f"{kind} ({', '.join(n for n, _ in items)})", err)

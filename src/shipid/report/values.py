@@ -86,7 +86,23 @@ def _plain(v: Any) -> Any:
     return v
 
 
-def flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any]]:
+def _squeeze(x):
+    x = _plain(x)
+    return x[0] if isinstance(x, (list, tuple)) and len(x) == 1 else x
+
+
+def _named_numbers(v, names) -> bool:
+    """A mapping of 3 to 40 of ``names`` (the result's estimates) to numbers (or one-element lists)."""
+    if not names or not isinstance(v, Mapping) or not 3 <= len(v) <= 40 or not set(map(str, v)) <= names:
+        return False
+    vals = [_squeeze(x) for x in v.values()]
+    return all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in vals)
+
+
+def flatten(d: Mapping, prefix: str = "", depth: int = 2, names=None) -> list[tuple[str, Any]]:
+    """``(key, value)`` rows of a nested mapping for a key-value table; ``names`` (the result's estimate
+    names): a mapping of one number per estimate becomes one row (a two-row table)."""
+    names = set(names) if names else None
     rows = []
     for k, v in d.items():
         key = f"{prefix}{short_paths(str(k))}"
@@ -99,8 +115,12 @@ def flatten(d: Mapping, prefix: str = "", depth: int = 2) -> list[tuple[str, Any
             rows.append((key, v))
         elif _records_map(v):
             rows.append((key, RecordsValue([{"": str(n), **r} for n, r in v.items()])))
+        elif _named_numbers(v, names):           # one number per coefficient: one row, a two-row table
+            nv = NamedVector([_squeeze(x) for x in v.values()])
+            nv.names = [str(n) for n in v]
+            rows.append((key, nv))
         elif isinstance(v, Mapping) and depth > 0:
-            rows.extend(flatten(v, key + ".", depth - 1))
+            rows.extend(flatten(v, key + ".", depth - 1, names))
         elif isinstance(v, (list, tuple)) and not v:
             rows.append((key, "none"))
         elif _small_matrix(v):

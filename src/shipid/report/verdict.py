@@ -1,4 +1,4 @@
-"""The verdict panel at the top of a report: what the result says about itself, in plain words.
+"""The first screen of a report: what was found, how far to trust it, what to do next.
 
 Everything comes from the result: ``diagnostics["converged"]``, the estimates and their
 standard errors, ``diagnostics["warnings"]``, a recorded coverage study
@@ -6,9 +6,9 @@ standard errors, ``diagnostics["warnings"]``, a recorded coverage study
 module publishes, :func:`known_coverage`) and held-out validation
 (``series["overlays"]`` entries of ``kind = "validation"``, or ``diagnostics["validation"]``).
 
-A coefficient is *not determined* when its status says so, when its SE is infinite or when
-its relative SE exceeds :data:`REL_SE_UNDETERMINED` (the 95 % interval then spans zero by a
-wide margin: the data do not fix even its sign).
+The verdict on each estimate is :func:`shipid.summary.grade`, computed once
+(:func:`shipid.summary.verdict`) and used by the panel, the badges, the estimates table and
+``Result.summary()`` alike: an estimate is in exactly one list.
 """
 
 from __future__ import annotations
@@ -21,47 +21,19 @@ from typing import Any, Mapping
 import numpy as np
 
 from shipid import registry as method_registry
-from shipid.report.formatting import fmt_num
+from shipid.report.formatting import fmt_num, format_estimate
+from shipid.report.units import pretty_unit
+from shipid.summary import (LOOSE, NOT_DETERMINED, REL_SE_UNDETERMINED, WELL, Verdict, effective_status,
+                            rel_se, verdict, warnings_of)
 
 esc = html.escape
 
-#: Relative SE above which an "estimated" coefficient is shown as not determined.
-REL_SE_UNDETERMINED = 1.0
-#: Bands of relative SE for the plain-words summary.
-WELL, LOOSE = 0.10, 0.50
-
-NOT_DETERMINED = "not determined"
-
-
-def rel_se(e) -> float:
-    try:
-        v, s = float(e.value), float(e.std)
-    except (TypeError, ValueError):
-        return float("nan")
-    if math.isinf(s):
-        return math.inf
-    if not (math.isfinite(v) and math.isfinite(s)) or v == 0 or s <= 0:
-        return float("nan")
-    return abs(s / v)
-
-
-def effective_status(e) -> str:
-    """The status shown: the estimate's own, or ``not determined`` for rel. SE > 100 % / infinite SE."""
-    st = str(getattr(e, "status", "") or "estimated")
-    if st.lower() in ("not determined", "not identifiable", "undetermined", "not-determined"):
-        return NOT_DETERMINED
-    if st == "estimated":
-        r = rel_se(e)
-        if math.isinf(r) or (math.isfinite(r) and r > REL_SE_UNDETERMINED):
-            return NOT_DETERMINED
-    return st
+__all__ = ["verdict_html", "verdict_facts", "known_coverage", "effective_status", "rel_se", "NOT_DETERMINED",
+           "REL_SE_UNDETERMINED", "WELL", "LOOSE"]
 
 
 def _warnings(result) -> list[str]:
-    w = (result.diagnostics or {}).get("warnings") or []
-    if isinstance(w, str):
-        w = [w]
-    return [str(x) for x in w] if isinstance(w, (list, tuple)) else [str(w)]
+    return warnings_of(result)
 
 
 def _coverage_text(result) -> tuple[str, str]:
@@ -133,6 +105,8 @@ def _validation_text(result) -> list[str]:
             except (KeyError, TypeError, ValueError):
                 continue
             unit = e.get("unit") or ""
+            if unit in ("rad", "rad/s"):     # angles in deg, as the validation tables
+                rms, span, unit = math.degrees(rms), math.degrees(span), unit.replace("rad", "deg")
             text = f"{e.get('label', name)}: RMS error {fmt_num(rms, 3)} {unit}".rstrip()
             if span > 0:
                 text += f" ({fmt_num(100 * rms / span, 2)} % of the measured signal's standard deviation)"
@@ -145,7 +119,7 @@ def _validation_text(result) -> list[str]:
     return out
 
 
-def _list(names: list[tuple[str, float]], limit: int = 12) -> str:
+def _list(names: list[tuple[str, float]], limit: int = 8) -> str:
     items = [f"{esc(n)} ({fmt_num(100 * r, 2)} %)" if math.isfinite(r) else esc(n) for n, r in names[:limit]]
     more = len(names) - limit
     return ", ".join(items) + (f" and {more} more" if more > 0 else "")
@@ -162,73 +136,139 @@ def _real_data(result) -> bool:
     return bool(files) and not any("simulat" in n.lower() for n in names)
 
 
-def verdict_html(result) -> str:
-    """The ``<section class="verdict">`` panel (plain words; the sections below carry the numbers)."""
-    d = result.diagnostics or {}
+_LISTS = (
+    ("well", "ok", f"<b>Well determined</b> (relative SE ≤ {100 * WELL:.0f} %)"),
+    ("loose", "", f"<b>Loosely determined</b> (relative SE {100 * WELL:.0f}–{100 * LOOSE:.0f} %)"),
+    ("poor", "warn", f"<b>Poorly determined</b> (relative SE {100 * LOOSE:.0f}–100 %)"),
+    ("no SE", "warn", "<b>Without a standard error</b>"),
+    ("flagged", "warn", "<b>Flagged by the method</b> as weakly determined or biased beyond their SE (see the notes "
+                        "of the estimates)"),
+    (NOT_DETERMINED, "bad", "<b>Not determined by these data</b> (relative SE above 100 % or the method's own test; "
+                            "shown as <i>not determined</i>, never as estimates)"),
+)
+
+
+def _found_table(result, v: Verdict, limit: int = 14) -> str:
+    """The determined estimates and derived quantities, value ± SE, compact (the full table is below)."""
+    rows = []
+    names = v.tabled
+    for n in names[:limit]:
+        e = result.estimates[n]
+        f = format_estimate(e.value, e.std)
+        sd = f" ± {f.std}" if f.std not in ("—", "not identifiable") else ""
+        g = v.grades[n]
+        rows.append(f"<tr><td><b>{esc(n)}</b></td><td class='num'>{f.value}{sd}{(' ' + f.scale) if f.scale else ''}"
+                    f"</td><td>{esc(pretty_unit(e.unit))}</td><td><span class='grade {g.replace(' ', '')}'>"
+                    f"{esc(g)}</span></td></tr>")
+    more = len(names) - limit
+    if more > 0:
+        rows.append(f"<tr><td colspan='4' class='small'>… and {more} more in <a href='#estimates'>Estimates</a>"
+                    "</td></tr>")
+    if not rows:
+        rows.append("<tr><td colspan='4'>No quantity is determined by these data.</td></tr>")
+    und = v.not_determined
+    tail = ""
+    if und:
+        tail = (f"<p class='small'><b>Not determined ({len(und)})</b>, not estimates: "
+                f"{esc(', '.join(und))}.</p>")
+    return (f"<table class='found'><thead><tr><th>quantity</th><th class='num'>estimate ± SE</th><th>unit</th>"
+            f"<th>verdict</th></tr></thead><tbody>{''.join(rows)}</tbody></table>{tail}")
+
+
+def _headline(v: Verdict, n_warn: int) -> str:
+    n = len(v.grades)
+    det, und = len(v.determined), len(v.not_determined)
+    est_total = det + und
+    bits = [f"{det} of {est_total} estimated quantit{'y' if est_total == 1 else 'ies'} determined by these data"
+            if est_total else "no estimated quantities"]
+    if und:
+        bits.append(f"{und} not determined")
+    weak = len(v.names("poor", "flagged", "no SE"))
+    if weak:
+        bits.append(f"{weak} of them poorly determined or flagged")
+    bits.append({True: "the estimator converged", False: "the estimator DID NOT converge",
+                 None: "convergence not recorded"}[v.converged])
+    bits.append(f"{n_warn} warning{'' if n_warn == 1 else 's'}")
+    cls = "bad" if (v.converged is False or (est_total and und * 2 > est_total)) else (
+        "warn" if (und or n_warn or weak) else "ok")
+    return f'<p class="headline {cls}">{esc("; ".join(bits))}.</p>' if n else \
+        '<p class="headline warn">The result carries no estimates.</p>'
+
+
+def _next_steps(result, v: Verdict, n_warn: int) -> list[tuple[str, str]]:
+    out = []
+    if v.converged is False:
+        out.append(("bad", "Do not use these estimates: the estimator did not converge. Check the data named in the "
+                           "warnings and run again."))
+    und = v.not_determined
+    if und:
+        what = (f"{esc(und[0])} is not determined and is not an estimate: fix it" if len(und) == 1 else
+                f"The {len(und)} not-determined quantities are not estimates: fix them")
+        out.append(("bad", f"{what} from a prior or a published set, or add trials that excite "
+                           f"{'it' if len(und) == 1 else 'them'} (other rudder angles, speed changes, longer runs) "
+                           "and identify again."))
+    weak = v.names("poor", "flagged", "no SE")
+    if weak:
+        out.append(("warn", f"Use {', '.join(esc(x) for x in weak[:6])}{' …' if len(weak) > 6 else ''} with care: "
+                            "read their notes in the estimates table."))
+    if n_warn:
+        out.append(("warn", f"Read the {n_warn} warning{'s' if n_warn != 1 else ''} below: each names what it "
+                            "affects."))
+    if not _validation_text(result):
+        out.append(("", "Check the model on a run it was not fitted to: "
+                        "<code>shipid validate MODEL.json --trial RUN</code>."))
+    if not out:
+        out.append(("ok", "Nothing here stops you using the model."))
+    return out
+
+
+def verdict_html(result, warnings: list[str] | None = None) -> str:
+    """The ``<section class="verdict">`` first screen.
+
+    ``warnings`` is the list the report's warnings box shows (the method's warnings and any
+    report problem); its length is the count quoted here, so the two cannot disagree.
+    """
+    v = verdict(result)
+    warns = list(v.warnings) if warnings is None else list(warnings)
     lines: list[tuple[str, str]] = []  # (css class, html)
-    conv = d.get("converged")
-    if conv is True:
+    if v.converged is True:
         lines.append(("ok", "<b>Converged.</b> The estimator reports convergence."))
-    elif conv is False:
+    elif v.converged is False:
         lines.append(("bad", "<b>Did not converge.</b> The estimates are the last iterate and must not be "
                              "trusted."))
     else:
         lines.append(("warn", "<b>Convergence not recorded</b> by this method."))
-    well, loose, poor, undet, fixed = [], [], [], [], []
-    for n, e in result.estimates.items():
-        st, r = effective_status(e), rel_se(e)
-        if st == NOT_DETERMINED:
-            undet.append((n, r))
-        elif st != "estimated":
-            fixed.append((n, r))
-        elif not math.isfinite(r):
-            loose.append((n, r))
-        elif r <= WELL:
-            well.append((n, r))
-        elif r <= LOOSE:
-            loose.append((n, r))
-        else:
-            poor.append((n, r))
-    weak = [(n, rel_se(e)) for n, e in result.estimates.items()
-            if effective_status(e) == "estimated" and re.search(r"weakly determined|biased|bias",
-                                                                 str(getattr(e, "note", "")), re.I)]
-    if well:
-        lines.append(("ok", f"<b>Well determined</b> (relative SE ≤ {100 * WELL:.0f} %): {_list(well)}."))
-    if loose:
-        lines.append(("", f"<b>Loosely determined</b> (relative SE {100 * WELL:.0f}–{100 * LOOSE:.0f} %): "
-                          f"{_list(loose)}."))
-    if poor:
-        lines.append(("warn", f"<b>Poorly determined</b> (relative SE {100 * LOOSE:.0f}–100 %): {_list(poor)}."))
-    if weak:
-        lines.append(("warn", f"<b>Flagged by the method</b> as weakly determined or biased beyond their SE "
-                              f"(see the notes of the estimates): {_list(weak)}."))
-    if undet:
-        lines.append(("bad", f"<b>Not determined by these data</b> (relative SE above 100 % or flagged by the "
-                             f"method; shown as <i>not determined</i> below, not as estimates): {_list(undet)}."))
+    for g, cls, label in _LISTS:
+        names = v.names(g)
+        if names:
+            pct = g != NOT_DETERMINED   # the method's test, not the relative SE, may have decided these
+            lines.append((cls, f"{label}: "
+                               f"{_list([(n, rel_se(result.estimates[n]) if pct else math.nan) for n in names])}."))
+    fixed = v.not_estimated
     if fixed:
         lines.append(("", f"Not estimated (fixed, known or derived): {len(fixed)} "
                           f"quantit{'y' if len(fixed) == 1 else 'ies'}."))
-    if not result.estimates:
-        lines.append(("warn", "The result carries no estimates."))
     lines.append(_coverage_text(result))
-    warns = _warnings(result)
     if warns:
-        lines.append(("bad", f"<b>{len(warns)} warning{'s' if len(warns) != 1 else ''}</b> from the method "
+        lines.append(("bad", f"<b>{len(warns)} warning{'s' if len(warns) != 1 else ''}</b> "
                              "(listed below the verdict)."))
     else:
-        lines.append(("ok", "No warnings from the method."))
+        lines.append(("ok", "No warnings."))
     val = _validation_text(result)
     if val:
         lines.append(("", "<b>Held-out prediction</b> (data not used for estimation): "
-                          + "; ".join(esc(v) for v in val) + "."))
+                          + "; ".join(esc(x) for x in val) + "."))
     elif _real_data(result):
-        lines.append(("warn", "<b>No held-out prediction error</b> is recorded with this result: check the model "
-                              "on a run it was not fitted to (<code>shipid validate MODEL.json --trial RUN</code>)."))
+        lines.append(("warn", "<b>No held-out prediction error</b> is recorded with this result."))
     setting = (result.provenance or {}).get("demo_setting")
     if setting:
         lines.append(("", f"<b>Demo setting:</b> {esc(str(setting))}"))
-    items = "".join(f'<li class="{c}">{t}</li>' for c, t in lines)
-    return f'<section class="verdict" id="verdict"><h2>Verdict</h2><ul>{items}</ul></section>'
+    trust = "".join(f'<li class="{c}">{t}</li>' for c, t in lines)
+    nxt = "".join(f'<li class="{c}">{t}</li>' for c, t in _next_steps(result, v, len(warns)))
+    return (f'<section class="verdict" id="verdict"><h2>Verdict</h2>{_headline(v, len(warns))}'
+            f'<div class="vcols"><div class="vfound"><h3>What was found</h3>{_found_table(result, v)}</div>'
+            f'<div class="vtrust"><h3>How far to trust it</h3><ul>{trust}</ul>'
+            f'<h3>What to do next</h3><ul>{nxt}</ul></div></div></section>')
 
 
 def verdict_facts(result) -> dict[str, Any]:

@@ -63,7 +63,9 @@ def test_report_of_a_run(stream, capsys):
     rc = main(["report", str(stream / "run.jsonl"), "--out", str(out), "--truth", str(stream / "s.truth.json")])
     assert rc == 0
     page = out.read_text()
-    assert "data:image/png;base64," in page and "detection_delay" in page and "<td>[]</td>" in page   # no false alarm
+    assert "data:image/png;base64," in page and "detection delay" in page
+    assert "<td>none</td>" in page and "0 false alarms" in page   # no false alarm, said in words
+    assert 'class="verdict"' in page and "[]" not in page
 
 
 def test_bad_stream_is_one_line(stream, capsys, tmp_path):

@@ -18,6 +18,7 @@ from shipid.errors import InputError, OutputExistsError
 from shipid.methods.monitor.estimator import MonitorOptions
 from shipid.models.roll_reduced import KnownParams
 from shipid.report.figures import new_figure, to_data_uri
+from shipid.report.page import page as report_page
 from shipid.simulate.masscm_stream import truth_at
 
 _KEYS = ("t", "m", "m_std", "zm_bar", "zm_bar_std", "rho", "rho_std", "converged", "alarm", "change_at")
@@ -120,7 +121,7 @@ def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
         axs[3].semilogy(t, np.maximum(T, 1e-3), color="C2", lw=1.0, label="detector T")
         if threshold is not None:
             axs[3].axhline(threshold, color="C3", lw=0.8, ls=":", label=f"threshold {threshold:g}")
-    axs[3].set_ylabel("Wald T")
+    axs[3].set_ylabel("Wald T [-]")
     axs[3].set_xlabel("stream time t [s]")
     for ax in axs:
         for a in alarms:
@@ -131,6 +132,81 @@ def figure(ups: list[dict], truth: dict | None, threshold: float | None = None):
     axs[3].legend(loc="best", fontsize=7)
     axs[0].set_title("red: alarm (solid) and located change (dashed)", fontsize=8)
     return fig
+
+
+def _s(x) -> str:
+    return "—" if x is None else f"{float(x):.0f} s"
+
+
+def _times(xs) -> str:
+    return ", ".join(_s(x) for x in xs) if xs else "none"
+
+
+def summary_rows(summ: dict) -> list[tuple[str, str]]:
+    """The :func:`summary` as labelled rows with units (seconds of stream time, coverage in %)."""
+    rows = [("updates", f"{summ['updates']}"), ("stream end", _s(summ["t_end"])),
+            ("alarms at", _times(summ["alarms"])), ("located change times", _times(summ["located"]))]
+    if "true_change_at" in summ:
+        rows += [("true change at (simulated)", _s(summ["true_change_at"])),
+                 ("false alarms (before the change)", _times(summ.get("false_alarms", []))),
+                 ("detection delay", _s(summ.get("detection_delay")) if summ.get("detection_delay") is not None
+                  else "no alarm after the change")]
+    if "coverage_from" in summ:
+        rows.append((f"±2 std intervals holding the truth from t = {_s(summ['coverage_from'])}",
+                     f"m {100 * summ['coverage_m']:.0f} %, zm_bar {100 * summ['coverage_zm_bar']:.0f} % "
+                     "(nominal 95 %)"))
+    return rows
+
+
+def monitor_page(jsonl, ups: list[dict], summ: dict, uri: str, warn: list[str], truth_path=None) -> str:
+    """The HTML page (the style of every shipid report, :mod:`shipid.report.page`)."""
+    esc = html.escape
+    last = ups[-1]
+    alarms, located = summ["alarms"], summ["located"]
+    if alarms:
+        head = (f"{len(alarms)} alarm{'s' if len(alarms) != 1 else ''} (first at {_s(alarms[0])}, change located "
+                f"at {_s(located[0])}): the loading changed.")
+        cls = "warn"
+    else:
+        head, cls = f"No alarm in {_s(last['t'])} of stream: no change of loading detected.", "ok"
+    trust = []
+    if "true_change_at" in summ:
+        fa = summ.get("false_alarms") or []
+        trust.append(("bad" if fa else "ok", f"{len(fa)} false alarm{'s' if len(fa) != 1 else ''} against the "
+                                             "simulated truth."))
+        d = summ.get("detection_delay")
+        trust.append(("ok" if d is not None else "bad", f"Detection delay {_s(d)}." if d is not None else
+                      "The change was not detected."))
+    if "coverage_from" in summ:
+        trust.append(("", f"±2 std intervals held the truth in {100 * summ['coverage_m']:.0f} % (m) and "
+                          f"{100 * summ['coverage_zm_bar']:.0f} % (zm_bar) of the updates from "
+                          f"{_s(summ['coverage_from'])} (nominal 95 %)."))
+    trust.append(("bad" if warn else "ok", f"{len(warn)} warning{'s' if len(warn) != 1 else ''}"
+                  + (" (listed below)." if warn else ".")))
+    nxt = ("After an alarm, the estimates settle on the new loading within about 300 s: read m, zm_bar and rho "
+           "from the last updates, not from those just after the alarm." if alarms else
+           "Nothing to do: keep monitoring.")
+    li = "".join(f'<li class="{c}">{t}</li>' for c, t in trust)
+    est = [(f"{k} at t = {last['t']:g} s", f"{last[k]:.4g} ± {last[k + '_std']:.2g} {u}".rstrip())
+           for k, u in (("m", "kg"), ("zm_bar", "m"), ("rho", "")) if last.get(k) is not None
+           and last.get(k + "_std") is not None]
+    rows = "".join(f'<tr><th scope="row">{esc(k)}</th><td>{esc(v)}</td></tr>' for k, v in est + summary_rows(summ))
+    warns = ('<section class="warnings" id="warnings"><h2>Warnings (' + str(len(warn)) + ")</h2><ul>"
+             + "".join(f"<li>{esc(w)}</li>" for w in warn) + "</ul></section>") if warn else ""
+    src = f"Truth from <code>{esc(Path(truth_path).name)}</code> (simulated stream)." if truth_path else \
+        "No truth given."
+    body = f"""<header class="top"><h1>Online mass and centre-of-mass monitoring</h1>
+<div class="sub">run <b>{esc(Path(jsonl).name)}</b> · {len(ups)} updates to t = {last['t']:g} s · after Linder et al.
+(2015), Algorithm 1 on a sliding window · {src}</div></header>
+<section class="verdict" id="verdict"><h2>Verdict</h2><p class="headline {cls}">{esc(head)}</p>
+<div class="vcols"><div><h3>What was found</h3><table class="kv"><tbody>{rows}</tbody></table></div>
+<div><h3>How far to trust it</h3><ul>{li}</ul><h3>What to do next</h3><ul><li>{esc(nxt)}</li></ul></div></div>
+</section>{warns}
+<h2>Estimates against time</h2>
+<figure><img src="{uri}" alt="m, zm_bar, rho and the detector statistic against time">
+<figcaption>m [kg], zm_bar [m] and rho [-] with ±2 std bands; alarms (red, solid) and located change times
+(red, dashed); the detector's Wald statistic T with the default threshold.</figcaption></figure>"""
+    return report_page(f"shipid report — monitor mass-cm — {Path(jsonl).name}", body)
 
 
 def write_monitor_report(jsonl: str | Path, out: str | Path, *, truth_path: str | Path | None = None,
@@ -154,25 +230,7 @@ def write_monitor_report(jsonl: str | Path, out: str | Path, *, truth_path: str 
     import matplotlib.pyplot as plt
     plt.close(fig)
     warn = sorted({w for u in ups for w in u.get("warnings", [])})
-    rows = "".join(f"<tr><th>{html.escape(str(k))}</th><td>{html.escape(json.dumps(v))}</td></tr>"
-                   for k, v in summ.items())
-    last = ups[-1]
-    page = f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>shipid monitor mass-cm: {html.escape(Path(jsonl).name)}</title>
-<style>body{{font-family:sans-serif;max-width:60em;margin:2em auto}} td,th{{padding:2px 8px;text-align:left}}
-table{{border-collapse:collapse}} tr:nth-child(even){{background:#f4f4f4}}</style></head><body>
-<h1>Online mass and centre-of-mass monitoring</h1>
-<p>Monitoring run {html.escape(str(jsonl))}: {len(ups)} updates to t = {last['t']:g} s
-(Linder et al. 2015, Algorithm 1 on a sliding window; shipid.methods.monitor.estimator).
-{"Truth from " + html.escape(str(truth_path)) + " (simulated stream)." if truth else "No truth given."}</p>
-<h2>Summary</h2><table>{rows}</table>
-<h2>Estimates against time</h2>
-<figure><img src="{uri}" alt="m, zm_bar, rho and the detector statistic against time" style="width:100%">
-<figcaption>Estimates with ±2 std bands; alarms (red, solid) and located change times (red, dashed);
-the detector's Wald statistic T with the default threshold.</figcaption></figure>
-<h2>Warnings</h2>{"<ul>" + "".join(f"<li>{html.escape(w)}</li>" for w in warn) + "</ul>" if warn else "<p>none</p>"}
-</body></html>
-"""
+    page = monitor_page(jsonl, ups, summ, uri, warn, truth_path if truth else None)
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(page, encoding="utf-8")
     tmp.replace(out)
