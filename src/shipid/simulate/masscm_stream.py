@@ -107,7 +107,7 @@ def truth_at(truth: dict, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def known_toml(vessel: str = "fishing-vessel", z_f: bool = True) -> str:
-    """``known.toml`` text of :func:`shipid.methods.masscm.cli.read_known` for a packaged vessel."""
+    """``known.toml`` text of :func:`shipid.methods.masscm.known.read_known` for a packaged vessel."""
     kn = KnownParams.from_vessel(vessel)
     lines = [f"{k} = {getattr(kn, k)!r}" for k in ("U", "M", "zg_bar", "m_c", "zc_bar", "zs_bar", "g")]
     if z_f:

@@ -7,7 +7,7 @@ from typing import Any, Mapping
 
 from shipid.errors import InputError
 from shipid.methods._trials import as_trial, grouped
-from shipid.methods.masscm.cli import read_known
+from shipid.methods.masscm.known import read_known
 from shipid.methods.masscm.estimator import REQUIRED, MassCMOptions, estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
 from shipid.result import Result
