@@ -23,7 +23,8 @@ differences start at 55cd5d5 (IV moments of the IIR initial prefilter from the l
 mean of m as 83c235a (0.399777593).
 
 With WORKERS = 1 the runs go in the child process itself; the sum of the runs' own wall times (the engine's
-per-run ``wall_s``, without the warm-up) over RUNS is the cost of one run of Algorithm 1. It is printed against
+per-run ``wall_s``, without the warm-up) over RUNS is the cost of one run of Algorithm 1; the runs' CPU
+time (``cpu_s``) likewise, the steadier measure on a loaded machine. It is printed against
 the flop floor of one run: ``FLOPS_PER_RUN`` (an estimate, about 98 Mflop for the fishing vessel's three 60-s
 datasets at 50 Hz: the 50 x 50 instrument moments, the eigen-decompositions, the FIR prefilters) at the
 single-thread DGEMM rate measured in the same run (512 x 512 matrices, one BLAS thread).
@@ -80,7 +81,8 @@ its = np.array([o["iterations"] if o else -1 for o in outs])
 flag = np.array([bool(o is None or o["implausible"]) for o in outs])
 np.savez(out, theta=arr, iterations=its, flagged=flag)
 run_wall = float(sum(r.wall_s or 0.0 for r in res.records))
-print(json.dumps({"src": shipid.__file__, "wall_s": wall, "run_wall_s": run_wall, "flagged": int(flag.sum()), "runs": runs,
+run_cpu = float(sum(r.cpu_s or 0.0 for r in res.records))
+print(json.dumps({"src": shipid.__file__, "wall_s": wall, "run_wall_s": run_wall, "run_cpu_s": run_cpu, "flagged": int(flag.sum()), "runs": runs,
                   "m_mean": float(np.nanmean(arr[~flag, 7])), "load": os.getloadavg()[0]}))
 """
 
@@ -111,6 +113,7 @@ def main():
             measure(src, 50, 1, os.path.join(tmp, f"warm_{label}.npz"))
     walls = {k: [] for k in trees}
     run_walls = {k: [] for k in trees}
+    run_cpus = {k: [] for k in trees}
     last = {}
     print(f"Table 3 (z_f known, init given, data seed 0, seed 0): {runs} runs, {workers} workers, {rounds} rounds")
     for r in range(rounds):
@@ -120,6 +123,7 @@ def main():
             row[label] = measure(trees[label], runs, workers, os.path.join(tmp, f"{label}.npz"))
             walls[label].append(row[label]["wall_s"])
             run_walls[label].append(row[label]["run_wall_s"])
+            run_cpus[label].append(row[label]["run_cpu_s"])
             last[label] = row[label]
         print(f"  round {r + 1} (order {', '.join(order)}): this {row['this']['wall_s']:.1f} s, peer "
               f"{row['peer']['wall_s']:.1f} s, ratio this/peer {row['this']['wall_s'] / row['peer']['wall_s']:.3f}  "
@@ -132,10 +136,13 @@ def main():
         gf = json.loads(subprocess.run([sys.executable, "-c", DGEMM], env=env, capture_output=True, text=True,
                                        check=True).stdout)["gflops"]
         floor = FLOPS_PER_RUN / (gf * 1e9)
-        per = {k: np.median(run_walls[k]) / runs for k in trees}
-        print(f"one process: this {1e3 * per['this']:.2f} ms/run, peer {1e3 * per['peer']:.2f} ms/run; flop floor "
-              f"{1e3 * floor:.2f} ms ({FLOPS_PER_RUN / 1e6:.0f} Mflop at {gf:.1f} GFLOP/s single-thread DGEMM, "
-              f"measured now): this {per['this'] / floor:.2f} x the floor, peer {per['peer'] / floor:.2f} x")
+        for what, d in (("wall", run_walls), ("CPU", run_cpus)):
+            per = {k: np.median(d[k]) / runs for k in trees}
+            cpu_ratios = np.array(d["this"]) / np.array(d["peer"])
+            print(f"one process, run {what} time: this {1e3 * per['this']:.2f} ms/run, peer {1e3 * per['peer']:.2f} "
+                  f"ms/run (this/peer median {np.median(cpu_ratios):.3f}); flop floor {1e3 * floor:.2f} ms "
+                  f"({FLOPS_PER_RUN / 1e6:.0f} Mflop at {gf:.1f} GFLOP/s single-thread DGEMM, measured now): "
+                  f"this {per['this'] / floor:.2f} x the floor, peer {per['peer'] / floor:.2f} x")
     a, b = (np.load(os.path.join(tmp, f"{k}.npz")) for k in ("this", "peer"))
     same = {k: bool(np.array_equal(a[k], b[k], equal_nan=(k == "theta"))) for k in ("theta", "iterations", "flagged")}
     dmax = float(np.nanmax(np.abs(a["theta"] - b["theta"]))) if a["theta"].shape == b["theta"].shape else float("nan")
