@@ -53,7 +53,8 @@ def _describe(pid: int) -> str:
         return str(pid)
 
 
-@pytest.mark.parametrize("engine", [["--workers", "2"], ["--dask-local", "2"]], ids=["pool", "dask-local"])
+@pytest.mark.parametrize("engine", [pytest.param(["--workers", "2"], id="pool"),
+                                    pytest.param(["--dask-local", "2"], id="dask-local", marks=pytest.mark.slow)])
 def test_a_campaign_leaves_no_process_behind(engine, tmp_path):
     if engine[0] == "--dask-local":
         pytest.importorskip("distributed")
