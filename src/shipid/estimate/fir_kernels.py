@@ -352,16 +352,4 @@ def project_qr(s, V, ZtP, rtol):
     return Rf, kept
 
 
-@njit(cache=True)
-def eigh_project_qr(ZtZ, ZtP, rtol):
-    """``s, V = eigh(Z^T Z)`` then :func:`project_qr`, in one compiled call (no Python between them).
-
-    The eigen-decomposition is LAPACK's ``dsyevd`` on the lower triangle, as :func:`numpy.linalg.eigh`
-    calls it (numba binds the LAPACK that scipy ships; with one OpenBLAS build both give the same bits).
-    Returns ``(Rf, kept)`` of :func:`project_qr`.
-    """
-    s, V = np.linalg.eigh(ZtZ)
-    return project_qr(s, V, ZtP, rtol)
-
-
-__all__ += ["project_qr", "eigh_project_qr"]
+__all__ += ["project_qr"]

@@ -19,7 +19,7 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from shipid.estimate.fir_kernels import eigh_project_qr
+from shipid.estimate.fir_kernels import project_qr
 from shipid.estimate.iir_kernels import lfilter
 
 
@@ -178,10 +178,11 @@ def iv_compress_products(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float =
 
 
 def iv_compress_products_compiled(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol: float = 1e-12) -> IVMoments:
-    """:func:`iv_compress_products` with the eigen-decomposition, projection and QR in one compiled call
-    (:func:`shipid.estimate.fir_kernels.eigh_project_qr`); the eigen-decomposition is the same LAPACK call."""
-    Rf, kept = eigh_project_qr(np.ascontiguousarray(ZtZ, dtype=float), np.ascontiguousarray(ZtP, dtype=float),
-                               float(rtol))
+    """:func:`iv_compress_products` with the projection and QR compiled
+    (:func:`shipid.estimate.fir_kernels.project_qr`); the eigen-decomposition is the same LAPACK call."""
+
+    s, V = np.linalg.eigh(ZtZ)
+    Rf, kept = project_qr(s, V, np.ascontiguousarray(ZtP), float(rtol))
     ng = ZtP.shape[1] - 1
     rss0 = float(Rf[ng, ng] ** 2) if kept > ng else 0.0
     return IVMoments(R=Rf[:ng, :ng].copy(), r=Rf[:ng, ng].copy(), rss0=rss0, n=n, rank_ok=bool(kept >= ng))

@@ -73,26 +73,9 @@ def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: K
     """
     if not np.all(np.isfinite(theta_q)):
         return True
-    if _implausible_q(theta_prev_q, known, conds):
+    if implausible_identifiable(from_moment(theta_prev_q), known, conds):
         return False
-    return _implausible_q(theta_q, known, conds)
-
-
-#: ``(key, verdict)`` of the last :func:`_implausible_q`: an iteration's iterate is judged again as the next
-#: iteration's previous one (a pure function of the key; one entry, replaced in one assignment).
-_LAST_CHECK: tuple = ((), False)
-
-
-def _implausible_q(theta_q: np.ndarray, known: KnownParams, conds) -> bool:
-    """``bool(implausible_identifiable(from_moment(theta_q), known, conds))``, remembered for the last key."""
-    global _LAST_CHECK
-    key = (np.asarray(theta_q, dtype=float).tobytes(), known, tuple(conds))
-    last = _LAST_CHECK
-    if last[0] == key:
-        return last[1]
-    verdict = bool(implausible_identifiable(from_moment(theta_q), known, conds))
-    _LAST_CHECK = (key, verdict)
-    return verdict
+    return bool(implausible_identifiable(from_moment(theta_q), known, conds))
 
 
 def search_bounds(free: np.ndarray, prior, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
