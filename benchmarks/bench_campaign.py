@@ -17,6 +17,7 @@ Usage::
     .venv/bin/python benchmarks/bench_campaign.py --runs 2000 --task shipid.campaign.toy:toy_run \\
         --kwargs '{"n": 20000}'
     .venv/bin/python benchmarks/bench_campaign.py --store        # also time the 2-worker run into a store
+    .venv/bin/python benchmarks/bench_campaign.py --smoke        # 4 runs, no Dask (the test suite's smoke test)
 """
 
 from __future__ import annotations
@@ -74,7 +75,10 @@ def main(argv=None) -> int:
                     "(default: the Table-3 study's defaults, or none for the toy)")
     ap.add_argument("--store", action="store_true", help="also time the 2-worker run writing a store")
     ap.add_argument("--skip-dask", action="store_true")
+    ap.add_argument("--smoke", action="store_true", help="4 runs, no Dask (the test suite's smoke test)")
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.runs, args.skip_dask = 4, True
 
     task = args.task or find_table3_task()
     note = ""

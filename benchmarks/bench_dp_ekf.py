@@ -7,7 +7,7 @@ same H, R and heading-wrapping residual (filterpy also uses the Joseph form). Ou
 :func:`shipid.estimate.ekf_augmented.parallel_augmented_ekf`. Prints wall times, the
 ratio and the largest difference of the parameter estimates (they must agree).
 
-Run: ``.venv/bin/python benchmarks/bench_dp_ekf.py [--duration 600] [--repeat 3]``
+Run: ``.venv/bin/python benchmarks/bench_dp_ekf.py [--duration 600] [--repeat 3] [--smoke]`` (needs filterpy).
 """
 
 from __future__ import annotations
@@ -22,13 +22,17 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--duration", type=float, default=600.0)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--smoke", action="store_true", help="60 s trials, one round (the test suite's smoke test)")
     args = ap.parse_args()
+    if args.smoke:
+        args.duration, args.repeat = 60.0, 1
 
     from filterpy.kalman import ExtendedKalmanFilter
     from scipy.linalg import block_diag
 
     from shipid.estimate.ekf_augmented import parallel_augmented_ekf
     from shipid.methods.dp import estimator as m
+    from shipid.methods.dp.stage_models import momentum_model, prepare
     from shipid.methods.dp.trials import simulate_dp_trial
     from shipid.models.dp import dp_vessel
     from shipid.vessels import load_vessel
@@ -39,8 +43,8 @@ def main() -> None:
     free = list(m.STAGES["SI2"])
     theta = np.array(opt.theta0)
     theta[[0, 5, 8]] = v.theta[[0, 5, 8]]
-    data = [m._prepare(t, v, "sway-yaw") for t in trials]
-    models = [m._momentum_model(v, theta, free, d["t"], False) for d in data]
+    data = [prepare(t, v, "sway-yaw") for t in trials]
+    models = [momentum_model(v, theta, free, d["t"], False) for d in data]
     b = v.bis
     sp = opt.sigma_pos / b.L
     a2 = np.array([1.0, 1.0, opt.yaw_arm ** 2])

@@ -7,6 +7,7 @@ the same for the named peer "plain IV" (Algorithm 1 without the ARMA prefilters 
 Issue target: spread within 1.3 x the bound, means within one spread of the truth.
 
 Usage:  python benchmarks/bench_masscm_efficiency.py [RUNS] [WORKERS] [DURATION]
+        python benchmarks/bench_masscm_efficiency.py --smoke     (3 runs of 60 s, 1 worker)
 """
 
 import sys
@@ -20,9 +21,10 @@ from shipid.campaign.engine import run_campaign
 
 
 def main():
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 100
-    workers = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-    duration = float(sys.argv[3]) if len(sys.argv) > 3 else 300.0
+    argv = sys.argv[1:] if "--smoke" not in sys.argv else ["3", "1", "60"]
+    runs = int(argv[0]) if len(argv) > 0 else 100
+    workers = int(argv[1]) if len(argv) > 1 else 2
+    duration = float(argv[2]) if len(argv) > 2 else 300.0
     b = crlb(duration=duration, noise=NoiseSpec.issue3())["bounds"]
     rows = {}
     for label, pf in (("Algorithm 1 (ARMA prefilters)", True), ("peer: plain IV (no prefilter)", False)):

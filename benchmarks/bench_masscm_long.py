@@ -32,6 +32,8 @@ Measured 2026-12-02 at load 7-8 against 83c235a (``/tmp/peer83/src``), with the 
 MiB, 58.85 MB; ratios: time 0.71, allocation peak 0.42. ``bench_masscm_long_cli.py`` measures the whole command.
 
 Usage:  python benchmarks/bench_masscm_long.py [DURATION_S=3600] [PEER_SRC=/work/main/src] [ROUNDS=1]
+        python benchmarks/bench_masscm_long.py --smoke    (60-s records, this tree only, one round)
+        python benchmarks/bench_masscm_long.py --smoke    (60 s records, this tree only, one round)
 """
 
 import json
@@ -85,10 +87,11 @@ def measure(src: str, duration: float) -> dict:
 
 
 def main():
-    duration = float(sys.argv[1]) if len(sys.argv) > 1 else 3600.0
-    peer = sys.argv[2] if len(sys.argv) > 2 else "/work/main/src"
     here = str(Path(__file__).resolve().parents[1] / "src")
-    rounds = int(sys.argv[3]) if len(sys.argv) > 3 else 1
+    argv = sys.argv[1:] if "--smoke" not in sys.argv else ["60", "--no-peer--", "1"]
+    duration = float(argv[0]) if len(argv) > 0 else 3600.0
+    peer = argv[1] if len(argv) > 1 else "/work/main/src"
+    rounds = int(argv[2]) if len(argv) > 2 else 1
     trees = [("this tree", here)] + ([("peer", peer)] if Path(peer).is_dir() else [])
     print(f"identify mass-cm, 3 datasets x {duration:g} s at 50 Hz, issue-3 noise, z_f known, one core")
     print(f"{'':10s} {'wall s':>8s} {'alloc peak MiB':>15s} {'max RSS MiB':>12s} {'(before)':>9s} {'(1st)':>7s} "

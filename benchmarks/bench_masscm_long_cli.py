@@ -53,6 +53,7 @@ excess is system time, 0.76 against 0.43 s), max RSS 304.5-331.4 MiB (347.5 MB),
 max RSS 0.87.
 
 Usage:  python benchmarks/bench_masscm_long_cli.py [DURATION_S=3600] [PEER_SRC=/tmp/peer17/src] [ROUNDS=2] [REFINE=none]
+        python benchmarks/bench_masscm_long_cli.py --smoke    (60-s records, this tree only, one round)
         (REFINE pem / whittle: this tree runs with ``--refine REFINE`` and, as a second peer, with ``--refine none``)
         (a peer: ``git worktree add /tmp/peer17 83c235a``; remove it after)
 """
@@ -104,10 +105,11 @@ def run(src: str, files: dict, out: str | None, json_path: str, extra=()) -> dic
 
 
 def main():
-    duration = float(sys.argv[1]) if len(sys.argv) > 1 else 3600.0
-    peer = sys.argv[2] if len(sys.argv) > 2 else "/tmp/peer17/src"
-    rounds = int(sys.argv[3]) if len(sys.argv) > 3 else 2
-    refine = sys.argv[4] if len(sys.argv) > 4 else "none"
+    argv = sys.argv[1:] if "--smoke" not in sys.argv else ["60", "--no-peer--", "1", "none"]
+    duration = float(argv[0]) if len(argv) > 0 else 3600.0
+    peer = argv[1] if len(argv) > 1 else "/tmp/peer17/src"
+    rounds = int(argv[2]) if len(argv) > 2 else 2
+    refine = argv[3] if len(argv) > 3 else "none"
     here = str(Path(__file__).resolve().parents[1] / "src")
     tmp = Path(tempfile.mkdtemp(prefix="bench_long_cli_"))
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,

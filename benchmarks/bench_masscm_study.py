@@ -29,6 +29,7 @@ Not a test: it prints timings and ratios, asserts nothing about speed.
 Usage:  python benchmarks/bench_masscm_study.py [RUNS] [PER_RUN_RUNS] [MODES] [ROUNDS]
         MODES: comma list of 1,2,dask (default all three), e.g. ``... 2000 200 2,dask``;
         PER_RUN_RUNS 0 skips part 1, RUNS 0 skips part 2; ROUNDS default 1.
+        python benchmarks/bench_masscm_study.py --smoke     (4 runs, 2 per path, one worker)
 """
 
 import os
@@ -132,10 +133,11 @@ MODES = {"1": ("local, 1 worker", {"workers": 1}), "2": ("local, 2 workers", {"w
 
 
 def main():
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 10_000
-    n1 = int(sys.argv[2]) if len(sys.argv) > 2 else 200
-    modes = [m for m in ("1", "2", "dask") if m in (sys.argv[3].split(",") if len(sys.argv) > 3 else MODES)]
-    rounds = int(sys.argv[4]) if len(sys.argv) > 4 else 1
+    argv = sys.argv[1:] if "--smoke" not in sys.argv else ["4", "2", "1", "1"]
+    runs = int(argv[0]) if len(argv) > 0 else 10_000
+    n1 = int(argv[1]) if len(argv) > 1 else 200
+    modes = [m for m in ("1", "2", "dask") if m in (argv[2].split(",") if len(argv) > 2 else MODES)]
+    rounds = int(argv[3]) if len(argv) > 3 else 1
     print(f"warm-up (numba kernels compiled or loaded from cache, datasets): {warm_up():.1f} s", flush=True)
     if n1 > 0:
         per_run(n1)

@@ -22,7 +22,17 @@ differences start at 55cd5d5 (IV moments of the IIR initial prefilter from the l
 55cd5d5 against 83c235a already differ); 7624e4c (main just before issue 17's merge) gives the same 200-run
 mean of m as 83c235a (0.399777593).
 
+With WORKERS = 1 the runs go in the child process itself; the sum of the runs' own wall times (the engine's
+per-run ``wall_s``, without the warm-up) over RUNS is the cost of one run of Algorithm 1; the runs' CPU
+time (``cpu_s``) likewise, the steadier measure on a loaded machine. It is printed against
+the flop floor of one run: ``FLOPS_PER_RUN`` (an estimate, about 98 Mflop for the fishing vessel's three 60-s
+datasets at 50 Hz: the 50 x 50 instrument moments, the eigen-decompositions, the FIR prefilters) at the
+single-thread DGEMM rate measured in the same run (512 x 512 matrices, one BLAS thread), on the same clock
+(wall or CPU time) as the runs.
+
 Usage:  python benchmarks/bench_masscm_table3_peer.py [RUNS=10000] [WORKERS=2] [ROUNDS=3] [PEER_SRC=/tmp/peer17/src]
+        python benchmarks/bench_masscm_table3_peer.py 500 1 3 /tmp/old/src     (ms per run, one process)
+        python benchmarks/bench_masscm_table3_peer.py --smoke    (4 runs in one process, this tree as its peer)
 """
 
 import json
@@ -35,6 +45,26 @@ from pathlib import Path
 import numpy as np
 
 NAMES = ("k", "A_x", "d", "K_r", "K_vdot", "K_delta", "z_f", "m", "zm_bar")
+#: Floating-point operations of one Table-3 run (Algorithm 1 on three 60-s datasets at 50 Hz).
+FLOPS_PER_RUN = 98e6
+
+DGEMM = r"""
+import json, time
+import numpy as np
+from threadpoolctl import threadpool_limits
+a, b = np.random.default_rng(0).standard_normal((2, 512, 512))
+def rate(clock):
+    best = float("inf")
+    for _ in range(5):
+        t0 = clock()
+        for _ in range(10):
+            a @ b
+        best = min(best, (clock() - t0) / 10)
+    return 2 * 512 ** 3 / best / 1e9
+with threadpool_limits(1):
+    a @ b
+    print(json.dumps({"wall": rate(time.perf_counter), "CPU": rate(time.process_time)}))
+"""
 
 CHILD = r"""
 import importlib, json, os, sys, time, warnings
@@ -58,7 +88,9 @@ arr = np.array([[o[n] for n in names] if o else [np.nan] * 9 for o in outs], dty
 its = np.array([o["iterations"] if o else -1 for o in outs])
 flag = np.array([bool(o is None or o["implausible"]) for o in outs])
 np.savez(out, theta=arr, iterations=its, flagged=flag)
-print(json.dumps({"src": shipid.__file__, "wall_s": wall, "flagged": int(flag.sum()), "runs": runs,
+run_wall = float(sum(r.wall_s or 0.0 for r in res.records))
+run_cpu = float(sum(r.cpu_s or 0.0 for r in res.records))
+print(json.dumps({"src": shipid.__file__, "wall_s": wall, "run_wall_s": run_wall, "run_cpu_s": run_cpu, "flagged": int(flag.sum()), "runs": runs,
                   "m_mean": float(np.nanmean(arr[~flag, 7])), "load": os.getloadavg()[0]}))
 """
 
@@ -73,18 +105,23 @@ def measure(src: str, runs: int, workers: int, out: str) -> dict:
 
 
 def main():
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 10_000
-    workers = int(sys.argv[2]) if len(sys.argv) > 2 else 2
-    rounds = int(sys.argv[3]) if len(sys.argv) > 3 else 3
-    peer = sys.argv[4] if len(sys.argv) > 4 else "/tmp/peer17/src"
     here = str(Path(__file__).resolve().parents[1] / "src")
+    smoke = "--smoke" in sys.argv
+    argv = sys.argv[1:] if not smoke else ["4", "1", "1", here]
+    runs = int(argv[0]) if len(argv) > 0 else 10_000
+    workers = int(argv[1]) if len(argv) > 1 else 2
+    rounds = int(argv[2]) if len(argv) > 2 else 3
+    peer = argv[3] if len(argv) > 3 else "/tmp/peer17/src"
     if not Path(peer).is_dir():
         raise SystemExit(f"no peer tree at {peer}")
     trees = {"this": here, "peer": peer}
     tmp = tempfile.mkdtemp(prefix="bench_t3_")
     for label, src in trees.items():                     # fill the numba caches, unmeasured
-        measure(src, 50, 1, os.path.join(tmp, f"warm_{label}.npz"))
+        if not smoke:
+            measure(src, 50, 1, os.path.join(tmp, f"warm_{label}.npz"))
     walls = {k: [] for k in trees}
+    run_walls = {k: [] for k in trees}
+    run_cpus = {k: [] for k in trees}
     last = {}
     print(f"Table 3 (z_f known, init given, data seed 0, seed 0): {runs} runs, {workers} workers, {rounds} rounds")
     for r in range(rounds):
@@ -93,6 +130,8 @@ def main():
         for label in order:
             row[label] = measure(trees[label], runs, workers, os.path.join(tmp, f"{label}.npz"))
             walls[label].append(row[label]["wall_s"])
+            run_walls[label].append(row[label]["run_wall_s"])
+            run_cpus[label].append(row[label]["run_cpu_s"])
             last[label] = row[label]
         print(f"  round {r + 1} (order {', '.join(order)}): this {row['this']['wall_s']:.1f} s, peer "
               f"{row['peer']['wall_s']:.1f} s, ratio this/peer {row['this']['wall_s'] / row['peer']['wall_s']:.3f}  "
@@ -100,6 +139,19 @@ def main():
     ratios = np.array(walls["this"]) / np.array(walls["peer"])
     print(f"median ratio this/peer: {np.median(ratios):.3f} (each {', '.join(f'{x:.3f}' for x in ratios)}); "
           f"median wall this {np.median(walls['this']):.1f} s, peer {np.median(walls['peer']):.1f} s")
+    if workers == 1:
+        env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+        gfs = json.loads(subprocess.run([sys.executable, "-c", DGEMM], env=env, capture_output=True, text=True,
+                                        check=True).stdout)
+        for what, d in (("wall", run_walls), ("CPU", run_cpus)):
+            gf = gfs[what]                                # the same clock for the runs and the DGEMM rate
+            floor = FLOPS_PER_RUN / (gf * 1e9)
+            per = {k: np.median(d[k]) / runs for k in trees}
+            cpu_ratios = np.array(d["this"]) / np.array(d["peer"])
+            print(f"one process, run {what} time: this {1e3 * per['this']:.2f} ms/run, peer {1e3 * per['peer']:.2f} "
+                  f"ms/run (this/peer median {np.median(cpu_ratios):.3f}); flop floor {1e3 * floor:.2f} ms "
+                  f"({FLOPS_PER_RUN / 1e6:.0f} Mflop at {gf:.1f} GFLOP/s single-thread DGEMM, measured now): "
+                  f"this {per['this'] / floor:.2f} x the floor, peer {per['peer'] / floor:.2f} x")
     a, b = (np.load(os.path.join(tmp, f"{k}.npz")) for k in ("this", "peer"))
     same = {k: bool(np.array_equal(a[k], b[k], equal_nan=(k == "theta"))) for k in ("theta", "iterations", "flagged")}
     dmax = float(np.nanmax(np.abs(a["theta"] - b["theta"]))) if a["theta"].shape == b["theta"].shape else float("nan")

@@ -35,7 +35,7 @@ the ninth held-out run; ``--runs`` takes fewer). Needs ``$SHIPID_DATA`` (or ../s
    same-run check than 5's reference).
 
 Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--study] [--study-reference] [--heldout9]
-[--heldout9-reference] [--oe-reference] [--skip-cv]``
+[--heldout9-reference] [--oe-reference] [--skip-cv] [--smoke]`` (``--smoke``: 3 runs, 2 folds, steps 1-3a only).
 """
 
 from __future__ import annotations
@@ -175,7 +175,10 @@ def main() -> None:
     ap.add_argument("--oe-reference", action="store_true",
                     help="The chosen candidate's output-error CV and final fit, compiled vs reference.")
     ap.add_argument("--skip-cv", action="store_true", help="Skip steps 1-3 (only the studies).")
+    ap.add_argument("--smoke", action="store_true", help="3 runs, 2 folds, steps 1-3a (the test suite's smoke test).")
     a = ap.parse_args()
+    if a.smoke:
+        a.runs, a.folds = 3, 2
 
     import numpy as np
 
@@ -216,6 +219,8 @@ def main() -> None:
                   f"chosen "
               f"'{res.model['structure_candidate']}' (previous '{res0.model['structure_candidate']}'), largest "
               f"relative estimate difference {rel:.1e}")
+        if a.smoke:
+            return
         rp = "auto"
         res2, c2, w2 = _timed(lambda: P.identify(trials, prior, folds=a.folds, refine=rp))
         oe = res2.diagnostics.get("output_error", {})

@@ -16,6 +16,7 @@ Printed: mean ± spread of K_vdot (true 0.1), its mean reported std, K_r (true -
 
 Usage:  python benchmarks/diag_masscm_kvdot_bias.py [SETTINGS=gyro_bias,sensors,both] [N=3] [NOISE_MODEL=auto]
         SETTINGS from: none, gyro_bias, acc_bias, gyro_noise, acc_noise, sensors, waves, both
+        python benchmarks/diag_masscm_kvdot_bias.py --smoke     (gyro_bias, one realisation)
 """
 
 import sys
@@ -54,9 +55,10 @@ def _moments(prep, L, y_hats, a_hats, options):
 
 
 def main():
-    settings = (sys.argv[1] if len(sys.argv) > 1 else "gyro_bias,sensors,both").split(",")
-    n = int(sys.argv[2]) if len(sys.argv) > 2 else 3
-    nm = sys.argv[3] if len(sys.argv) > 3 else "auto"
+    argv = sys.argv[1:] if "--smoke" not in sys.argv else ["gyro_bias", "1"]
+    settings = (argv[0] if len(argv) > 0 else "gyro_bias,sensors,both").split(",")
+    n = int(argv[1]) if len(argv) > 1 else 3
+    nm = argv[2] if len(argv) > 2 else "auto"
     warnings.simplefilter("ignore")
     iteration.build_moments = _moments
     known = KnownParams.from_vessel("fishing-vessel")

@@ -9,6 +9,7 @@ Printed per regime: the range (min, 5 %, median, 95 %, max over realisations) of
 The thresholds of :mod:`shipid.methods.masscm.refine` were chosen on seeds 100..199 with this script.
 
 Usage:  python benchmarks/diag_masscm_refine_rule.py [FIRST=100] [LAST=199] [DURATION=300]
+        python benchmarks/diag_masscm_refine_rule.py --smoke     (one seed, 60-s records)
 """
 
 import sys
@@ -47,5 +48,5 @@ def main(first=100, last=199, duration=300.0):
 
 
 if __name__ == "__main__":
-    a = sys.argv[1:]
+    a = sys.argv[1:] if "--smoke" not in sys.argv else ["100", "100", "60"]
     main(int(a[0]) if a else 100, int(a[1]) if len(a) > 1 else 199, float(a[2]) if len(a) > 2 else 300.0)

@@ -7,7 +7,8 @@ import a method"):
 (a) no cycle among module-level imports of shipid modules;
 (b) no ``import shipid...`` / ``from shipid... import`` (absolute or relative) inside a function, and no
     ``importlib.import_module("shipid...")`` of a literal name there either, except in ``shipid/cli/``, in a
-    method's ``cli*.py`` modules (lazy loading for start-up) and in a package's module-level ``__getattr__``
+    method's ``cli*.py`` modules and ``shipid/api.py`` (the command line and the Python API load a method
+    where it is called, for start-up) and in a package's module-level ``__getattr__``
     (PEP 562 lazy attributes, as ``shipid.__getattr__``); the plug-in look-ups of ``shipid/registry.py``
     and ``shipid/demo.py`` (``importlib`` on names found at run time) are allowed;
 (c) no ``from shipid.x import _name`` of a module-private name defined in another module;
@@ -282,7 +283,7 @@ def _defined_private(module: str, name: str) -> bool:
 
 
 def _lazy_allowed(module: str) -> bool:
-    return module == "shipid.cli" or module.startswith("shipid.cli.") or \
+    return module in ("shipid.cli", "shipid.api") or module.startswith("shipid.cli.") or \
         module.rpartition(".")[2].startswith("cli")
 
 

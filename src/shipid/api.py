@@ -20,20 +20,19 @@ Examples
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 from shipid import registry
 from shipid.errors import InputError
 from shipid.estimate.linalg import single_threaded
-from shipid.methods._trials import Trialish, as_trial
-from shipid.methods.mmg import validate as _V
-from shipid.models import mmg as _mmg_model
 from shipid.registry import MethodInfo
 from shipid.result import Result
-from shipid.simulate.run import simulate_vessel
 
+if TYPE_CHECKING:
+    from shipid.methods._trials import Trialish
 
-#: Method name -> :class:`~shipid.registry.MethodInfo` (paper, options class, trials taken).
-METHODS: dict[str, MethodInfo] = registry.identifying()
+# The methods, the MMG model and the simulator are imported where used, so that ``shipid.identify``
+# loads the one method it runs; ``METHODS`` and ``simulate`` are read on first use (module __getattr__).
 
 
 @single_threaded
@@ -97,6 +96,10 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     The method is found from ``Result.method`` through :func:`shipid.registry.for_result`; one
     without a ``validate`` module raises :class:`~shipid.errors.InputError`.
     """
+    from shipid.methods._trials import as_trial
+    from shipid.methods.mmg import validate as _V
+    from shipid.models import mmg as _mmg_model
+
     if isinstance(model, os.PathLike) or (isinstance(model, str) and not model.startswith("published:")):
         path = os.fspath(model)
         if not os.path.isfile(path):
@@ -122,8 +125,18 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     return mod.validate_result(model, tr, horizon=horizon, **kwargs)
 
 
-#: ``shipid.simulate``: a packaged vessel through a standard manoeuvre (``shipid simulate VESSEL MANOEUVRE``).
-simulate = simulate_vessel
+def __getattr__(name: str):
+    """``METHODS``: method name -> :class:`~shipid.registry.MethodInfo` (paper, options class, trials
+    taken); ``simulate``: a packaged vessel through a standard manoeuvre (``shipid simulate VESSEL
+    MANOEUVRE``, :func:`shipid.simulate.run.simulate_vessel`)."""
+    if name == "METHODS":
+        value = registry.identifying()
+    elif name == "simulate":
+        from shipid.simulate.run import simulate_vessel as value
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
 
 
 __all__ = ["identify", "validate", "simulate", "METHODS", "MethodInfo"]

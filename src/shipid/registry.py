@@ -107,6 +107,20 @@ def methods() -> dict[str, MethodInfo]:
     return out
 
 
+def _by_package(pkg: str) -> MethodInfo | None:
+    """``METHOD`` of the subpackage ``shipid.methods.<pkg>`` if there is one (imports that package only)."""
+    if not pkg.isidentifier() or pkg.startswith("_"):
+        return None
+    name = f"{_METHODS_PACKAGE}.{pkg}"
+    try:
+        if importlib.util.find_spec(name) is None:
+            return None
+    except ImportError:
+        return None
+    info = getattr(importlib.import_module(name), "METHOD", None)
+    return info if isinstance(info, MethodInfo) else None
+
+
 def get(name: str) -> MethodInfo:
     """The method called ``name`` (CLI name, an alias, or a ``Result.method`` value).
 
@@ -116,6 +130,9 @@ def get(name: str) -> MethodInfo:
         One line naming the methods there are.
     """
     key = _key(name)
+    info = _by_package(key.replace("-", ""))
+    if info is not None and key in (info.name, *info.aliases, *info.result_methods):
+        return info                     # the method named after its package: only that one imported
     for info in methods().values():
         if key == info.name or key in info.aliases or key in info.result_methods:
             return info

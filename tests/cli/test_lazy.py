@@ -1,4 +1,4 @@
-"""Lazy command loading (issue 14): ``shipid --help``, ``shipid vessels`` and ``shipid check`` import no method.
+"""Lazy loading: ``shipid --help``, ``shipid vessels``, ``shipid check`` and ``shipid.identify`` import no method.
 
 The groups list their commands from the generated index ``shipid.cli.INDEX``; a command's
 module is imported when the command is resolved. The index must be what the command modules say
@@ -86,4 +86,33 @@ def test_import_shipid_is_cheap_and_keeps_its_api():
     first, second = out.splitlines()
     assert first == "[]"                                  # import shipid alone: none of them
     assert second.split() == [shipid.__version__, "True", "Result"]
-    assert probe["numba"]                                 # shipid.identify loaded the methods
+    assert probe == {"numba": False, "methods": []}       # shipid.identify alone loads no method
+
+
+def _imported_by(body: str) -> list[str]:
+    out, _ = _fresh(body + "; print(json.dumps(sorted(sys.modules)))")
+    return json.loads(out.splitlines()[-1])
+
+
+def test_shipid_identify_imports_no_click_and_no_method():
+    """``import shipid; shipid.identify``: no click, no numba, nothing under ``shipid.methods``, no scipy.signal."""
+    mods = _imported_by("import shipid; shipid.identify; shipid.validate; shipid.Result")
+    heavy = [m for m in mods if m.split(".")[0] in ("click", "numba", "pandas")
+             or m.startswith(("shipid.methods", "shipid.cli", "scipy.signal", "scipy.stats"))]
+    assert heavy == []
+
+
+@pytest.mark.parametrize("name, package", [("mass-cm", "masscm"), ("dp", "dp"), ("ebm", "ebm"), ("mmg", "mmg")])
+def test_a_method_named_loads_that_method_only(name, package):
+    """``registry.get(name).identify`` (what ``shipid.identify(name, ...)`` runs) imports that method's
+    package and no other, and no command-line module."""
+    mods = _imported_by(f"import shipid; from shipid import registry; registry.get({name!r}).identify; "
+                        f"registry.get({name!r}).options")
+    methods = {m.split(".")[2] for m in mods if m.startswith("shipid.methods.") and not m.split(".")[2].startswith("_")}
+    assert methods == {package}
+    assert [m for m in mods if m.split(".")[0] == "click" or m.startswith("shipid.cli")] == []
+
+
+def test_the_monitor_imports_no_scipy_signal():
+    mods = _imported_by("import shipid.methods.monitor.estimator, shipid.methods.monitor.bj_prefilter")
+    assert [m for m in mods if m.startswith(("scipy.signal", "scipy.stats", "click"))] == []

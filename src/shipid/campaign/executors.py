@@ -10,6 +10,7 @@ worker processes.
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import importlib
@@ -208,6 +209,8 @@ def start_forkserver(warm_up: str | None = None, warm_kwargs: dict | None = None
         else:
             os.environ[WARM_UP_VAR] = spec       # read by the server as it imports worker_preload
         server.ensure_running()
+        atexit.unregister(stop_servers)      # once, however often the server is restarted
+        atexit.register(stop_servers)
     finally:
         if old is None:
             os.environ.pop(WARM_UP_VAR, None)
@@ -215,6 +218,54 @@ def start_forkserver(warm_up: str | None = None, warm_kwargs: dict | None = None
             os.environ[WARM_UP_VAR] = old
     _SERVER_WARM[:] = [spec]
     return spec is not None
+
+
+def _reap(pid: int, timeout: float) -> bool:
+    """Wait up to ``timeout`` s for this process's child ``pid`` to exit and reap it; True if it did."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            done, _ = os.waitpid(pid, os.WNOHANG)
+        except ChildProcessError:            # not ours, or reaped already
+            return True
+        if done:
+            return True
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+
+
+def stop_servers(timeout: float = 5.0) -> None:
+    """Stop this process's ``forkserver`` and ``multiprocessing`` resource tracker and reap both.
+
+    Both outlive a pool: they exit only when this process's end of their pipes closes, so after
+    a campaign command they ran on (and, under an init that reaps late, lingered as zombies) for
+    a moment after the command itself had returned. Registered with :mod:`atexit` by
+    :func:`start_forkserver`, so campaigns of one process still share one warm server, and no
+    process of shipid's outlives the command. Each is given ``timeout`` s to exit (a process
+    still holding the tracker's pipe would keep it alive; it is then left to exit on its own).
+    """
+    from multiprocessing import forkserver, resource_tracker
+
+    server = forkserver._forkserver
+    pid, fd = getattr(server, "_forkserver_pid", None), getattr(server, "_forkserver_alive_fd", None)
+    if pid is not None and fd is not None:
+        os.close(fd)                         # EOF on its "alive" pipe: the server exits
+        server._forkserver_alive_fd = None
+        if _reap(pid, timeout):
+            server._forkserver_pid = None
+            address = getattr(server, "_forkserver_address", None)
+            if address and not address.startswith("\0") and os.path.exists(address):
+                os.unlink(address)
+            server._forkserver_address = None
+        _SERVER_WARM.clear()
+    tracker = resource_tracker._resource_tracker
+    pid, fd = getattr(tracker, "_pid", None), getattr(tracker, "_fd", None)
+    if pid is not None and fd is not None:
+        os.close(fd)                         # the tracker exits when every writer has closed its pipe
+        tracker._fd = None
+        if _reap(pid, timeout):
+            tracker._pid = None
 
 
 def warm_up_here(warm_up: str, warm_kwargs: dict | None = None) -> None:

@@ -89,13 +89,16 @@ def test_regression_from_exact_states_recovers_the_truth_and_step1_smoothing_bia
     assert abs(sm5["N_r"] / truth.coef["N_r"] - 1) < abs(sm["N_r"] / truth.coef["N_r"] - 1)
 
 
-def test_study_says_loudly_that_the_std_do_not_cover(capsys):
-    """The study's summary names the coefficients whose ±2 std cover the truth too rarely; --strict exits 3."""
+@pytest.mark.parametrize("runs", [pytest.param(1, id="1-run"), pytest.param(3, id="3-runs", marks=pytest.mark.slow)])
+def test_study_says_loudly_that_the_std_do_not_cover(runs, capsys):
+    """The study's summary names the coefficients whose ±2 std cover the truth too rarely; --strict exits 3.
+    One run takes the same path (campaign, summary, warning, exit status) in a third of the time; three in the
+    slow suite."""
     import json
 
     from shipid.cli import main
 
-    assert main(["study", "mmg-coverage", "--runs", "3", "--seed", "701", "--workers", "1", "--seconds", "60",
+    assert main(["study", "mmg-coverage", "--runs", str(runs), "--seed", "701", "--workers", "1", "--seconds", "60",
                  "--json", "--strict"]) == 3
     cap = capsys.readouterr()
     s = json.loads(cap.out)

@@ -4,15 +4,33 @@
 trials; ``Options`` is :class:`~shipid.methods.dp.estimator.DPOptions`.
 """
 
-from shipid.methods.dp.entry import REQUIRED, identify
-from shipid.methods.dp.estimator import COVERAGE, DPOptions
 from shipid.registry import MethodInfo
-
-Options = DPOptions
 
 METHOD = MethodInfo(
     name="dp", title="DP low-frequency model, parallel state-augmented EKF",
     paper="Fossen, Sagatun & Sorensen 1996", trials="mapping surge/sway-yaw/azimuth -> trials",
     package=__name__, result_methods=("dp",))
+
+#: Public names, imported from their modules on first use (PEP 562): importing the package (which the
+#: registry does to read ``METHOD``) loads no numerics.
+_LAZY = {
+    "identify": ("shipid.methods.dp.entry", "identify"),
+    "REQUIRED": ("shipid.methods.dp.entry", "REQUIRED"),
+    "COVERAGE": ("shipid.methods.dp.estimator", "COVERAGE"),
+    "DPOptions": ("shipid.methods.dp.estimator", "DPOptions"),
+    "Options": ("shipid.methods.dp.estimator", "DPOptions"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(mod), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["identify", "Options", "DPOptions", "COVERAGE", "REQUIRED", "METHOD"]

@@ -4,14 +4,32 @@
 hydrodynamic forces; ``Options`` is :class:`~shipid.methods.ebm.estimator.EbmConfig`.
 """
 
-from shipid.methods.ebm.entry import identify
-from shipid.methods.ebm.estimator import COVERAGE, REQUIRED, EbmConfig
 from shipid.registry import MethodInfo
-
-Options = EbmConfig
 
 METHOD = MethodInfo(
     name="ebm", title="Estimation-Before-Modelling of Abkowitz coefficients", paper="Yoon & Rhee 2003",
     trials="sequence of trials", package=__name__, result_methods=("ebm",))
+
+#: Public names, imported from their modules on first use (PEP 562): importing the package (which the
+#: registry does to read ``METHOD``) loads no numerics.
+_LAZY = {
+    "identify": ("shipid.methods.ebm.entry", "identify"),
+    "COVERAGE": ("shipid.methods.ebm.estimator", "COVERAGE"),
+    "REQUIRED": ("shipid.methods.ebm.estimator", "REQUIRED"),
+    "EbmConfig": ("shipid.methods.ebm.estimator", "EbmConfig"),
+    "Options": ("shipid.methods.ebm.estimator", "EbmConfig"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(mod), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["identify", "Options", "EbmConfig", "COVERAGE", "REQUIRED", "METHOD"]

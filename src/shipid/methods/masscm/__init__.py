@@ -4,15 +4,33 @@
 loaded datasets); ``Options`` is :class:`~shipid.methods.masscm.estimator.MassCMOptions`.
 """
 
-from shipid.methods.masscm.entry import identify
-from shipid.methods.masscm.estimator import COVERAGE, REQUIRED, MassCMOptions
 from shipid.registry import MethodInfo
-
-Options = MassCMOptions
 
 METHOD = MethodInfo(
     name="mass-cm", title="mass and centre of mass from IMU + rudder", paper="Linder et al. 2015",
     trials="mapping nominal/calibration/loaded -> trial(s)", package=__name__,
     result_methods=("mass-cm",), aliases=("masscm", "mass-and-cm"))
+
+#: Public names, imported from their modules on first use (PEP 562): importing the package (which the
+#: registry does to read ``METHOD``) loads no numerics.
+_LAZY = {
+    "identify": ("shipid.methods.masscm.entry", "identify"),
+    "COVERAGE": ("shipid.methods.masscm.estimator", "COVERAGE"),
+    "REQUIRED": ("shipid.methods.masscm.estimator", "REQUIRED"),
+    "MassCMOptions": ("shipid.methods.masscm.estimator", "MassCMOptions"),
+    "Options": ("shipid.methods.masscm.estimator", "MassCMOptions"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(mod), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["identify", "Options", "MassCMOptions", "COVERAGE", "REQUIRED", "METHOD"]

@@ -5,15 +5,31 @@ regression per mode, choosing the structure by cross-validation; ``Options`` is
 :class:`~shipid.methods.mmg.estimator.FitConfig`.
 """
 
-from shipid.methods.mmg.entry import identify
-from shipid.methods.mmg.estimator import FitConfig
 from shipid.registry import MethodInfo
-
-Options = FitConfig
 
 METHOD = MethodInfo(
     name="mmg", title="MMG model from free-running model tests (EBM adapted)",
     paper="Yoon & Rhee 2003 applied to the MMG structure", trials="sequence of trials", package=__name__,
     result_methods=("mmg-ebm", "realdata"), aliases=("mmg-ebm",))
+
+#: Public names, imported from their modules on first use (PEP 562): importing the package (which the
+#: registry does to read ``METHOD``) loads no numerics.
+_LAZY = {
+    "identify": ("shipid.methods.mmg.entry", "identify"),
+    "FitConfig": ("shipid.methods.mmg.estimator", "FitConfig"),
+    "Options": ("shipid.methods.mmg.estimator", "FitConfig"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(mod), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["identify", "Options", "FitConfig", "METHOD"]

@@ -4,14 +4,30 @@ The monitor is run on a stream (``shipid monitor mass-cm``), not through ``shipi
 ``Options`` is :class:`~shipid.methods.monitor.estimator.MonitorOptions`.
 """
 
-from shipid.methods.monitor.estimator import MonitorOptions
 from shipid.registry import MethodInfo
-
-Options = MonitorOptions
 
 METHOD = MethodInfo(
     name="monitor", title="online mass and centre-of-mass monitor with change detection",
     paper="Linder et al. 2015, recursive", trials="a stream of IMU + rudder samples", package=__name__,
     result_methods=("mass-cm-monitor",))
+
+#: Public names, imported from their modules on first use (PEP 562): importing the package (which the
+#: registry does to read ``METHOD``) loads no numerics.
+_LAZY = {
+    "MonitorOptions": ("shipid.methods.monitor.estimator", "MonitorOptions"),
+    "Options": ("shipid.methods.monitor.estimator", "MonitorOptions"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(mod), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = ["Options", "MonitorOptions", "METHOD"]

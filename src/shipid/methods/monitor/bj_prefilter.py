@@ -17,12 +17,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.methods.masscm.iteration import left_physical_region
 from shipid.methods.masscm.noise_bj import ma_structure, noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, KnownParams
+
+
+def lfilter(*args, **kwargs):
+    """:func:`scipy.signal.lfilter`, imported on first call (``scipy.signal`` pulls ``scipy.stats``:
+    about 0.5 s of start-up for a module that only filters)."""
+    from scipy.signal import lfilter as _lfilter
+
+    return _lfilter(*args, **kwargs)
 
 
 def bj_mode(options: MassCMOptions) -> bool:

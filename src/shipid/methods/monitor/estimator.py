@@ -86,7 +86,6 @@ from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import lfilter
 
 from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
@@ -94,7 +93,7 @@ from shipid.estimate.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm.estimator import DEFAULT_THETA0, MassCMOptions, iterate, prepare
-from shipid.methods.monitor.bj_prefilter import bj_mode, degenerate, fit_bj, inverse_c, transient_samples
+from shipid.methods.monitor.bj_prefilter import bj_mode, degenerate, fit_bj, inverse_c, lfilter, transient_samples
 from shipid.methods.monitor.fit import fit_load, search
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, KnownParams, bilinear_tf, discrete_coeffs,
                                         roll_terms)
