@@ -1,0 +1,200 @@
+"""Live feeds over UDP and TCP: a listener that binds only the address it is given, and a sender.
+
+:class:`Listener` (``udp://HOST:PORT`` or ``tcp://HOST:PORT``) yields ``(line, receive_time)`` for every
+text line that arrives: a UDP datagram may hold several lines; a TCP stream is split at newlines (one client
+at a time; when it closes, the next is accepted). What cannot be used is counted in :attr:`Listener.counts`
+and dropped, never raised: a datagram longer than ``max_datagram`` bytes, a TCP line longer than
+``max_line``, bytes that are not ASCII, and datagrams / lines beyond ``max_rate`` per second (a flood).
+The host must be given (``0.0.0.0`` binds every interface only when asked for in so many words).
+
+:class:`Sender` writes lines to ``udp://`` (one datagram per call) or ``tcp://`` (a connection).
+"""
+
+from __future__ import annotations
+
+import select
+import socket
+import time
+from urllib.parse import urlsplit
+
+from shipid.errors import InputError
+
+MAX_DATAGRAM = 2048
+MAX_LINE = 512
+MAX_RATE = 20000.0           # datagrams or lines per second before the rest of the second is dropped
+
+
+def parse_url(url: str) -> tuple[str, str, int]:
+    """``(scheme, host, port)`` of ``udp://HOST:PORT`` or ``tcp://HOST:PORT``; InputError otherwise."""
+    u = urlsplit(url)
+    if u.scheme not in ("udp", "tcp"):
+        raise InputError(f"'{url}': the address must be udp://HOST:PORT or tcp://HOST:PORT")
+    try:
+        port = u.port
+    except ValueError:
+        port = None
+    if not u.hostname or port is None or u.path not in ("", "/"):
+        raise InputError(f"'{url}': give the host and the port, as udp://127.0.0.1:10110")
+    return u.scheme, u.hostname, port
+
+
+class Listener:
+    """Bind ``url`` and read lines from it (see the module docstring). Use as a context manager."""
+
+    def __init__(self, url: str, *, max_datagram: int = MAX_DATAGRAM, max_line: int = MAX_LINE,
+                 max_rate: float = MAX_RATE):
+        self.scheme, host, port = parse_url(url)
+        self.max_datagram, self.max_line, self.max_rate = max_datagram, max_line, max_rate
+        self.counts = {"datagrams": 0, "lines": 0, "oversized": 0, "not_text": 0, "flood": 0, "empty": 0,
+                       "connections": 0}
+        fam = socket.AF_INET6 if ":" in host else socket.AF_INET
+        kind = socket.SOCK_DGRAM if self.scheme == "udp" else socket.SOCK_STREAM
+        self.sock = socket.socket(fam, kind)
+        try:
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if self.scheme == "udp":
+                self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
+            self.sock.bind((host, port))
+            if self.scheme == "tcp":
+                self.sock.listen(1)
+        except OSError as err:
+            self.sock.close()
+            raise InputError(f"cannot listen on {url}: {err.strerror or err}") from None
+        self.address = self.sock.getsockname()[:2]
+        self.client: socket.socket | None = None
+        self._buf = b""
+        self._skip = False          # discarding the rest of an oversized TCP line
+        self._sec, self._in_sec = -1, 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self) -> None:
+        for s in (self.client, self.sock):
+            if s is not None:
+                s.close()
+        self.client = None
+
+    def _rate_ok(self, now: float) -> bool:
+        sec = int(now)
+        if sec != self._sec:
+            self._sec, self._in_sec = sec, 0
+        self._in_sec += 1
+        if self._in_sec > self.max_rate:
+            self.counts["flood"] += 1
+            return False
+        return True
+
+    def _text(self, data: bytes) -> list[str] | None:
+        try:
+            text = data.decode("ascii")
+        except UnicodeDecodeError:
+            self.counts["not_text"] += 1
+            return None
+        return [ln for ln in text.replace("\r", "\n").split("\n") if ln.strip()]
+
+    def lines(self, idle_timeout: float | None = None, poll: float = 0.2):
+        """Yield ``(line, receive_time, unit)``, ``unit`` the number of the datagram (UDP) or line (TCP) it came
+        in; end after ``idle_timeout`` s without data (never, when None). ``(None, now, None)`` is yielded every
+        ``poll`` s of silence (a chance to act on a timer)."""
+        last = time.monotonic()
+        while True:
+            socks = [self.sock] if self.client is None else [self.client]
+            ready, _, _ = select.select(socks, [], [], poll)
+            now = time.time()
+            if not ready:
+                if idle_timeout is not None and time.monotonic() - last > idle_timeout:
+                    return
+                yield None, now, None
+                continue
+            last = time.monotonic()
+            if self.scheme == "udp":
+                data = self.sock.recv(65536)
+                self.counts["datagrams"] += 1
+                if len(data) > self.max_datagram:
+                    self.counts["oversized"] += 1
+                    continue
+                if not self._rate_ok(now):
+                    continue
+                lines = self._text(data)
+                if lines == []:
+                    self.counts["empty"] += 1
+                for ln in lines or ():
+                    self.counts["lines"] += 1
+                    yield ln, now, self.counts["datagrams"]
+                continue
+            if self.client is None:
+                self.client, _ = self.sock.accept()
+                self.counts["connections"] += 1
+                self._buf, self._skip = b"", False
+                continue
+            try:
+                data = self.client.recv(65536)
+            except OSError:
+                data = b""
+            if not data:
+                self.client.close()
+                self.client = None
+                continue
+            self._buf += data
+            while True:
+                i = self._buf.find(b"\n")
+                if i < 0:
+                    if len(self._buf) > self.max_line:
+                        self.counts["oversized"] += 1
+                        self._buf, self._skip = b"", True
+                    break
+                raw, self._buf = self._buf[:i], self._buf[i + 1:]
+                if self._skip:
+                    self._skip = False
+                    continue
+                if len(raw) > self.max_line:
+                    self.counts["oversized"] += 1
+                    continue
+                if not self._rate_ok(now):
+                    continue
+                self.counts["datagrams"] += 1
+                for ln in self._text(raw) or ():
+                    self.counts["lines"] += 1
+                    yield ln, now, self.counts["datagrams"]
+
+
+class Sender:
+    """Send text to ``udp://HOST:PORT`` (one datagram per :meth:`send`) or ``tcp://HOST:PORT``."""
+
+    def __init__(self, url: str):
+        self.scheme, host, port = parse_url(url)
+        fam = socket.AF_INET6 if ":" in host else socket.AF_INET
+        try:
+            if self.scheme == "udp":
+                self.sock = socket.socket(fam, socket.SOCK_DGRAM)
+                self.sock.connect((host, port))
+            else:
+                self.sock = socket.create_connection((host, port), timeout=10)
+        except OSError as err:
+            raise InputError(f"cannot send to {url}: {err.strerror or err}") from None
+
+    def send(self, lines: list[str]) -> None:
+        data = ("\r\n".join(lines) + "\r\n").encode("ascii")
+        try:
+            if self.scheme == "udp":
+                self.sock.send(data)
+            else:
+                self.sock.sendall(data)
+        except ConnectionRefusedError:      # UDP: nobody listening (yet); the datagram is lost, as on a network
+            pass
+
+    def close(self) -> None:
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+__all__ = ["Listener", "Sender", "parse_url", "MAX_DATAGRAM", "MAX_LINE"]
