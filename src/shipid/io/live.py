@@ -4,7 +4,9 @@
 text line that arrives: a UDP datagram may hold several lines; a TCP stream is split at newlines (one client
 at a time; when it closes, the next is accepted). What cannot be used is counted in :attr:`Listener.counts`
 and dropped, never raised: a datagram longer than ``max_datagram`` bytes, a TCP line longer than
-``max_line``, bytes that are not ASCII, and datagrams / lines beyond ``max_rate`` per second (a flood).
+``max_line``, bytes that are not ASCII, datagrams / lines beyond ``max_rate`` per second (a flood), and
+what arrives while ``max_queue`` reads already wait (the socket is read by a thread of its own, so a long
+update never leaves datagrams to overflow the kernel's buffer).
 The host must be given (``0.0.0.0`` binds every interface only when asked for in so many words).
 
 :class:`Sender` writes lines to ``udp://`` (one datagram per call) or ``tcp://`` (a connection).
@@ -12,8 +14,10 @@ The host must be given (``0.0.0.0`` binds every interface only when asked for in
 
 from __future__ import annotations
 
+import queue
 import select
 import socket
+import threading
 import time
 from urllib.parse import urlsplit
 
@@ -21,7 +25,8 @@ from shipid.errors import InputError
 
 MAX_DATAGRAM = 2048
 MAX_LINE = 512
-MAX_RATE = 20000.0           # datagrams or lines per second before the rest of the second is dropped
+MAX_RATE = 20000.0
+MAX_QUEUE = 1_000_000        # datagrams / reads waiting for the monitor before the newest are dropped           # datagrams or lines per second before the rest of the second is dropped
 
 
 def parse_url(url: str) -> tuple[str, str, int]:
@@ -42,11 +47,11 @@ class Listener:
     """Bind ``url`` and read lines from it (see the module docstring). Use as a context manager."""
 
     def __init__(self, url: str, *, max_datagram: int = MAX_DATAGRAM, max_line: int = MAX_LINE,
-                 max_rate: float = MAX_RATE):
+                 max_rate: float = MAX_RATE, max_queue: int = MAX_QUEUE):
         self.scheme, host, port = parse_url(url)
         self.max_datagram, self.max_line, self.max_rate = max_datagram, max_line, max_rate
         self.counts = {"datagrams": 0, "lines": 0, "oversized": 0, "not_text": 0, "flood": 0, "empty": 0,
-                       "connections": 0}
+                       "overflow": 0, "connections": 0}
         fam = socket.AF_INET6 if ":" in host else socket.AF_INET
         kind = socket.SOCK_DGRAM if self.scheme == "udp" else socket.SOCK_STREAM
         self.sock = socket.socket(fam, kind)
@@ -65,6 +70,10 @@ class Listener:
         self._buf = b""
         self._skip = False          # discarding the rest of an oversized TCP line
         self._sec, self._in_sec = -1, 0
+        self.max_queue = max_queue
+        self._q: queue.Queue = queue.Queue()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
 
     def __enter__(self):
         return self
@@ -73,6 +82,9 @@ class Listener:
         self.close()
 
     def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
         for s in (self.client, self.sock):
             if s is not None:
                 s.close()
@@ -96,23 +108,60 @@ class Listener:
             return None
         return [ln for ln in text.replace("\r", "\n").split("\n") if ln.strip()]
 
+    def _reader(self) -> None:
+        """The socket read in a thread of its own, so that a long computation never leaves datagrams to the
+        kernel's buffer: what arrives goes to a queue (at most ``max_queue``; beyond, counted as overflow)."""
+        while not self._stop.is_set():
+            try:
+                socks = [self.sock] if self.client is None else [self.client]
+                ready, _, _ = select.select(socks, [], [], 0.1)
+                if not ready:
+                    continue
+                now = time.time()
+                if self.scheme == "udp":
+                    self._put((self.sock.recv(65536), now))
+                    continue
+                if self.client is None:
+                    self.client, _ = self.sock.accept()
+                    self.counts["connections"] += 1
+                    continue
+                try:
+                    data = self.client.recv(65536)
+                except OSError:
+                    data = b""
+                if not data:
+                    self.client.close()
+                    self.client = None
+                    self._put((None, now))      # end of this connection: a partial line is dropped
+                    continue
+                self._put((data, now))
+            except (OSError, ValueError):       # the socket was closed under us
+                return
+
+    def _put(self, item) -> None:
+        if self._q.qsize() >= self.max_queue:
+            self.counts["overflow"] += 1
+            return
+        self._q.put(item)
+
     def lines(self, idle_timeout: float | None = None, poll: float = 0.2):
         """Yield ``(line, receive_time, unit)``, ``unit`` the number of the datagram (UDP) or line (TCP) it came
         in; end after ``idle_timeout`` s without data (never, when None). ``(None, now, None)`` is yielded every
         ``poll`` s of silence (a chance to act on a timer)."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._reader, name="shipid-listener", daemon=True)
+            self._thread.start()
         last = time.monotonic()
         while True:
-            socks = [self.sock] if self.client is None else [self.client]
-            ready, _, _ = select.select(socks, [], [], poll)
-            now = time.time()
-            if not ready:
+            try:
+                data, now = self._q.get(timeout=poll)
+            except queue.Empty:
                 if idle_timeout is not None and time.monotonic() - last > idle_timeout:
                     return
-                yield None, now, None
+                yield None, time.time(), None
                 continue
             last = time.monotonic()
             if self.scheme == "udp":
-                data = self.sock.recv(65536)
                 self.counts["datagrams"] += 1
                 if len(data) > self.max_datagram:
                     self.counts["oversized"] += 1
@@ -126,18 +175,8 @@ class Listener:
                     self.counts["lines"] += 1
                     yield ln, now, self.counts["datagrams"]
                 continue
-            if self.client is None:
-                self.client, _ = self.sock.accept()
-                self.counts["connections"] += 1
+            if data is None:
                 self._buf, self._skip = b"", False
-                continue
-            try:
-                data = self.client.recv(65536)
-            except OSError:
-                data = b""
-            if not data:
-                self.client.close()
-                self.client = None
                 continue
             self._buf += data
             while True:
@@ -151,12 +190,12 @@ class Listener:
                 if self._skip:
                     self._skip = False
                     continue
+                self.counts["datagrams"] += 1
                 if len(raw) > self.max_line:
                     self.counts["oversized"] += 1
                     continue
                 if not self._rate_ok(now):
                     continue
-                self.counts["datagrams"] += 1
                 for ln in self._text(raw) or ():
                     self.counts["lines"] += 1
                     yield ln, now, self.counts["datagrams"]

@@ -8,7 +8,7 @@ directly give the same estimates. The faults and what is done:
 
 * **repeated sample** (a time already received): dropped, counted;
 * **out-of-order sample**: put back in order if it is at most ``reorder`` seconds late, else dropped and
-  counted (late); repeated and late samples are said as one summary line per ``every`` seconds of stream;
+  counted (late); repeated and late samples are said as one summary line per ``summary`` seconds of stream;
 * **clock jump**: the time tag jumps by more than ``bridge`` seconds (forward, or back beyond the reorder
   horizon) while every checked channel continues the signal (the step to the new sample within
   ``continuity`` standard deviations of the channel's sample-to-sample change): the time is re-based so
@@ -59,7 +59,9 @@ class FaultOptions:
     continuity : float
         A time jump is a clock jump when every checked channel's step is within this many standard deviations.
     every : float
-        Period of the summaries and of the "cannot estimate" lines (s).
+        Period of the "cannot estimate" lines (s).
+    summary : float
+        Repeated and late samples are said in one line per this many seconds of stream (s).
     """
 
     bridge: float = 1.0
@@ -68,6 +70,7 @@ class FaultOptions:
     spike: float = 12.0
     continuity: float = 4.0
     every: float = 10.0
+    summary: float = 60.0
 
 
 class Conditioner:
@@ -150,8 +153,8 @@ class Conditioner:
             self._summ["late"] += 1
             return
         self.seen.append(k)
-        exact = self.offset == 0.0 and abs(ta - self.base - k * self.T) <= 0.25 * self.T
-        self.buf[k] = (t if exact else self.base + k * self.T, vals)
+        on_grid = abs(ta - self.base - k * self.T) <= 0.25 * self.T
+        self.buf[k] = (ta if on_grid else self.base + k * self.T, vals)
         if k > self.max_k:
             self.max_k, self.last_vals = k, vals
         elif k == self.max_k:
@@ -272,6 +275,7 @@ class Conditioner:
 
     def _open_break(self, t: float, c: int) -> None:
         self.bad_since = t
+        self.hist.clear()               # no spike check or bridge against samples from before the break
         self.bad_what = f"channel {CHANNELS[c]}" + (" (frozen)" if self.frozen_on[c] else "")
         self.next_tick = t + self.o.every
         self.warnings.append(f"t = {t:.6g} s: {self.bad_what} missing for more than {self.o.bridge:g} s; "
@@ -291,13 +295,13 @@ class Conditioner:
 
     def _summary(self, t: float) -> None:
         if self._summ_t is None:
-            self._summ_t = t + self.o.every
+            self._summ_t = t + self.o.summary
         if t < self._summ_t:
             return
-        self._summ_t = t + self.o.every
+        self._summ_t = t + self.o.summary
         if self._summ["repeated"] or self._summ["late"]:
             self.warnings.append(f"t = {t:.6g} s: {self._summ['repeated']} repeated and {self._summ['late']} "
-                                 f"late samples dropped in the last {self.o.every:g} s")
+                                 f"late samples dropped in the last {self.o.summary:g} s")
             self._summ = {"repeated": 0, "late": 0}
 
     def _drain_all(self) -> None:
@@ -309,6 +313,9 @@ class Conditioner:
         for j in sorted(self.buf):
             self._stage2(j, *self.buf.pop(j))
         self._drain_all()
+        if self._summ["repeated"] or self._summ["late"]:
+            self._summ_t = -math.inf
+            self._summary(self.base + (self.next_k - 1) * self.T if self.base is not None else 0.0)
 
     def take(self) -> tuple[list, list[str], list[tuple[float, str]]]:
         """What was produced since the last call: items, warning lines, "cannot estimate" lines."""
