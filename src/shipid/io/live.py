@@ -4,9 +4,10 @@
 text line that arrives: a UDP datagram may hold several lines; a TCP stream is split at newlines (one client
 at a time; when it closes, the next is accepted). What cannot be used is counted in :attr:`Listener.counts`
 and dropped, never raised: a datagram longer than ``max_datagram`` bytes, a TCP line longer than
-``max_line``, bytes that are not ASCII, datagrams / lines beyond ``max_rate`` per second (a flood), and
-what arrives while ``max_queue`` reads already wait (the socket is read by a thread of its own, so a long
-update never leaves datagrams to overflow the kernel's buffer).
+``max_line``, bytes that are not ASCII, UDP datagrams beyond ``max_rate`` per second (a flood), and
+datagrams that arrive while ``max_queue`` already wait (the socket is read by a thread of its own, so a long
+update never leaves datagrams to overflow the kernel's buffer). A TCP sender is slowed down instead (the
+reader waits for room in the queue, and TCP's flow control does the rest).
 The host must be given (``0.0.0.0`` binds every interface only when asked for in so many words).
 
 :class:`Sender` writes lines to ``udp://`` (one datagram per call) or ``tcp://`` (a connection).
@@ -26,7 +27,7 @@ from shipid.errors import InputError
 MAX_DATAGRAM = 2048
 MAX_LINE = 512
 MAX_RATE = 20000.0
-MAX_QUEUE = 1_000_000        # datagrams / reads waiting for the monitor before the newest are dropped           # datagrams or lines per second before the rest of the second is dropped
+MAX_QUEUE = 100_000          # reads waiting for the monitor (UDP: the newest beyond are dropped; TCP: waits)
 
 
 def parse_url(url: str) -> tuple[str, str, int]:
@@ -71,7 +72,7 @@ class Listener:
         self._skip = False          # discarding the rest of an oversized TCP line
         self._sec, self._in_sec = -1, 0
         self.max_queue = max_queue
-        self._q: queue.Queue = queue.Queue()
+        self._q: queue.Queue = queue.Queue(maxsize=max_queue)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -139,24 +140,32 @@ class Listener:
                 return
 
     def _put(self, item) -> None:
-        if self._q.qsize() >= self.max_queue:
-            self.counts["overflow"] += 1
+        if self.scheme == "tcp":            # back-pressure: TCP's flow control slows the sender down
+            while not self._stop.is_set():
+                try:
+                    self._q.put(item, timeout=0.2)
+                    return
+                except queue.Full:
+                    continue
             return
-        self._q.put(item)
+        try:
+            self._q.put_nowait(item)
+        except queue.Full:
+            self.counts["overflow"] += 1
 
     def lines(self, idle_timeout: float | None = None, poll: float = 0.2):
         """Yield ``(line, receive_time, unit)``, ``unit`` the number of the datagram (UDP) or line (TCP) it came
-        in; end after ``idle_timeout`` s without data (never, when None). ``(None, now, None)`` is yielded every
-        ``poll`` s of silence (a chance to act on a timer)."""
+        in; end after ``idle_timeout`` s without data once data have come (never, when None). ``(None, now,
+        None)`` is yielded every ``poll`` s of silence (a chance to act on a timer)."""
         if self._thread is None:
             self._thread = threading.Thread(target=self._reader, name="shipid-listener", daemon=True)
             self._thread.start()
-        last = time.monotonic()
+        last = None
         while True:
             try:
                 data, now = self._q.get(timeout=poll)
             except queue.Empty:
-                if idle_timeout is not None and time.monotonic() - last > idle_timeout:
+                if idle_timeout is not None and last is not None and time.monotonic() - last > idle_timeout:
                     return
                 yield None, time.time(), None
                 continue
@@ -193,8 +202,6 @@ class Listener:
                 self.counts["datagrams"] += 1
                 if len(raw) > self.max_line:
                     self.counts["oversized"] += 1
-                    continue
-                if not self._rate_ok(now):
                     continue
                 for ln in self._text(raw) or ():
                     self.counts["lines"] += 1

@@ -19,7 +19,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import out_options, refuse_existing, strict_option, warn
+from shipid.cli._common import refuse_existing, strict_option, warn
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -149,11 +149,14 @@ def live_panel(u, nominal_label: str):
                    "(shipid.methods.monitor.bj_prefilter) [default: MonitorOptions().masscm.noise_model].")
 @click.option("--json", "--jsonl", "as_json", is_flag=True,
               help="One JSON line per update on stdout (the default when stdout is not a terminal).")
-@out_options(json_flag=False, out_help="Also write each JSON line to FILE as it is produced (an existing FILE "
-                                       "needs --force, unless --state resumes it).")
+@click.option("-o", "--out", "out", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Also write each JSON line to FILE as it is produced (an existing FILE needs --force, unless "
+                   "--state resumes it).")
+@click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
 @click.option("--follow", is_flag=True, help="Keep reading a CSV file that is still being written (as tail -f).")
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
-              help="With --follow or --listen: stop after this many seconds without new data [default: never].")
+              help="With --follow or --listen: stop after this many seconds without new data (with --listen: once "
+                   "data have come) [default: never].")
 @strict_option
 def monitor_mass_cm(nominal, calibration, known_path, stream, listen, state_path, emit_url, window, every, init_s,
                     threshold, noise_model, as_json, out, force, follow, idle_timeout):
@@ -306,7 +309,7 @@ def _listen(url: str, push, idle_timeout, every: float) -> None:
             pass
         c = lst.counts
         bad = stats.bad_total(c)
-        text = (f"{url}: {c['datagrams']} {'datagrams' if lst.scheme == 'udp' else 'lines'} received, "
+        text = (f"{lst.scheme}://{lst.address[0]}:{lst.address[1]}: {c['datagrams']} {'datagrams' if lst.scheme == 'udp' else 'lines'} received, "
                 f"{bad} bad and dropped ({stats.bad_lines} unparsable lines, {c['not_text']} not text, "
                 f"{c['empty']} empty, {c['oversized']} oversized, {c['flood']} over the rate limit), "
                 f"{stats.samples} samples, {getattr(stats, 'incomplete', 0)} incomplete, {c['overflow']} lost to a "
