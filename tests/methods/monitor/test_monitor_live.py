@@ -123,3 +123,24 @@ def test_listen_refuses_an_address_without_host(stream300, tmp_path):
     assert r.returncode == 2 and "give the host and the port" in r.stderr
     r = run(*monitor_args(stream300, "--listen", "udp://127.0.0.1:1", "--stream", "x.csv"))
     assert r.returncode == 2 and "give one of --stream" in r.stderr
+
+
+def test_emit_sends_estimates_and_the_alarm_as_nmea(stream300, tmp_path, capsys):
+    from shipid.cli import main
+    from shipid.io.live import Listener
+    from shipid.io.nmea_live import checksum
+
+    d = stream300
+    with Listener("udp://127.0.0.1:0") as lst:
+        url = f"udp://127.0.0.1:{lst.address[1]}"
+        assert main(monitor_args(d, "--stream", str(d / "s.csv"), "--emit", url)) == 0
+        got = [x[0] for x in lst.lines(idle_timeout=0.5) if x[0] is not None]
+    capsys.readouterr()
+    xdr = [g for g in got if g.startswith("$SIXDR")]
+    alr = [g for g in got if g.startswith("$SIALR")]
+    assert len(xdr) == 30 - 11 and len(alr) == 1 and "LOAD CHANGED AT T=200 S" in alr[0]   # estimates from 120 s
+    for g in got:
+        body, cs = g[1:].split("*")
+        assert checksum(body) == cs
+    ref = [json.loads(x) for x in _lines(d / "ref.jsonl") if json.loads(x)["m"] is not None]
+    assert [float(x.split(",")[2]) for x in xdr] == [float(f"{r['m']:.6g}") for r in ref]

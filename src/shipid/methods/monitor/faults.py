@@ -105,6 +105,7 @@ class Conditioner:
                        "nan": 0, "frozen": 0, "spikes": 0, "breaks": 0}
         self._summ = {"repeated": 0, "late": 0}
         self._summ_t: float | None = None
+        self._summ_from = 0.0
 
     # ------------------------------------------------------------------ stage 1: time, order, repeats
     def _sd(self, c: int) -> float | None:
@@ -295,14 +296,15 @@ class Conditioner:
 
     def _summary(self, t: float) -> None:
         if self._summ_t is None:
-            self._summ_t = t + self.o.summary
+            self._summ_t, self._summ_from = t + self.o.summary, t
         if t < self._summ_t:
             return
         self._summ_t = t + self.o.summary
         if self._summ["repeated"] or self._summ["late"]:
             self.warnings.append(f"t = {t:.6g} s: {self._summ['repeated']} repeated and {self._summ['late']} "
-                                 f"late samples dropped in the last {self.o.summary:g} s")
+                                 f"late samples dropped since t = {self._summ_from:.6g} s")
             self._summ = {"repeated": 0, "late": 0}
+        self._summ_from = t
 
     def _drain_all(self) -> None:
         while self.q:
