@@ -74,3 +74,22 @@ def test_a_finished_state_resumes_to_nothing_new(stream300, tmp_path, capsys):
     assert main(args) == 0
     assert capsys.readouterr().out == "" and _lines(out) == first == _lines(d / "ref.jsonl")
     assert json.loads(first[-1])["t"] == 300.0
+
+
+def test_state_file_runs_no_foreign_code(tmp_path):
+    """The state is a pickle read by a restricted unpickler: only numpy arrays, deques and shipid classes."""
+    import os
+    import pickle
+
+    from shipid.errors import InputError
+    from shipid.methods.monitor.session import load_state
+
+    class Evil:
+        def __reduce__(self):
+            return (os.system, ("touch " + str(tmp_path / "pwned"),))
+
+    p = tmp_path / "evil.bin"
+    p.write_bytes(pickle.dumps({"version": 1, "fingerprint": "x", "session": Evil()}))
+    with pytest.raises(InputError, match="not a readable monitor state"):
+        load_state(str(p), "x")
+    assert not (tmp_path / "pwned").exists()

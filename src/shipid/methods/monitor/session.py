@@ -52,6 +52,7 @@ class MonitorSession:
 
     def __init__(self, monitor: MassCMMonitor, faults: FaultOptions = FaultOptions(), fingerprint: str = ""):
         self.mon = monitor
+        monitor.keep_updates = False             # the session hands the updates out; the monitor keeps none
         self.cond = Conditioner(monitor.T, replace(faults, every=monitor.opt.every))
         self.fingerprint = fingerprint
         self.t_pushed: float | None = None       # time of the last sample pushed (a resumed file skips to it)
@@ -143,11 +144,19 @@ def save_state(session: MonitorSession, path: str) -> None:
 
 
 class _Restricted(pickle.Unpickler):
-    _OK = ("numpy", "collections", "shipid.")
+    """Only what a session holds: numpy arrays and scalars, deques, builtin containers, shipid classes."""
+
+    _NUMPY = ("_reconstruct", "ndarray", "dtype", "scalar", "_frombuffer")
 
     def find_class(self, module, name):
-        if module.startswith(self._OK) or (module == "builtins" and name in ("complex", "slice", "frozenset", "set")):
+        top = module.split(".")[0]
+        if (top == "numpy" and name in self._NUMPY) or (module == "collections" and name == "deque") \
+                or (module == "builtins" and name in ("complex", "slice", "frozenset", "set")):
             return super().find_class(module, name)
+        if top == "shipid":
+            obj = super().find_class(module, name)
+            if isinstance(obj, type):
+                return obj
         raise pickle.UnpicklingError(f"{module}.{name} is not allowed in a monitor state file")
 
 
