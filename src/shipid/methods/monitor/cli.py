@@ -164,9 +164,10 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, listen, state_path
 
     Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
     "rho_std", "converged", "alarm", "change_at", ...} (shipid.methods.monitor.estimator). Channels as for
-    `shipid identify mass-cm`: t, p, a_s, r, delta. Sensor faults (gaps, NaN, repeated or late samples,
-    clock jumps, frozen channels, spikes) are one warning line each and survived
-    (shipid.methods.monitor.faults); while a channel stays bad the update says it cannot estimate.
+    `shipid identify mass-cm`: t, p, a_s, r, delta. Sensor faults in the samples that arrive (gaps, NaN,
+    repeated or late samples, clock jumps, frozen channels, spikes) are one warning line each and survived
+    (shipid.methods.monitor.faults); while a channel stays bad the update says it cannot estimate. A file or
+    standard input is read as a trial first (a NaN or a gap there is an error, as for every trial).
     Example: shipid simulate fishing-vessel mass-cm-stream --change-at 900 --to 0.7,-0.14 --out s.csv;
     shipid monitor mass-cm --nominal s.nominal.csv --calibration s.calibration.csv --known s.known.toml
     --stream s.csv -o run.jsonl
