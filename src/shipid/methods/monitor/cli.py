@@ -180,6 +180,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, listen, state_path
     from shipid.methods.monitor.estimator import MassCMMonitor, MonitorOptions
     from shipid.methods.monitor.session import MonitorSession, fingerprint, load_state, save_state
 
+    if out and not (state_path is not None and os.path.exists(state_path)):
+        refuse_existing(out, force=force)        # before any work; a resumed run goes on with its FILE
     if (stream is None) == (listen is None):
         raise InputError("give one of --stream FILE|- and --listen udp://HOST:PORT|tcp://HOST:PORT")
     if listen is not None and follow:
@@ -198,8 +200,6 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, listen, state_path
         session = load_state(state_path, fp)
         click.echo(f"shipid: resumed from {state_path} at t = {session.t_pushed} s "
                    f"({session.n_updates} updates; the start-up is not run again)", err=True)
-    if out and session is None and os.path.exists(out) and not force:
-        refuse_existing(out, force=force)
     if session is None:
         nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm")
         cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm")
