@@ -313,7 +313,7 @@ def _listen(url: str, push, idle_timeout, every: float) -> None:
         text = (f"{lst.scheme}://{lst.address[0]}:{lst.address[1]}: {c['datagrams']} {'datagrams' if lst.scheme == 'udp' else 'lines'} received, "
                 f"{bad} bad and dropped ({stats.bad_lines} unparsable lines, {c['not_text']} not text, "
                 f"{c['empty']} empty, {c['oversized']} oversized, {c['flood']} over the rate limit), "
-                f"{stats.samples} samples, {getattr(stats, 'incomplete', 0)} incomplete, {c['overflow']} lost to a "
+                f"{stats.samples} samples, {stats.incomplete} incomplete, {c['overflow']} lost to a "
                 "full queue")
         if bad or c["overflow"]:
             warn(text)

@@ -27,6 +27,7 @@ class FeedStats:
     bad_kinds: dict = field(default_factory=dict)
     bad_units: set = field(default_factory=set)     # datagram numbers (UDP) / line numbers (TCP) with a bad line
     samples: int = 0
+    incomplete: int = 0                             # samples passed on with a channel lost
 
     def bad_total(self, listener_counts: dict) -> int:
         """Bad datagrams (UDP) or lines (TCP): unparsable, not text, empty, oversized or flooding."""
