@@ -4,6 +4,7 @@ import math
 import socket
 import time
 
+import numpy as np
 import pytest
 
 from shipid.errors import InputError
@@ -152,3 +153,26 @@ def test_sender_udp_and_flood_limit():
         got = [x for x in lst.lines(idle_timeout=0.5) if x[0] is not None]
     c = lst.counts
     assert c["datagrams"] == 120 and c["flood"] + len(got) == 120 and c["flood"] >= 120 - 2 * 50
+
+
+def test_live_samples_untagged_use_receive_time_and_bad_lines_are_said():
+    from shipid.methods.monitor.sources import FeedStats, live_samples
+
+    said = []
+    stats = FeedStats()
+    with Listener("udp://127.0.0.1:0") as lst:
+        with Sender(f"udp://127.0.0.1:{lst.address[1]}") as snd:
+            snd.send([_s("HEROT,60.0,A"), _s("IIRSA,2.0,A,,")])
+            for i in range(8):
+                snd.send([_s(f"IIXDR,G,{0.01 * i!r},R,ROLLRATE,G,0.5,M,ACCY")])
+            for i in range(7):
+                snd.send([f"$IIXDR,G,0.1,R,ROLLRATE*{i:02d}"])          # bad checksums
+        t0 = time.time()
+        chunks = list(live_samples(lst, stats, said.append, idle_timeout=0.5, say_first=3))
+    t = np.concatenate([c[0] for c in chunks])
+    p = np.concatenate([c[1] for c in chunks])
+    r = np.concatenate([c[3] for c in chunks])
+    assert p.tolist() == [0.01 * i for i in range(8)] and np.all(r == math.radians(1.0))
+    assert np.all(np.abs(t - t0) < 5.0) and np.all(np.diff(t) >= 0)     # receive times (s since the epoch)
+    assert stats.bad_lines == 7 and stats.bad_total(lst.counts) == 7 and stats.samples == 8
+    assert len(said) == 4 and said[-1].endswith("4 more bad sentences dropped (7 in all)")
