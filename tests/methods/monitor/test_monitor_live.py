@@ -97,9 +97,9 @@ def _fuzz(d, tmp_path, n_bad, seed, speed=25.0):
             tx.sendto(bad, ("127.0.0.1", port))
             j += 1
         tx.sendto(good, ("127.0.0.1", port))
-        due = start + (float(tr.t[i]) - float(tr.t[0])) / speed
-        if due > time.monotonic():
-            time.sleep(due - time.monotonic())
+        wait = start + (float(tr.t[i]) - float(tr.t[0])) / speed - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
     tx.close()
     err = _finish(proc)
     m = re.search(rf"{re.escape(url)}: (\d+) datagrams received, (\d+) bad and dropped", err)
