@@ -43,7 +43,6 @@ def test_monitor_file_and_stdin_agree(stream, capsys, monkeypatch):
     alarms = [x for x in lines if x["alarm"]]
     assert len(alarms) == 1 and 250 < alarms[0]["t"] <= 370
     assert "alarm at t =" in cap.err
-    (stream / "run.jsonl").write_text(cap.out)
     monkeypatch.setattr(sys, "stdin", io.StringIO((stream / "s.csv").read_text()))
     out = stream / "stdin-run.jsonl"
     rc = main(_args(stream, "--stream", "-", "--json", "-o", str(out)))
@@ -56,11 +55,12 @@ def test_monitor_file_and_stdin_agree(stream, capsys, monkeypatch):
     assert out.read_text(encoding="utf-8") == printed
 
 
-def test_report_of_a_run(stream, capsys):
-    if not (stream / "run.jsonl").exists():
-        pytest.skip("needs test_monitor_file_and_stdin_agree")
-    out = stream / "r.html"
-    rc = main(["report", str(stream / "run.jsonl"), "--out", str(out), "--truth", str(stream / "s.truth.json")])
+def test_report_of_a_run(stream, capsys, tmp_path):
+    run = tmp_path / "run.jsonl"                 # its own run: no dependence on another test's files
+    assert main(_args(stream, "--stream", str(stream / "s.csv"), "-o", str(run))) == 0
+    capsys.readouterr()
+    out = tmp_path / "r.html"
+    rc = main(["report", str(run), "--out", str(out), "--truth", str(stream / "s.truth.json")])
     assert rc == 0
     page = out.read_text()
     assert "data:image/png;base64," in page and "detection delay" in page

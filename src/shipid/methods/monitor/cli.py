@@ -1,8 +1,10 @@
 """``shipid monitor mass-cm``: online mass / centre-of-mass monitoring of a loaded-condition stream (seed 000).
 
-A thin loop over :class:`shipid.methods.monitor.estimator.MassCMMonitor`: read the stream in chunks, feed them,
-print each update (one JSON line, or a live panel on a terminal); ``-o/--out FILE`` also writes the JSON lines
-of the whole run to FILE (atomically, when the stream ends), the input of ``shipid report``.
+A thin loop over :class:`shipid.methods.monitor.session.MonitorSession` (sensor faults handled, then
+:class:`shipid.methods.monitor.estimator.MassCMMonitor`): read the stream (a file, standard input, a growing
+file, or a live NMEA feed on a socket) in chunks, feed them, print each update (one JSON line, or a live
+panel on a terminal); ``-o/--out FILE`` also writes each JSON line to FILE as it is produced (the input of
+``shipid report``); ``--state FILE`` saves the session after every update and resumes from it.
 """
 
 from __future__ import annotations
@@ -17,8 +19,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import emit as emit_out
-from shipid.cli._common import channels_option, out_options, strict_option, warn
+from shipid.cli._common import channels_option, refuse_existing, strict_option, warn
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -123,9 +124,18 @@ def live_panel(u, nominal_label: str):
               help="Calibration trial (known extra m_c at zc_bar, recorded once).")
 @click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False),
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g and z_f (required here).")
-@click.option("--stream", required=True, type=str,
+@click.option("--stream", type=str, default=None,
               help="Loaded-condition stream: a trial file, '-' for standard input (CSV), or with --follow a "
-                   "CSV file still being written.")
+                   "CSV file still being written. Or --listen.")
+@click.option("--listen", type=str, default=None,
+              help="Read a live NMEA 0183 feed instead: udp://HOST:PORT or tcp://HOST:PORT (binds only that "
+                   "address). Sentences: XDR (roll rate, acceleration), ROT or XDR (yaw rate), RSA or XDR "
+                   "(rudder), VectorNav $VNYMR; tag-block times, else the receive time (shipid.io.nmea_live).")
+@click.option("--state", "state_path", type=click.Path(dir_okay=False), default=None,
+              help="Save the monitor's state to FILE after every update (atomically) and, when FILE exists, "
+                   "resume from it: the start-up is not run again, and -o FILE goes on from the saved update.")
+@click.option("--emit", "emit_url", type=str, default=None,
+              help="Also send each update as NMEA sentences (XDR estimates, ALR on an alarm) to udp://HOST:PORT.")
 @channels_option
 @click.option("--window", type=click.FloatRange(min=30), default=300.0, show_default=True,
               help="Sliding window of the loaded-stream moments (s).")
@@ -140,30 +150,43 @@ def live_panel(u, nominal_label: str):
                    "(shipid.methods.monitor.bj_prefilter) [default: MonitorOptions().masscm.noise_model].")
 @click.option("--json", "--jsonl", "as_json", is_flag=True,
               help="One JSON line per update on stdout (the default when stdout is not a terminal).")
-@out_options(json_flag=False, out_help="Also write the JSON lines of the run to FILE (atomically, when the stream "
-                                       "ends; an existing FILE needs --force).")
+@click.option("-o", "--out", "out", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Also write each JSON line to FILE as it is produced (an existing FILE needs --force, unless "
+                   "--state resumes it).")
+@click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
 @click.option("--follow", is_flag=True, help="Keep reading a CSV file that is still being written (as tail -f).")
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
-              help="With --follow: stop after this many seconds without new data [default: never].")
+              help="With --follow or --listen: stop after this many seconds without new data (with --listen: once "
+                   "data have come) [default: never].")
 @strict_option
-def monitor_mass_cm(nominal, calibration, known_path, stream, channels, window, every, init_s, threshold, noise_model, as_json,
-                    out, force, follow, idle_timeout):
+def monitor_mass_cm(nominal, calibration, known_path, stream, channels, listen, state_path, emit_url, window, every,
+                    init_s, threshold, noise_model, as_json, out, force, follow, idle_timeout):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
 
     Every EVERY seconds of stream time one update: {"t", "m", "m_std", "zm_bar", "zm_bar_std", "rho",
     "rho_std", "converged", "alarm", "change_at", ...} (shipid.methods.monitor.estimator). Channels as for
-    `shipid identify mass-cm`: t, p, a_s, r, delta.
+    `shipid identify mass-cm`: t, p, a_s, r, delta. Sensor faults in the samples that arrive (gaps, NaN,
+    repeated or late samples, clock jumps, frozen channels, spikes) are one warning line each and survived
+    (shipid.methods.monitor.faults); while a channel stays bad the update says it cannot estimate. A file or
+    standard input is read as a trial first (a NaN or a gap there is an error, as for every trial).
     Example: shipid simulate fishing-vessel mass-cm-stream --change-at 900 --to 0.7,-0.14 --out s.csv;
     shipid monitor mass-cm --nominal s.nominal.csv --calibration s.calibration.csv --known s.known.toml
     --stream s.csv -o run.jsonl
     """
     from dataclasses import replace
 
-    from shipid.methods.masscm.cli import read_known
     from shipid.io.files import read_trial
+    from shipid.methods.masscm.cli import read_known
     from shipid.methods.masscm.estimator import REQUIRED
     from shipid.methods.monitor.estimator import MassCMMonitor, MonitorOptions
+    from shipid.methods.monitor.session import MonitorSession, fingerprint, load_state, save_state
 
+    if out and not (state_path is not None and os.path.exists(state_path)):
+        refuse_existing(out, force=force)        # before any work; a resumed run goes on with its FILE
+    if (stream is None) == (listen is None):
+        raise InputError("give one of --stream FILE|- and --listen udp://HOST:PORT|tcp://HOST:PORT")
+    if listen is not None and follow:
+        raise InputError("--follow reads a file; it does not go with --listen")
     kn = read_known(known_path)
     if kn["z_f"] is None:
         raise InputError("z_f is required for monitoring (m is not identifiable without it)", file=known_path)
@@ -172,43 +195,82 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, channels, window, 
         opts = replace(opts, threshold=threshold)
     if noise_model is not None:
         opts = replace(opts, masscm=replace(opts.masscm, noise_model=noise_model))
-    nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
-    cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
-    mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)
-    mon.keep_updates = False
+    fp = fingerprint(nominal, calibration, known_path, opts)
+    session = None
+    if state_path is not None and os.path.exists(state_path):
+        session = load_state(state_path, fp)
+        click.echo(f"shipid: resumed from {state_path} at t = {session.t_pushed} s "
+                   f"({session.n_updates} updates; the start-up is not run again)", err=True)
+    if session is None:
+        nom = read_trial(nominal, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
+        cal = read_trial(calibration, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
+        mon = MassCMMonitor(nom, cal, kn["known"], kn["z_f"], opts)
+        mon.keep_updates = False
+        session = MonitorSession(mon, fingerprint=fp)
+    T = session.mon.T
     live = None
-    lines: list[str] | None = [] if out else None
+    out_fh = None
+    if out:
+        out_fh = open(out, "r+b" if os.path.exists(out) and session.n_updates else "wb")
+        out_fh.truncate(session.out_bytes)
+        out_fh.seek(session.out_bytes)
+    emitter = None
+    if emit_url is not None:
+        from shipid.io.live import Sender, parse_url
+        if parse_url(emit_url)[0] != "udp":
+            raise InputError(f"'{emit_url}': --emit sends to udp://HOST:PORT")
+        emitter = Sender(emit_url)
     as_json = as_json or not sys.stdout.isatty()
     if not as_json:
         from rich.live import Live
         live = Live(refresh_per_second=4)
         live.start()
+    skip_to = session.t_pushed if listen is None else None     # a re-read file: skip what was pushed
 
-    def emit(updates):
-        for u in updates:
+    def handle(result):
+        ups, warns = result
+        for w in warns:
+            warn(w)
+        for u in ups:
             for w in u.warnings:        # one line each, counted for --strict (global or this command's)
                 warn(w)
             if u.alarm:
                 click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
-                           f"detector T = {u.statistic:.3g} > {opts.threshold:g})", err=True)
-            line = json.dumps(u.to_json())
-            if lines is not None:
-                lines.append(line)
+                           f"detector T = {u.statistic:.3g} > {session.mon.opt.threshold:g})", err=True)
+            j = u.to_json()
+            line = json.dumps(j)
+            if out_fh is not None:
+                out_fh.write((line + "\n").encode("utf-8"))
+                out_fh.flush()
+            if emitter is not None:
+                emitter.send(nmea_estimates(j))
             if live is not None:
                 live.update(live_panel(u, Path(nominal).name))
             else:
                 click.echo(line)
                 sys.stdout.flush()
+        if ups and state_path is not None:
+            session.out_bytes = out_fh.tell() if out_fh is not None else 0
+            save_state(session, state_path)
+
+    def push(t, p, a_s, r, delta):
+        if skip_to is not None:
+            keep = t > skip_to + 0.5 * T
+            t, p, a_s, r, delta = t[keep], p[keep], a_s[keep], r[keep], delta[keep]
+        if t.size:
+            handle(session.push(t, p, a_s, r, delta))
 
     try:
-        chunk_lines = max(1, int(round(every / mon.T)))
-        if stream == "-" or follow:
+        chunk_lines = max(1, int(round(every / T)))
+        if listen is not None:
+            _listen(listen, push, idle_timeout, every)
+        elif stream == "-" or follow:
             fh = sys.stdin if stream == "-" else open(stream, encoding="utf-8", newline="")
             try:
                 label = "stdin" if stream == "-" else stream
                 hdr = _header(fh, label)
                 for tr in _csv_chunks(fh, hdr, label, chunk_lines, follow, 0.2, idle_timeout, channels):
-                    emit(mon.feed(tr.t, tr["p"], tr["a_s"], tr["r"], tr["delta"]))
+                    push(tr.t, tr["p"], tr["a_s"], tr["r"], tr["delta"])
             finally:
                 if fh is not sys.stdin:
                     fh.close()
@@ -218,9 +280,43 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, channels, window, 
             tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
             for a in range(0, len(tr.t), chunk_lines):
                 s = slice(a, a + chunk_lines)
-                emit(mon.feed(tr.t[s], tr["p"][s], tr["a_s"][s], tr["r"][s], tr["delta"][s]))
+                push(tr.t[s], tr["p"][s], tr["a_s"][s], tr["r"][s], tr["delta"][s])
+        handle(session.finish())
     finally:
         if live is not None:
             live.stop()
-    if lines is not None:
-        emit_out("".join(f"{ln}\n" for ln in lines), as_json=False, out=out, force=force)
+        if out_fh is not None:
+            out_fh.close()
+        if emitter is not None:
+            emitter.close()
+
+
+def nmea_estimates(j: dict) -> list[str]:
+    from shipid.io.nmea_live import estimate_sentences
+    return estimate_sentences(j)
+
+
+def _listen(url: str, push, idle_timeout, every: float) -> None:
+    """Read the live feed at ``url`` until ``idle_timeout`` s of silence (or for ever); say what was dropped."""
+    from shipid.io.live import Listener
+    from shipid.methods.monitor.sources import FeedStats, live_samples
+
+    stats = FeedStats()
+    with Listener(url) as lst:
+        click.echo(f"shipid: listening on {lst.scheme}://{lst.address[0]}:{lst.address[1]}", err=True)
+        try:
+            for chunk in live_samples(lst, stats, warn, idle_timeout=idle_timeout, every=every):
+                push(*chunk)
+        except KeyboardInterrupt:
+            pass
+        c = lst.counts
+        bad = stats.bad_total(c)
+        text = (f"{lst.scheme}://{lst.address[0]}:{lst.address[1]}: {c['datagrams']} {'datagrams' if lst.scheme == 'udp' else 'lines'} received, "
+                f"{bad} bad and dropped ({stats.bad_lines} unparsable lines, {c['not_text']} not text, "
+                f"{c['empty']} empty, {c['oversized']} oversized, {c['flood']} over the rate limit), "
+                f"{stats.samples} samples, {stats.incomplete} incomplete, {c['overflow']} lost to a "
+                "full queue")
+        if bad or c["overflow"]:
+            warn(text)
+        else:
+            click.echo(f"shipid: {text}", err=True)

@@ -374,12 +374,11 @@ class MassCMMonitor:
         return (b1, a1, b2, a2, float(tm["Kyaw"][0]), float(tm["K_delta"][0]))
 
     def _rebuild(self, blocks, warm=()) -> None:
-        """Moments of ``blocks`` (consecutive) from their raw samples with the current model, from rest.
-
-        ``warm``: blocks just before ``blocks`` run through the filters first (their moments are discarded),
-        so that the start-up transient of the filters falls on them."""
-        self._sim = None
-        for b in list(warm) + list(blocks):
+        """Moments of ``blocks`` from their raw samples with the current model, from rest (and again after a gap,
+        a block with ``after_gap``). ``warm``: blocks just before ``blocks`` run through the filters first (their
+        moments discarded), so that the start-up transient of the filters falls on them."""
+        for i, b in enumerate(list(warm) + list(blocks)):
+            self._sim = None if i == 0 or getattr(b, "after_gap", False) else self._sim
             self._moments(b)
 
     def _moments(self, b: _Block) -> None:
