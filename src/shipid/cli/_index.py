@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '2959c2d09928f65c'
+SOURCES = '57b29bdd7cbdf968'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -51,6 +51,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.monitor.cli', 'Monitor a ship online from a stream of measurements.', False),
     ('monitor', 'mass-cm'):
         ('shipid.methods.monitor.cli', 'Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.', False),
+    ('replay',):
+        ('shipid.cli.replay_cmds', 'Send the IMU + rudder channels of a trial file (t, p, a_s, r, delta) as NMEA 0183 sentences, one datagram (or line group) per sample, each with a tag-block time: the live feed `shipid monitor mass-cm --listen` reads (shipid.io.nmea_live). Example: shipid replay s.csv --to udp://127.0.0.1:10110 --speed 10', False),
     ('report',):
         ('shipid.cli.report_cmds', 'Write the HTML report of a result written with --json.', False),
     ('simulate',):
