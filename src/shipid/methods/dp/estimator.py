@@ -133,6 +133,13 @@ class DPOptions:
         (:mod:`shipid.methods.dp.pem`). ``"ekf"``: the paper's procedure, the EKF's final
         estimate and P_θθ with the noise levels above taken as known. ``current_states``
         always uses ``"ekf"``.
+    sample_interval : float or None
+        Sample interval (s) the filters run at. A trial sampled at least twice as fast is
+        decimated to it by block means (:func:`shipid.methods.dp.stage_models.decimate`: the
+        anti-alias filter that keeps the measurement noise white) and the result says so in one
+        data-repair line. The low-frequency dynamics (time constants of tens of seconds, eq. 48)
+        are resolved at 1 s; faster samples only add white noise the block mean averages out,
+        and steps a filter must take. None: every sample is used.
     """
 
     sigma_pos: float = 0.5
@@ -150,6 +157,7 @@ class DPOptions:
     q_c: float = 1e-7
     passes: int = 2
     covariance: str = "observed"
+    sample_interval: float | None = 1.0
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -168,6 +176,7 @@ class StageResult:
     diagnostics: dict = field(default_factory=dict)
     est: tuple[int, ...] = ()
     theta_cov: np.ndarray | None = None
+    data: list = field(default_factory=list, repr=False)
 
     @property
     def free_theta(self) -> np.ndarray:
@@ -217,7 +226,7 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     pem_on = options.covariance == "observed" and not options.current_states
     if options.covariance not in ("observed", "ekf"):
         raise InputError(f"unknown covariance {options.covariance!r} (observed, ekf)")
-    data = [prepare(tr, vessel, kind) for tr in trials]
+    data = [prepare(tr, vessel, kind, options.sample_interval) for tr in trials]
     ns = dict(noise_start or {})
     if pem_on:
         # imported here, not at the top: pem loads the numba kernels of loglik, which would otherwise be
@@ -321,8 +330,11 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     diag["samples"] = [int(d["t"].size) for d in data]
     diag["seconds"] = secs
     diag["passes"] = history
+    diag["decimated"] = [None if d["decimated"] is None else
+                         {"factor": d["decimated"][0], "dt_in_s": d["decimated"][1], "dt_out_s": d["decimated"][2]}
+                         for d in data]
     return StageResult(name=name, free=free, ekf=ekf, t=t_si, theta_full=full, seconds=secs, diagnostics=diag,
-                       est=tuple(est), theta_cov=cov)
+                       est=tuple(est), theta_cov=cov, data=data)
 
 
 def _stage_diagnostics(th: np.ndarray, sd: np.ndarray, ekf: ParallelEKFResult, std0: np.ndarray,
@@ -466,6 +478,14 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
             if v["at_bound"]:
                 diagnostics["warnings"].append(f"{st.name}: noise level {k} not determined by the data "
                                                f"(held at {v['scale_vs_nominal']:.3g} x nominal)")
+    dec = [(st.name, d) for st in stages for d in st.diagnostics.get("decimated", []) if d]
+    if dec:
+        rates = sorted({f"{1.0 / d['dt_in_s']:.3g} Hz" for _, d in dec})
+        outs = sorted({f"{d['dt_out_s']:.3g} s" for _, d in dec})
+        diagnostics["warnings"].append(
+            f"data repaired: {len(dec)} trial(s) sampled at {', '.join(rates)} block-averaged to one sample per "
+            f"{', '.join(outs)} (anti-alias: non-overlapping block means of positions and heading, exact mean "
+            f"thrust over each step); the filters run at that interval")
     diagnostics["noise"] = {st.name: st.diagnostics["noise"] for st in stages if "noise" in st.diagnostics}
     diagnostics["covariance"] = stages[-1].diagnostics.get("covariance", "")
     if theta_true is not None:
