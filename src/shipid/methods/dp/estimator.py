@@ -60,6 +60,7 @@ import numpy as np
 from shipid.io.trial import Trial
 from shipid.errors import ConvergenceError, InputError
 from shipid.estimate.ekf_augmented import ParallelEKFResult, parallel_augmented_ekf
+from shipid.methods.dp.fast_ekf import run_parallel
 from shipid.methods.dp.stage_models import momentum_model, prepare, surge_model
 from shipid.models import dp
 from shipid.report.convention import table
@@ -140,6 +141,10 @@ class DPOptions:
         data-repair line. The low-frequency dynamics (time constants of tens of seconds, eq. 48)
         are resolved at 1 s; faster samples only add white noise the block mean averages out,
         and steps a filter must take. None: every sample is used.
+    compiled : bool
+        Run the EKF passes through the compiled kernel (:mod:`shipid.methods.dp.fast_ekf`, equal to
+        the Python filter to round-off); False: :func:`shipid.estimate.ekf_augmented.parallel_augmented_ekf`
+        on the models of :mod:`shipid.methods.dp.stage_models`. ``current_states`` always uses the latter.
     """
 
     sigma_pos: float = 0.5
@@ -158,6 +163,7 @@ class DPOptions:
     passes: int = 2
     covariance: str = "observed"
     sample_interval: float | None = 1.0
+    compiled: bool = True
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -258,6 +264,8 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
         P0x = np.diag([options.h0_std ** 2, 2 * sp ** 2, options.b0_std ** 2])
         R = np.array([[sp ** 2]])
 
+        qdiag = np.array([options.q_h, 0.0, options.q_b])
+
         def make_Q(dt):
             return lambda k: np.diag([options.q_h * dt[k], 0.0, options.q_b * dt[k]])
     else:
@@ -273,10 +281,13 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
                                       options.b0_std ** 2 * a2, [c0 ** 2] * nc]))
         R = np.diag([sp ** 2, sp ** 2, options.sigma_psi ** 2])
 
+        qdiag = np.concatenate([options.q_h * a2, np.zeros(3), options.q_b * a2])
+
         def make_Q(dt):
             return lambda k: np.diag(np.concatenate([options.q_h * dt[k] * a2, np.zeros(3),
                                                      options.q_b * dt[k] * a2, [qc * dt[k]] * nc]))
     Qx = [make_Q(np.diff(d["t"])) for d in data]
+    fast = options.compiled and not options.current_states
     # parameter random walk, eq. 38 (per step, with the mean bis step of the first trial)
     dtm = float(np.mean(np.diff(data[0]["t"])))
     Qt = np.zeros((len(est), len(est)))
@@ -285,8 +296,13 @@ def run_stage(name: str, trials: Sequence[Trial], vessel: dp.DPVessel, theta_ful
     history = []
     for j in range(max(1, options.passes)):
         try:
-            ekf = parallel_augmented_ekf(models[0], x0, th0, P0x, P0t, Qx, Qt, R, [d["Z"] for d in data],
-                                         [d["U"] for d in data], models=models, consider_theta=cpos)
+            if fast:
+                full0 = np.asarray(theta_full, dtype=float).copy()
+                full0[est] = th0
+                ekf = run_parallel(kind, data, vessel, full0, est, x0, P0x, P0t, qdiag, Qt, R, cpos)
+            else:
+                ekf = parallel_augmented_ekf(models[0], x0, th0, P0x, P0t, Qx, Qt, R, [d["Z"] for d in data],
+                                             [d["U"] for d in data], models=models, consider_theta=cpos)
         except ConvergenceError as err:
             raise ConvergenceError(f"{name} (pass {j + 1}): {err}") from None
         history.append(ekf.theta_final[fpos].tolist())
