@@ -491,7 +491,12 @@ def _result(stages: list[StageResult], vessel: dp.DPVessel, options: DPOptions, 
             diagnostics["warnings"].append(f"{st.name}: parameter estimate gained little information "
                                            f"(see diagnostics.stages.{st.name})")
         for k, v in st.diagnostics.get("noise", {}).items():
-            if v["at_bound"]:
+            if v["at_bound"] and "allowed_scale_vs_nominal" in v:
+                lo, hi = v["allowed_scale_vs_nominal"]
+                diagnostics["warnings"].append(
+                    f"{st.name}: noise level {k} not determined by the data (likelihood-ratio interval within "
+                    f"{lo:.3g}-{hi:.3g} x nominal; theta's std includes that range)")
+            elif v["at_bound"]:
                 diagnostics["warnings"].append(f"{st.name}: noise level {k} not determined by the data "
                                                f"(held at {v['scale_vs_nominal']:.3g} x nominal)")
     dec = [(st.name, d) for st in stages for d in st.diagnostics.get("decimated", []) if d]
