@@ -119,3 +119,19 @@ def test_hard_regime_campaign_covers():
     assert s["ok"] == 8
     assert s["pooled"]["cover_2sd"] >= 0.85
     assert 0.6 <= s["pooled"]["rms_error_over_std"] <= 1.5
+
+
+def test_the_cli_default_trials_identify():
+    """One path: the six trials `shipid simulate supply dp-* --noise` makes (10 Hz, 600 s, seeds 1, 2), then
+    ``shipid.identify("dp", ...)``: converged, every θ within 3 std of the truth, one data-repair line."""
+    import shipid
+
+    trials = {k: [shipid.simulate("supply", f"dp-{k}", noise=True, seed=s) for s in (1, 2)]
+              for k in ("surge", "sway-yaw", "azimuth")}
+    assert np.median(np.diff(trials["surge"][0].t)) == pytest.approx(0.1)
+    res = shipid.identify("dp", trials, vessel="supply")
+    assert res.diagnostics["converged"]
+    z = [(res.estimates[f"theta{i + 1}"].value - V.theta[i]) / res.estimates[f"theta{i + 1}"].std for i in range(9)]
+    assert np.all(np.abs(z) < 3.0), z
+    rep = [w for w in res.diagnostics["warnings"] if w.startswith("data repaired")]
+    assert len(rep) == 1 and "10 Hz" in rep[0]

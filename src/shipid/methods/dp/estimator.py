@@ -24,9 +24,13 @@ own P_θθ assumes the noise known and ignores that the gain depends on θ; on d
 levels differed from the assumed ones by factors 0.5–2 it covered the error within ±2σ in
 44 % of cases (issue 15). The estimated noise levels are in ``diagnostics["noise"]`` (SI
 units). A noise level the data do not determine (at or next to the bound of its scale, or with
-a likelihood flat or concave along it, e.g. q_h under large measurement noise) is held at its
-optimum when the Hessian is formed, marked ``"determined": False`` and warned about; θ's std
-then comes from the rest of the Hessian. A scheme whose likelihood maximisation has not settled gets a line in
+a likelihood flat or concave along it, e.g. q_h under large measurement noise) is left out of the
+Hessian, marked ``"determined": False`` and warned about with the range the data allow: θ is
+re-estimated over a grid of that level within its likelihood-ratio interval and the likelihood-
+weighted spread of θ is added to its covariance (law of total variance,
+:func:`shipid.methods.dp.pem.noise_profile`), so θ's std includes what is not known about the
+noise. Trials sampled faster than ``DPOptions.sample_interval`` are block-averaged to it first
+(:func:`shipid.methods.dp.stage_models.decimate`, one data-repair line). A scheme whose likelihood maximisation has not settled gets a line in
 ``diagnostics["warnings"]`` and its parameters (and those of later schemes) the status
 ``"std unreliable"``. ``covariance="ekf"`` is the paper's procedure (EKF estimate and P_θθ).
 

@@ -32,9 +32,12 @@ paper (fixed at their values) and their uncertainty is propagated to first order
 
 Noise levels the data do not determine -- at a bound of the log-scale, within 0.25 of it, or
 with a curvature that is not positive (the likelihood flat or concave along it) -- are held
-at their optimum when H is formed (:func:`undetermined_noise`), so ``cov(θ̂_f)`` comes from the θ
-block and the noise directions the data do determine; they are listed in
-``diagnostics["noise_at_bound"]`` and reported as not determined.
+at their optimum when H is formed (:func:`undetermined_noise`), so H is that of θ and the noise
+directions the data do determine; they are listed in ``diagnostics["noise_at_bound"]`` and
+reported as not determined. Each is then profiled over the range the data allow
+(:func:`noise_profile`: its likelihood-ratio interval) and the likelihood-weighted spread of θ̂
+over that range is added to ``cov(θ̂_f)`` (law of total variance), so θ's std does not assume the
+undetermined level known.
 
 A scheme has *settled* when the optimiser stopped on its gradient test, H is positive
 definite and the Newton decrement ``sqrt(gᵀ H⁻¹ g)`` at the final point is below 0.1 (the
