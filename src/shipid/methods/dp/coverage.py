@@ -46,6 +46,12 @@ pooled ±2-std coverage 0.963 (±1 std 0.68), per θ 0.917–1.00, RMS of error/
 1.05 0.81 0.80 vs 1.35 4.25 22.2 5.35 1.30 0.29 1.21 2.04 0.93 with ekf; within the band 24 24
 17 23 24 24 24 24 24 vs 24 20 15 21 24 24 24 24 24 of 24 (θ4 10.7 % at 3.3 std once; the seven
 θ3 misses all have a noise scale of 2, |error|/std 0.8–2.0).
+
+Hard regime (``--regime hard``, :func:`hard_draw`): measurement noise, white force noise, bias random
+walk (eq. 37) and initial bias each scaled log-uniformly over 0.3–3, separately; sampling 1–10 Hz
+(decimated by the estimator to about 1 s), trials of 600–1800 s. Its measured coverage is in
+``docs/validation/dp.md``. The figures above predate the profiling of undetermined noise levels
+(:func:`shipid.methods.dp.pem.noise_profile`) and are not re-measured.
 """
 
 from __future__ import annotations
