@@ -26,6 +26,7 @@ COMPILED = {
     "shipid.methods.ebm.kernels.rk4_into": "tests/methods/ebm/test_kernels.py",
     "shipid.methods.dp.loglik._mom_rk4": "tests/methods/dp/test_rk4_kernels.py",
     "shipid.methods.dp.loglik._surge_rk4": "tests/methods/dp/test_rk4_kernels.py",
+    "shipid.methods.dp.aekf_kernels.rk4_aug": "tests/methods/dp/test_aekf_kernels.py",
     "shipid.methods.mmg.kernels._kin_rk4": "tests/methods/mmg/test_kernels.py",
     "shipid.models.mmg_kernels.rows_rk4_kernel": "tests/models/test_mmg_kernels.py",
 }

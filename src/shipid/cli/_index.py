@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '57b29bdd7cbdf968'
+SOURCES = 'e2d93983d8b5c4d0'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -58,7 +58,7 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
     ('simulate',):
         ('shipid.cli.simulate_cmds', 'Simulate VESSEL through MANOEUVRE and write the trial.', False),
     ('study', 'dp-coverage'):
-        ('shipid.methods.dp.cli', 'Coverage of the DP std over realisations with unknown noise levels (issue 15).', False),
+        ('shipid.methods.dp.cli', 'Coverage of the DP std over realisations with unknown noise levels.', False),
     ('study', 'dp-supply'):
         ('shipid.methods.dp.cli', 'Simulate the six trials of §4.2 for the supply vessel and identify it.', False),
     ('study', 'ebm-coverage'):

@@ -20,7 +20,7 @@ from shipid.cli._common import ManyValues, channels_option, emit, loud, loud_lin
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 from shipid.io.files import read_trial
 from shipid.errors import ShipidError
-from shipid.methods.dp.coverage import summarise
+from shipid.methods.dp.coverage import by_scale, summarise, worst_regime
 from shipid.methods.dp.estimator import DPOptions, fit_dp
 from shipid.methods.dp.series import with_series
 from shipid.methods.dp.plot import plot_parameter_histories
@@ -159,25 +159,34 @@ def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
 @click.option("--duration", type=float, default=1200.0, show_default=True, help="Length of each trial, s.")
 @click.option("--covariance", type=click.Choice(["observed", "ekf"]), default="observed", show_default=True,
               help="observed: noise levels and std from the likelihood (default); ekf: the paper's P_theta.")
+@click.option("--regime", type=click.Choice(["scales", "hard"]), default="scales", show_default=True,
+              help="scales: noise scales from {0.5, 1, 2}, 1 Hz, --duration; hard: measurement, process-noise, "
+                   "bias random-walk and initial-bias scales each log-uniform over 0.3-3, 1-10 Hz, 600-1800 s.")
 @out_options(json_help="Print the summary (and every run) as JSON on stdout.")
 @campaign_options
-def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign):
-    """Coverage of the DP std over realisations with unknown noise levels (issue 15).
+def study_dp_coverage(runs, duration, covariance, regime, as_json, out, force, campaign):
+    """Coverage of the DP std over realisations with unknown noise levels.
 
-    Each run: the six trials of `study dp-supply` (1 Hz) with its own noise seed, measurement
-    noise (0.5 m, 0.2 deg) and process noise (white force, wandering bias) each scaled by a
-    factor drawn from {0.5, 1, 2}; the estimator is told neither. Prints per theta the coverage
-    of +-1 and +-2 std and the RMS of error/std; every run is kept (--store FILE).
+    Each run: the six trials of `study dp-supply` with its own noise seed. --regime scales (1 Hz):
+    measurement noise (0.5 m, 0.2 deg) and process noise (white force, wandering bias) each scaled
+    by a factor drawn from {0.5, 1, 2}. --regime hard: measurement noise, white force noise, bias
+    random walk and initial bias each scaled log-uniformly over 0.3-3, sampling 1-10 Hz, trials of
+    600-1800 s. The estimator is told none of it. Prints per theta the coverage of +-1 and +-2 std,
+    the RMS of error/std and the worst realisations; every run is kept (--store FILE).
     """
     if duration < 60:
         raise ShipidError("--duration must be >= 60 s")
     res = replace(campaign, progress=not as_json).run(
-        "shipid.methods.dp.coverage:run_one", runs, kwargs={"duration": duration, "covariance": covariance},
-        name=f"dp-coverage-{covariance}", warm_up="shipid.methods.dp.coverage:warm_up",
+        "shipid.methods.dp.coverage:run_one", runs,
+        kwargs={"duration": duration, "covariance": covariance, "regime": regime},
+        name=f"dp-coverage-{regime}-{covariance}", warm_up="shipid.methods.dp.coverage:warm_up",
         chunk_size=1)  # runs of ~30 s: each is stored as soon as it is done
     outs = [r.outputs if r.status == "ok" else None for r in res.records]
     s = summarise(outs)
-    s.update({"seed": campaign.seed, "covariance": covariance, "duration_s": duration, "wall_s": res.wall_s})
+    s.update({"seed": campaign.seed, "covariance": covariance, "regime": regime, "duration_s": duration,
+              "wall_s": res.wall_s, "worst": worst_regime(outs)})
+    if regime == "hard":
+        s["by_setting"] = {k: by_scale(outs, k) for k in ("s_m", "s_p", "s_b")}
     s["warnings"] = loud_lines(failure_lines(res) + list(s.get("warnings", [])))
     emit({"summary": s, "runs": outs}, as_json=as_json, out=out, force=force, indent=1,
          text=lambda: _coverage_table(res, s, covariance, campaign.seed))
@@ -186,7 +195,7 @@ def study_dp_coverage(runs, duration, covariance, as_json, out, force, campaign)
 def _coverage_table(res, s: dict, covariance: str, seed: int) -> None:
 
     echo_campaign_summary(res)
-    click.echo(f"dp-coverage: {s['ok']} realisations (seed {seed}), covariance {covariance}, "
+    click.echo(f"dp-coverage: {s['ok']} realisations (seed {seed}), regime {s.get('regime', 'scales')}, covariance {covariance}, "
                f"{s.get('unsettled_runs', 0)} with an unsettled scheme, "
                f"{s.get('seconds_per_identify', float('nan')):.1f} s per identify")
     click.echo(f"  {'param':8s} {'cover 1sd':>9s} {'cover 2sd':>9s} {'2sd all':>8s} {'RMS e/sd':>9s} "
@@ -203,3 +212,10 @@ def _coverage_table(res, s: dict, covariance: str, seed: int) -> None:
                    f"{p['rms_error_over_std']:9.2f} {'':9s} {'':9s} {'':9s} {'':11s} {p['no_std']:6d}")
     click.echo("  (coverage and RMS over the estimates with a std; '2sd all' counts those without one as misses;"
                " 'in band': |error| within the band)")
+    for key, rows in s.get("by_setting", {}).items():
+        click.echo(f"  by {key}: " + "; ".join(f"{r['range'][0]:g}-{r['range'][1]:g}: {r['runs']} runs, "
+                                              f"2sd {r['cover_2sd']:.2f}, RMS {r['rms_error_over_std']:.2f}"
+                                              for r in rows))
+    for w in s.get("worst", []):
+        sets = ", ".join(f"{k} {v:.3g}" for k, v in w.items() if k not in ("max_abs_error_over_std", "theta"))
+        click.echo(f"  worst: {w['theta']} at {w['max_abs_error_over_std']:.2f} std ({sets})")

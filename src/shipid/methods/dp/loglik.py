@@ -74,22 +74,19 @@ def _mom_f(x, tau, M, Minv, A, out):
 def _mom_jac(x, M, Minv, A, F):
     """∂ẋ/∂x of :func:`_mom_f` (the ``Fx`` of :func:`shipid.models.dp.momentum_jacobian`)."""
     F[:, :] = 0.0
-    nu = Minv @ x[0:3]
+    u = Minv[0, 0] * x[0] + Minv[0, 1] * x[1] + Minv[0, 2] * x[2]
+    v = Minv[1, 0] * x[0] + Minv[1, 1] * x[1] + Minv[1, 2] * x[2]
+    r = Minv[2, 0] * x[0] + Minv[2, 1] * x[1] + Minv[2, 2] * x[2]
     m11, m22, m23 = M[0, 0], M[1, 1], M[1, 2]
-    u, v, r = nu[0], nu[1], nu[2]
     a = m22 * v + m23 * r
-    J = np.zeros((3, 3))
-    J[0, 1] = -m22 * r
-    J[0, 2] = -a - m23 * r
-    J[1, 0] = m11 * r
-    J[1, 2] = m11 * u
-    J[2, 0] = a - m11 * v
-    J[2, 1] = (m22 - m11) * u
-    J[2, 2] = m23 * u
-    JM = J @ Minv
+    J00, J01, J02 = 0.0, -m22 * r, -a - m23 * r
+    J10, J11, J12 = m11 * r, 0.0, m11 * u
+    J20, J21, J22 = a - m11 * v, (m22 - m11) * u, m23 * u
+    for j in range(3):
+        F[0, j] = A[0, j] - (J00 * Minv[0, j] + J01 * Minv[1, j] + J02 * Minv[2, j])
+        F[1, j] = A[1, j] - (J10 * Minv[0, j] + J11 * Minv[1, j] + J12 * Minv[2, j])
+        F[2, j] = A[2, j] - (J20 * Minv[0, j] + J21 * Minv[1, j] + J22 * Minv[2, j])
     for i in range(3):
-        for j in range(3):
-            F[i, j] = A[i, j] - JM[i, j]
         F[i, 6 + i] = 1.0
     c, s = np.cos(x[5]), np.sin(x[5])
     for j in range(3):
@@ -101,6 +98,17 @@ def _mom_jac(x, M, Minv, A, F):
 
 
 @njit(**_JIT)
+def _matmul_into(A, B, out, n):
+    """``out = A @ B`` for n × n matrices (explicit loops: no BLAS call for a 9 × 9 product)."""
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for l in range(n):
+                acc += A[i, l] * B[l, j]
+            out[i, j] = acc
+
+
+@njit(**_JIT)
 def _mom_rk4(x, tau, M, Minv, A, dt, Phi):
     """One RK4 step of eqs. 35–37 and its exact Jacobian into ``Phi``.
 
@@ -108,31 +116,62 @@ def _mom_rk4(x, tau, M, Minv, A, dt, Phi):
     (without current states); ``tests/methods/dp/test_rk4_kernels.py`` checks they agree.
     """
     n = 9
-    I = np.eye(n)
     k1 = np.empty(n)
     k2 = np.empty(n)
     k3 = np.empty(n)
     k4 = np.empty(n)
-    A1 = np.empty((n, n))
-    A2 = np.empty((n, n))
-    A3 = np.empty((n, n))
-    A4 = np.empty((n, n))
+    Aj = np.empty((n, n))
+    S = np.empty((n, n))
+    Kc = np.empty((n, n))
+    Ks = np.empty((n, n))
     _mom_f(x, tau, M, Minv, A, k1)
-    _mom_jac(x, M, Minv, A, A1)
+    _mom_jac(x, M, Minv, A, Aj)
+    for i in range(n):
+        for j in range(n):
+            Ks[i, j] = Aj[i, j]
+            S[i, j] = (1.0 if i == j else 0.0) + 0.5 * dt * Aj[i, j]
     x2 = x + 0.5 * dt * k1
     _mom_f(x2, tau, M, Minv, A, k2)
-    _mom_jac(x2, M, Minv, A, A2)
-    K2 = A2 @ (I + 0.5 * dt * A1)
+    _mom_jac(x2, M, Minv, A, Aj)
+    _matmul_into(Aj, S, Kc, n)                       # K2 = A2 (I + dt/2 A1)
+    for i in range(n):
+        for j in range(n):
+            Ks[i, j] += 2.0 * Kc[i, j]
+            S[i, j] = (1.0 if i == j else 0.0) + 0.5 * dt * Kc[i, j]
     x3 = x + 0.5 * dt * k2
     _mom_f(x3, tau, M, Minv, A, k3)
-    _mom_jac(x3, M, Minv, A, A3)
-    K3 = A3 @ (I + 0.5 * dt * K2)
+    _mom_jac(x3, M, Minv, A, Aj)
+    _matmul_into(Aj, S, Kc, n)                       # K3 = A3 (I + dt/2 K2)
+    for i in range(n):
+        for j in range(n):
+            Ks[i, j] += 2.0 * Kc[i, j]
+            S[i, j] = (1.0 if i == j else 0.0) + dt * Kc[i, j]
     x4 = x + dt * k3
     _mom_f(x4, tau, M, Minv, A, k4)
-    _mom_jac(x4, M, Minv, A, A4)
-    K4 = A4 @ (I + dt * K3)
-    Phi[:, :] = I + dt / 6.0 * (A1 + 2.0 * K2 + 2.0 * K3 + K4)
+    _mom_jac(x4, M, Minv, A, Aj)
+    _matmul_into(Aj, S, Kc, n)                       # K4 = A4 (I + dt K3)
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] = (1.0 if i == j else 0.0) + dt / 6.0 * (Ks[i, j] + Kc[i, j])
     return x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+@njit(**_JIT)
+def _propagate(Phi, P, q, W, n):
+    """``P = sym(Φ P Φᵀ + diag(q))`` in place (W: n × n work)."""
+    _matmul_into(Phi, P, W, n)
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for l in range(n):
+                acc += W[i, l] * Phi[j, l]
+            if i == j:
+                P[i, i] = acc + q[i]
+            else:
+                P[i, j] = acc
+    for i in range(n):
+        for j in range(i + 1, n):
+            P[j, i] = P[i, j]
 
 
 @njit(**_JIT)
@@ -160,51 +199,67 @@ def _surge_rk4(x, tau, Ac, h):
 def _update(x, P, nu, Hidx, R, nis_ll):
     """Joseph-form update with measurements ``x[Hidx] + v``; adds (NIS, log det 2πS) to nis_ll.
 
-    Returns False when S or the updated P is not positive definite.
+    ``P⁺ = (I − KH) P (I − KH)ᵀ + K R Kᵀ`` with ``K = P Hᵀ S⁻¹`` (through the Cholesky factor of
+    S), written out for a selection matrix H, symmetrised. Returns False when S or the updated
+    P is not positive definite.
     """
     n = x.size
     m = Hidx.size
     S = np.empty((m, m))
-    PHt = np.empty((n, m))
-    for i in range(n):
-        for j in range(m):
-            PHt[i, j] = P[i, Hidx[j]]
     for i in range(m):
         for j in range(m):
-            S[i, j] = PHt[Hidx[i], j] + (R[i] if i == j else 0.0)
-    for i in range(m):
-        for j in range(i + 1, m):
-            v = 0.5 * (S[i, j] + S[j, i])
-            S[i, j] = v
-            S[j, i] = v
-    for i in range(m):
-        if not S[i, i] > 0.0:
-            return False
-    L = np.linalg.cholesky(S)
-    # K = P Hᵀ S⁻¹  (solve S Kᵀ = H P)
-    Sinv = np.linalg.inv(L).T @ np.linalg.inv(L)
-    K = PHt @ Sinv
-    w = np.linalg.solve(L, nu)
-    nis_ll[0] += w @ w
+            S[i, j] = 0.5 * (P[Hidx[i], Hidx[j]] + P[Hidx[j], Hidx[i]]) + (R[i] if i == j else 0.0)
+    L = np.zeros((m, m))
+    if not cholesky_into(S, m, L):
+        return False
+    # Kᵀ = S⁻¹ H P by forward and back substitution
+    Kt = np.empty((m, n))
+    for c in range(n):
+        for a in range(m):
+            v = P[Hidx[a], c]
+            for b in range(a):
+                v -= L[a, b] * Kt[b, c]
+            Kt[a, c] = v / L[a, a]
+        for a in range(m - 1, -1, -1):
+            v = Kt[a, c]
+            for b in range(a + 1, m):
+                v -= L[b, a] * Kt[b, c]
+            Kt[a, c] = v / L[a, a]
+    w = np.empty(m)
+    for a in range(m):
+        v = nu[a]
+        for b in range(a):
+            v -= L[a, b] * w[b]
+        w[a] = v / L[a, a]
     ld = 0.0
-    for i in range(m):
-        ld += 2.0 * np.log(L[i, i])
+    for a in range(m):
+        nis_ll[0] += w[a] * w[a]
+        ld += 2.0 * np.log(L[a, a])
     nis_ll[1] += ld + m * LOG2PI
     nis_ll[2] += m
-    x += K @ nu
-    IKH = np.eye(n)
     for i in range(n):
-        for j in range(m):
-            IKH[i, Hidx[j]] -= K[i, j]
-    KRKt = np.zeros((n, n))
+        acc = 0.0
+        for a in range(m):
+            acc += Kt[a, i] * nu[a]
+        x[i] += acc
+    # M1 = (I − KH) P ; P⁺ = M1 (I − KH)ᵀ + K R Kᵀ = M1 − M1 Hᵀ Kᵀ + K R Kᵀ
+    M1 = P.copy()
     for i in range(n):
         for j in range(n):
             acc = 0.0
-            for l in range(m):
-                acc += K[i, l] * R[l] * K[j, l]
-            KRKt[i, j] = acc
-    Pn = IKH @ P @ IKH.T + KRKt
-    P[:, :] = 0.5 * (Pn + Pn.T)
+            for a in range(m):
+                acc += Kt[a, i] * P[Hidx[a], j]
+            M1[i, j] -= acc
+    Pn = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            acc = M1[i, j]
+            for a in range(m):
+                acc += -M1[i, Hidx[a]] * Kt[a, j] + Kt[a, i] * R[a] * Kt[a, j]
+            Pn[i, j] = acc
+    for i in range(n):
+        for j in range(n):
+            P[i, j] = 0.5 * (Pn[i, j] + Pn[j, i])
     for i in range(n):
         if not P[i, i] > 0.0:
             return False
@@ -233,6 +288,7 @@ def momentum_loglik(Z, dt, tau, M, Minv, A, qh, qb, R, x0, P0):
     x = x0.copy()
     P = P0.copy()
     Phi = np.empty((9, 9))
+    W = np.empty((9, 9))
     Hidx = np.array([3, 4, 5])
     acc = np.zeros(3)
     Q = np.zeros(9)
@@ -251,10 +307,7 @@ def momentum_loglik(Z, dt, tau, M, Minv, A, qh, qb, R, x0, P0):
         for i in range(3):
             Q[i] = qh[i] * dt[k]
             Q[6 + i] = qb[i] * dt[k]
-        Pn = Phi @ P @ Phi.T
-        for i in range(9):
-            Pn[i, i] += Q[i]
-        P = 0.5 * (Pn + Pn.T)
+        _propagate(Phi, P, Q, W, 9)
         x = xn
         if not np.all(np.isfinite(x)):
             return -np.inf, acc[0], acc[2], k

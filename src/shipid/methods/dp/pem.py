@@ -32,9 +32,12 @@ paper (fixed at their values) and their uncertainty is propagated to first order
 
 Noise levels the data do not determine -- at a bound of the log-scale, within 0.25 of it, or
 with a curvature that is not positive (the likelihood flat or concave along it) -- are held
-at their optimum when H is formed (:func:`undetermined_noise`), so ``cov(θ̂_f)`` comes from the θ
-block and the noise directions the data do determine; they are listed in
-``diagnostics["noise_at_bound"]`` and reported as not determined.
+at their optimum when H is formed (:func:`undetermined_noise`), so H is that of θ and the noise
+directions the data do determine; they are listed in ``diagnostics["noise_at_bound"]`` and
+reported as not determined. Each is then profiled over the range the data allow
+(:func:`noise_profile`: its likelihood-ratio interval) and the likelihood-weighted spread of θ̂
+over that range is added to ``cov(θ̂_f)`` (law of total variance), so θ's std does not assume the
+undetermined level known.
 
 A scheme has *settled* when the optimiser stopped on its gradient test, H is positive
 definite and the Newton decrement ``sqrt(gᵀ H⁻¹ g)`` at the final point is below 0.1 (the
@@ -370,6 +373,12 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
         J = -Cz @ Hc
     Cz_tot = Cz + J @ cov_c @ J.T
     ip = list(range(p))  # θ_f are the first p of act (noise may be dropped, never θ)
+    profiles = {}
+    if pd and at_bound:
+        for j in at_bound:
+            spread, prof = noise_profile(f, z, act, p + j, H, h1, f0, lo[p + j], hi[p + j])
+            Cz_tot = Cz_tot + spread
+            profiles[lik.noise_names[j]] = prof
     cov_free = (s[:, None] * Cz_tot[np.ix_(ip, ip)]) * s[None, :]
     cross = s[:, None] * (J[ip] @ cov_c) if consider else np.zeros((p, 0))
     a_std = np.zeros(m)
@@ -383,10 +392,87 @@ def pem_stage(lik: StageLikelihood, theta_full: np.ndarray, free: list[int], the
             "newton_decrement": newton, "hessian_positive_definite": pd,
             "noise_at_bound": [lik.noise_names[j] for j in at_bound],
             "noise_held": [lik.noise_names[j] for j in at_bound if abs(abs(z[p + j]) - A_BOUND) >= 1e-9],
+            "noise_profiles": profiles,
             "evaluations": lik.n_eval,
             "loglik_start": -float(f_start), "loglik": -float(f0)}
     return PEMResult(theta=th_hat[free], cov_free=0.5 * (cov_free + cov_free.T), cross=cross, log_scales=a_hat,
                      log_scales_std=a_std, loglik=-float(f0), settled=settled, diagnostics=diag)
+
+
+#: Profile of an undetermined noise level: grid step in its log-scale, the likelihood-ratio drop
+#: (χ²₁ 95 %: 3.84 / 2) that ends the interval the data allow, and the most grid points each way.
+PROFILE_STEP = 0.5
+PROFILE_DROP = 1.92
+PROFILE_MAX_STEPS = 8
+
+
+def noise_profile(f, z: np.ndarray, act: list[int], j: int, H: np.ndarray, h: np.ndarray, f0: float,
+                  lo: float, hi: float) -> tuple[np.ndarray, dict]:
+    """θ's spread over the values of an undetermined noise log-scale that the data allow.
+
+    The noise coordinate ``z[j]`` (not in ``act``: held) is stepped by :data:`PROFILE_STEP` each way
+    from its optimum, within ``[lo, hi]``, while the active coordinates ``act`` (θ_f first, then
+    the determined noise scales) are re-optimised at every grid point (one Newton step on the
+    optimum's Hessian ``H`` with a finite-difference gradient, from the previous grid point: a
+    continuation). The walk stops where the profile log-likelihood has fallen by more than
+    :data:`PROFILE_DROP` (the 95 % likelihood-ratio interval of one parameter). Over the grid
+    points inside it, with weights ``w_g ∝ exp(ℓ_p(a_g) − ℓ_max)`` (the likelihood integrated over
+    the log-scale, a flat prior on it within its bounds), the law of total variance adds
+    ``Σ w_g (θ̂_g − θ̂)(θ̂_g − θ̂)ᵀ`` to cov(θ̂): the share of θ's uncertainty that comes from
+    not knowing the noise level. (The conditional covariance is taken as the optimum's.)
+
+    Returns the spread over the active coordinates (``len(act)`` square, in the units of ``z``) and a record:
+    the interval of the log-scale the data allow (to the first grid point outside it, or the bound),
+    the grid, its log-likelihood drops and weights.
+    """
+    Hs = 0.5 * (H + H.T)
+    Hinv = np.linalg.inv(Hs)
+    base = z[act].copy()
+    pts = [(float(z[j]), 0.0, base.copy())]
+    edge = [lo, hi]
+    for direction in (1.0, -1.0):
+        y = base.copy()
+        a = float(z[j])
+        for _ in range(PROFILE_MAX_STEPS):
+            if (direction > 0 and a >= hi - 1e-9) or (direction < 0 and a <= lo + 1e-9):
+                break
+            a = float(np.clip(a + direction * PROFILE_STEP, lo, hi))
+            zz = z.copy()
+            zz[j] = a
+
+            def fy(v, zz=zz):
+                zz2 = zz.copy()
+                zz2[act] = v
+                return f(zz2)
+
+            g = _gradient(fy, y, 0.1 * h)
+            step = -Hinv @ g
+            fy0, lam, fn = fy(y), 1.0, np.inf
+            for _ in range(4):
+                fn = fy(y + lam * step)
+                if fn < fy0:
+                    y = y + lam * step
+                    break
+                lam *= 0.5
+            else:
+                fn = fy0
+            drop = f0 - fn
+            if not np.isfinite(fn) or drop < -PROFILE_DROP:
+                edge[direction > 0] = a
+                break
+            pts.append((a, float(drop), y.copy()))
+        else:
+            edge[direction > 0] = a
+    a_g = np.array([q[0] for q in pts])
+    dl = np.array([q[1] for q in pts])
+    w = np.exp(dl - dl.max())
+    w /= w.sum()
+    dth = np.array([q[2] for q in pts]) - base
+    spread = (dth * w[:, None]).T @ dth
+    order = np.argsort(a_g)
+    rec = {"log_scale_interval": [float(edge[0]), float(edge[1])], "grid_inside": [float(a_g.min()), float(a_g.max())],
+           "grid": a_g[order].tolist(), "loglik_drop": dl[order].tolist(), "weights": w[order].tolist()}
+    return 0.5 * (spread + spread.T), rec
 
 
 def noise_report(lik: StageLikelihood, pem: PEMResult, vessel) -> dict:
@@ -407,6 +493,11 @@ def noise_report(lik: StageLikelihood, pem: PEMResult, vessel) -> dict:
                   "scale_vs_nominal": sc, "log_scale_std": sd,
                   "at_bound": k in pem.diagnostics["noise_at_bound"],
                   "determined": k not in pem.diagnostics["noise_at_bound"]}
+        prof = pem.diagnostics.get("noise_profiles", {}).get(k)
+        if prof:
+            lo_, hi_ = prof["log_scale_interval"]
+            out[k]["allowed_scale_vs_nominal"] = [float(np.exp(lo_)), float(np.exp(hi_))]
+            out[k]["profile"] = prof
     return out
 
 

@@ -65,7 +65,11 @@ def innovations(stages, vessel, trials_by_stage: dict[str, Sequence]) -> tuple[d
         n, nz = nu.shape
         S = np.asarray(ekf.combined.S, dtype=float)[:n, :nz, :nz]    # trial 0 is the first block
         sd = np.sqrt(np.clip(np.einsum("kii->ki", S), 0.0, None))
-        t = np.asarray(tr.t, dtype=float)[:n]
+        prep = st.data[0] if getattr(st, "data", None) else None   # the samples the filter ran on
+        if prep is not None:
+            t = np.asarray(vessel.bis.t_from_bis(prep["t"]), dtype=float)[:n]
+        else:
+            t = np.asarray(tr.t, dtype=float)[:n]
         t = t - t[0]
         chans = CHANNELS["surge" if nz == 1 else "momentum"]
         src = tr.meta.get("source") or f"{st.name} trial 1"
@@ -78,7 +82,8 @@ def innovations(stages, vessel, trials_by_stage: dict[str, Sequence]) -> tuple[d
                 title=f"Innovation of {label} ({st.name}, {src}, final pass) with the EKF's predicted ±2σ "
                       "(√ of the diagonal of S); about 95 % inside and white for a consistent filter.")
             if st.name == "SI2" and ch == "psi" and ch in tr.channels:
-                meas = np.asarray(tr[ch], dtype=float)[:n].copy()
+                meas = (np.asarray(prep["Z"][:, 2], dtype=float)[:n].copy() if prep is not None
+                        else np.asarray(tr[ch], dtype=float)[:n].copy())
                 if ch == "psi":  # unwrapped over the valid fixes, as the filter sees it
                     ok = np.isfinite(meas)
                     meas[ok] = np.unwrap(meas[ok])

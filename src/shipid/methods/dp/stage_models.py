@@ -30,8 +30,13 @@ from shipid.models.thrusters import control_vector
 # ---------------------------------------------------------------------------------------------
 # Data preparation
 # ---------------------------------------------------------------------------------------------
-def prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
-    """Bis time, measurements and inputs of one trial."""
+def prepare(trial: Trial, vessel: dp.DPVessel, kind: str, sample_interval: float | None = None) -> dict:
+    """Bis time, measurements and inputs of one trial, block-averaged to ``sample_interval`` (s) if faster.
+
+    A trial sampled faster than ``sample_interval`` (by a factor q ≥ 2) is decimated by
+    :func:`decimate` (block means, an anti-alias filter whose output noise stays white); the
+    returned ``"decimated"`` is then ``(q, dt_in, dt_out)`` in seconds, else None.
+    """
     need = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6"]
     trial.require(need, method="identify dp")
     b = vessel.bis
@@ -65,7 +70,84 @@ def prepare(trial: Trial, vessel: dp.DPVessel, kind: str) -> dict:
     else:
         Z = np.full((t.size, 3), np.nan)
         Z[idx] = np.column_stack([x[idx] / b.L, y[idx] / b.L, np.unwrap(psi[idx])])
-    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0])}
+    dec = None
+    if sample_interval is not None and t.size > 2:
+        q = int(round(sample_interval / float(np.median(np.diff(t)))))
+        if q >= 2:
+            dt_in = float(np.median(np.diff(t)))
+            tb, Z, U = decimate(tb, Z, U, q)
+            dec = (q, dt_in, q * dt_in)
+            good = np.flatnonzero(np.all(np.isfinite(Z), axis=1))
+            if good.size < 10:
+                raise InputError(f"too few position/heading fixes after decimation ({good.size})", file=src)
+            idx = good
+    return {"t": tb, "Z": Z, "U": U, "source": src, "first": int(idx[0]), "decimated": dec}
+
+
+def decimate(t: np.ndarray, Z: np.ndarray, U: np.ndarray, q: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Non-overlapping block means of q samples: the anti-alias filter and decimation of a fast trial.
+
+    Measurements (eqs. 44–45): each block of q consecutive samples (by time, ``t`` from its first
+    sample in steps of q times the median interval) becomes the mean of its fixes, stamped at the
+    mean time of those fixes; a block without a fix is missing (NaN). The block mean is a
+    low-pass filter (a sinc response, zero at the new sampling rate and its multiples) whose
+    output noise is exactly white with variance σ²/q for white sensor noise of variance σ² --
+    the filter's measurement model -- while a smooth track is moved only by ``T² z̈ / 24``
+    (T the block length; sub-millimetre for a DP vessel at T = 1 s).
+
+    Inputs: the filter holds ``U[k]`` over the step from block time k to k + 1, so the new input
+    is the exact time average of the zero-order-held input over that step (from the cumulative
+    integral of the held input). The models are linear in ``u1 … u5`` and in the azimuth
+    thruster's force direction ``u6 (cos α6, sin α6)`` (eq. 7), so the mean of those is taken and
+    turned back into ``(u6, α6)``: the mean thrust of every step is then the true one.
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        Sample times (any unit; the output has the same).
+    Z : ndarray (n, nz)
+        Measurements, NaN where missing (a sample counts as a fix when all its channels are finite).
+    U : ndarray (n, 7)
+        ``[u1 … u6, α6]`` per sample, held until the next sample.
+    q : int
+        Decimation factor (≥ 2).
+    """
+    n = t.size
+    h = float(np.median(np.diff(t))) * q
+    blk = np.floor((t - t[0]) / h + 1e-9).astype(int)
+    nb = int(blk[-1]) + 1
+    ok = np.all(np.isfinite(Z), axis=1)
+    cnt_all = np.bincount(blk, minlength=nb).astype(float)
+    cnt = np.bincount(blk[ok], minlength=nb).astype(float)
+    tm_all = np.bincount(blk, weights=t, minlength=nb) / np.maximum(cnt_all, 1.0)
+    tm_ok = np.bincount(blk[ok], weights=t[ok], minlength=nb) / np.maximum(cnt, 1.0)
+    keep = cnt_all > 0
+    tb = np.where(cnt > 0, tm_ok, tm_all)[keep]
+    Zb = np.full((nb, Z.shape[1]), np.nan)
+    for c in range(Z.shape[1]):
+        s = np.bincount(blk[ok], weights=Z[ok, c], minlength=nb)
+        Zb[cnt > 0, c] = s[cnt > 0] / cnt[cnt > 0]
+    Zb = Zb[keep]
+    # time averages of the zero-order-held inputs over [tb_k, tb_k+1)
+    F = np.column_stack([U[:, :5], U[:, 5] * np.cos(U[:, 6]), U[:, 5] * np.sin(U[:, 6])])
+    C = np.vstack([np.zeros((1, F.shape[1])), np.cumsum(F[:-1] * np.diff(t)[:, None], axis=0)])
+
+    def integral(tau):
+        i = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, n - 1)
+        return C[i] + F[i] * (tau - t[i])[:, None]
+
+    Ci = integral(tb)
+    Fm = np.empty((tb.size, F.shape[1]))
+    if tb.size > 1:
+        Fm[:-1] = (Ci[1:] - Ci[:-1]) / np.diff(tb)[:, None]
+    Fm[-1] = F[-1]
+    u6 = np.hypot(Fm[:, 5], Fm[:, 6])
+    alpha = np.arctan2(Fm[:, 6], Fm[:, 5])
+    still = u6 <= 1e-15
+    if still.any():  # no azimuth thrust over the step: keep the recorded angle
+        alpha[still] = U[np.clip(np.searchsorted(t, tb[still], side="right") - 1, 0, n - 1), 6]
+    Ub = np.column_stack([Fm[:, :5], u6, alpha])
+    return tb, Zb, Ub
 
 
 class _RK4Discrete:
@@ -167,4 +249,4 @@ def momentum_model(vessel: dp.DPVessel, theta_full: np.ndarray, free: tuple[int,
                           h_jac=lambda k, x, th: (H, np.zeros((3, len(free)))), residual=_wrap_last)
 
 
-__all__ = ["prepare", "surge_model", "momentum_model"]
+__all__ = ["prepare", "decimate", "surge_model", "momentum_model"]
