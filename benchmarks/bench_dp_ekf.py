@@ -33,10 +33,7 @@ def main() -> None:
 
     from shipid.estimate.ekf_augmented import parallel_augmented_ekf
     from shipid.methods.dp import estimator as m
-<<<<<<< HEAD
-=======
     from shipid.methods.dp.fast_ekf import run_parallel
->>>>>>> dp
     from shipid.methods.dp.stage_models import momentum_model, prepare
     from shipid.methods.dp.trials import simulate_dp_trial
     from shipid.models.dp import dp_vessel

@@ -14,11 +14,7 @@ thread (BLAS/numba threads set to 1 before NumPy is imported):
 Prints seconds and the ratios observed/ekf and observed/floor. The numba kernels are compiled
 (or loaded from the cache) before timing. Target: observed ≤ 60 s on one core.
 
-<<<<<<< HEAD
-Run: ``python benchmarks/bench_dp_identify.py [--duration 1500] [--seed 5] [--repeat 1] [--smoke]``
-=======
-Run: ``python benchmarks/bench_dp_identify.py [--duration 1500] [--seed 5] [--repeat 1] [--dt 0.1]``
->>>>>>> dp
+Run: ``python benchmarks/bench_dp_identify.py [--duration 1500] [--seed 5] [--repeat 1] [--dt 0.1] [--smoke]``
 """
 
 from __future__ import annotations
@@ -37,12 +33,9 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=1500.0)
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=1)
-<<<<<<< HEAD
     ap.add_argument("--smoke", action="store_true",
                     help="120-s trials, the two EKF modes only (the test suite's smoke test; observed takes a minute)")
-=======
     ap.add_argument("--dt", type=float, default=1.0, help="sample interval of the trials, s (0.1: a 10-Hz logger)")
->>>>>>> dp
     args = ap.parse_args()
     if args.smoke:
         args.duration, args.repeat = 120.0, 1
@@ -73,14 +66,10 @@ def main() -> None:
         es = np.asarray(res.diagnostics["error_sigma"])
         stages = ", ".join(f"{k} {s['seconds']:.1f} s" for k, s in res.diagnostics["stages"].items())
         print(f"{name:9s} {best[name]:7.2f} s  ({stages}); max |error|/std {np.max(np.abs(es)):.2f}")
-<<<<<<< HEAD
     if args.smoke:
         print(f"six {args.duration:.0f}-s trials: ekf / floor = {best['ekf'] / best['floor']:.2f} (smoke: no observed)")
         return
-    print(f"six {args.duration:.0f}-s trials: observed / ekf = {best['observed'] / best['ekf']:.2f}, "
-=======
     print(f"six {args.duration:.0f}-s trials at {1 / args.dt:g} Hz: observed / ekf = {best['observed'] / best['ekf']:.2f}, "
->>>>>>> dp
           f"observed / floor = {best['observed'] / best['floor']:.2f}; target observed <= 60 s: "
           f"{'met' if best['observed'] <= 60 else 'NOT met'}")
 
