@@ -141,6 +141,7 @@ def read_for_model(x, mv: dict, *, fmt: str | None = None, channels=None, rudder
     convention), the settings used and the warning lines (a conflict is one line).
     """
     notes: list[str] = []
+    differs: list[str] = []          # what the file says against the model's settings: one line at the end
     use_fmt, use_ch = fmt, channels
     if not isinstance(x, Trial) and fmt is None:
         rec_fmt, own = mv.get("format"), _own_format(x)
@@ -149,8 +150,8 @@ def read_for_model(x, mv: dict, *, fmt: str | None = None, channels=None, rudder
             if use_ch is None:
                 use_ch = mv.get("channels")
         else:
-            notes.append(f"{x}: read as the file says ({own}), not with the model's reading settings "
-                         f"(format {rec_fmt}, for its training runs)")
+            differs.append(f"format {own}, not the model's {rec_fmt}"
+                           + (" and its column map" if mv.get("channels") and channels is None else ""))
     elif fmt is not None and fmt == mv.get("format") and use_ch is None:
         use_ch = mv.get("channels")
     tr = as_run(x, use_fmt, use_ch, method=method, required=required)
@@ -162,6 +163,10 @@ def read_for_model(x, mv: dict, *, fmt: str | None = None, channels=None, rudder
             rudder_sign, sign_from = int(mv["rudder_sign"]), "model"
         else:
             rudder_sign, sign_from = profile_sign(profile), "data profile"
+            if "rudder_sign" in mv and int(mv["rudder_sign"]) != rudder_sign:
+                differs.append(f"rudder sign {rudder_sign:+d} of its data profile ({profile or 'none named'}), not "
+                               f"the {int(mv['rudder_sign']):+d} of the model's training runs "
+                               f"({', '.join(model_profiles)})")
     else:
         if rudder_sign not in (1, -1):
             raise InputError("rudder_sign must be 1 or -1")
@@ -169,6 +174,9 @@ def read_for_model(x, mv: dict, *, fmt: str | None = None, channels=None, rudder
         if "rudder_sign" in mv and same and int(mv["rudder_sign"]) != rudder_sign:
             notes.append(f"rudder sign {rudder_sign:+d} differs from the rudder sign of the model's training runs "
                          f"({int(mv['rudder_sign']):+d})")
+    if differs:
+        notes.insert(0, f"{tr.meta.get('source', 'run')}: read as the file says, not with the model's reading "
+                        f"settings: {'; '.join(differs)}")
     tr = flip(tr, rudder_sign)
     settings = {"format": use_fmt, "channels": use_ch, "profile": profile, "rudder_sign": rudder_sign,
                 "rudder_sign_from": sign_from}
