@@ -154,3 +154,28 @@ def test_api_equals_cli_mmg_on_hsva_dat_files(tmp_path):
     _same(res, cli)
     assert res.model["conventions"]["rudder_sign"] == -1
     assert res.estimates["NR_arm"].value < 0 and res.estimates["YR_gain"].value > 0
+
+
+# ----------------------------------------------------------------------------- the README's example
+README_SNIPPET = '''
+import shipid
+trial = shipid.simulate("esso-osaka", "prbs-35-105", duration=600.0, noise=True, seed=2)
+res = shipid.identify("ebm", [trial], vessel="esso-osaka")          # or "mass-cm", "dp", "mmg"
+e = res.estimates["N_r"]
+print(f"N_r {e.value:.3e} ± {e.std:.1e} ({e.status}), converged: {res.diagnostics['converged']}")
+'''
+
+
+def test_the_readme_python_example_identifies_n_r_within_its_std(capsys):
+    """The README's Python example as written: shipid.simulate's defaults for the EBM ship make the trials of
+    the paper's §5.1 (1-s samples, eq. 19 noise, the current), from which EBM determines N_r; the printed
+    value is within 3 of its printed standard errors of the truth (Table 3, packaged with the vessel)."""
+    ns: dict = {}
+    exec(compile(README_SNIPPET, "README.md", "exec"), ns)
+    out = capsys.readouterr().out.strip()
+    value, std = (float(x) for x in out.split()[1:4:2])
+    truth = float(load_vessel("esso-osaka").value("abkowitz", "N_r"))
+    assert "(estimated), converged: True" in out
+    assert abs(value - truth) <= 3.0 * std, (out, truth)
+    e = ns["res"].estimates["N_r"]
+    assert f"{e.value:.3e}" == out.split()[1] and e.status == "estimated"
