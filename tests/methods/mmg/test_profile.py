@@ -77,3 +77,46 @@ def test_the_model_s_settings_apply_to_a_file_of_its_kind(dat_model):
     assert v.settings["rudder_sign"] == 1 and v.settings["profile"] == "kvlcc2"
     assert sum("differs from the rudder sign of the model's training runs" in w for w in v.settings["warnings"]) == 1
     assert np.isfinite(v.horizons["psi"]["rms"])
+
+
+def _esso():
+    root = data_root()
+    if root is None or not (root / "esso_osaka_3m").is_dir():
+        pytest.skip("shared data (esso_osaka_3m/) not found (set SHIPID_DATA)")
+    return root / "esso_osaka_3m" / "data" / "random"
+
+
+@pytest.mark.realdata
+def test_esso_runs_are_retimed_by_identify_and_by_validate(tmp_path, capsys):
+    """Esso CSV runs: identify estimates the channel offsets on the training runs, records them in MODEL.json
+    and says so in one line; validate re-times a run it reads by them (one line), --no-retime refuses both."""
+    d = _esso()
+    train = [str(d / f) for f in ("random_06-Aug-2020_16_24_25_4.csv", "random_31-Jul-2020_14_52_18.csv")]
+    kw = dict(structure="hull+rudder+thrust", refine="none", simex="off")
+    res = shipid.identify("mmg", train, **kw)
+    rt = res.model["retime"]
+    assert rt["runs"] == 2 and 0.0 < rt["psi"] < 2.0 and res.model["validate"]["retime"]
+    assert sum("re-timed onto the position clock" in w for w in res.warnings) == 1
+    model = tmp_path / "MODEL.json"
+    model.write_text(res.to_json(), encoding="utf-8")
+    test = str(d / "random_06-Aug-2020_16_24_25_1.csv")
+    v = shipid.validate(str(model), test)
+    assert v.settings["retimed"] and sum("re-timed" in w for w in v.settings["warnings"]) == 1
+    raw = shipid.validate(str(model), test, retime=False)
+    assert not raw.settings["retimed"] and any("--no-retime" in w for w in raw.settings["warnings"])
+    assert v.horizons["psi"]["rms"] != raw.horizons["psi"]["rms"]
+    # the command line: the same model, and --no-retime refuses
+    out = tmp_path / "cli.json"
+    assert main(["identify", "mmg", *[a for f in train for a in ("--trial", f)], "--structure", "hull+rudder+thrust",
+                 "--refine", "none", "--simex", "off", "-o", str(out)]) == 0
+    cli = json.loads(out.read_text(encoding="utf-8"))
+    assert cli["model"]["retime"] == json.loads(res.to_json())["model"]["retime"]
+    assert cli["estimates"] == json.loads(res.to_json())["estimates"]
+    out2 = tmp_path / "cli_raw.json"
+    assert main(["identify", "mmg", *[a for f in train for a in ("--trial", f)], "--structure", "hull+rudder+thrust",
+                 "--refine", "none", "--simex", "off", "--no-retime", "-o", str(out2)]) == 0
+    assert json.loads(out2.read_text(encoding="utf-8"))["model"]["retime"] is None
+    capsys.readouterr()
+    assert main(["validate", str(model), "--trial", test, "--no-retime", "--json"]) == 0
+    d2 = json.loads(capsys.readouterr().out)
+    assert d2["settings"]["retimed"] is False and d2["horizons"] == json.loads(json.dumps(raw.to_dict()))["horizons"]

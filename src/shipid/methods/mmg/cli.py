@@ -48,8 +48,11 @@ from shipid.errors import ShipidError
 @click.option("--out", "out_path", default=None, type=click.Path(dir_okay=False),
               help="Write the whole-run open-loop prediction beside the measured channels (CSV/Parquet).")
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
+@click.option("--no-retime", "no_retime", is_flag=True,
+              help="MMG: do not re-time the run by the offsets MODEL.json records (estimated on its training runs).")
 @strict_option
-def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
+def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force,
+                 no_retime):
     """Simulate MODEL open loop on a held-out run and report RMS/max errors.
 
     MODEL is a result JSON of 'shipid identify mmg | ebm | dp | mass-cm --json' (the
@@ -88,7 +91,8 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         return
     from shipid.methods.mmg.entry import validate_with_run
 
-    v, tr = validate_with_run(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign)
+    v, tr = validate_with_run(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
+                              retime=not no_retime)
     rudder_sign = v.settings["rudder_sign"]
     warns = loud_lines(v.settings.pop("warnings"))
     if out_path:
@@ -215,14 +219,15 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
-              selection="auto", simex="auto", equation="auto", water_depth=None):
+              selection="auto", simex="auto", equation="auto", water_depth=None, no_retime=False):
     from shipid.api import identify as api_identify
 
     if rudder_sign not in (None, 1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
     res = api_identify("mmg", list(paths), prior=prior, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
                        structure=structure, folds=folds, selection=selection, refine=refine, simex=simex,
-                       equation=equation, water_depth=water_depth, command="shipid identify")
+                       equation=equation, water_depth=water_depth, retime=False if no_retime else "auto",
+                       command="shipid identify")
     loud(res)
 
     def text():
@@ -284,6 +289,11 @@ _ID_OPTS = [
                  help="Water depth of the training runs, m, recorded in MODEL.json's training conditions "
                       "(simulate / imo warn when asked for another depth class) [default: from the data profile "
                       "where it records one (HSVA KVLCC2: 6.0 m), else not recorded]."),
+    click.option("--no-retime", "no_retime", is_flag=True,
+                 help="Do not re-time the runs onto their position clock [default: re-time Esso CSV runs: the "
+                      "offsets of heading, velocities, yaw rate, rudder, propeller and wind are estimated on the "
+                      "training runs, recorded in MODEL.json and applied by 'shipid validate'; one data-repair "
+                      "line]."),
     out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
                          "file needs --force."),
@@ -302,7 +312,7 @@ def _with_id_opts(f):
               help="A training run (repeat for several).")
 @_with_id_opts
 def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
-                 water_depth, as_json, out, force):
+                 water_depth, no_retime, as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
@@ -310,7 +320,7 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
     for 'shipid validate'.
     """
     _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
-              simex, equation, water_depth)
+              simex, equation, water_depth, no_retime)
 
 
 # ----------------------------------------------------------------------------- studies

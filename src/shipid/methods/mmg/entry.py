@@ -54,8 +54,8 @@ def _selection_kw(selection: str, pm, st: str | None) -> tuple[str | None, dict]
 def identify(trials, *, vessel: str | None = None, options: FitConfig | None = None, prior=None,
              fmt: str | None = None, channels=None, rudder_sign: int | None = None, structure: str | None = None,
              folds: int | None = None, selection: str = "auto", refine: str = "auto", simex: str = "auto",
-             equation: str = "auto", water_depth: float | None = None, command: str = "shipid.identify",
-             **kw) -> Result:
+             equation: str = "auto", water_depth: float | None = None, retime="auto",
+             command: str = "shipid.identify", **kw) -> Result:
     """An MMG model from free-running model tests (EBM applied to the MMG structure).
 
     Parameters
@@ -91,6 +91,11 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         Step-2 regression form (:class:`~shipid.methods.mmg.estimator.FitConfig`).
     water_depth : float, optional
         Water depth of the runs, m, over what a data profile records.
+    retime : {"auto", True, False}
+        Re-time the state channels and the inputs onto the position clock by offsets estimated on these
+        runs (:func:`shipid.methods.mmg.profile.estimate_retime`), before anything else; recorded in
+        ``model["retime"]`` and applied by ``validate`` to the runs it reads; one data-repair line.
+        ``"auto"``: for runs of the profiles in :data:`~shipid.methods.mmg.profile.RETIME_PROFILES` (Esso).
     command : str
         Recorded in the provenance.
     **kw
@@ -125,6 +130,11 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         if w:
             notes.append(w)
         data.append(tr)
+    rt = None
+    if PF.wants_retime(retime, profiles):
+        rt = PF.estimate_retime(data)
+        data = [PF.apply_retime(tr, rt) for tr in data]
+        notes.append(PF.retime_line(rt, f"the {len(data)} training runs"))
     pm, prior_info = PF.choose_prior(prior if prior is not None else vessel, profiles, notes)
     st = None if structure in (None, "auto") else structure
     if selection == "auto":
@@ -145,20 +155,21 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         "yaw_rate": "positive to starboard", "heading": "clockwise from x0", "first_rudder_step": steps}
     res.model["validate"] = {"rudder_sign": rudder_sign, "format": fmt, "channels": channels,
                              "profiles": sorted(p for p in profiles if p), "horizon_s": 60.0,
-                             "read": PF.READ_SETTINGS}
+                             "read": PF.READ_SETTINGS, "retime": rt is not None}
+    res.model["retime"] = rt
     collect(res, trials=data, extra=notes)
     return res
 
 
 def validate(model, trial, *, horizon: float | None = None, fmt: str | None = None, channels=None,
-             rudder_sign: int | None = None, **kw):
+             rudder_sign: int | None = None, retime: bool = True, **kw):
     """Open-loop prediction of a measured run by an MMG model (:func:`validate_with_run` without the run)."""
     return validate_with_run(model, trial, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
-                             **kw)[0]
+                             retime=retime, **kw)[0]
 
 
 def validate_with_run(model, trial, *, horizon: float | None = None, fmt: str | None = None, channels=None,
-                      rudder_sign: int | None = None, **kw):
+                      rudder_sign: int | None = None, retime: bool = True, **kw):
     """Open-loop prediction of a measured run by an MMG model, the run read as its file says.
 
     Parameters
@@ -173,6 +184,9 @@ def validate_with_run(model, trial, *, horizon: float | None = None, fmt: str | 
         Restarted-horizon length, s (default: the model's, else 60 s).
     fmt, channels, rudder_sign : optional
         Reading settings that override the model's.
+    retime : bool
+        Re-time the run by the model's offsets (``model["retime"]``, estimated on its training runs) when it
+        has them and the run is of its training runs' kind (one data-repair line); False: refuse (one line).
     **kw
         ``stride=``, ``windows=`` of :func:`shipid.methods.mmg.validate.validate`.
 
@@ -203,6 +217,17 @@ def validate_with_run(model, trial, *, horizon: float | None = None, fmt: str | 
                      "its predictions must not be trusted")
     tr, settings, more = PF.read_for_model(trial, mv, fmt=fmt, channels=channels, rudder_sign=rudder_sign)
     notes += more
+    rt = ((doc or {}).get("model") or {}).get("retime")
+    kinds = list(mv.get("profiles") or [])
+    settings["retimed"] = False
+    if rt and (not kinds or settings["profile"] in kinds):
+        if retime:
+            tr = PF.apply_retime(tr, rt)
+            notes.append(PF.retime_line(rt, str(tr.meta.get("source", "the run"))))
+            settings["retimed"] = True
+        else:
+            notes.append("not re-timed (--no-retime): the model was identified from runs re-timed onto their "
+                         "position clock, this run is compared as recorded")
     rs = settings["rudder_sign"]
     st, w = PF.convention_warning(tr, rs, "the model's convention (rudder positive turns to starboard"
                                   + (f", as in its training runs with rudder sign {int(mv['rudder_sign']):+d})"

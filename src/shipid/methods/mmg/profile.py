@@ -18,6 +18,8 @@ from typing import Iterable, Sequence
 from shipid.errors import InputError
 from shipid.io.files import read_trial
 from shipid.io.trial import Trial
+from shipid.methods.mmg import timing as TM
+from shipid.methods.mmg import timing_inputs as TI
 from shipid.methods.mmg.validate import first_step_yaw_sign, load_model
 from shipid.models import mmg
 
@@ -25,6 +27,10 @@ from shipid.models import mmg
 PROFILE_DEFAULTS = {"kvlcc2": ("kvlcc2_hsva", -1), "esso": ("esso_osaka_3m", 1)}
 #: How ``identify`` and ``validate`` read runs (recorded in MODEL.json's ``model.validate``).
 READ_SETTINGS = {"trim_empty_rows": True, "interpolate_gaps": 1.0}
+#: Data profiles whose runs are re-timed by default (``retime="auto"``): the Esso Osaka logs, whose heading,
+#: body velocities, yaw rate and inputs lag the position (training-run CV of the held-out study:
+#: docs/validation/mmg.md).
+RETIME_PROFILES = ("esso",)
 #: The prior used when neither the caller nor the files' profile names one.
 FALLBACK_PRIOR = "esso_osaka_3m"
 
@@ -183,5 +189,47 @@ def read_for_model(x, mv: dict, *, fmt: str | None = None, channels=None, rudder
     return tr, settings, notes
 
 
+# ----------------------------------------------------------------------------- re-timing
+def wants_retime(retime, profiles: Iterable[str | None]) -> bool:
+    """Whether runs of ``profiles`` are re-timed: ``retime`` True/False as given; ``"auto"`` for runs all of
+    a profile in :data:`RETIME_PROFILES`."""
+    if retime in (True, False):
+        return bool(retime)
+    if retime != "auto":
+        raise InputError(f"retime must be 'auto', True or False, got {retime!r}")
+    ps = set(profiles)
+    return bool(ps) and ps <= set(RETIME_PROFILES)
+
+
+def estimate_retime(trials: Sequence[Trial]) -> dict:
+    """Offsets of the state channels (:func:`shipid.methods.mmg.timing.estimate_lags`) and of the inputs
+    (:func:`shipid.methods.mmg.timing_inputs.estimate_input_lags`, on the state-re-timed runs) behind the
+    position, estimated on the training runs; the dict MODEL.json records as ``model["retime"]``."""
+    lags = TM.estimate_lags(trials)
+    ilags = TI.estimate_input_lags([TM.retime(tr, lags) for tr in trials])
+    lags = TI.with_inputs(lags, ilags)
+    return {**lags.to_dict(), "not_determined": TI.at_bound(ilags)}
+
+
+def apply_retime(tr: Trial, retime: dict) -> Trial:
+    """``tr`` re-timed onto its position clock by the offsets ``retime`` (MODEL.json's ``model["retime"]``);
+    the reader's repairs are kept, the re-timing is said by :func:`retime_line` instead of per run."""
+    keys = ("psi", "uv", "r", "mismatch_before", "mismatch_after", "runs", "delta", "n", "wind")
+    out = TM.retime(tr, TM.Lags(**{k: retime[k] for k in keys if k in retime}))
+    return Trial(out.t, out.channels, out.units, {**out.meta, "repairs": list(tr.meta.get("repairs", []) or [])})
+
+
+def retime_line(retime: dict, what: str) -> str:
+    """The one data-repair line of a re-timing of ``what`` (e.g. "the 32 training runs")."""
+    line = (f"data repaired: heading, body velocities and yaw rate (advanced by {retime['psi']:.2f} s, "
+            f"{retime['uv']:.2f} s, {retime['r']:.2f} s) and rudder angle, propeller rate and wind (advanced by "
+            f"{retime['delta']:.2f} s, {retime['n']:.2f} s, {retime['wind']:.2f} s) of {what} re-timed onto the "
+            f"position clock (offsets estimated on the {retime['runs']} training runs; --no-retime to refuse)")
+    for name in retime.get("not_determined") or ():
+        line += f"; the {name} offset is on the end of its search grid (not determined within it, used as found)"
+    return line
+
+
 __all__ = ["PROFILE_DEFAULTS", "READ_SETTINGS", "FALLBACK_PRIOR", "read_run", "with_meta", "as_run", "profile_sign",
-           "rudder_sign_of", "flip", "convention_warning", "choose_prior", "read_for_model"]
+           "rudder_sign_of", "flip", "convention_warning", "choose_prior", "read_for_model",
+           "RETIME_PROFILES", "wants_retime", "estimate_retime", "apply_retime", "retime_line"]
