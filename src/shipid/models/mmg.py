@@ -55,7 +55,6 @@ from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
 from shipid.models import mmg_kernels
 from shipid.models.mmg_esso_ext import EXT_COEFS, ext_columns
-from shipid.models.mmg_esso_ext2 import EXT2_COEFS, ext2_columns
 from shipid.simulate.integrate import rk4_step
 from shipid.simulate.model import ShipModel
 
@@ -107,10 +106,6 @@ COEFS["esso-lowspeed-asym"] = {"X": COEFS["esso-lowspeed"]["X"],
 # ``esso-lowspeed-asym`` with the surge and slipstream-rudder columns of :mod:`shipid.models.mmg_esso_ext`.
 STRUCTURES = STRUCTURES + ("esso-lowspeed-ext",)
 COEFS["esso-lowspeed-ext"] = {m: COEFS["esso-lowspeed-asym"][m] + EXT_COEFS[m] for m in MODES}
-# ``esso-lowspeed-ext`` with the rudder yaw-inflow, propeller-walk and wind-arm columns of
-# :mod:`shipid.models.mmg_esso_ext2`.
-STRUCTURES = STRUCTURES + ("esso-lowspeed-ext2",)
-COEFS["esso-lowspeed-ext2"] = {m: COEFS["esso-lowspeed-ext"][m] + EXT2_COEFS[m] for m in MODES}
 
 #: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
 COEF_UNITS = {"NR_arm": "m", "NR_s": "m"}
@@ -200,7 +195,7 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         out = basis_esso(p, u, v, r, delta, n)
         for m, H in zip(MODES, cubic_hull(p, u, v, r)):
             out[m] = (np.concatenate([H, out[m][0][..., 3:]], axis=-1), out[m][1])
-    elif model.structure in ("esso-lowspeed-asym", "esso-lowspeed-ext", "esso-lowspeed-ext2"):
+    elif model.structure in ("esso-lowspeed-asym", "esso-lowspeed-ext"):
         out = basis_esso(p, u, v, r, delta, n)
         a = out["aux"]
         T4 = (n > 0) * p["rho"] * p["D_p"] ** 4 * n * n
@@ -208,10 +203,8 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         dFN = 0.5 * p["rho"] * p["A_R"] * a["U_R"] ** 2 * f_alpha * np.cos(a["alpha_R"]) * np.cos(delta)
         for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
-        if model.structure in ("esso-lowspeed-ext", "esso-lowspeed-ext2"):
+        if model.structure == "esso-lowspeed-ext":
             out = ext_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
-        if model.structure == "esso-lowspeed-ext2":
-            out = ext2_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
     elif model.structure == "yasukawa2015-asym":
         out = basis_yasukawa(p, u, v, r, delta, n)
         T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]
@@ -522,7 +515,7 @@ def ship_model(model: MmgModel):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
                 "delta": U[:, 0], "n": U[:, 1]}
 
-    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym", "esso-lowspeed-ext", "esso-lowspeed-ext2")
+    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym", "esso-lowspeed-ext")
     n0 = 10.0 if esso else 10.23
     U0 = 0.5 if esso else 1.179
     return ShipModel(name=model.name, f=dynamics, theta=model, state_names=STATE_NAMES,
