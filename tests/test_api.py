@@ -1,10 +1,16 @@
-"""shipid.identify / validate / simulate: the Python face runs each method as the method's own function."""
+"""shipid.identify / validate / simulate: the Python face runs each method as the method's own function, and gives
+what the command line gives on the same files."""
+
+import json
 
 import numpy as np
 import pytest
 
 import shipid
+from shipid.cli import main
 from shipid.errors import InputError
+from shipid.io import data_root
+from shipid.io.files import write_trial
 from shipid.methods.ebm import estimator as ebm
 from shipid.methods.masscm.estimator import estimate_mass_cm
 from shipid.models.roll_reduced import KnownParams
@@ -53,12 +59,7 @@ def test_identify_refuses_what_it_cannot_do():
 # ----------------------------------------------------------------------------- API = CLI, per method
 # One implementation under every face: `shipid identify METHOD ... -o R.json` and shipid.identify on the
 # same files give the same estimates, standard errors, covariance and warning lines.
-import json  # noqa: E402
-from pathlib import Path  # noqa: E402
 
-from shipid.cli import main  # noqa: E402
-from shipid.io import data_root  # noqa: E402
-from shipid.io.files import write_trial  # noqa: E402
 
 
 def _cli_result(argv, tmp_path, name="cli.json") -> dict:

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 import warnings
 from pathlib import Path
 from contextlib import contextmanager

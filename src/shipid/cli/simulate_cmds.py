@@ -7,7 +7,6 @@ import time
 from pathlib import Path
 
 import click
-import numpy as np
 
 from shipid.cli import CONTEXT, cli
 from shipid.errors import OutputExistsError, ShipidError

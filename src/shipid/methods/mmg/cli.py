@@ -1,12 +1,15 @@
-"""Real-data commands (issue 6): validate a model on a run, identify MMG models, held-out studies.
+"""MMG commands: validate a model on a run, identify MMG models, held-out studies.
 
-* ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
+The commands parse their options, call the library and print; what decides the model (data profile,
+rudder sign, prior, re-timing, checks, selection) is :mod:`shipid.methods.mmg.entry` and
+:mod:`shipid.methods.mmg.profile`, the same functions ``shipid.identify("mmg", ...)`` and
+``shipid.validate`` run.
+
+* ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png] [--no-retime]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
-* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
-  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline); ``--selection``: the
-  structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`) or, for the
-  Yasukawa-2015 structure (KVLCC2) by default, by what a turning circle measures
-  (:mod:`shipid.methods.mmg.turning_selection`)
+* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``;
+  ``--selection``: the structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`)
+  or by what a turning circle measures (:mod:`shipid.methods.mmg.turning_selection`)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
 * ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
@@ -24,7 +27,7 @@ import math
 import click
 
 from shipid.cli import CONTEXT, cli, identify, study
-from shipid.cli._common import ManyValues, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import emit, loud, loud_lines, out_options, strict_option
 from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
 
