@@ -94,7 +94,10 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
         Length of the restarted horizons, s (default: the method's ``DEFAULT_HORIZON``; 60 s, and
         10 s for mass-cm's 60-s records).
     **kwargs
-        Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``).
+        Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``); an MMG
+        model takes ``fmt=``, ``channels=``, ``rudder_sign=`` and ``retime=`` too
+        (:func:`shipid.methods.mmg.entry.validate`: the run is read as its file says, in the model's
+        conventions, and re-timed by the model's offsets).
 
     Returns
     -------
