@@ -20,11 +20,13 @@ Examples
 from __future__ import annotations
 
 import os
+import warnings
 from typing import TYPE_CHECKING
 
 from shipid import registry
 from shipid.errors import InputError
 from shipid.estimate.linalg import single_threaded
+from shipid.warning_lines import collect, recorded
 from shipid.registry import MethodInfo
 from shipid.result import Result
 
@@ -66,7 +68,15 @@ def identify(method: str, trials, *, vessel: str | None = None, options=None, **
     info = registry.get(method)
     if info.identify is None:
         raise InputError(f"{info.name} is not run by identify; see `shipid {info.name} --help`")
-    return info.identify(trials, vessel=vessel, options=options, **kwargs)
+    from shipid.methods._trials import reading_log
+
+    py: list[str] = []
+    with reading_log() as read, recorded(py):
+        res = info.identify(trials, vessel=vessel, options=options, **kwargs)
+    collect(res, trials=read, python=py)
+    for line in py:          # shown as well as recorded (the command line prints the result's list instead)
+        warnings.warn(line, RuntimeWarning, stacklevel=3)
+    return res
 
 
 @single_threaded
@@ -85,7 +95,10 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
         Length of the restarted horizons, s (default: the method's ``DEFAULT_HORIZON``; 60 s, and
         10 s for mass-cm's 60-s records).
     **kwargs
-        Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``).
+        Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``); an MMG
+        model takes ``fmt=``, ``channels=``, ``rudder_sign=`` and ``retime=`` too
+        (:func:`shipid.methods.mmg.entry.validate`: the run is read as its file says, in the model's
+        conventions, and re-timed by the model's offsets).
 
     Returns
     -------
@@ -97,9 +110,10 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     without a ``validate`` module raises :class:`~shipid.errors.InputError`.
     """
     from shipid.methods._trials import as_trial
-    from shipid.methods.mmg import validate as _V
+    from shipid.methods.mmg import entry as _mmg
     from shipid.models import mmg as _mmg_model
 
+    given = model
     if isinstance(model, os.PathLike) or (isinstance(model, str) and not model.startswith("published:")):
         path = os.fspath(model)
         if not os.path.isfile(path):
@@ -109,10 +123,10 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
                 model = Result.from_json(fh.read())
         except (UnicodeDecodeError, ValueError, KeyError, TypeError) as err:
             raise InputError(f"not a result JSON file ({type(err).__name__}: {err})", file=path) from None
-    if isinstance(model, str) or isinstance(model, _mmg_model.MmgModel):
-        m = _V.load_model(model) if isinstance(model, str) else model
-        tr = as_trial(trial, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.validate")
-        return _V.validate(m, tr, horizon=_V.DEFAULT_HORIZON if horizon is None else horizon, **kwargs)
+    if (isinstance(model, (str, _mmg_model.MmgModel))
+            or (isinstance(model, Result) and (model.model or {}).get("family") == "mmg")):
+        spec = os.fspath(given) if isinstance(given, (str, os.PathLike)) else model
+        return _mmg.validate(spec, trial, horizon=horizon, **kwargs)
     if not isinstance(model, Result):
         raise InputError("validate: model must be a Result, an MmgModel or a model path")
     info = registry.for_result(model.method)

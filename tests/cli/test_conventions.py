@@ -63,7 +63,7 @@ def test_json_out_force(path, cmd):
     assert force is not None and force.is_flag and force.name == "force"
 
 
-@pytest.mark.parametrize("path", [("identify", "mmg"), ("identify", "realdata")], ids=str)
+@pytest.mark.parametrize("path", [("identify", "mmg")], ids=str)
 def test_output_is_a_hidden_alias_where_it_existed(path):
     cmd = cli.commands[path[0]].commands[path[1]]
     alias = _option(cmd, "--output")

@@ -85,15 +85,15 @@ def test_identify_mmg_on_files_that_name_no_ship_warns_about_the_prior(tmp_path,
     argv = ["identify", "mmg", "--trial", files[0], "--trial", files[1], "--structure", "hull-only", "--json"]
     assert main(argv) == 0
     cap = capsys.readouterr()
-    assert any("no --prior given" in w and "Esso Osaka 3 m prior" in w for w in _warnings(cap.err))
+    assert any("no prior given" in w and "Esso Osaka 3 m prior" in w for w in _warnings(cap.err))
     d = json.loads(cap.out)
     assert d["model"]["prior"]["chosen_by"].startswith("default")
-    assert any("no --prior given" in w for w in d["diagnostics"]["warnings"])
+    assert any("no prior given" in w for w in d["diagnostics"]["warnings"])
     assert main(["identify", "mmg", "--trial", files[0], "--trial", files[1], "--structure", "hull-only",
                  "--prior", "esso_osaka_3m", "--json"]) == 0
     cap = capsys.readouterr()
     assert not any("prior" in w for w in _warnings(cap.err))
-    assert json.loads(cap.out)["model"]["prior"]["chosen_by"] == "--prior"
+    assert json.loads(cap.out)["model"]["prior"]["chosen_by"] == "given"
 
 
 # ----------------------------------------------------------------------------- real data

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 import warnings
 from pathlib import Path
 from contextlib import contextmanager
@@ -37,13 +36,14 @@ from typing import Any, Callable, Iterable, Iterator
 
 import click
 
+# the lines themselves are the library's (every face of a method reports the same ones)
+from shipid.warning_lines import QUIET as _QUIET  # noqa: F401
+from shipid.warning_lines import (UNDETERMINED, collect, implied_warnings, one_line,  # noqa: F401
+                                      python_warnings, repair_warnings)
+
 #: Exit status of a command that warned under ``--strict``.
 STRICT_EXIT = 3
 PREFIX = "shipid: warning: "
-#: Estimate statuses that are not an estimate a user may quote.
-UNDETERMINED = ("not determined", "not identifiable", "implausible", "flagged")
-#: Warning categories meant for developers, not for users of the command (not shown, as Python's defaults).
-_QUIET = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
 
 
 @dataclass
@@ -55,11 +55,6 @@ class _Session:
 
 
 _S = _Session()
-
-
-def one_line(text: Any) -> str:
-    """``text`` on one line (runs of whitespace, newlines included, become one space)."""
-    return " ".join(str(text).split())
 
 
 def set_strict(ctx: click.Context | None = None, param: Any = None, value: bool = True) -> bool:
@@ -106,53 +101,7 @@ def take_python_warnings() -> list[str]:
         return []
     new = rec[_S.claimed:]
     _S.claimed = len(rec)
-    counts: dict[str, int] = {}
-    for w in new:
-        if issubclass(w.category, _QUIET):
-            continue
-        t = one_line(w.message)
-        counts[t] = counts.get(t, 0) + 1
-    return [t if n == 1 else f"{t} ({n} times)" for t, n in counts.items()]
-
-
-def implied_warnings(res) -> list[str]:
-    """What a :class:`~shipid.result.Result` says a user must know, beyond its own warning list.
-
-    Non-convergence (``diagnostics["converged"]`` False, or a stage / mode of it), and
-    every estimate whose status is one of :data:`UNDETERMINED` or whose standard error
-    is infinite (the data do not determine it).
-    """
-    d = res.diagnostics or {}
-    own = " ".join(str(w) for w in d.get("warnings", []) or []).lower()
-    out = []
-    if d.get("converged") is False and not ("converge" in own or "settled" in own):
-        parts = []
-        for key, label in (("stages", "stage"), ("ridge", "mode"), ("modes", "mode")):
-            sub = d.get(key)
-            if isinstance(sub, dict):
-                parts += [f"{label} {k}" for k, v in sub.items() if isinstance(v, dict) and v.get("converged") is False]
-        where = f" ({', '.join(parts)} not converged)" if parts else ""
-        out.append(f"{res.method}: the estimator did not converge{where}; do not trust these estimates")
-    for name, e in (res.estimates or {}).items():
-        status = str(getattr(e, "status", "")).lower()
-        std = getattr(e, "std", float("nan"))
-        if status in UNDETERMINED or (isinstance(std, float) and math.isinf(std)):
-            label = status if status in UNDETERMINED else "not determined by the data"
-            note = f" ({one_line(e.note)})" if getattr(e, "note", "") else ""
-            out.append(f"{name}: {label}{note}")
-    return out
-
-
-def repair_warnings(trials: Iterable) -> list[str]:
-    """One line per data repair recorded by the reader (``trial.meta["repairs"]``), naming the file."""
-    out = []
-    for tr in trials:
-        meta = getattr(tr, "meta", {}) or {}
-        src = meta.get("source", "")
-        for r in meta.get("repairs", []) or []:
-            text = r.get("text", r) if isinstance(r, dict) else r
-            out.append(f"data repaired in {src}: {one_line(text)}" if src else f"data repaired: {one_line(text)}")
-    return out
+    return python_warnings(new)
 
 
 def loud(res, *, trials: Iterable = (), extra: Iterable[str] = ()) -> list[str]:
@@ -161,13 +110,7 @@ def loud(res, *, trials: Iterable = (), extra: Iterable[str] = ()) -> list[str]:
     Call it before the result is written or printed, so that its JSON carries every
     warning. Returns the full warning list of the result.
     """
-    d = res.diagnostics
-    lst = [one_line(w) for w in (d.get("warnings") or [])]
-    for w in [*take_python_warnings(), *repair_warnings(trials), *extra, *implied_warnings(res)]:
-        w = one_line(w)
-        if w not in lst:
-            lst.append(w)
-    d["warnings"] = lst
+    lst = collect(res, trials=trials, extra=extra, python=take_python_warnings())
     for w in lst:
         warn(w)
     return lst

@@ -7,7 +7,6 @@ import time
 from pathlib import Path
 
 import click
-import numpy as np
 
 from shipid.cli import CONTEXT, cli
 from shipid.errors import OutputExistsError, ShipidError
@@ -22,11 +21,15 @@ _SUFFIXES = (".csv", ".parquet", ".pq")
               help="Output trial file; .csv or .parquet (by extension).")
 @click.option("--duration", type=float, default=None,
               help="Seconds [default: by manoeuvre, e.g. 900 for zig-zags].")
-@click.option("--dt", type=float, default=0.1, show_default=True, help="Sample interval (s).")
+@click.option("--dt", type=float, default=None,
+              help="Sample interval (s) [default: the vessel's trial sampling, [trials].dt of its file (esso-osaka: "
+                   "1 s), else 0.1].")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of every random draw (PRBS, --noise).")
 @click.option("--speed", type=float, default=None, help="Approach speed in m/s [default: service speed].")
-@click.option("--noise", is_flag=True, help="Add default sensor noise (shipid.simulate.noise.DEFAULT_NOISE).")
+@click.option("--noise", is_flag=True,
+              help="Add sensor noise: the vessel's trial sensors where its file states them (esso-osaka: Yoon & Rhee "
+                   "eq. 19), else shipid.simulate.noise.DEFAULT_NOISE.")
 @click.option("--rps", type=float, default=None,
               help="Identified MMG models only: propeller rate, rev/s [default: from the training data].")
 @click.option("--rudder-rate", type=float, default=None,
@@ -68,13 +71,15 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     if is_model_spec(vessel):
         if seed < 0:
             raise ShipidError(f"--seed must be >= 0, got {seed}")
-        return simulate_identified(vessel, manoeuvre, out, duration=duration, dt=dt, seed=seed, speed=speed,
+        return simulate_identified(vessel, manoeuvre, out, duration=duration, dt=0.1 if dt is None else dt,
+                                   seed=seed, speed=speed,
                                    rps=rps, rudder_rate=rudder_rate, noise=noise, force=force,
                                    water_depth=water_depth)
     if rps is not None or rudder_rate is not None or water_depth is not None:
         raise ShipidError("--rps, --rudder-rate and --water-depth apply to identified MMG models (MODEL.json) only")
-    from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
+    from shipid.simulate.manoeuvres import parse_manoeuvre
     from shipid.simulate.registry import get_ship_model
+    from shipid.simulate.run import default_dt, simulate_vessel
 
     path = Path(out)
     if path.suffix.lower() not in _SUFFIXES:
@@ -88,23 +93,20 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     from shipid.io.files import write_trial
     from shipid.progress import progress_bar
 
+    dt = default_dt(vessel) if dt is None else dt
     dur = spec.default_duration if duration is None else duration
     steps = max(1, int(round(dur / dt))) if dt > 0 else 1
     with progress_bar(steps, f"{model.name} {spec.name}") as advance:
         last = [0]
 
         def tick(k: int) -> None:
+            k = min(k, steps)
             if k - last[0] >= 100 or k == steps:
                 advance(k - last[0])
                 last[0] = k
 
-        trial = run_manoeuvre(model, manoeuvre, duration=duration, dt=dt, seed=seed,
-                              speed=speed, progress=tick)
-    if noise:
-        from shipid.simulate.noise import default_measurement_model
-        # a separate stream from the manoeuvre's draws: seed sequence (seed, 1)
-        trial = default_measurement_model().apply(trial, np.random.default_rng([seed, 1]),
-                                                  missing_ok=True)
+        trial = simulate_vessel(vessel, manoeuvre, duration=duration, dt=dt, seed=seed, speed=speed, noise=noise,
+                                progress=tick)
     write_trial(trial, path, force=force)
     click.echo(f"wrote {out}: {model.name} {spec.name}, {len(trial)} samples, "
                f"{trial.duration:g} s at dt {dt:g} s, seed {seed}{', with sensor noise' if noise else ''}")

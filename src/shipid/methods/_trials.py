@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Mapping, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from typing import Any, Iterator, Mapping, Sequence
 
 from shipid.io.files import read_trial
 from shipid.io.trial import Trial
@@ -11,10 +13,29 @@ from shipid.errors import InputError
 
 Trialish = Trial | str | os.PathLike
 
+_READ: ContextVar[list | None] = ContextVar("shipid_trials_read", default=None)
+
+
+@contextmanager
+def reading_log() -> Iterator[list]:
+    """Collect every trial :func:`as_trial` reads from a file inside (their repairs become warnings)."""
+    log: list = []
+    token = _READ.set(log)
+    try:
+        yield log
+    finally:
+        _READ.reset(token)
+
 
 def as_trial(t: Trialish, **read_kwargs) -> Trial:
     """``t`` itself when it is a :class:`Trial`, else the file read with :func:`read_trial`."""
-    return t if isinstance(t, Trial) else read_trial(t, **read_kwargs)
+    if isinstance(t, Trial):
+        return t
+    tr = read_trial(t, **read_kwargs)
+    log = _READ.get()
+    if log is not None:
+        log.append(tr)
+    return tr
 
 
 def as_list(x) -> list:

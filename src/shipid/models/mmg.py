@@ -55,7 +55,6 @@ from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
 from shipid.models import mmg_kernels
 from shipid.models.mmg_esso_ext import EXT_COEFS, ext_columns
-from shipid.models.mmg_esso_ext2 import EXT2_COEFS, ext2_columns
 from shipid.simulate.integrate import rk4_step
 from shipid.simulate.model import ShipModel
 
@@ -107,10 +106,6 @@ COEFS["esso-lowspeed-asym"] = {"X": COEFS["esso-lowspeed"]["X"],
 # ``esso-lowspeed-asym`` with the surge and slipstream-rudder columns of :mod:`shipid.models.mmg_esso_ext`.
 STRUCTURES = STRUCTURES + ("esso-lowspeed-ext",)
 COEFS["esso-lowspeed-ext"] = {m: COEFS["esso-lowspeed-asym"][m] + EXT_COEFS[m] for m in MODES}
-# ``esso-lowspeed-ext`` with the rudder yaw-inflow, propeller-walk and wind-arm columns of
-# :mod:`shipid.models.mmg_esso_ext2`.
-STRUCTURES = STRUCTURES + ("esso-lowspeed-ext2",)
-COEFS["esso-lowspeed-ext2"] = {m: COEFS["esso-lowspeed-ext"][m] + EXT2_COEFS[m] for m in MODES}
 
 #: Units of the linear coefficients (dimensional gains; hull coefficients are non-dimensional).
 COEF_UNITS = {"NR_arm": "m", "NR_s": "m"}
@@ -124,8 +119,9 @@ class MmgModel:
     structure : {"esso-lowspeed", "yasukawa2015"}
     particulars : mapping of str to float
         ``L, B, d, m, x_G, rho, m_x, m_y, J_z, I_zG`` (SI; ``I_zG`` may be folded into
-        ``J_z`` as the Esso set does, with ``I_zG = 0``) and the sub-model constants of
-        the structure (propeller, rudder, wind geometry).
+        ``J_z`` as the Esso set does, with ``I_zG = 0``), the sub-model constants of
+        the structure (propeller, rudder, wind geometry) and, where known, ``L_ship``: the
+        full-scale length of the ship a model-scale hull represents (m).
     coef : mapping of str to float
         The linear coefficients :data:`COEFS` of the structure.
     name : str
@@ -199,7 +195,7 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         out = basis_esso(p, u, v, r, delta, n)
         for m, H in zip(MODES, cubic_hull(p, u, v, r)):
             out[m] = (np.concatenate([H, out[m][0][..., 3:]], axis=-1), out[m][1])
-    elif model.structure in ("esso-lowspeed-asym", "esso-lowspeed-ext", "esso-lowspeed-ext2"):
+    elif model.structure in ("esso-lowspeed-asym", "esso-lowspeed-ext"):
         out = basis_esso(p, u, v, r, delta, n)
         a = out["aux"]
         T4 = (n > 0) * p["rho"] * p["D_p"] ** 4 * n * n
@@ -207,10 +203,8 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
         dFN = 0.5 * p["rho"] * p["A_R"] * a["U_R"] ** 2 * f_alpha * np.cos(a["alpha_R"]) * np.cos(delta)
         for m, extra in (("Y", (T4, dFN)), ("N", (T4 * p["L"], dFN * p["L"]))):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
-        if model.structure in ("esso-lowspeed-ext", "esso-lowspeed-ext2"):
+        if model.structure == "esso-lowspeed-ext":
             out = ext_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
-        if model.structure == "esso-lowspeed-ext2":
-            out = ext2_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
     elif model.structure == "yasukawa2015-asym":
         out = basis_yasukawa(p, u, v, r, delta, n)
         T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]
@@ -346,6 +340,13 @@ def _params_dir(root: Path | None) -> Path:
     return root / "params"
 
 
+#: Full-scale length between perpendiculars of the ESSO OSAKA, m (Crane 1979, Table 1: 1066 ft), the ship the
+#: 3 m model represents; ``particulars["L_ship"]`` of the published set (``shipid imo``'s full-scale L/V).
+ESSO_OSAKA_SHIP_LENGTH = 325.0
+#: Full-scale length between perpendiculars of the KVLCC2, m (Yasukawa & Yoshimura 2015, Table 1).
+KVLCC2_SHIP_LENGTH = 320.0
+
+
 def load_esso_osaka_published(root: Path | None = None) -> MmgModel:
     """The published MMG set of the 3 m Esso Osaka (mmg-1p1r-simulator, commit c54ef807).
 
@@ -367,7 +368,7 @@ def load_esso_osaka_published(root: Path | None = None) -> MmgModel:
     L, d_, rho = pp["lpp"], pp["draft"], pp["rho_fresh"]
     qM, qI = 0.5 * rho * L * L * d_, 0.5 * rho * L ** 4 * d_
     part = {
-        "L": L, "B": pp["breadth"], "d": d_, "rho": rho,
+        "L": L, "L_ship": ESSO_OSAKA_SHIP_LENGTH, "B": pp["breadth"], "d": d_, "rho": rho,
         "m": pp["mass_nd"] * qM, "x_G": pp["x_lcg"] * L,
         "m_x": pr["massx_nd"] * qM, "m_y": pr["massy_nd"] * qM, "J_z": pr["IzzJzz_nd"] * qI, "I_zG": 0.0,
         "D_p": pp["dia_prop"], "pitch_ratio": pp["pitchr"],
@@ -432,7 +433,7 @@ def load_kvlcc2_published(root: Path | None = None) -> MmgModel:
     rho, L, d = y["ρ"], y["L_pp"], y["d"]
     m = rho * y["nabla"]
     qM, qI = 0.5 * rho * L * L * d, 0.5 * rho * L ** 4 * d
-    part = {"L": L, "B": y["B"], "d": d, "rho": rho, "m": m, "x_G": y["x_G"],
+    part = {"L": L, "L_ship": KVLCC2_SHIP_LENGTH, "B": y["B"], "d": d, "rho": rho, "m": m, "x_G": y["x_G"],
             "m_x": y["m_x_dash"] * qM, "m_y": y["m_y_dash"] * qM, "J_z": y["J_z_dash"] * qI,
             "I_zG": m * (0.25 * L) ** 2, "D_p": y["D_p"], "H_R": y["H_R"], "A_R": y["A_R"],
             "w_P0": y["w_P0"], "t_P": y["t_P"], "x_P": y["x_P_dash"], "k_0": y["k_0"], "k_1": y["k_1"],
@@ -477,7 +478,8 @@ def load_kvlcc2_hsva_prior(root: Path | None = None) -> MmgModel:
     p = dict(base.particulars)
     L, d, rho = y["L"], y["T"], y["rho"]
     scale = (rho * L * L * d) / (base.particulars["rho"] * base.particulars["L"] ** 2 * base.particulars["d"])
-    p.update(L=L, B=y["B"], d=d, rho=rho, m=y["m"], x_G=y["x_G"], I_zG=y["I_z"], D_p=y["D"], A_R=y["A_R"],
+    p.update(L=L, L_ship=L * y["scale_factor"] if "scale_factor" in y else KVLCC2_SHIP_LENGTH, B=y["B"], d=d,
+             rho=rho, m=y["m"], x_G=y["x_G"], I_zG=y["I_z"], D_p=y["D"], A_R=y["A_R"],
              H_R=y["H_R"], w_P0=y["w_p0"], C_1=y["C_1"], C_2_plus=y["C_2_beta_p_pos"],
              C_2_minus=y["C_2_beta_p_neg"], t_P=y["tdf"],
              m_x=base.particulars["m_x"] * scale, m_y=base.particulars["m_y"] * scale,
@@ -513,7 +515,7 @@ def ship_model(model: MmgModel):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
                 "delta": U[:, 0], "n": U[:, 1]}
 
-    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym", "esso-lowspeed-ext", "esso-lowspeed-ext2")
+    esso = model.structure in ("esso-lowspeed", "esso-lowspeed-asym", "esso-lowspeed-ext")
     n0 = 10.0 if esso else 10.23
     U0 = 0.5 if esso else 1.179
     return ShipModel(name=model.name, f=dynamics, theta=model, state_names=STATE_NAMES,

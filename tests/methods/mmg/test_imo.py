@@ -68,11 +68,30 @@ def test_stopping_only_where_the_model_has_an_astern_propeller():
     rep = I.assess({"model": kv.to_dict()}, samples=0, rps=10.23, rudder_rate_deg_s=15.0)
     stop = rep["criteria"][-1]
     assert stop["verdict"] == "not available: model has no astern propeller"
-    # without the full-scale length an overshoot verdict is given only where every L/V agrees
-    z = next(c for c in rep["criteria"] if c["name"] == "zigzag-10 first overshoot")
-    assert z["limit"] == [10.0, 20.0]
-    assert z["verdict"] == ("pass" if z["value"] <= 10 else "fail" if z["value"] > 20 else
-                            "depends on L/V (give --ship-length)")
+
+
+def test_imo_has_no_silent_ship_length_or_rudder_rate(capsys):
+    """The full-scale length comes from the model's prior (L_ship) or must be given; the rudder rate is
+    SOLAS's at that scale unless given; both, and where they came from, are in the JSON and the header."""
+    need()
+    res = _published_esso_result()
+    rep = I.assess(res, samples=0)
+    assert rep["ship_length"] == mmg.ESSO_OSAKA_SHIP_LENGTH and "L_ship" in rep["ship_length_from"]
+    assert rep["rudder_rate_deg_s"] == pytest.approx(65 / 28 * np.sqrt(325 / 3.0))
+    assert rep["conditions"]["rudder_rate_deg_s"] == pytest.approx(rep["rudder_rate_deg_s"])
+    assert "SOLAS" in rep["rudder_rate_from"]
+    head = I.format_report(rep).splitlines()[1]
+    assert head.startswith("ship length 325 m (L_ship of the model's particulars")
+    assert f"rudder rate {rep['rudder_rate_deg_s']:.3g} deg/s (the SOLAS minimum" in head
+    given = I.assess(res, samples=0, ship_length=200.0, rudder_rate_deg_s=30.0)
+    assert (given["ship_length"], given["ship_length_from"]) == (200.0, "given")
+    assert (given["rudder_rate_deg_s"], given["rudder_rate_from"]) == (30.0, "given")
+    bare = dict(res, model=dict(res["model"], particulars={k: v for k, v in res["model"]["particulars"].items()
+                                                           if k != "L_ship"}))
+    with pytest.raises(InputError, match="records no full-scale ship length .* give --ship-length"):
+        I.assess(bare, samples=0)
+    kv = mmg.load_published("kvlcc2_hsva")
+    assert kv.particulars["L_ship"] == pytest.approx(7.0 * 45.7)
 
 
 def _identify(files, tmp_path, name):

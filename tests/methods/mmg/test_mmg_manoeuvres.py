@@ -101,7 +101,7 @@ def test_imo_and_simulate_say_when_the_depth_is_outside_the_training_runs(tmp_pa
         assert capsys.readouterr().err.count("shipid: warning: water depth 0.6 m") == 1
     assert main(["imo", str(mj), "--samples", "0"]) == 0
     assert main(["identify", "mmg", "--trial", str(out), "--water-depth", "-1"]) == 2
-    assert "--water-depth must be positive" in capsys.readouterr().err
+    assert "water depth must be positive" in capsys.readouterr().err
     # validate: a run that records its depth is checked against the model's training depth
     from shipid.io import write_trial
 

@@ -134,8 +134,8 @@ def test_cli_identify_with_channel_map_then_validate(tmp_path, capsys):
                  "--structure", "hull+rudder+thrust", "-o", str(model)]) == 2
 
 
-def test_identify_realdata_subprocess_json(tmp_path):
-    """``shipid identify realdata --train A B --json`` in a fresh interpreter prints a MODEL.json."""
+def test_identify_mmg_subprocess_json(tmp_path):
+    """``shipid identify mmg --trial A --trial B --json`` in a fresh interpreter prints a MODEL.json."""
     need_params()
     import subprocess
     import sys
@@ -146,7 +146,7 @@ def test_identify_realdata_subprocess_json(tmp_path):
         p = tmp_path / f"run{s}.csv"
         write_trial(_sim_trial(truth, s, seconds=60.0, noise=1.0), p)
         files.append(str(p))
-    r = subprocess.run([sys.executable, "-m", "shipid", "identify", "realdata", "--train", *files,
+    r = subprocess.run([sys.executable, "-m", "shipid", "identify", "mmg", *[a for f in files for a in ("--trial", f)],
                         "--structure", "hull-only", "--json"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)

@@ -1,12 +1,15 @@
-"""Real-data commands (issue 6): validate a model on a run, identify MMG models, held-out studies.
+"""MMG commands: validate a model on a run, identify MMG models, held-out studies.
 
-* ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png]``
+The commands parse their options, call the library and print; what decides the model (data profile,
+rudder sign, prior, re-timing, checks, selection) is :mod:`shipid.methods.mmg.entry` and
+:mod:`shipid.methods.mmg.profile`, the same functions ``shipid.identify("mmg", ...)`` and
+``shipid.validate`` run.
+
+* ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png] [--no-retime]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
-* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``
-  and ``shipid identify realdata --train RUN.csv ...`` (the same pipeline); ``--selection``: the
-  structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`) or, for the
-  Yasukawa-2015 structure (KVLCC2) by default, by what a turning circle measures
-  (:mod:`shipid.methods.mmg.turning_selection`)
+* ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``;
+  ``--selection``: the structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`)
+  or by what a turning circle measures (:mod:`shipid.methods.mmg.turning_selection`)
 * ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
 * ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
 * ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
@@ -24,44 +27,9 @@ import math
 import click
 
 from shipid.cli import CONTEXT, cli, identify, study
-from shipid.cli._common import CHANNELS_HELP, ManyValues, channels_option, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import CHANNELS_HELP, channels_option, emit, loud, loud_lines, out_options, strict_option
 from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
-
-
-#: Per data profile: the published prior and the sign of the file's rudder relative to MMG's
-#: (MMG: rudder positive turns the ship to starboard; HSVA logs the rudder positive to port).
-PROFILE_DEFAULTS = {"kvlcc2": ("kvlcc2_hsva", -1), "esso": ("esso_osaka_3m", 1)}
-#: How ``identify`` and ``validate`` read runs (recorded in MODEL.json's ``model.validate``).
-READ_SETTINGS = {"trim_empty_rows": True, "interpolate_gaps": 1.0}
-
-
-def _read_run(path, fmt=None, channels=None, required=None, method="shipid validate/identify"):
-    from shipid.io.files import read_trial
-
-    return read_trial(path, fmt=fmt, channel_map=channels, required=required, method=method, **READ_SETTINGS)
-
-
-def _flip(tr, sign):
-    if sign == -1 and "delta" in tr:
-        out = tr.with_channels(delta=-tr["delta"])
-        out.meta["rudder_sign_flipped"] = True
-        return out
-    return tr
-
-
-def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
-    """The first-rudder-step yaw sign of a run (rudder already multiplied by ``sign``) and a warning if it
-    contradicts MMG's convention (``against`` names what it contradicts)."""
-    from shipid.methods.mmg.validate import first_step_yaw_sign
-
-    st = first_step_yaw_sign(tr)
-    if st["sign"] >= 0:
-        return st, None
-    return st, (f"{tr.meta.get('source', 'run')}: the yaw response to the first rudder step (t = {st['t_step']:.1f} s, "
-                f"rudder {st['delta_step_deg']:+.1f} deg with rudder sign {sign:+d}, yaw rate change "
-                f"{st['dr_deg_s']:+.2f} deg/s) contradicts {against}; the run's rudder sign is probably the "
-                f"opposite (--rudder-sign {-sign:+d})")
 
 
 @cli.command("validate", context_settings=CONTEXT)
@@ -82,8 +50,11 @@ def _convention_warning(tr, sign, against: str) -> tuple[dict, str | None]:
 @click.option("--out", "out_path", default=None, type=click.Path(dir_okay=False),
               help="Write the whole-run open-loop prediction beside the measured channels (CSV/Parquet).")
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
+@click.option("--no-retime", "no_retime", is_flag=True,
+              help="MMG: do not re-time the run by the offsets MODEL.json records (estimated on its training runs).")
 @strict_option
-def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force):
+def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force,
+                 no_retime):
     """Simulate MODEL open loop on a held-out run and report RMS/max errors.
 
     MODEL is a result JSON of 'shipid identify mmg | ebm | dp | mass-cm --json' (the
@@ -120,34 +91,12 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         _validate_other(model, other, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path,
                         out_path, force)
         return
-    m, doc = V.load_model_document(model)
-    mv = dict((doc or {}).get("model", {}).get("validate", {}) or {})
-    notes = []
-    if doc is not None and (doc.get("diagnostics") or {}).get("converged") is False:
-        notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
-                     "its predictions must not be trusted")
-    tr = _read_run(trial_path, fmt or mv.get("format"), channels if channels is not None else mv.get("channels"))
-    profile = tr.meta.get("profile")
-    if rudder_sign is None:
-        rudder_sign = int(mv.get("rudder_sign") or PROFILE_DEFAULTS.get(profile, (None, 1))[1])
-    elif "rudder_sign" in mv and int(mv["rudder_sign"]) != rudder_sign:
-        notes.append(f"--rudder-sign {rudder_sign:+d} differs from the rudder sign of the model's training runs "
-                     f"({int(mv['rudder_sign']):+d})")
-    if horizon is None:
-        horizon = float(mv.get("horizon_s", 60.0))
-    tr = _flip(tr, rudder_sign)
-    st, w = _convention_warning(tr, rudder_sign, "the model's convention (rudder positive turns to starboard"
-                                + (f", as in its training runs with rudder sign {int(mv['rudder_sign']):+d})"
-                                   if "rudder_sign" in mv else ")"))
-    if w:
-        notes.append(w)
-    if tr.meta.get("water_depth") is not None:       # the run's depth against the model's training depth
-        from shipid.methods.mmg.manoeuvres import depth_check
+    from shipid.methods.mmg.entry import validate_with_run
 
-        tc = ((doc or {}).get("model") or {}).get("training_conditions") or {}
-        notes += depth_check(float(m.particulars["d"]), tc.get("water_depth"), float(tr.meta["water_depth"]))[1]
-    v = V.validate(m, tr, horizon=horizon)
-    warns = loud_lines(notes, trials=[tr])
+    v, tr = validate_with_run(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
+                              retime=not no_retime)
+    rudder_sign = v.settings["rudder_sign"]
+    warns = loud_lines(v.settings.pop("warnings"))
     if out_path:
         from shipid.methods.mmg.export import write_prediction
         _, pt = write_prediction(v, tr, out_path, rudder_sign=rudder_sign, force=force)
@@ -158,8 +107,6 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         V.plot(v, plot_path, force=force)
     if as_json:
         d = v.to_dict()
-        d["settings"] = {"rudder_sign": rudder_sign, "horizon_s": horizon, "profile": profile,
-                         "first_step_yaw_sign": st}
         d["warnings"] = warns
         click.echo(json.dumps(d, indent=2))
     else:
@@ -196,7 +143,6 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
     """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
     from shipid import registry
     from shipid.analysis.openloop import format_table, write_csv
-    from shipid.io.files import read_trial
     from shipid.errors import InputError
     from shipid.result import Result
 
@@ -211,9 +157,10 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
         res = Result.from_dict(doc)
     except (KeyError, TypeError, ValueError) as err:
         raise InputError(f"malformed result ({type(err).__name__}: {err})", file=model) from None
-    tr = read_trial(trial_path, fmt=fmt, channel_map=channels, required=list(getattr(mod, "REQUIRED", ())) or None,
-                    method="shipid validate", **READ_SETTINGS)
-    tr = _flip(tr, rudder_sign)
+    from shipid.methods.mmg.profile import flip, read_run
+
+    tr = flip(read_run(trial_path, fmt, channels, method="shipid validate",
+                       required=list(getattr(mod, "REQUIRED", ())) or None), rudder_sign)
     notes = []
     if (res.diagnostics or {}).get("converged") is False:
         notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
@@ -237,30 +184,6 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
 
 
 # ----------------------------------------------------------------------------- identify
-def _prior(spec: str | None, profiles: set, notes: list):
-    """The prior model and how it was chosen: ``--prior``, else the data profile, else Esso with a warning."""
-    from shipid.methods.mmg import validate as V
-    from shipid.models import mmg
-
-    if spec is None:
-        known = {p for p in profiles if p in PROFILE_DEFAULTS}
-        if len(known) > 1:
-            raise ShipidError(f"training runs of different ships ({', '.join(sorted(known))}): give --prior")
-        if known:
-            prof = known.pop()
-            spec, how = PROFILE_DEFAULTS[prof][0], f"data profile {prof}"
-        else:
-            spec, how = "esso_osaka_3m", "default (no --prior, and the files' format names no ship)"
-            notes.append("no --prior given and the training files' format names no ship: the Esso Osaka 3 m "
-                         "prior (structure, masses, fixed constants) is used; give --prior for another ship")
-    else:
-        how = "--prior"
-    if spec.endswith(".json"):
-        return V.load_model(spec), {"spec": spec, "chosen_by": how}
-    pm = mmg.load_published(spec.replace("published:", ""))
-    return pm, {"spec": spec, "name": pm.name, "chosen_by": how}
-
-
 def _print_result(res) -> None:
     conv = res.diagnostics.get("converged")
     if conv is not None:
@@ -298,74 +221,16 @@ def _print_result(res) -> None:
 
 
 def _identify(paths, fmt, channels, prior, structure, folds, rudder_sign, as_json, output, force, refine="auto",
-              selection="auto", simex="auto", equation="auto", water_depth=None):
-    from shipid.methods.mmg import estimator as R
-    from shipid.methods.mmg import pipeline as P
-    from shipid.methods.mmg import rudder_angle as RA
-    from shipid.methods.mmg import simex as SX
-    from shipid.methods.mmg import turning_nested as TN
-    from shipid.methods.mmg import turning_selection as TS
+              selection="auto", simex="auto", equation="auto", water_depth=None, no_retime=False):
+    from shipid.api import identify as api_identify
 
-    if not paths:
-        raise ShipidError("no training runs given")
     if rudder_sign not in (None, 1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
-    if water_depth is not None and not (math.isfinite(water_depth) and water_depth > 0):
-        raise ShipidError(f"--water-depth must be positive, got {water_depth:g}")
-    raw = [_read_run(p, fmt, channels, ["x", "y", "psi", "u", "v", "r", "delta", "n"], "identify mmg")
-           for p in paths]     # the channels of shipid.methods.mmg.estimator.smooth_run
-    if water_depth is not None:   # the runs' depth as given, over what a data profile records
-        for tr in raw:
-            tr.meta.update(water_depth=float(water_depth), water_depth_source="--water-depth")
-    profiles = {tr.meta.get("profile") for tr in raw}
-    notes: list[str] = []
-    if rudder_sign is None:
-        signs = {PROFILE_DEFAULTS.get(p, (None, 1))[1] for p in profiles}
-        if len(signs) > 1:
-            raise ShipidError("training runs with different rudder conventions: give --rudder-sign")
-        rudder_sign, sign_from = signs.pop(), "data profile"
-    else:
-        sign_from = "--rudder-sign"
-    trials, steps = [], []
-    for tr in raw:
-        tr = _flip(tr, rudder_sign)
-        st, w = _convention_warning(tr, rudder_sign, "MMG's convention (rudder positive turns to starboard)")
-        steps.append({"file": tr.meta.get("source", ""), **st})
-        if w:
-            notes.append(w)
-        trials.append(tr)
-    pm, prior_info = _prior(prior, profiles, notes)
-    st = None if structure in (None, "auto") else structure
-    if selection == "auto":
-        selection = "horizons"
-    selectors = {"turning": TS.select_for_turning, "turning-auto": TN.select_auto}
-    sel_kw = {}
-    if selection == "rudder-angle":
-        if pm.structure != "yasukawa2015":
-            raise ShipidError(f"--selection rudder-angle: for the structure 'yasukawa2015' only (not '{pm.structure}')")
-        name = f"{RA.BASE}/{RA.CHOSEN}"
-        if st is not None and st != name:
-            raise ShipidError(f"--selection rudder-angle fixes the candidate '{name}': leave --structure out")
-        st, sel_kw = name, {"candidates": {name: RA.candidates()[RA.CHOSEN]}, "resolve": RA.resolve}
-    elif selection in selectors:
-        if pm.structure not in TS.TURNING_CANDIDATES:
-            raise ShipidError(f"--selection {selection}: no turning candidates for the structure '{pm.structure}' "
-                              f"(only {', '.join(TS.TURNING_CANDIDATES)})")
-        sel_kw = {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": selectors[selection],
-                  "resolve": TS.resolve}
-    sx = {"auto": SX.SimexConfig(), "on": SX.SimexConfig(pilot=False), "off": None}[simex]
-    res = P.identify(trials, pm, structure=st, select=st is None, folds=folds, refine=refine, simex=sx,
-                     fit_config=R.FitConfig(equation=equation),
-                     extra_provenance={"command": "shipid identify", "rudder_sign": rudder_sign,
-                                       "selection": selection}, **sel_kw)
-    res.model["prior"] = prior_info
-    res.model["conventions"] = {
-        "rudder_sign": rudder_sign, "rudder_sign_from": sign_from,
-        "rudder": "delta = rudder_sign x the file's rudder; positive turns the ship to starboard (MMG)",
-        "yaw_rate": "positive to starboard", "heading": "clockwise from x0", "first_rudder_step": steps}
-    res.model["validate"] = {"rudder_sign": rudder_sign, "format": fmt, "channels": channels,
-                             "profiles": sorted(p for p in profiles if p), "horizon_s": 60.0, "read": READ_SETTINGS}
-    loud(res, trials=trials, extra=notes)
+    res = api_identify("mmg", list(paths), prior=prior, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
+                       structure=structure, folds=folds, selection=selection, refine=refine, simex=simex,
+                       equation=equation, water_depth=water_depth, retime=False if no_retime else "auto",
+                       command="shipid identify")
+    loud(res)
 
     def text():
         _print_result(res)
@@ -425,6 +290,11 @@ _ID_OPTS = [
                  help="Water depth of the training runs, m, recorded in MODEL.json's training conditions "
                       "(simulate / imo warn when asked for another depth class) [default: from the data profile "
                       "where it records one (HSVA KVLCC2: 6.0 m), else not recorded]."),
+    click.option("--no-retime", "no_retime", is_flag=True,
+                 help="Do not re-time the runs onto their position clock [default: re-time Esso CSV runs: the "
+                      "offsets of heading, velocities, yaw rate, rudder, propeller and wind are estimated on the "
+                      "training runs, recorded in MODEL.json and applied by 'shipid validate'; one data-repair "
+                      "line]."),
     out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
                          "file needs --force."),
@@ -443,7 +313,7 @@ def _with_id_opts(f):
               help="A training run (repeat for several).")
 @_with_id_opts
 def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
-                 water_depth, as_json, out, force):
+                 water_depth, no_retime, as_json, out, force):
     """Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).
 
     The structure (which coefficients are free) is chosen by cross-validation over the
@@ -451,18 +321,7 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
     for 'shipid validate'.
     """
     _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
-              simex, equation, water_depth)
-
-
-@identify.command("realdata", context_settings=CONTEXT)
-@click.option("--train", "train", cls=ManyValues, required=True, type=click.Path(dir_okay=False),
-              help="Training runs: --train A.csv B.csv ...")
-@_with_id_opts
-def identify_realdata(train, fmt, channels, prior, structure, folds, selection, refine, rudder_sign, equation, simex,
-                      water_depth, as_json, out, force):
-    """Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ..."""
-    _identify(train, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
-              simex, equation, water_depth)
+              simex, equation, water_depth, no_retime)
 
 
 # ----------------------------------------------------------------------------- studies

@@ -79,10 +79,12 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
               help="Monte Carlo draws from the parameter covariance (0: nominal only).")
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the draws.")
 @click.option("--ship-length", type=float, default=None,
-              help="Full-scale length (m): gives the full-scale L/V of the overshoot limits.")
+              help="Full-scale length (m) of the overshoot limits' L/V and the steering-gear scale "
+                   "[default: the model's L_ship, from its prior; required where it has none].")
 @click.option("--speed", type=float, default=None, help="Approach speed, m/s [default: from the training data].")
 @click.option("--rps", type=float, default=None, help="Propeller rate, rev/s [default: from the training data].")
-@click.option("--rudder-rate", type=float, default=None, help="Steering-gear rate, deg/s [default: training data].")
+@click.option("--rudder-rate", type=float, default=None,
+              help="Steering-gear rate, deg/s [default: the SOLAS minimum 2.32 deg/s at the model's scale (Froude)].")
 @click.option("--dt", type=float, default=0.1, show_default=True, help="Simulation step, s.")
 @click.option("--water-depth", type=float, default=None,
               help="Water depth, m [default: the training runs']; a depth class (h/T) other than the training "

@@ -1,43 +1,252 @@
-"""``shipid.methods.mmg.identify``: the common entry shape around :func:`shipid.methods.mmg.pipeline.identify`."""
+"""``shipid.methods.mmg.identify``: the whole of ``identify mmg``, from files to MODEL.json.
+
+The command line (``shipid identify mmg``) parses its options and calls this function; whatever decides
+the model — how the runs are read, their rudder sign, the prior, the convention checks, the structure
+selection, the refinement — happens here, so that ``shipid.identify("mmg", files)`` and the command give
+the same estimates, covariance and warnings.
+"""
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 from shipid.errors import InputError
-from shipid.methods._trials import as_list, as_trial
-from shipid.methods.mmg import pipeline
+from shipid.methods._trials import as_list
+from shipid.warning_lines import collect, one_line, repair_warnings
+from shipid.methods.mmg import pipeline as P
+from shipid.methods.mmg import profile as PF
+from shipid.methods.mmg import rudder_angle as RA
+from shipid.methods.mmg import simex as SX
+from shipid.methods.mmg import turning_nested as TN
+from shipid.methods.mmg import turning_selection as TS
+from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.estimator import FitConfig
-from shipid.methods.mmg.validate import load_model
+from shipid.methods.mmg.manoeuvres import depth_check
 from shipid.models import mmg as mmg_model
 from shipid.result import Result
 
+#: ``selection=`` values (the criterion and candidate list of the structure selection).
+SELECTIONS = ("auto", "horizons", "turning", "turning-auto", "rudder-angle")
+#: ``simex=`` values.
+SIMEX = ("auto", "on", "off")
+
+
+def _selection_kw(selection: str, pm, st: str | None) -> tuple[str | None, dict]:
+    """The structure and :func:`~shipid.methods.mmg.pipeline.identify` keywords of a ``selection``."""
+    if selection in ("auto", "horizons"):
+        return st, {}
+    if selection == "rudder-angle":
+        if pm.structure != "yasukawa2015":
+            raise InputError(f"selection rudder-angle: for the structure 'yasukawa2015' only (not '{pm.structure}')")
+        name = f"{RA.BASE}/{RA.CHOSEN}"
+        if st is not None and st != name:
+            raise InputError(f"selection rudder-angle fixes the candidate '{name}': leave the structure out")
+        return name, {"candidates": {name: RA.candidates()[RA.CHOSEN]}, "resolve": RA.resolve}
+    selectors = {"turning": TS.select_for_turning, "turning-auto": TN.select_auto}
+    if pm.structure not in TS.TURNING_CANDIDATES:
+        raise InputError(f"selection {selection}: no turning candidates for the structure '{pm.structure}' "
+                         f"(only {', '.join(TS.TURNING_CANDIDATES)})")
+    return st, {"candidates": TS.TURNING_CANDIDATES[pm.structure], "selector": selectors[selection],
+                "resolve": TS.resolve}
+
 
 def identify(trials, *, vessel: str | None = None, options: FitConfig | None = None, prior=None,
-             **kw) -> Result:
+             fmt: str | None = None, channels=None, rudder_sign: int | None = None, structure: str | None = None,
+             folds: int | None = None, selection: str = "auto", refine: str = "auto", simex: str = "auto",
+             equation: str = "auto", water_depth: float | None = None, retime="auto",
+             command: str = "shipid.identify", **kw) -> Result:
     """An MMG model from free-running model tests (EBM applied to the MMG structure).
 
     Parameters
     ----------
     trials : sequence
-        Measured runs (objects or paths); files are read with empty rows trimmed and gaps of up to
-        1 s interpolated (each repair is reported).
-    vessel, prior : str or MmgModel
-        The prior: a published set (``"esso_osaka_3m"``, ``"kvlcc2_hsva"``, ``"published:<name>"``) or
-        an identified model JSON; ``vessel`` is accepted as the same argument.
+        Measured runs (objects or paths); files are read by :func:`shipid.methods.mmg.profile.read_run`
+        (empty rows trimmed, gaps of up to 1 s interpolated; each repair is one warning).
+    vessel, prior : str or MmgModel, optional
+        The prior: a published set (``"esso_osaka_3m"``, ``"kvlcc2_hsva"``, ``"published:<name>"``), an
+        identified model JSON or an :class:`~shipid.models.mmg.MmgModel`; ``vessel`` is accepted as the
+        same argument. Default: the set of the runs' data profile
+        (:data:`~shipid.methods.mmg.profile.PROFILE_DEFAULTS`), else the Esso Osaka 3 m set with a warning.
     options : FitConfig, optional
+        Step-2 settings; ``equation`` other than ``"auto"`` replaces its regression form.
+    fmt, channels : optional
+        Trial format and column map of the files (default: from each file).
+    rudder_sign : {1, -1}, optional
+        Sign of the files' rudder relative to MMG's (default: from the data profile, -1 for HSVA KVLCC2).
+        Each run's yaw response to its first rudder step is checked against it (one warning per run
+        that contradicts it).
+    structure : str, optional
+        A candidate name, or None / ``"auto"`` to choose by cross-validation over the runs.
+    folds : int, optional
+        CV folds (default: leave one run out).
+    selection : {"auto", "horizons", "turning", "turning-auto", "rudder-angle"}
+        Criterion and candidate list of the structure selection (``shipid identify mmg --help``).
+    refine : {"auto", "none", "output-error"}
+        See :func:`shipid.methods.mmg.pipeline.identify`.
+    simex : {"auto", "on", "off"}
+        SIMEX correction (:mod:`shipid.methods.mmg.simex`): only where its pilot finds it material, always,
+        never.
+    equation : {"auto", "integral", "differential"}
+        Step-2 regression form (:class:`~shipid.methods.mmg.estimator.FitConfig`).
+    water_depth : float, optional
+        Water depth of the runs, m, over what a data profile records.
+    retime : {"auto", True, False}
+        Re-time the state channels and the inputs onto the position clock by offsets estimated on these
+        runs (:func:`shipid.methods.mmg.profile.estimate_retime`), before anything else; recorded in
+        ``model["retime"]`` and applied by ``validate`` to the runs it reads; one data-repair line.
+        ``"auto"``: for runs of the profiles in :data:`~shipid.methods.mmg.profile.RETIME_PROFILES` (Esso).
+    command : str
+        Recorded in the provenance.
     **kw
-        ``structure=``, ``folds=``, ``refine=`` ... of :func:`shipid.methods.mmg.pipeline.identify`;
-        ``refine`` defaults to ``"auto"`` (see :func:`shipid.methods.mmg.pipeline.identify`).
+        Further keywords of :func:`shipid.methods.mmg.pipeline.identify`.
+
+    Returns
+    -------
+    Result
+        MODEL.json: estimates, covariance, the structure selection table, and in ``model`` the prior,
+        the conventions and the reading settings ``validate`` applies to runs of the same profile.
     """
-    data = [as_trial(x, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.identify mmg")
-            for x in as_list(trials)]
-    prior = prior or vessel
-    if prior is None:
-        raise InputError("mmg: prior= is required (a published set such as 'esso_osaka_3m' or 'kvlcc2_hsva', "
-                         "or an identified model JSON)")
-    if isinstance(prior, str):
-        prior = (load_model(prior) if prior.endswith(".json")
-                 else mmg_model.load_published(prior.replace("published:", "")))
-    if options is not None:
-        kw["fit_config"] = options
-    kw.setdefault("refine", "auto")
-    return pipeline.identify(data, prior, **kw)
+    paths = as_list(trials)
+    if not paths:
+        raise InputError("no training runs given")
+    if water_depth is not None and not (math.isfinite(water_depth) and water_depth > 0):
+        raise InputError(f"water depth must be positive, got {water_depth:g}")
+    if selection not in SELECTIONS:
+        raise InputError(f"unknown selection '{selection}' ({', '.join(SELECTIONS)})")
+    if simex not in SIMEX:
+        raise InputError(f"unknown simex '{simex}' ({', '.join(SIMEX)})")
+    raw = [PF.as_run(p, fmt, channels, method="shipid identify mmg") for p in paths]
+    if water_depth is not None:   # the runs' depth as given, over what a data profile records
+        raw = [PF.with_meta(tr, water_depth=float(water_depth), water_depth_source="given") for tr in raw]
+    profiles = {tr.meta.get("profile") for tr in raw}
+    notes: list[str] = []
+    rudder_sign, sign_from = PF.rudder_sign_of(raw, rudder_sign)
+    data, steps = [], []
+    for tr in raw:
+        tr = PF.flip(tr, rudder_sign)
+        st, w = PF.convention_warning(tr, rudder_sign, "MMG's convention (rudder positive turns to starboard)")
+        steps.append({"file": tr.meta.get("source", ""), **st})
+        if w:
+            notes.append(w)
+        data.append(tr)
+    rt = None
+    if PF.wants_retime(retime, profiles):
+        rt = PF.estimate_retime(data)
+        data = [PF.apply_retime(tr, rt) for tr in data]
+        notes.append(PF.retime_line(rt, f"the {len(data)} training runs"))
+    pm, prior_info = PF.choose_prior(prior if prior is not None else vessel, profiles, notes)
+    st = None if structure in (None, "auto") else structure
+    if selection == "auto":
+        selection = "horizons"
+    st, sel_kw = _selection_kw(selection, pm, st)
+    cfg = options or FitConfig()
+    if equation != "auto":
+        cfg = replace(cfg, equation=equation)
+    sx = {"auto": SX.SimexConfig(), "on": SX.SimexConfig(pilot=False), "off": None}[simex]
+    kw = {**sel_kw, **kw}
+    res = P.identify(data, pm, structure=st, select=st is None, folds=folds, refine=refine, simex=sx,
+                     fit_config=cfg, extra_provenance={"command": command, "rudder_sign": rudder_sign,
+                                                       "selection": selection}, **kw)
+    res.model["prior"] = prior_info
+    res.model["conventions"] = {
+        "rudder_sign": rudder_sign, "rudder_sign_from": sign_from,
+        "rudder": "delta = rudder_sign x the file's rudder; positive turns the ship to starboard (MMG)",
+        "yaw_rate": "positive to starboard", "heading": "clockwise from x0", "first_rudder_step": steps}
+    res.model["validate"] = {"rudder_sign": rudder_sign, "format": fmt, "channels": channels,
+                             "profiles": sorted(p for p in profiles if p), "horizon_s": 60.0,
+                             "read": PF.READ_SETTINGS, "retime": rt is not None}
+    res.model["retime"] = rt
+    collect(res, trials=data, extra=notes)
+    return res
+
+
+def validate(model, trial, *, horizon: float | None = None, fmt: str | None = None, channels=None,
+             rudder_sign: int | None = None, retime: bool = True, **kw):
+    """Open-loop prediction of a measured run by an MMG model (:func:`validate_with_run` without the run)."""
+    return validate_with_run(model, trial, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
+                             retime=retime, **kw)[0]
+
+
+def validate_with_run(model, trial, *, horizon: float | None = None, fmt: str | None = None, channels=None,
+                      rudder_sign: int | None = None, retime: bool = True, **kw):
+    """Open-loop prediction of a measured run by an MMG model, the run read as its file says.
+
+    Parameters
+    ----------
+    model : str, MmgModel, Result or dict
+        MODEL.json path, ``"published:<name>"``, an :class:`~shipid.models.mmg.MmgModel`, an
+        ``identify("mmg", ...)`` result or its dict.
+    trial : Trial or path
+        The measured run; read by :func:`shipid.methods.mmg.profile.read_for_model` (the model's reading
+        settings and rudder sign apply to a run of its training runs' kind only).
+    horizon : float, optional
+        Restarted-horizon length, s (default: the model's, else 60 s).
+    fmt, channels, rudder_sign : optional
+        Reading settings that override the model's.
+    retime : bool
+        Re-time the run by the model's offsets (``model["retime"]``, estimated on its training runs) when it
+        has them and the run is of its training runs' kind (one data-repair line); False: refuse (one line).
+    **kw
+        ``stride=``, ``windows=`` of :func:`shipid.methods.mmg.validate.validate`.
+
+    Returns
+    -------
+    Validation, Trial
+        The validation, with ``settings`` holding how the run was read and ``settings["warnings"]`` the warning lines
+        (non-converged model, a reading conflict, a contradicted rudder convention, a depth change, data
+        repairs); and the run as it was simulated (MMG's conventions).
+    """
+    if isinstance(model, Result):
+        doc, label = model.to_dict(), "the model"
+        m = V.model_from_result(doc)
+    elif isinstance(model, dict):
+        doc, label = model, "the model"
+        m = V.model_from_result(doc)
+    elif isinstance(model, mmg_model.MmgModel):
+        m, doc, label = model, None, model.name
+    else:
+        m, doc = V.load_model_document(model)
+        label = str(model)
+    if horizon is not None and not horizon > 0:
+        raise InputError("the horizon must be positive")
+    mv = dict(((doc or {}).get("model") or {}).get("validate") or {})
+    notes = []
+    if doc is not None and (doc.get("diagnostics") or {}).get("converged") is False:
+        notes.append(f"model {label} did not converge when it was identified (diagnostics.converged false): "
+                     "its predictions must not be trusted")
+    tr, settings, more = PF.read_for_model(trial, mv, fmt=fmt, channels=channels, rudder_sign=rudder_sign)
+    notes += more
+    rt = ((doc or {}).get("model") or {}).get("retime")
+    kinds = list(mv.get("profiles") or [])
+    settings["retimed"] = False
+    if rt and (not kinds or settings["profile"] in kinds):
+        if retime:
+            tr = PF.apply_retime(tr, rt)
+            notes.append(PF.retime_line(rt, str(tr.meta.get("source", "the run"))))
+            settings["retimed"] = True
+        else:
+            notes.append("not re-timed (--no-retime): the model was identified from runs re-timed onto their "
+                         "position clock, this run is compared as recorded")
+    rs = settings["rudder_sign"]
+    st, w = PF.convention_warning(tr, rs, "the model's convention (rudder positive turns to starboard"
+                                  + (f", as in its training runs with rudder sign {int(mv['rudder_sign']):+d})"
+                                     if "rudder_sign" in mv else ")"))
+    if w:
+        notes.append(w)
+    if tr.meta.get("water_depth") is not None:       # the run's depth against the model's training depth
+        tc = ((doc or {}).get("model") or {}).get("training_conditions") or {}
+        notes += depth_check(float(m.particulars["d"]), tc.get("water_depth"), float(tr.meta["water_depth"]))[1]
+    if horizon is None:
+        horizon = float(mv.get("horizon_s", V.DEFAULT_HORIZON))
+    v = V.validate(m, tr, horizon=horizon, **kw)
+    warns: list[str] = []
+    for line in [*repair_warnings([tr]), *notes]:
+        line = one_line(line)
+        if line not in warns:
+            warns.append(line)
+    v.settings.update(settings, horizon_s=horizon, first_step_yaw_sign=st, warnings=warns)
+    return v, tr
+
+
+__all__ = ["identify", "validate", "validate_with_run", "SELECTIONS", "SIMEX"]

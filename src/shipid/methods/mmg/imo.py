@@ -19,13 +19,12 @@ ITTC 7.5-04-02-01, :mod:`shipid.simulate.metrics`):
 
 Scale: the criteria in ship lengths hold at any Froude-similar scale; the overshoot
 limits depend on the *full-scale* L/V in seconds, ``(L/V)_ship = (L/U)_model √λ``
-with ``λ = L_ship / L_model``. Without ``ship_length`` the scale is unknown and an
-overshoot criterion is decided only when it passes the strictest limit (pass) or
-fails the most lenient one (fail); otherwise it reads "depends on L/V". With
-``ship_length`` the steering gear is the slowest SOLAS allows (2.32°/s: 35° to 30°
-the other side in 28 s, II-1 reg. 29.3.2) at model scale, ``2.32 √λ`` °/s, unless a
-rate is given; without it, the training runs' rudder rate (often far faster: the
-3 m Esso Osaka's servo swings 30° within one 0.1-s sample). The stopping test uses
+with ``λ = L_ship / L_model``. The full-scale length is the one given (``ship_length``) or the
+model's ``particulars["L_ship"]``, which the published priors carry (ESSO OSAKA 325 m, KVLCC2
+320 m) and an identified model inherits; a model without one needs ``ship_length``: there is no
+silent default. The steering gear is the slowest SOLAS allows (2.32°/s: 35° to 30° the other side
+in 28 s, II-1 reg. 29.3.2) at model scale, ``2.32 √λ`` °/s, unless a rate is given. Both values
+and where they came from are in the report's header and JSON. The stopping test uses
 the training runs' propeller reversal, so its track reach is the model's.
 
 Uncertainty: ``samples`` coefficient vectors are drawn (seeded) from N(θ̂, Σ) of the
@@ -279,6 +278,21 @@ def _safe(f, *a):
         return None
 
 
+def full_scale_length(model, ship_length: float | None = None) -> tuple[float, str]:
+    """The full-scale ship length (m) of the overshoot limits and of the steering-gear rate, and where it
+    came from: ``ship_length`` as given, else the model's ``particulars["L_ship"]`` (its prior's), else
+    :class:`~shipid.errors.InputError`: there is no silent default."""
+    if ship_length is not None:
+        if not ship_length > 0:
+            raise InputError(f"--ship-length must be positive, got {ship_length:g}")
+        return float(ship_length), "given"
+    ls = model.particulars.get("L_ship")
+    if ls is not None and float(ls) > 0:
+        return float(ls), f"L_ship of the model's particulars, from its prior ({model.name})"
+    raise InputError(f"the model {model.name} records no full-scale ship length (particulars L_ship): give "
+                     "--ship-length (m); the overshoot limits and the steering-gear rate depend on it")
+
+
 def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship_length: float | None = None,
            speed: float | None = None, rps: float | None = None, rudder_rate_deg_s: float | None = None,
            dt: float = 0.1, form_term: bool = True, water_depth: float | None = None) -> dict[str, Any]:
@@ -294,11 +308,11 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
         raise InputError(f"--samples must be >= 0, got {samples}")
     model = model_from_result(result)
     L = float(model.particulars["L"])
-    if ship_length is not None and not ship_length > 0:
-        raise InputError(f"--ship-length must be positive, got {ship_length:g}")
-    gear_note = None
-    if ship_length is not None and rudder_rate_deg_s is None:
+    ship_length, length_from = full_scale_length(model, ship_length)
+    gear_note, rate_from = None, "given"
+    if rudder_rate_deg_s is None:
         rudder_rate_deg_s = SOLAS_RUDDER_RATE * np.sqrt(ship_length / L)
+        rate_from = f"the SOLAS minimum {SOLAS_RUDDER_RATE:.3g} deg/s at scale {ship_length / L:.4g} (Froude)"
         gear_note = (f"rudder rate {rudder_rate_deg_s:.3g} deg/s: the SOLAS minimum {SOLAS_RUDDER_RATE:.3g} deg/s "
                      f"(35 deg to 30 deg the other side in 28 s) at scale {ship_length / L:.4g} (Froude)")
     cond = MM.resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate_deg_s,
@@ -307,7 +321,7 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
         from dataclasses import replace
         cond = replace(cond, notes=cond.notes + (gear_note,))
     lu = L / cond.speed
-    lv = None if ship_length is None else lu * np.sqrt(ship_length / L)
+    lv = lu * np.sqrt(ship_length / L)
     names, vals = sample_coefficients(result, samples, seed, form_term)
     with_form = bool(samples) and form_term and form_delta(result, names) is not None
     Th = MM.theta_rows(model, names, vals)
@@ -412,7 +426,8 @@ def assess(result: Mapping[str, Any], *, samples: int = 100, seed: int = 0, ship
     if with_form:
         cov_kind += " + model-form term (differential minus integral form of step 2 as one std)"
     return {"model": model.name, "structure": model.structure, "L": L, "L_over_U_model_s": lu,
-            "ship_length": ship_length, "L_over_V_full_scale_s": lv, "conditions": cond.to_dict(),
+            "ship_length": ship_length, "ship_length_from": length_from,
+            "rudder_rate_deg_s": float(rudder_rate_deg_s), "rudder_rate_from": rate_from, "L_over_V_full_scale_s": lv, "conditions": cond.to_dict(),
             "samples": int(samples), "seed": int(seed), "dt": dt, "form_term": with_form,
             "covariance_names": names, "covariance_kind": cov_kind,
             "criteria": [c.to_dict() for c in crit], "warnings": warnings,
@@ -427,9 +442,11 @@ def format_report(rep: Mapping[str, Any]) -> str:
     c = rep["conditions"]
     lv = rep["L_over_V_full_scale_s"]
     lines = [f"IMO MSC.137(76) manoeuvres of {rep['model']} ({rep['structure']}), L = {rep['L']:g} m",
+             f"ship length {rep['ship_length']:g} m ({rep['ship_length_from']}); rudder rate "
+             f"{rep['rudder_rate_deg_s']:.3g} deg/s ({rep['rudder_rate_from']})",
              f"approach {c['speed']:.4g} m/s, {c['rps']:.4g} rev/s, rudder {c['rudder_rate_deg_s']:.3g} deg/s; "
              f"L/U = {rep['L_over_U_model_s']:.3g} s (model); full-scale L/V = "
-             + (f"{lv:.3g} s" if lv is not None else "unknown (give --ship-length)"),
+             + f"{lv:.3g} s",
              f"bands: {rep['samples']} draws from the parameter covariance, seed {rep['seed']}; covariance: "
              + rep.get("covariance_kind", "ridge SE (independent residuals assumed: optimistic)"),
              f"{'criterion':<52} {'value':>8} {'std':>7} {'band (+-2 std)':>19} {'limit':>11} {'P(pass)':>8}  verdict"]
@@ -444,5 +461,5 @@ def format_report(rep: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["assess", "format_report", "overshoot_limits", "sample_coefficients", "form_delta", "initial_turning",
+__all__ = ["assess", "full_scale_length", "format_report", "overshoot_limits", "sample_coefficients", "form_delta", "initial_turning",
            "stopping_reach", "Criterion", "BAND", "STOPPING_LIMIT"]

@@ -36,8 +36,8 @@ squares is weighted by Huber's ``min(1, c / e_h)`` (``e_h`` its RMS scaled error
 horizon's) and the minimisation is repeated, twice, from where it stopped — iteratively reweighted least
 squares for Huber's M-estimate at the horizon level (Huber 1964; Holland & Welsch 1977). The sandwich is
 then that of the weighted criterion with the final weights held fixed (the M-estimator's sandwich up to
-the weights' own dependence on θ, which is zero for every horizon inside ``c``). Chosen by the
-training-run CV of :func:`shipid.methods.mmg.study_ext2.cv_robust`; ``robust=None``
+the weights' own dependence on θ, which is zero for every horizon inside ``c``). Chosen by a
+training-run CV (``docs/validation/mmg.md``); ``robust=None``
 (:data:`LEAST_SQUARES`) is the plain criterion.
 """
 
@@ -60,7 +60,7 @@ POS_SCALE = 1.0
 #: Residual given to every sample of a diverged horizon (in scaled units).
 DIVERGED = 10.0
 #: Default Huber threshold of :class:`OEConfig` (multiple of the median horizon error), chosen by the
-#: training-run CV of :func:`shipid.methods.mmg.study_ext2.cv_robust` (one value, fixed before its score).
+#: training-run CV (one value, fixed before its score; ``docs/validation/mmg.md``).
 ROBUST_K = 2.0
 
 
@@ -104,7 +104,7 @@ class OEConfig:
 
 
 #: The plain least-squares refinement (every horizon's sum of squares weighted alike), the default before
-#: the Huber weights; the earlier training-run CVs of :mod:`shipid.methods.mmg.study_ext2` were scored with it.
+#: the Huber weights.
 LEAST_SQUARES = OEConfig(robust=None)
 
 

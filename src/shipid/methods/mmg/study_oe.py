@@ -155,10 +155,10 @@ a slope independent of the speed. Re-timing ψ, u, v, r onto the position clock 
 the same offsets for every run, estimated on training runs only) gives every restarted horizon
 a consistent initial state; the heading error is then measured against the raw heading samples
 0.9 s later, the position error against the same raw position samples. Decision rule of
-:mod:`shipid.methods.mmg.candidates_ext2` (written before the scores), 4-fold output-error CV of
+the rule of ``docs/validation/mmg.md`` (written before the scores), 4-fold output-error CV of
 the base ``hull+rudder+thrust/nondimensional+prop-side+wind-gain``, offsets estimated on each
 fold's training runs (0.9 / 0.6–0.7 / 0.9 s in every fold); pooled score, per-fold scores,
-pooled RMS ψ / pos, mean over left-out runs ψ / pos (:mod:`shipid.methods.mmg.study_ext2`)::
+pooled RMS ψ / pos, mean over left-out runs ψ / pos::
 
     base (as recorded)             1.345  0.966 1.502 1.403 1.370  7.60 / 0.584  6.10 / 0.621
     ... + rudder-yaw-inflow        1.342  0.971 1.485 1.413 1.365  7.58 / 0.584  6.13 / 0.617
@@ -227,26 +227,26 @@ the output-error CV chose the same candidate, 1.233 (pooled 7.15° / 0.518 m; me
 the published model's on 9 of 9 runs. Heading target NOT met, by 0.01°.
 
 Overlapping training horizons (2026-12-04, training runs only, no test run read; rule of
-:func:`shipid.methods.mmg.study_ext2.decide` fixed before the scores): the chosen candidate refined on
+``docs/validation/mmg.md`` fixed before the scores): the chosen candidate refined on
 60-s horizons restarted every 30 s (``OEConfig(stride=30.0)``, twice the shooting nodes, sandwich
-clustered by run) against every 60 s, same 4-fold re-timed CV (``study_ext2.cv_retimed(inputs=True)``):
+clustered by run) against every 60 s, same 4-fold re-timed CV:
 pooled score 1.2334 against 1.2335 (pooled 7.12° / 0.521 m against 7.18° / 0.515 m), 2 of 4 folds
 better: no gain, not adopted; the held-out runs were not scored for it.
 
-Wind-driven current (2026-12-06, training runs only, rule of :func:`shipid.methods.mmg.study_ext2.cv_current`
+Wind-driven current (2026-12-06, training runs only, rule in ``docs/validation/mmg.md``
 fixed before the scores): the runs moved into the water frame of a current ``c`` times the low-passed true
-wind (:mod:`shipid.methods.mmg.current`), ``c`` 0.01-0.03, time constant 60 or 300 s, same 4-fold re-timed
+wind (deleted; ``docs/validation/mmg.md``), ``c`` 0.01-0.03, time constant 60 or 300 s, same 4-fold re-timed
 CV of the chosen candidate. Best c = 0.01, τ = 60 s: 1.2295 against 1.2335, 2 of 4 folds better, gain 0.004
-below the rule's 0.02: not adopted; 2-3 % make every fold worse (table in that module). The held-out runs
+below the rule's 0.02: not adopted; 2-3 % make every fold worse (table in ``docs/validation/mmg.md``). The held-out runs
 were not scored for it.
 
-Reversed-propeller side force (2026-12-06, same CV; :func:`shipid.methods.mmg.study_ext2.cv_astern`, rule
+Reversed-propeller side force (2026-12-06, same CV; ``docs/validation/mmg.md``, rule
 and diagnosis there: horizons with the propeller reversed 40 % of the time or more carry 40 % of the training
 CV's heading error). Freeing its yaw-moment terms gives 1.2426, with the side-force terms too 1.2467,
 against 1.2335: not adopted; the held-out runs were not scored for it.
 
 Huber-weighted horizons (2026-12-06; ``OEConfig.robust``, the default since; rule, diagnosis and table in
-:func:`shipid.methods.mmg.study_ext2.cv_robust`, scored on the target's own metric, the mean over left-out
+``docs/validation/mmg.md``, scored on the target's own metric, the mean over left-out
 runs: 1.124 → 1.102, 4 of 4 folds). The worst 25 of the 197 training-CV horizons carried 69 % of the heading
 error's sum of squares; least squares bent the coefficients towards them. Training side end to end
 (``shipid study esso-osaka-heldout9 --train-only``; 2 min 33 s wall on 2 cores with the rows integrated in

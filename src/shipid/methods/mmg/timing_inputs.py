@@ -22,53 +22,8 @@ error ``sd / √runs`` across runs, reported with the pooled estimate.
 (one repair line for state and inputs); :func:`at_bound` names an offset on the end of the grid
 (not determined within it).
 
-Decision rule (written before any lag was estimated and before any CV score was computed)
-----------------------------------------------------------------------------------------
-Score: the 4-fold output-error CV of :func:`shipid.methods.mmg.study_ext2.cv_retimed` on the
-32 training runs of the 9-run split (same folds, same
-:class:`~shipid.methods.mmg.output_error.OEConfig`, same base candidate
-:func:`shipid.methods.mmg.candidates_ext2.base_candidate`); in each fold the state offsets AND
-the input offsets come from that fold's own training runs. Base: the same CV with the input
-offsets zero (the current re-timing), recomputed by the same code. The input re-timing is kept
-only if all of the rules of :mod:`shipid.methods.mmg.candidates_ext2` hold:
-
-1. pooled ``S(input-lagged) ≤ S(base) − 0.02``;
-2. better in at least 3 of the 4 folds;
-3. the mean paired fold difference below minus its standard error;
-
-AND its pooled position RMS is not above the base's. One variant is scored (all estimated
-input offsets together; no per-input subsets, no second grid), and its score is reported
-whether or not it passes.
-
-Result (:func:`shipid.methods.mmg.study_ext2.cv_input_lags`; pooled score, per-fold scores,
-pooled RMS ψ [deg] / pos [m], mean over the 32 left-out runs ψ / pos)::
-
-    base, state re-timed (recomputed)    1.288  0.929 1.434 1.330 1.306  7.60 / 0.528  5.86 / 0.565
-    ... + input offsets (two steps)      1.246  0.923 1.339 1.321 1.274  7.29 / 0.517  5.85 / 0.561
-    ... + input offsets (one retime)     1.248  0.925 1.346 1.326 1.273  7.30 / 0.518  5.84 / 0.560  <- kept
-
-(gain 0.040, better in 4 of 4 folds, mean fold difference −0.032 against its SE 0.020, pooled
-position RMS lower: passes; the first row is bit-identical to the recorded 1.288). "Two steps":
-the inputs moved after the state re-timing had already dropped its last 0.9 s, as first scored;
-"one retime": both in :func:`shipid.methods.mmg.timing.retime`, what the study does (drops the
-last ``max τ`` s once). Offsets per fold (pooled argmin; per-run median, SE): rudder 0.7–0.9 s
-(median 0.70–0.80, SE 0.07: well determined, about the heading's 0.9 s); propeller −0.2 … −0.4 s
-(median −0.25 … +0.05, SE 0.20: not well determined; its sign is not settled); wind 1.5 s in
-every fold, the end of the grid (per-run median 1.50, SE 0.10–0.17): not determined within the
-grid, used as found (the study prints a line). On all 32 training runs: rudder 0.8 s (0.75,
-0.06), propeller −0.4 s (−0.20, 0.18), wind 1.5 s (1.50, 0.14). Which input carries the gain
-was not scored separately (one variant by the rule); the fold-2 gain (1.434 → 1.346) is most of it.
-
-The grid up to 3 s (2026-12-04). The wind offset sat on the 1.5-s end of the first grid, which the
-study reported as not determined. Rule, written before scoring: widen the grid to −1 … 3 s and keep it
-if the same 4-fold CV (chosen candidate ``…+rudder-offset+wind-gain``, offsets from each fold's
-training runs) is not worse than with the old grid by more than 0.02 (the gain
-:data:`shipid.methods.mmg.study_ext2.MIN_GAIN` asks of a variant) and every
-fold's wind offset is inside the new grid. Result: pooled score 1.2389 → 1.2335, better in 4 of 4
-folds (mean fold difference −0.005, SE 0.002), wind 1.6–1.8 s per fold, inside: kept. On all 32
-training runs the pooled yaw residual has its minimum at 1.75–1.8 s (per-run median 1.80, SE 0.18);
-rudder 0.8 s and propeller −0.4 s are unchanged. A plausible cause is the anemometer's averaging
-(a trailing mean over about 3.5 s delays by half its length); not verified on the logger.
+The training-run CV that adopted the input offsets, its decision rule and the grid are recorded in
+``docs/validation/mmg.md`` (re-timing of the Esso logs).
 """
 
 from __future__ import annotations
@@ -81,8 +36,7 @@ import numpy as np
 from shipid.io.trial import Trial
 from shipid.methods.mmg.timing import SMOOTH, Lags
 
-#: Default grid of input offsets (s). Up to 3 s since 2026-12-04: on the 1.5-s end of the earlier grid the
-#: wind offset was not determined (module docstring).
+#: Default grid of input offsets (s): −1 … 3 s, wide enough for the wind offset of the Esso logs (1.8 s).
 GRID = np.round(np.arange(-1.0, 3.001, 0.1), 10)
 #: Samples kept clear of each end of a run at least (filter edges); :func:`_edge` adds the largest grid offset.
 _EDGE = 2 * SMOOTH + 16

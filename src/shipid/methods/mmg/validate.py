@@ -43,7 +43,7 @@ def model_from_result(d: Mapping[str, Any]) -> mmg.MmgModel:
     model = d.get("model") if "model" in d else None
     if not isinstance(model, Mapping) or model.get("family") != "mmg":
         raise InputError("MODEL.json does not hold an MMG model ('model.family' is not 'mmg'); "
-                         "write it with 'shipid identify mmg --json' or 'shipid identify realdata --json'")
+                         "write it with 'shipid identify mmg --json'")
     return mmg.MmgModel.from_dict(model)
 
 
