@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'e2d93983d8b5c4d0'
+SOURCES = 'a3e0dd04d5851532'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -43,8 +43,6 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.masscm.cli', 'Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).', False),
     ('identify', 'mmg'):
         ('shipid.methods.mmg.cli', 'Identify an MMG model from real runs (EKF + smoother, forces, ridge per mode; see --refine).', False),
-    ('identify', 'realdata'):
-        ('shipid.methods.mmg.cli', "Same pipeline as 'identify mmg', taking the training runs as --train A.csv B.csv ...", False),
     ('imo',):
         ('shipid.methods.mmg.cli_imo', 'IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.', False),
     ('monitor',):
