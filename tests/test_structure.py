@@ -64,7 +64,7 @@ PENDING: dict[str, tuple[str, ...]] = {
 #: other). The root package ``shipid`` (lazy names only) is importable from anywhere.
 LAYERS = {
     "errors": 0,
-    "outputs": 1, "progress": 1, "registry": 1, "vessels": 1,
+    "outputs": 1, "progress": 1, "registry": 1, "vessels": 1, "warning_lines": 1,
     "io": 2, "result": 2, "summary": 1.5, "report.convention": 2,
     "models": 3,
     "simulate": 4, "estimate": 4,
