@@ -34,7 +34,7 @@ this tree CPU 46.65 s, wall 218 s, max RSS 709.5 MiB (744 MB), JSON 1.030 MB; pe
 measured above. On these data (the same seed, in-process) the refinement converged in 15 iterations: m 0.3988 ±
 0.0068 against Algorithm 1's 0.3997 ± 0.0104 (true 0.4).
 
-With the compiled prefilter (``shipid.estimate.iir_kernels``, lfilter's numbers) and the default ``refine="auto"``
+With the compiled prefilter (``shipid.numerics.iir_kernels``, lfilter's numbers) and the default ``refine="auto"``
 (Whittle on these files), 2026-12-02, load 0.6-1.1, two invocations of 3 rounds, peer 83c235a at ``/tmp/peer83/src``:
 this tree CPU 5.37 / 4.35 / 4.42 s and 5.28 / 4.44 / 4.47 s (medians 4.42 / 4.47 s; the first round of an
 invocation is the slow one), max RSS 343.9-372.9 MB, JSON 1.020 MB; ``--refine none`` 3.81-4.36 s; peer 11.8-12.4 s,

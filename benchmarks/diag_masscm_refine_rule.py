@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.coverage import REGIMES
 from shipid.methods.masscm.refine import SENSOR_NOISE_MIN, WAVE_Z_MIN, choose
 from shipid.models.roll_sim import NoiseSpec, simulate_datasets

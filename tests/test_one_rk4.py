@@ -2,11 +2,11 @@
 
 Issue 14: "one dynamics signature ``f(t, x, u, θ)`` and one RK4 for simulators and filters; each model's
 equations written once, with the compiled kernel tested against that one source". The RK4 is
-:func:`shipid.simulate.integrate.rk4_propagate` (with :func:`~shipid.simulate.integrate.rk4_step` and
-:func:`~shipid.simulate.integrate.rk4_step_jacobians` built on it).
+:func:`shipid.numerics.integrate.rk4_propagate` (with :func:`~shipid.numerics.integrate.rk4_step` and
+:func:`~shipid.numerics.integrate.rk4_step_jacobians` built on it).
 
 An RK4 is recognised by its weighted sum of the four stages, ``k1 + 2 k2 + 2 k3 + k4`` (or
-``k1 + 2 (k2 + k3) + k4``), whatever the names. Outside ``shipid.simulate.integrate`` only the
+``k1 + 2 (k2 + k3) + k4``), whatever the names. Outside ``shipid.numerics.integrate`` only the
 compiled (numba) twins of :data:`COMPILED` may contain one, each with the test file that checks it
 against the one RK4 on the same model; a listed twin must exist, be decorated with numba's ``njit``
 and be named in its test file, so the list cannot go stale.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "src" / "shipid"
-HOME = "shipid.simulate.integrate"
+HOME = "shipid.numerics.integrate"
 
 #: compiled twin (module.function) -> the test that checks it against the one RK4 (rtol ~1e-12)
 COMPILED = {
@@ -98,7 +98,7 @@ def test_one_rk4_in_the_package():
         for name, fn in rk4_definers(tree).items():
             found[f"{module}.{name}"] = fn
     stray = sorted(q for q in found if not q.startswith(HOME + ".") and q not in COMPILED)
-    assert not stray, ("RK4 outside shipid.simulate.integrate (use rk4_propagate / rk4_step / "
+    assert not stray, ("RK4 outside shipid.numerics.integrate (use rk4_propagate / rk4_step / "
                        "rk4_step_jacobians, or list a compiled twin with its equality test):\n" + "\n".join(stray))
     assert f"{HOME}.rk4_propagate" in found
     for q, test in COMPILED.items():

@@ -65,7 +65,7 @@ PENDING: dict[str, tuple[str, ...]] = {
 LAYERS = {
     "errors": 0,
     "outputs": 1, "progress": 1, "registry": 1, "vessels": 1, "warning_lines": 1,
-    "io": 2, "result": 2, "summary": 1.5, "report.convention": 2,
+    "io": 2, "result": 2, "summary": 1.5, "report.convention": 2, "numerics": 2,
     "models": 3,
     "simulate": 4, "estimate": 4,
     "analysis": 5, "campaign": 5,
@@ -100,7 +100,7 @@ HISTORY = re.compile(r"\bsessions? \d|\bissues? \d|\bissue-\d|#\d\d|(?<!-)\bseed
 #: Modules whose ``importlib`` calls are plug-in discovery (the method registry, the demo's steps).
 PLUGIN_LOOKUPS = ("shipid.registry", "shipid.demo")
 
-SHARED = ("io", "estimate", "models", "simulate", "campaign", "report", "analysis", "result", "outputs",
+SHARED = ("io", "numerics", "estimate", "models", "simulate", "campaign", "report", "analysis", "result", "outputs",
           "progress", "registry")
 
 

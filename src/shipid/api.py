@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 from shipid import registry
 from shipid.errors import InputError
-from shipid.estimate.linalg import single_threaded
+from shipid.numerics.linalg import single_threaded
 from shipid.warning_lines import collect, recorded
 from shipid.registry import MethodInfo
 from shipid.result import Result
@@ -63,7 +63,7 @@ def identify(method: str, trials, *, vessel: str | None = None, options=None, **
     Result
         Estimates with standard errors, covariance, diagnostics (``converged``, ``warnings``) and
         provenance, as the CLI's ``--json`` prints it. BLAS runs one thread during the call
-        (:func:`shipid.estimate.linalg.one_blas_thread`), so the numbers do not depend on the core count.
+        (:func:`shipid.numerics.linalg.one_blas_thread`), so the numbers do not depend on the core count.
     """
     info = registry.get(method)
     if info.identify is None:

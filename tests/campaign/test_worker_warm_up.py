@@ -67,7 +67,7 @@ def test_failing_warm_up_warns_and_the_campaign_completes():
 def test_mass_cm_study_warm_workers_equal_in_process_bit_for_bit():
     """The Table-3 task with its warm-up, on 2 warm workers, equals the same runs computed in one process
     whose BLAS runs 4 threads (as on a 4-core machine): OpenBLAS splits its reductions between threads, so
-    without :func:`shipid.estimate.linalg.one_blas_thread` around every computation (the cached datasets
+    without :func:`shipid.numerics.linalg.one_blas_thread` around every computation (the cached datasets
     included) 219 fields differed by ~1e-9 relative (k 10.379489411238223 vs 10.37948941371897)."""
     out = _in_fresh_process("""
         res = run_campaign("shipid.methods.masscm.study:run_one", 24, 5, workers=2, progress=False,

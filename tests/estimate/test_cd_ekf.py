@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from shipid.estimate.cd_ekf import cd_ekf, taylor_discretise, van_loan
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 
 
 def _double_integrator(q=0.5, r=0.3, h=0.5, n=200, seed=0):

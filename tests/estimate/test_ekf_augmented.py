@@ -8,7 +8,7 @@ import pytest
 from shipid.errors import ConvergenceError
 from shipid.estimate.ekf_augmented import (AugmentedModel, augmented_ekf, numerical_jacobian,
                                            parallel_augmented_ekf, rk4_map)
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 
 
 def _linear_system(seed=0, n=200):

@@ -11,7 +11,7 @@ from known.fossen1996 import A_EQ51, A_H_EQ48, B_EQ52, K_EQ49, T_EQ29
 from shipid.export import load, state_space
 from shipid.export.statespace import accelerations, trim
 from shipid.models import abkowitz as ab
-from shipid.simulate.integrate import simulate
+from shipid.numerics.integrate import simulate
 
 #: Eq. (30): the a-priori inertia matrix M'' of the supply vessel (bis), as the paper prints it.
 M_EQ30 = np.array([[1.1274, 0.0, 0.0], [0.0, 1.8902, -0.0744], [0.0, -0.0744, 0.1278]])

@@ -5,7 +5,7 @@ import pytest
 from known.yoon_rhee2003 import EQ21_ALPHA, EQ21_TRUE, TABLE3_TRUE
 
 from shipid.models import abkowitz as ab
-from shipid.simulate.integrate import simulate
+from shipid.numerics.integrate import simulate
 from shipid.vessels import load_vessel
 
 

@@ -149,7 +149,7 @@ def test_momentum_current_form_is_lf_form_with_current(supply):
 
 
 def test_ship_model_simulates_supply_steady_surge(supply):
-    from shipid.simulate.integrate import simulate
+    from shipid.numerics.integrate import simulate
 
     model = dp.ship_model(load_vessel("supply"))
     assert model.input_names == ("p1", "p2", "p3", "p4", "p5", "p6", "alpha6")

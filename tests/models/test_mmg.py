@@ -121,7 +121,7 @@ def test_batch_simulation_equals_single_runs():
     for i in range(2):
         one = mmg.simulate_batch(m, t, x0[i][None], U[i])[0]
         np.testing.assert_allclose(both[i], one, rtol=1e-12, atol=1e-12)
-    from shipid.simulate.integrate import simulate
+    from shipid.numerics.integrate import simulate
     ref = simulate(mmg.dynamics, t, x0[1], U[1], m)
     np.testing.assert_allclose(both[1], ref.x, rtol=1e-10, atol=1e-12)
 

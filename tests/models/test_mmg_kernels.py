@@ -1,7 +1,7 @@
 """The compiled Esso MMG simulation (shipid.models.mmg_kernels.rows_rk4_kernel) against the Python reference.
 
 The compiled twin ``rows_rk4_kernel`` is checked against the package's one RK4
-(:func:`shipid.simulate.integrate.rk4_propagate`) on the reference dynamics.
+(:func:`shipid.numerics.integrate.rk4_propagate`) on the reference dynamics.
 
 Reference: :func:`shipid.methods.mmg.cv_fast.simulate_rows` with ``compiled=False`` (RK4 of
 :func:`shipid.methods.mmg.manoeuvres.rows_deriv`, i.e. :func:`shipid.models.mmg.basis`) and

@@ -12,7 +12,7 @@ from shipid.errors import ShipidError
 from shipid.simulate.actuators import RateLimitedActuator
 from shipid.simulate.manoeuvres import (PITCH_RATE, T_EXECUTE, mls_bits, parse_manoeuvre,
                                         prbs_signal, rudder_turn_sign, run_manoeuvre)
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 from shipid.simulate.nomoto import nomoto_model
 
 

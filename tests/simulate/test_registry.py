@@ -6,7 +6,7 @@ import pytest
 from shipid.errors import ShipidError
 from shipid.simulate import registry
 from shipid.simulate.manoeuvres import run_manoeuvre
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 from shipid.vessels import vessel_names
 
 

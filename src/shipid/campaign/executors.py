@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterator, Sequence
 import numpy as np
 
 from shipid.errors import ShipidError
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.outputs import json_default
 from shipid.campaign.seeding import run_entropy
 
@@ -421,7 +421,7 @@ def iter_dask(client, chunks, args, seed: int) -> Iterator[list[dict]]:
 # Context managers for the executors
 # --------------------------------------------------------------------------------------
 def threads_limited():
-    """One BLAS thread for in-process runs, as the workers have (:func:`shipid.estimate.linalg.one_blas_thread`)."""
+    """One BLAS thread for in-process runs, as the workers have (:func:`shipid.numerics.linalg.one_blas_thread`)."""
     return one_blas_thread()
 
 

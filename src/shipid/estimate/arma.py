@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from shipid.estimate.fir_kernels import ar_fit
-from shipid.estimate.iir_kernels import lfilter as iir_lfilter
+from shipid.numerics.iir_kernels import lfilter as iir_lfilter
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,7 @@ class ARMA:
 
     def prefilter(self, x: np.ndarray) -> np.ndarray:
         """Apply ``L = H^-1 = A/C`` (eq. 43) along axis 0 (a 1-D signal through the compiled
-        :func:`shipid.estimate.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s numbers)."""
+        :func:`shipid.numerics.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s numbers)."""
         if np.ndim(x) == 1:
             return iir_lfilter(self.a, self.c, x)
         from scipy.signal import lfilter  # scipy.signal (with scipy.stats) only where it is called

@@ -5,7 +5,7 @@ Continuous state equation ``ẋ = f(t, x, u, θ) + w(t)`` (the package's one dyn
 passed through; discrete measurements ``z_k = h(t_k, x_k) + v_k``, ``E[v vᵀ] = R``.
 
 Between samples the estimate follows ``f`` (the one RK4,
-:func:`shipid.simulate.integrate.rk4_propagate`), and the covariance
+:func:`shipid.numerics.integrate.rk4_propagate`), and the covariance
 follows the matrix Riccati equation ``Ṗ = F P + P Fᵀ + Q`` with the Jacobian ``F``
 frozen at the start of the interval, solved exactly by Van Loan's method::
 
@@ -28,8 +28,8 @@ from typing import Any, Callable
 import numpy as np
 import scipy.linalg as sla
 
-from shipid.estimate.linalg import check_positive_definite, symmetrize
-from shipid.simulate.integrate import Dynamics, rk4_propagate
+from shipid.numerics.linalg import check_positive_definite, symmetrize
+from shipid.numerics.integrate import Dynamics, rk4_propagate
 
 LOG2PI = float(np.log(2.0 * np.pi))
 

@@ -29,9 +29,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from shipid.errors import ConvergenceError
-from shipid.estimate.linalg import (NotPositiveDefiniteError, check_positive_definite, joseph_update,
+from shipid.numerics.linalg import (NotPositiveDefiniteError, check_positive_definite, joseph_update,
                                     kalman_gain, symmetrize)
-from shipid.simulate.integrate import rk4_step_jacobians
+from shipid.numerics.integrate import rk4_step_jacobians
 
 # f(k, x, u, theta) -> x_next ; h(k, x, theta) -> z
 DiscreteDynamics = Callable[[int, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -153,7 +153,7 @@ def rk4_map(f: Callable[[float, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
     The discrete map ``f(k, x, u, θ)`` of eq. 15 and its ``Φ`` (Table 1) from the continuous
     model ``f(t, x, u, θ)`` with Jacobians ``jac(t, x, u, θ) -> (∂f/∂x, ∂f/∂θ)``, by the package's
-    one RK4 (:func:`shipid.simulate.integrate.rk4_step_jacobians`): the Jacobians are propagated
+    one RK4 (:func:`shipid.numerics.integrate.rk4_step_jacobians`): the Jacobians are propagated
     through the four stages by the chain rule, so ``Φ`` is the derivative of the very map the
     filter propagates with.
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from shipid.estimate.fir_kernels import project_qr
-from shipid.estimate.iir_kernels import lfilter
+from shipid.numerics.iir_kernels import lfilter
 
 
 def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
@@ -64,7 +64,7 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
 
 
 def arx_simulate(b: np.ndarray, a: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Noise-free simulation ``y = B/A u`` of a 1-D input from rest (:func:`shipid.estimate.iir_kernels.lfilter`,
+    """Noise-free simulation ``y = B/A u`` of a 1-D input from rest (:func:`shipid.numerics.iir_kernels.lfilter`,
     ``scipy.signal.lfilter``'s numbers)."""
     return lfilter(b, a, u)
 

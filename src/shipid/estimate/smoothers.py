@@ -34,7 +34,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from shipid.estimate.cd_ekf import FilterResult
-from shipid.estimate.linalg import symmetrize
+from shipid.numerics.linalg import symmetrize
 
 
 @dataclass(frozen=True)

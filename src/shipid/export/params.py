@@ -43,7 +43,7 @@ from shipid.models import mmg
 from shipid.models.bis import Bis
 from shipid.outputs import atomic_write_text
 from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 
 SUFFIXES = (".toml", ".yaml", ".yml")
 

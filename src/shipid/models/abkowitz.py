@@ -45,7 +45,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 from shipid.vessels import Vessel, load_vessel
 
 KNOT = 1852.0 / 3600.0

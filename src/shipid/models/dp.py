@@ -32,7 +32,7 @@ import numpy as np
 from shipid.errors import ShipidError
 from shipid.models.bis import Bis
 from shipid.models.thrusters import configuration_matrix, control_vector
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 
 #: Names of θ1..θ9 (eqs. 46–47) and what each one is.
 THETA_NAMES = tuple(f"theta{i}" for i in range(1, 10))
@@ -232,7 +232,7 @@ def lf_dynamics(t: float, x: np.ndarray, u: np.ndarray, theta: LFParams) -> np.n
 
 
 def ship_model(vessel):
-    """The :class:`shipid.simulate.model.ShipModel` of a DP vessel (``"supply"``).
+    """The :class:`shipid.models.ship_model.ShipModel` of a DP vessel (``"supply"``).
 
     Inputs ``p1..p6`` (pitch ratios) and ``alpha6`` (rad); states ``x, y, psi, u, v, r,
     u_c, v_c, r_c`` (SI). Outputs the Trial channels ``x, y, psi, u, v, r``.

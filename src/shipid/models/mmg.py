@@ -55,8 +55,8 @@ from shipid.models.mmg_forces import (apparent_wind, basis_esso, basis_yasukawa,
                                       fujii_f_alpha, fujiwara_coefficients, wind_forces)
 from shipid.models import mmg_kernels
 from shipid.models.mmg_esso_ext import EXT_COEFS, ext_columns
-from shipid.simulate.integrate import rk4_step
-from shipid.simulate.model import ShipModel
+from shipid.numerics.integrate import rk4_step
+from shipid.models.ship_model import ShipModel
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 INPUT_NAMES = ("delta", "n", "wind_speed", "wind_dir")
@@ -285,7 +285,7 @@ def simulate_batch(model: MmgModel, t: np.ndarray, x0: np.ndarray, U: np.ndarray
         Time grid (uniform or not).
     x0 : ndarray (B, 6)
     U : ndarray (B, n, 4) or (n, 4)
-        Inputs on the grid, held over each step (as :func:`shipid.simulate.integrate.simulate`).
+        Inputs on the grid, held over each step (as :func:`shipid.numerics.integrate.simulate`).
 
     compiled : bool
         For the structures :func:`shipid.models.mmg_kernels.supported` names and inputs with the wind
@@ -506,7 +506,7 @@ def load_published(name: str, root: Path | None = None) -> MmgModel:
 
 
 def ship_model(model: MmgModel):
-    """The :class:`shipid.simulate.model.ShipModel` of an MMG model (for the generic simulator)."""
+    """The :class:`shipid.models.ship_model.ShipModel` of an MMG model (for the generic simulator)."""
 
     def x0(speed: float) -> np.ndarray:
         return np.array([0.0, 0.0, 0.0, speed, 0.0, 0.0])

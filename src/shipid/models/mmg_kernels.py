@@ -4,7 +4,7 @@ A compiled copy of the state derivative :func:`shipid.models.mmg.dynamics` for r
 their own coefficients (:func:`shipid.methods.mmg.manoeuvres.rows_deriv`) and of its RK4
 integration with the inputs held over each step
 (:func:`shipid.methods.mmg.manoeuvres.rows_rk4`, the package's one RK4
-:func:`shipid.simulate.integrate.rk4_propagate`), for the structures
+:func:`shipid.numerics.integrate.rk4_propagate`), for the structures
 
 * ``esso-lowspeed``: :func:`shipid.models.mmg_forces.basis_esso` (the low-speed model of
   Miyauchi et al. 2022, J Mar Sci Technol 27:1065, §2, as coded in
@@ -309,7 +309,7 @@ def _deriv(x, delta, n, UT, cgT, sgT, sd, cd, c, code, thX, thY, thN, out):
 def rows_rk4_kernel(c, code, ThX, ThY, ThN, x0, U, h, substeps, out):
     """RK4 of every row with its inputs ``U`` (B, L, 4) held over each step into ``out`` (B, L, 6).
 
-    The compiled twin of :func:`shipid.simulate.integrate.rk4_propagate` on
+    The compiled twin of :func:`shipid.numerics.integrate.rk4_propagate` on
     :func:`shipid.methods.mmg.manoeuvres.rows_dynamics`: ``substeps`` RK4 steps of length ``h`` (B, L − 1)
     per sample, then states beyond 1e6 → NaN (as :func:`shipid.models.mmg.simulate_batch`).
     """

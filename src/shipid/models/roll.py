@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.linalg import expm
 
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 from shipid.vessels import Vessel, load_vessel
 
 STATE_NAMES = ("phi", "psi", "v", "p", "r")
@@ -228,7 +228,7 @@ def simulate_zoh(th: RollShipParams, delta: np.ndarray, dt: float, tau: np.ndarr
 
 
 def ship_model(vessel: Vessel | str = "fishing-vessel"):
-    """The :class:`shipid.simulate.model.ShipModel` of the fishing vessel (loaded condition).
+    """The :class:`shipid.models.ship_model.ShipModel` of the fishing vessel (loaded condition).
 
     The state is ``[phi, psi, v, p, r]`` of (11); earth-fixed position is not part of the linear
     model. Outputs are the Trial channels ``phi, psi, v, p, r, a_s, u, delta``.

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shipid.io.trial import Trial
-from shipid.estimate.iir_kernels import lfilter
+from shipid.numerics.iir_kernels import lfilter
 from shipid.models.roll import RollShipParams, imu_outputs, params_from_vessel, simulate_zoh
 from shipid.models.roll_reduced import CALIBRATION, LOADED, NOMINAL, bilinear_tf
 from shipid.vessels import load_vessel

@@ -1,6 +1,6 @@
 """Standard manoeuvres as closed-loop input laws, and :func:`run_manoeuvre` to record them as a Trial.
 
-Every manoeuvre is an input law ``u(t, x)`` for :func:`shipid.simulate.integrate.simulate`:
+Every manoeuvre is an input law ``u(t, x)`` for :func:`shipid.numerics.integrate.simulate`:
 a *command* (a sampled schedule, or a rule that looks at the state, such as the
 zig-zag) passed through rate- and angle-limited actuators
 (:mod:`shipid.simulate.actuators`). The law is stateful and is called once per
@@ -44,8 +44,8 @@ import shipid
 from shipid.io.trial import CHANNELS, Trial
 from shipid.errors import ShipidError
 from shipid.simulate.actuators import RateLimitedActuator, steering_gear
-from shipid.simulate.integrate import rk4_step, simulate
-from shipid.simulate.model import ShipModel
+from shipid.numerics.integrate import rk4_step, simulate
+from shipid.models.ship_model import ShipModel
 
 #: Default durations (s) by manoeuvre kind, when none is given.
 DEFAULT_DURATION: dict[str, float] = {"straight": 120.0, "turning": 900.0, "zigzag": 900.0,

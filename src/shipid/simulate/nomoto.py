@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,7 @@ def _outputs(t: np.ndarray, X: np.ndarray, U: np.ndarray) -> dict[str, np.ndarra
 def nomoto_model(K: float | None = None, T: float | None = None, *, L: float = 100.0,
                  U: float = 7.5, name: str = "nomoto", rudder_limit: float = np.deg2rad(35.0),
                  rudder_rate_limit: float = np.deg2rad(2.33)) -> ShipModel:
-    """A first-order Nomoto :class:`~shipid.simulate.model.ShipModel`.
+    """A first-order Nomoto :class:`~shipid.models.ship_model.ShipModel`.
 
     Parameters
     ----------

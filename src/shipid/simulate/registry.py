@@ -1,4 +1,4 @@
-"""Vessel name → simulatable :class:`~shipid.simulate.model.ShipModel`.
+"""Vessel name → simulatable :class:`~shipid.models.ship_model.ShipModel`.
 
 The packaged vessels (``shipid.vessels``) are simulated by the model family of
 their paper; each family module exposes ``ship_model(vessel) -> ShipModel``
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from shipid.errors import ShipidError
-from shipid.simulate.model import ShipModel
+from shipid.models.ship_model import ShipModel
 from shipid.vessels import load_vessel, vessel_names
 
 #: Model family module of each packaged vessel (canonical name as in its TOML file).

@@ -12,7 +12,7 @@ from shipid.methods.dp.estimator import DPOptions, run_stage
 from shipid.methods.dp.stage_models import momentum_model, surge_model
 from shipid.methods.dp.trials import simulate_dp_trial
 from shipid.models.dp import dp_vessel
-from shipid.simulate.integrate import rk4_step_jacobians
+from shipid.numerics.integrate import rk4_step_jacobians
 from shipid.vessels import load_vessel
 
 V = dp_vessel(load_vessel("supply"))

@@ -2,7 +2,7 @@
 
 The models are written once, as continuous ``f(t, x, u, θ)`` in :mod:`shipid.methods.dp.stage_models`
 (eqs. 31–32 and 35–38); their discrete map (eq. 15) and Φ (Table 1) are the package's one RK4
-(:func:`shipid.estimate.ekf_augmented.rk4_map`, i.e. :func:`shipid.simulate.integrate.rk4_step_jacobians`).
+(:func:`shipid.estimate.ekf_augmented.rk4_map`, i.e. :func:`shipid.numerics.integrate.rk4_step_jacobians`).
 The numba kernels of :mod:`shipid.methods.dp.loglik` must reproduce that map and its Jacobian to
 rounding (rtol 1e-12: the compiled right-hand sides sum the same terms in another order).
 """

@@ -3,7 +3,7 @@
 
 The model equations are stated once, in :class:`~shipid.models.ebm_state.EbmModel`; the numba
 kernels of ``f, F, h, H`` must equal it on random states and random parameters, and the compiled
-RK4 must equal the one RK4 :func:`shipid.simulate.integrate.rk4_propagate`. The compiled filter and
+RK4 must equal the one RK4 :func:`shipid.numerics.integrate.rk4_propagate`. The compiled filter and
 smoothers must equal the pure-Python :func:`shipid.estimate.cd_ekf.cd_ekf` with the ``EbmModel``
 callables and :mod:`shipid.estimate.smoothers` (seed 002 eqs. 9–10) on the same short seeded
 simulated trial, to 1e-9 relative (the two differ only in the order of floating-point operations,
@@ -18,9 +18,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from shipid.estimate import numba_linalg
+from shipid.numerics import numba_linalg
 from shipid.estimate.cd_ekf import cd_ekf
-from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.numerics.linalg import NotPositiveDefiniteError
 from shipid.estimate.smoothers import mbf_smoother, rts_smoother
 from shipid.methods.ebm import compiled as fast
 from shipid.methods.ebm import estimator as ebm
@@ -28,7 +28,7 @@ from shipid.methods.ebm import kernels, model_kernels
 from shipid.methods.ebm.trials import simulate_trial
 from shipid.models import abkowitz as ab
 from shipid.models.ebm_state import NX, EbmModel, initial_state, measurement_noise
-from shipid.simulate.integrate import rk4_propagate
+from shipid.numerics.integrate import rk4_propagate
 
 RTOL = 1e-9
 
@@ -134,7 +134,7 @@ def test_model_kernels_equal_the_model_on_random_parameters_and_states(absolute)
 
 @pytest.mark.parametrize("substeps", [1, 3])
 def test_compiled_rk4_equals_the_one_rk4(substeps):
-    """kernels.rk4_into (inside the compiled filter) is simulate.integrate.rk4_propagate on EbmModel.f."""
+    """kernels.rk4_into (inside the compiled filter) is numerics.integrate.rk4_propagate on EbmModel.f."""
     rng = np.random.default_rng(12)
     for _ in range(10):
         m = _random_model(rng, bool(rng.integers(2)))
@@ -146,7 +146,7 @@ def test_compiled_rk4_equals_the_one_rk4(substeps):
 
 
 def test_model_kernels_cache_key_is_current():
-    """kernels.py keys its numba disk cache on model_kernels.py and estimate/numba_linalg.py
+    """kernels.py keys its numba disk cache on model_kernels.py and numerics/numba_linalg.py
     (numba does not see those dependencies).
 
     If this fails, one of them was edited: set the key named in ``shipid/methods/ebm/kernels.py``

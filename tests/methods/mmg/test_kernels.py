@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from shipid.io.trial import Trial
-from shipid.estimate import numba_linalg
+from shipid.numerics import numba_linalg
 from shipid.errors import ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import kernels
-from shipid.simulate.integrate import rk4_propagate
+from shipid.numerics.integrate import rk4_propagate
 
 
 def _trial(seed: int, n: int = 900, gaps: bool = False) -> Trial:
@@ -50,7 +50,7 @@ def test_compiled_step1_fails_loudly_on_a_broken_run():
 
 
 def test_numba_linalg_cache_key_is_current():
-    """kernels.py keys its numba disk cache on estimate/numba_linalg.py (numba does not see that dependency).
+    """kernels.py keys its numba disk cache on numerics/numba_linalg.py (numba does not see that dependency).
 
     If this fails, numba_linalg.py was edited: set ``NUMBA_LINALG_KEY`` in
     ``shipid/methods/mmg/kernels.py`` to the value printed, which also refreshes that file's cache.
@@ -61,7 +61,7 @@ def test_numba_linalg_cache_key_is_current():
 
 
 def test_compiled_kinematic_rk4_is_the_one_rk4():
-    """kernels._kin_rk4 (inside the compiled filter) = simulate.integrate.rk4_propagate on estimator.kinematic_f."""
+    """kernels._kin_rk4 (inside the compiled filter) = numerics.integrate.rk4_propagate on estimator.kinematic_f."""
     rng = np.random.default_rng(5)
     for _ in range(5):
         x = np.concatenate([rng.normal(0, 50, 2), [rng.uniform(-np.pi, np.pi)], rng.normal(0, 1, 3),

@@ -1,7 +1,7 @@
 """The batched row integrator of the MMG studies against the one Python source (Yoshimura & Yasukawa MMG).
 
 :func:`shipid.methods.mmg.manoeuvres.rows_rk4` steps many rows, each with its own coefficients, by the
-package's one RK4 (:func:`shipid.simulate.integrate.rk4_propagate`) on a row-wise form of the model.
+package's one RK4 (:func:`shipid.numerics.integrate.rk4_propagate`) on a row-wise form of the model.
 Each row must equal one RK4 step of :func:`shipid.models.mmg.dynamics` (``f(t, x, u, θ)``) with that
 row's coefficients, to rounding (rtol 1e-12: the row form sums the coefficient products by einsum).
 """
@@ -14,7 +14,7 @@ import pytest
 from shipid.io import data_root
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.models import mmg
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,7 @@ models of :mod:`shipid.methods.dp.stage_models` and computes the same thing in t
 
 * time update: one RK4 step of each active trial's continuous model with its exact chain-rule
   Jacobians ``∂x⁺/∂x`` and ``∂x⁺/∂θ`` (the variational system stepped by the same four stages as
-  :func:`shipid.simulate.integrate.rk4_step_jacobians`), ``P = sym(Φ P Φᵀ + Q)``; a trial past
+  :func:`shipid.numerics.integrate.rk4_step_jacobians`), ``P = sym(Φ P Φᵀ + Q)``; a trial past
   its last sample is frozen (identity, no noise);
 * measurement update over every channel measured at the step: ``S = sym(H P Hᵀ + R)``,
   ``K = P Hᵀ S⁻¹`` through the Cholesky factor of S, zero gain rows for the considered
@@ -151,7 +151,7 @@ def _model(kind, x, u, th, M, Minv, arms, f, A, B):
 def rk4_aug(kind, x, u, th, est, M, Minv, arms, h, Fx, Ft):
     """One RK4 step of a trial's model and its exact Jacobians (into Fx (nx, nx), Ft (nx, p)).
 
-    The compiled twin of :func:`shipid.simulate.integrate.rk4_step_jacobians`: the variational
+    The compiled twin of :func:`shipid.numerics.integrate.rk4_step_jacobians`: the variational
     system ``ẋ = f``, ``Ṡ_x = A S_x``, ``Ṡ_θ = A S_θ + B`` stepped by the same four stages from
     ``S_x = I``, ``S_θ = 0``. Returns the next state.
     """

@@ -18,12 +18,12 @@ covariance, the heading innovation wrapped to (−π, π]; ``tests/methods/dp/te
 checks the two agree.
 
 Positive definiteness of the filtered covariance is checked by a Cholesky factorisation at
-every sample (:func:`shipid.estimate.numba_linalg.cholesky_into`); on failure the kernels
+every sample (:func:`shipid.numerics.numba_linalg.cholesky_into`); on failure the kernels
 return the failing step (the caller raises).
 
 Cache. Everything compiled here lives in this one file except that Cholesky kernel. numba
 keys the on-disk cache of a function on the file that defines it only, so this file carries
-:data:`NUMBA_LINALG_KEY`, the hash of ``shipid/estimate/numba_linalg.py``: an edit there must
+:data:`NUMBA_LINALG_KEY`, the hash of ``shipid/numerics/numba_linalg.py``: an edit there must
 update the key here (``tests/methods/dp/test_loglik.py`` checks it). If the key does not match
 the file found at import, the kernels are compiled without the disk cache, never run stale.
 """
@@ -33,10 +33,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from shipid.estimate import numba_linalg
-from shipid.estimate.numba_linalg import cholesky_into, source_key
+from shipid.numerics import numba_linalg
+from shipid.numerics.numba_linalg import cholesky_into, source_key
 
-#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+#: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
 NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
 #: True when the on-disk cache may be used: the compiled callee is the one the key names.

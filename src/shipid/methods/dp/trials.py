@@ -32,7 +32,7 @@ import numpy as np
 from shipid.io.trial import Trial
 from shipid.models import dp
 from shipid.models.thrusters import pitch_from_control
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 
 #: Moment arm (in L) of the environmental yaw moment relative to the environmental forces.
 YAW_ARM = 0.1

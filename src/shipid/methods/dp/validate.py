@@ -24,7 +24,7 @@ from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import dp
 from shipid.result import Result
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 from shipid.vessels import load_vessel
 
 #: Channels the run must have (positions, heading, pitch ratios, azimuth angle).

@@ -28,7 +28,7 @@ from shipid.io.trial import Trial
 from shipid.methods.ebm.pipeline import estimate_states, fit_coefficients, sensor_positions
 from shipid.methods.ebm.trials import add_measurements
 from shipid.models import abkowitz as ab
-from shipid.simulate.integrate import simulate
+from shipid.numerics.integrate import simulate
 
 OVERSAMPLE = 5
 

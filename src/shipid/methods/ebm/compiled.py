@@ -17,7 +17,7 @@ What is compiled
 * :func:`mbf_smoother_fast`, :func:`rts_smoother_fast`: generic — they only read the arrays
   of a :class:`FilterResult`, whichever filter produced it.
 
-Numerics (the standards of :mod:`shipid.estimate.linalg`, kept)
+Numerics (the standards of :mod:`shipid.numerics.linalg`, kept)
 ---------------------------------------------------------------
 float64 throughout, no ``fastmath``. The per-sample algebra is the reference's, evaluated
 so that the structure of the problem is not paid for in flops:
@@ -40,7 +40,7 @@ so that the structure of the problem is not paid for in flops:
 * Positive definiteness of the filtered covariance is checked by a Cholesky factorisation
   at *every* sample (the reference checks every 50th, for cost); a failure, or an innovation
   covariance S that is not positive definite, raises
-  :class:`~shipid.estimate.linalg.NotPositiveDefiniteError` naming the sample index and time
+  :class:`~shipid.numerics.linalg.NotPositiveDefiniteError` naming the sample index and time
   — nothing is returned from a failed run.
 * MBF backward pass: ``(I − K H)ᵀ Λ (I − K H) = Λ − (Z H + (Z H)ᵀ)`` with ``U = Λ K``,
   ``Z = U − ½ Hᵀ (Kᵀ U)`` (again exact algebra, using Λ = Λᵀ).
@@ -57,7 +57,7 @@ from dataclasses import replace
 import numpy as np
 
 from shipid.estimate.cd_ekf import FilterResult, cd_ekf
-from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.numerics.linalg import NotPositiveDefiniteError
 from shipid.estimate.smoothers import SmootherResult
 from shipid.methods.ebm.kernels import (P_NOT_PD, S_NOT_PD, TAYLOR_NOT_CONVERGED, ebm_filter_loop, mbf_loop,
                                         rts_loop)

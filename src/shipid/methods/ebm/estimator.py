@@ -57,7 +57,7 @@ import numpy as np
 
 from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
-from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.numerics.linalg import NotPositiveDefiniteError
 from shipid.methods.ebm.bias import corrected, pipeline_bias
 from shipid.methods.ebm.pipeline import (REQUIRED, EbmConfig, EbmFit, RegressionData, StateEstimate,
                                          approach_condition, combined_coefficients, estimate_states,

@@ -7,7 +7,7 @@ Cache. Compilation is cached on disk (``cache=True``, in ``__pycache__``). numba
 cache of a function on the file that defines it only, not on the compiled functions it calls
 from other files; the loops here call the model kernels of
 :mod:`shipid.methods.ebm.model_kernels` and the linear-algebra kernels of
-:mod:`shipid.estimate.numba_linalg`. So this file carries :data:`MODEL_KERNELS_KEY` and
+:mod:`shipid.numerics.numba_linalg`. So this file carries :data:`MODEL_KERNELS_KEY` and
 :data:`NUMBA_LINALG_KEY`, the hashes of those files: an edit there must update the key here
 (which changes this file and so invalidates its cache; ``tests/methods/ebm/test_kernels.py``
 checks the keys). If a key does not match the file found at import, the loops here are
@@ -19,16 +19,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from shipid.estimate import numba_linalg
+from shipid.numerics import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
-from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
+from shipid.numerics.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 from shipid.methods.ebm import model_kernels
 from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into, ebm_H_into
 
 #: First 16 hex digits of the SHA-256 of ``model_kernels.py`` (see the module docstring).
 MODEL_KERNELS_KEY = "f76451348711c0e0"
 
-#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+#: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
 NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the keys name.

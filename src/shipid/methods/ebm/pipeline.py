@@ -24,7 +24,7 @@ from shipid.analysis.observability import ebm_observability
 from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.estimate.cd_ekf import FilterResult, cd_ekf
-from shipid.estimate.linalg import NotPositiveDefiniteError
+from shipid.numerics.linalg import NotPositiveDefiniteError
 from shipid.estimate.ridge import RidgeFit, ridge
 from shipid.estimate.smoothers import SmootherResult, mbf_smoother, rts_smoother
 from shipid.methods.ebm.compiled import ebm_cd_ekf, mbf_smoother_fast, rts_smoother_fast

@@ -34,7 +34,7 @@ from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import abkowitz as ab
 from shipid.result import Result
-from shipid.simulate.integrate import rk4_step
+from shipid.numerics.integrate import rk4_step
 
 #: Channels the run must have: the measurements of eq. 8 and the inputs δ, n.
 REQUIRED = ("x", "y", "x_dot", "y_dot", "psi", "U", "delta", "n")

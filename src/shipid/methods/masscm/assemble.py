@@ -20,7 +20,7 @@ import numpy as np
 
 from shipid.io.trial import Trial
 from shipid.errors import InputError
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.data import Dataset, first_row, prepare
 from shipid.methods.masscm.iteration import iterate
 from shipid.methods.masscm.moments import transient_length

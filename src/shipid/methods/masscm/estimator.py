@@ -78,7 +78,7 @@ Known limitations (measured; reproduced by ``tests/methods/masscm/test_masscm_li
 
 Computation (``MassCMOptions.compute``; how, not what): ``"reference"`` (default) is the straightforward
 numpy/scipy path, except two compiled pieces that both modes share: the prefilter
-(:func:`shipid.estimate.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s arithmetic, tested bit-identical) and the lag
+(:func:`shipid.numerics.iir_kernels.lfilter`, ``scipy.signal.lfilter``'s arithmetic, tested bit-identical) and the lag
 moments of an IIR-prefiltered dataset (:func:`shipid.estimate.fir_kernels.lag_moments`, tested against the explicit
 instrument matrix, ``explicit_moments=True``). ``"fast"`` (the Monte Carlo study's default) runs the same steps through numba kernels: steps
 (b)–(c) per dataset (:mod:`shipid.methods.masscm.step`, :mod:`shipid.estimate.fir_kernels`), the same

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.estimate.fir_kernels import fir_filter, lag_moments
-from shipid.estimate.iir_kernels import lfilter, lfilter_into
+from shipid.numerics.iir_kernels import lfilter, lfilter_into
 from shipid.estimate.iv import iv_compress, iv_compress_products, lag_gram_from, lag_matrix
 from shipid.methods.masscm.data import Dataset, diff2, first_row
 from shipid.methods.masscm.options import MassCMOptions
@@ -180,7 +180,7 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
 
     The same quantities as the explicit path (:func:`instruments`, prefilter, transient drop
     :func:`transient_length`, :func:`iv_compress`; tests compare them): the eight distinct signals are
-    prefiltered once, from rest, by :func:`shipid.estimate.iir_kernels.lfilter_into` (the numbers of
+    prefiltered once, from rest, by :func:`shipid.numerics.iir_kernels.lfilter_into` (the numbers of
     ``scipy.signal.lfilter``), the four instrument signals into one array and the three measured differences
     of (37) and ``y`` into the array of the regressors; the two delayed-``y`` columns of (37) are the delayed
     filtered ``y`` (the filter commutes with the delay), and ``Z^T Z``, ``Z^T [Phi, y]`` come from the lag
@@ -199,7 +199,7 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
             *zip(T[2:5], ds.Phi[:, 2:].T), (T[5], ds.y))
     for out, x in rows:                     # row by row: no 8 x n copy of the inputs
         if L is not None:
-            lfilter_into(L.a, L.c, x, out)  # = scipy.signal.lfilter(L.a, L.c, x) (shipid.estimate.iir_kernels)
+            lfilter_into(L.a, L.c, x, out)  # = scipy.signal.lfilter(L.a, L.c, x) (shipid.numerics.iir_kernels)
         else:
             out[:] = x
     T[0, 0], T[0, 1:] = 0.0, -T[5, :-1]     # the delayed-y columns: the filter commutes with the delay

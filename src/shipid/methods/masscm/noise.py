@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.estimate.arma import ARMA, fit_ar, hannan_rissanen
-from shipid.estimate.iir_kernels import lfilter
+from shipid.numerics.iir_kernels import lfilter
 from shipid.methods.masscm.noise_bj import noise_model_bj
 from shipid.methods.masscm.options import MassCMOptions
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.estimate.arma import ARMA, ar_gram, ar_solve_normal, fit_ar
-from shipid.estimate.iir_kernels import lfilter
+from shipid.numerics.iir_kernels import lfilter
 from shipid.methods.masscm.options import MassCMOptions
 
 #: The candidate MA structures ``(c, k)``: ``C(q) = (1 - c q^-2)^k``. ``(0, 0)`` is the plain AR model; the

@@ -59,7 +59,7 @@ import numpy as np
 from numba import njit
 from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
 
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.pem_initial import without_initial_state

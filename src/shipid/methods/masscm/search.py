@@ -31,10 +31,10 @@ import types
 import numpy as np
 from numba import njit
 
-from shipid.estimate import numba_linalg
-from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key
+from shipid.numerics import numba_linalg
+from shipid.numerics.numba_linalg import cho_solve_inplace, cholesky_into, source_key
 
-#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py``: :func:`spd_solve` (and
+#: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py``: :func:`spd_solve` (and
 #: :func:`levenberg_marquardt`, which calls it) compile its kernels in, and numba keys their disk cache on this
 #: file only. An edit there must update the key (``tests/methods/masscm/test_masscm_compiled.py`` checks it).
 NUMBA_LINALG_KEY = "9a3ec582af18b94f"
@@ -205,7 +205,7 @@ def _norm(x):
 def spd_solve(H, b):
     """``H x = b`` for symmetric positive definite ``H`` by Cholesky; ``(ok, x)``.
 
-    :func:`shipid.estimate.numba_linalg.cholesky_into` and ``cho_solve_inplace``; ``ok`` False (and x zero)
+    :func:`shipid.numerics.numba_linalg.cholesky_into` and ``cho_solve_inplace``; ``ok`` False (and x zero)
     when ``H`` is not positive definite.
     """
     n = b.size

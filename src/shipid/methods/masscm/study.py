@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.estimator import (MassCMOptions, estimate_mass_cm, implausible_reasons, initial_state,
                                              iterate, prepare, rho_of)
 from shipid.models.roll_reduced import THETA_NAMES, KnownParams

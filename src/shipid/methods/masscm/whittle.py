@@ -65,7 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import continuous_model, foh, noise_from_ship
 from shipid.methods.masscm.whittle_kernels import noise_spectrum, ship_columns, transient_normal
 from shipid.methods.masscm.pem import (FREE, PEMFit, PEMOptions, WAVE_LR, WHITE_LAGS, WHITE_P, finish,

@@ -8,7 +8,7 @@ fused into one compiled pass that returns only what step 2 reads (smoothed state
 standard deviations, the NIS per sample and the log-likelihood). Tests require agreement
 with the reference to rounding (``tests/methods/mmg/test_kernels.py``).
 
-Numerics (the standards of :mod:`shipid.estimate.linalg`, kept): float64, no ``fastmath``.
+Numerics (the standards of :mod:`shipid.numerics.linalg`, kept): float64, no ``fastmath``.
 
 * Φ and Q_d by the Taylor series of :func:`shipid.estimate.cd_ekf.taylor_discretise`
   (same terms, same stopping rule). The kinematic Jacobian has 10 non-zeros,
@@ -26,7 +26,7 @@ Numerics (the standards of :mod:`shipid.estimate.linalg`, kept): float64, no ``f
 Cache. Compilation is cached on disk (``cache=True``). numba keys the cache of a function
 on the file that defines it only, not on the compiled functions it calls from other files;
 the loop here calls the Cholesky and symmetrisation kernels of
-:mod:`shipid.estimate.numba_linalg`. So this file carries :data:`NUMBA_LINALG_KEY`, the hash
+:mod:`shipid.numerics.numba_linalg`. So this file carries :data:`NUMBA_LINALG_KEY`, the hash
 of that file: an edit there must update the key here (``tests/methods/mmg/test_kernels.py``
 checks it). If the key does not match the file found at import, the loops here are compiled
 without the disk cache, never run stale.
@@ -37,12 +37,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from shipid.estimate import numba_linalg
+from shipid.numerics import numba_linalg
 from shipid.estimate.cd_ekf import LOG2PI
-from shipid.estimate.linalg import check_positive_definite
-from shipid.estimate.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
+from shipid.numerics.linalg import check_positive_definite
+from shipid.numerics.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 
-#: First 16 hex digits of the SHA-256 of ``shipid/estimate/numba_linalg.py`` (see the module docstring).
+#: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
 NUMBA_LINALG_KEY = "9a3ec582af18b94f"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the key names.
@@ -99,7 +99,7 @@ def _kin_f(x, out):
 def _kin_rk4(x, h, k1, k2, k3, k4, xt):
     """One RK4 step of length ``h`` of :func:`_kin_f`, in place on ``x`` (``k1..k4``, ``xt``: work arrays).
 
-    The compiled twin of :func:`shipid.simulate.integrate.rk4_propagate` on
+    The compiled twin of :func:`shipid.numerics.integrate.rk4_propagate` on
     :func:`shipid.methods.mmg.estimator.kinematic_f`; ``tests/methods/mmg/test_kernels.py`` checks they agree.
     """
     n = x.size

@@ -46,8 +46,8 @@ from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
 from shipid.models import mmg
 from shipid.io.files import read_trial
-from shipid.simulate.integrate import rk4_propagate
-from shipid.simulate.model import ShipModel
+from shipid.numerics.integrate import rk4_propagate
+from shipid.models.ship_model import ShipModel
 
 #: Rudder limit (rad) of the manoeuvres (35° hard over, MSC.137(76) 4.2.1).
 RUDDER_LIMIT = np.deg2rad(35.0)
@@ -302,7 +302,7 @@ def rudder_turn_sign(model: mmg.MmgModel, cond: Conditions) -> float:
 
 
 def ship_model(model: mmg.MmgModel, cond: Conditions):
-    """:class:`shipid.simulate.model.ShipModel` of an identified MMG model in calm water at ``cond``."""
+    """:class:`shipid.models.ship_model.ShipModel` of an identified MMG model in calm water at ``cond``."""
 
     def outputs(t, X, U):
         return {"x": X[:, 0], "y": X[:, 1], "psi": X[:, 2], "u": X[:, 3], "v": X[:, 4], "r": X[:, 5],
@@ -362,7 +362,7 @@ def rows_dynamics(t: float, x: np.ndarray, u: tuple, theta: tuple) -> np.ndarray
 def rows_rk4(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], x: np.ndarray, delta, n, h, wind=None):
     """One RK4 step of every row (inputs held), as :func:`shipid.models.mmg.simulate_batch`; ``h`` scalar or (B, 1).
 
-    The package's one RK4 (:func:`shipid.simulate.integrate.rk4_propagate`) on :func:`rows_dynamics`.
+    The package's one RK4 (:func:`shipid.numerics.integrate.rk4_propagate`) on :func:`rows_dynamics`.
     A state beyond 1e6 becomes NaN (a diverging row)."""
     x = rk4_propagate(rows_dynamics, 0.0, x, h, 1, ((delta, n, wind), (model, Th)))
     return np.where(np.abs(x) < 1e6, x, np.nan)

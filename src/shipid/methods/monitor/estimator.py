@@ -89,7 +89,7 @@ import numpy as np
 
 from shipid.io.trial import Trial
 from shipid.errors import InputError, ShipidError
-from shipid.estimate.linalg import one_blas_thread
+from shipid.numerics.linalg import one_blas_thread
 from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm.estimator import DEFAULT_THETA0, MassCMOptions, iterate, prepare

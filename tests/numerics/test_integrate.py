@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from shipid.simulate.integrate import simulate
+from shipid.numerics.integrate import simulate
 
 # Damped oscillator (ω_n = 1.3 rad/s, ζ = 0.2) driven by b·cos(ω t) plus a constant input b·u.
 A = np.array([[0.0, 1.0], [-1.69, -0.52]])

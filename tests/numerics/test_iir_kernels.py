@@ -1,4 +1,4 @@
-"""The compiled rational filter of :mod:`shipid.estimate.iir_kernels` against ``scipy.signal.lfilter``.
+"""The compiled rational filter of :mod:`shipid.numerics.iir_kernels` against ``scipy.signal.lfilter``.
 
 Equality is ``numpy.array_equal`` (every bit, except that it treats -0.0 and 0.0 as equal: the module's one
 documented difference), on random filters of the shapes Algorithm 1 uses (AR numerators over ``(1 - c q^-2)^k``,
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.signal import lfilter as scipy_lfilter
 
-from shipid.estimate.iir_kernels import BLOCK, lfilter, lfilter_into
+from shipid.numerics.iir_kernels import BLOCK, lfilter, lfilter_into
 
 
 def _stable(rng, na):

@@ -1,4 +1,4 @@
-"""The shared numba Cholesky kernels (shipid.estimate.numba_linalg) against numpy."""
+"""The shared numba Cholesky kernels (shipid.numerics.numba_linalg) against numpy."""
 
 import importlib
 import re
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import shipid
-from shipid.estimate import numba_linalg as nl
+from shipid.numerics import numba_linalg as nl
 
 
 def _spd(rng, n):
