@@ -37,7 +37,7 @@ from shipid.numerics import numba_linalg
 from shipid.numerics.numba_linalg import cholesky_into, source_key
 
 #: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
-NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+NUMBA_LINALG_KEY = "355c3586dc6b4413"
 
 #: True when the on-disk cache may be used: the compiled callee is the one the key names.
 CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY

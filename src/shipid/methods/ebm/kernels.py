@@ -26,10 +26,10 @@ from shipid.methods.ebm import model_kernels
 from shipid.methods.ebm.model_kernels import ebm_f_into, ebm_F_into, ebm_h_into, ebm_H_into
 
 #: First 16 hex digits of the SHA-256 of ``model_kernels.py`` (see the module docstring).
-MODEL_KERNELS_KEY = "f76451348711c0e0"
+MODEL_KERNELS_KEY = "017e7ac1ac440667"
 
 #: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
-NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+NUMBA_LINALG_KEY = "355c3586dc6b4413"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the keys name.
 CACHE_VALID = (source_key(model_kernels) == MODEL_KERNELS_KEY

@@ -37,7 +37,7 @@ from shipid.numerics.numba_linalg import cho_solve_inplace, cholesky_into, sourc
 #: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py``: :func:`spd_solve` (and
 #: :func:`levenberg_marquardt`, which calls it) compile its kernels in, and numba keys their disk cache on this
 #: file only. An edit there must update the key (``tests/methods/masscm/test_masscm_compiled.py`` checks it).
-NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+NUMBA_LINALG_KEY = "355c3586dc6b4413"
 
 #: True when the on-disk cache of those two may be used (else they compile without it, never run stale).
 CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY

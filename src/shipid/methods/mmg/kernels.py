@@ -43,7 +43,7 @@ from shipid.numerics.linalg import check_positive_definite
 from shipid.numerics.numba_linalg import cho_solve_inplace, cholesky_into, source_key, symmetrise_inplace
 
 #: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py`` (see the module docstring).
-NUMBA_LINALG_KEY = "9a3ec582af18b94f"
+NUMBA_LINALG_KEY = "355c3586dc6b4413"
 
 #: True when the on-disk cache may be used: the compiled callees are the ones the key names.
 CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
