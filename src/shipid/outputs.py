@@ -68,6 +68,15 @@ def jsonable(obj: Any, *, strict: bool = False) -> Any:
     return json.loads(json.dumps(obj, default=json_default if strict else _text_default))
 
 
+def short_path(p: str) -> str:
+    """``p`` relative to the working directory when it lies below it, else its file name."""
+    try:
+        rel = os.path.relpath(p)
+    except ValueError:
+        rel = p
+    return rel if not rel.startswith("..") else os.path.basename(p.rstrip("/")) or p
+
+
 def _umask() -> int:
     """The process umask, read without changing it where the OS allows (Linux ``/proc``)."""
     try:

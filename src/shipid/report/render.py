@@ -16,6 +16,7 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
+from shipid.outputs import short_path
 from shipid.report import figures as F
 from shipid.report.formatting import fmt_num
 from shipid.report.registry import Claim, Entry, Group
@@ -29,17 +30,6 @@ PAPERS = {"mass-cm": "Linder et al. 2015", "dp": "Fossen, Sagatun & Sørensen 19
           "ebm-design": "Yoon & Rhee 2003"}
 
 _ABS_PATH = re.compile(r"(?<![\w.])(/[\w.\-+@]+)+/?")
-
-
-def short_path(p: str) -> str:
-    """``p`` relative to the working directory when it lies below it, else its file name."""
-    import os
-
-    try:
-        rel = os.path.relpath(p)
-    except ValueError:
-        rel = p
-    return rel if not rel.startswith("..") else os.path.basename(p.rstrip("/")) or p
 
 
 _SEED_REF = re.compile(r"\s*\(seed 00\d\)|,?\s*\bseed 00\d\b", re.I)

@@ -19,10 +19,10 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from shipid.report.render import short_path
 from shipid.io.files import read_trial
 from shipid.io.trial import Trial
 from shipid.errors import InputError
+from shipid.outputs import short_path
 from shipid.report.convention import overlay, signal, trial_summary
 from shipid.methods.mmg import validate as V
 from shipid.models import mmg
