@@ -28,14 +28,14 @@ import numpy as np
 
 from shipid.campaign.engine import run_campaign
 
-TASK = "shipid.methods.monitor.study:monitor_run"
+TASK = "_monitor_study:monitor_run"   # benchmarks/_monitor_study.py (this folder is on sys.path; in-process runs)
 
 
 def study(runs: int, seed: int, noise: str = "issue3", noise_model: str | None = None, reselect: int = 0) -> None:
     extra = {"noise_model": noise_model, "bj_reselect": reselect}
     for label, kw, sd in (("change at 900 s", {"change_at": 900.0, "noise": noise, **extra}, seed),
                           ("no change", {"change_at": None, "noise": noise, **extra}, seed + 1)):
-        from shipid.methods.monitor.study import summarise
+        from _monitor_study import summarise
         res = run_campaign(TASK, runs, seed=sd, kwargs=kw, workers=1, progress=False)
         recs = [r.outputs for r in res.records if r.status == "ok"]
         failed = runs - len(recs)
@@ -107,7 +107,7 @@ def memory() -> None:
 
 
 def tradeoff(runs: int) -> None:
-    from shipid.methods.monitor.study import summarise
+    from _monitor_study import summarise
     for w in (150.0, 300.0, 600.0):
         for label, kw, sd in (("change", {"change_at": 900.0}, 31), ("no change", {"change_at": None}, 32)):
             res = run_campaign(TASK, runs, seed=sd, kwargs={**kw, "window": w}, workers=1, progress=False)

@@ -6,8 +6,8 @@ import pytest
 
 import shipid.demo as D
 from shipid.cli import main
-from shipid.report import demo_step as RS
-from shipid.report.examples import example
+from shipid.demo import report_step as RS
+from report.examples import example
 
 
 @pytest.fixture

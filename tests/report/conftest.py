@@ -225,7 +225,7 @@ def artifacts() -> Path:
 @pytest.fixture(scope="session")
 def example_reports(tmp_path_factory):
     """The HTML reports of the three example results, built once: method -> (Result, html, path)."""
-    from shipid.report.examples import EXAMPLES
+    from report.examples import EXAMPLES
 
     return _build_reports(EXAMPLES, tmp_path_factory.mktemp("reports"))
 

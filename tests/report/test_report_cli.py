@@ -4,7 +4,7 @@ import subprocess
 import sys
 
 from shipid.cli import main
-from shipid.report.examples import mass_cm_example
+from report.examples import mass_cm_example
 from shipid.result import Estimate, Result
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-import shipid.report.demo_step  # noqa: F401  (registers the "report" step of ``shipid demo``)
+import shipid.demo.report_step  # noqa: F401  (registers the "report" step of ``shipid demo``)
 from shipid.cli import cli
 from shipid.errors import InputError, OutputExistsError
 

@@ -81,8 +81,8 @@ a report warning, never a crash).
 `shipid identify ebm --figures`). Each is hooked where the method builds its Result and never raises.
 
 ## Try it
-`python -c "from shipid.report.examples import example; example('ebm').write_json('/tmp/e.json')"`
-then `shipid report /tmp/e.json --out /tmp/e.html`. `src/shipid/report/examples.py` holds a fully populated
+`PYTHONPATH=tests python -c "from report.examples import example; example('ebm').write_json('/tmp/e.json')"`
+then `shipid report /tmp/e.json --out /tmp/e.html`. `tests/report/examples.py` holds a fully populated
 synthetic Result per method: copy its shape.
 """
 

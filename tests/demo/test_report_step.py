@@ -3,9 +3,9 @@
 import pytest
 
 from shipid.demo import DemoContext, demo_steps
-from shipid.report import demo_step
+from shipid.demo import report_step as demo_step
 from shipid.methods.mmg import demo as mmg_demo
-from shipid.report.examples import EXAMPLES
+from report.examples import EXAMPLES
 
 
 def test_step_is_registered_last():

@@ -3,7 +3,8 @@
 These are NOT identification results: the numbers are synthetic (seeded random
 draws around made-up values) and exist to test and demonstrate the report, and
 to show method authors what a fully populated :class:`~shipid.result.Result`
-looks like. ``shipid.report.examples.example(method)`` returns one.
+looks like. ``example(method)`` returns one (``from report.examples import example`` in the tests, which
+put ``tests/`` on ``sys.path``).
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ def mass_cm_example(seed: int = 0) -> Result:
         provenance={"inputs": [{"name": "example_roll.csv", "channels": {"p": "rad/s", "a_s": "m/s^2",
                                                                           "delta": "rad"},
                                 "n_samples": n, "duration_s": float(t[-1]), "dt_s": dt, "note": _NOTE}],
-                    "seed": seed, "command": "shipid.report.examples.mass_cm_example"},
+                    "seed": seed, "command": "tests/report/examples.py: mass_cm_example"},
     )
 
 
