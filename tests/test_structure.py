@@ -10,7 +10,7 @@ import a method"):
     method's ``cli*.py`` modules and ``shipid/api.py`` (the command line and the Python API load a method
     where it is called, for start-up) and in a package's module-level ``__getattr__``
     (PEP 562 lazy attributes, as ``shipid.__getattr__``); the plug-in look-ups of ``shipid/registry.py``
-    and ``shipid/demo.py`` (``importlib`` on names found at run time) are allowed;
+    and ``shipid/demo/__init__.py`` (``importlib`` on names found at run time) are allowed;
 (c) no ``from shipid.x import _name`` of a module-private name defined in another module;
 (d) every source file has at most 600 lines;
 (e) the shared layers (data, estimate, models, simulate, studies, report, analysis, result, outputs,
