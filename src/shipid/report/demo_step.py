@@ -1,4 +1,4 @@
-"""The last ``shipid demo`` step: an HTML report for every result the demo produced (issue 8).
+"""The last ``shipid demo`` step: an HTML report for every result the demo produced.
 
 Results are collected from the demo context, in this order:
 

@@ -1,4 +1,4 @@
-"""Noise intensities and observed-information covariance of one DP scheme (seed 001).
+"""Noise intensities and observed-information covariance of one DP scheme (Fossen, Sagatun & Sørensen 1996).
 
 Fossen, Sagatun & Sørensen (1996) estimate θ with the state-augmented EKF (Table 1,
 eqs. 20–25) and assume the noise covariances known. Here, after the EKF passes of a scheme

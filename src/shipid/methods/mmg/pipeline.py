@@ -93,7 +93,7 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
                fit_config: FitConfig) -> dict | None:
     """The differential form of step 2 checked against the integral form on the same smoothed runs.
 
-    The differential form (seed 002, eq. 16) regresses forces computed from the smoothed accelerations,
+    The differential form (Yoon & Rhee 2003, eq. 16) regresses forces computed from the smoothed accelerations,
     which lag the rudder (:mod:`shipid.methods.mmg.coverage`); its standard errors do not hold that bias:
     in the simulated KVLCC2 campaign (``shipid study mmg-coverage --vessel kvlcc2``) its ±2 std of
     N_v, N_r, NR_arm covered the truth in a fifth to a quarter of the runs, the integral form's in 0.95 or

@@ -1,6 +1,6 @@
 """Online mass and centre-of-mass monitoring: Algorithm 1 of Linder et al. (2015) on a sliding window.
 
-Seed 000 is an *online* method: the ship's load changes while it sails. :class:`MassCMMonitor` is fed
+Monitoring is *online*: the ship's load changes while it sails. :class:`MassCMMonitor` is fed
 chunks of the loaded-condition IMU + rudder stream and returns one :class:`MonitorUpdate` every
 ``every`` seconds of stream time. It is built from the pieces of Algorithm 1
 (:mod:`shipid.methods.masscm.estimator`):
