@@ -13,7 +13,7 @@ tank, so no current states):
 
    with measurements ``z = [x0, y0, ψ, u, v, r]``, followed by the RTS fixed-interval
    smoother (:func:`shipid.estimate.smoothers.rts_smoother`; eq. 10 gives the same
-   estimates on this nearly linear model). The seed's force states (its eqs. 5–6) are
+   estimates on this nearly linear model). The paper's force states (its eqs. 5–6) are
    replaced by acceleration states: the forces then follow from the equations of
    motion with the known masses, ``X = (m + m_x) u̇ − (m + m_y) v r − x_G m r²`` etc.
    (:func:`shipid.models.mmg.rigid_body_forces`), which is the same information

@@ -155,7 +155,7 @@ def approach_rows(model, Th: Mapping[str, np.ndarray], cond: MM.Conditions, *, s
     (:func:`~shipid.methods.mmg.manoeuvres.rows_equilibrium`): with a propeller rate (given or the training
     runs'), each draw's own equilibrium speed; with a speed only, each draw's own rate. Holding the nominal
     model's speed for every draw instead starts each draw off its equilibrium and leaves the surge
-    coefficients' share of the turning criteria out of the band: on the simulated coverage study's tuning
+    coefficients' share of the turning criteria out of the band: on one simulated coverage-study
     truth (30 noise realisations, ``docs/validation/mmg.md``) the advance's band std was then 0.012 L
     against an error RMS of 0.019 L. Row 0 keeps ``cond``'s values exactly. Returns ``(speed, rps, no_eq)``,
     ``no_eq`` True where a draw has no equilibrium."""

@@ -52,7 +52,7 @@ from shipid.models import mmg
 @dataclass(frozen=True)
 class SimexConfig:
     """``lambdas``: added noise variances in units of σ̂²; ``draws`` noise draws per λ; ``seed`` of the draws;
-    ``extrapolant``: ``"linear"`` or ``"quadratic"`` in λ (module docstring).
+    ``extrapolant``: ``"linear"`` or ``"quadratic"`` in λ (the two compared: ``docs/validation/mmg.md``).
 
     ``pilot``: first refit twice at ``λ = pilot_lambda`` (added noise of twice the measured variance); if no
     estimate moves by more than ``pilot_threshold`` of its (iid ridge, i.e. small) standard error, the measurement noise is too small to bias the

@@ -90,8 +90,8 @@ class MonitorOptions:
     threshold : float
         Alarm when the largest Wald statistic over the splits exceeds this (chi^2, 2 dof for one split;
         ``chi2.sf(threshold, 2) = exp(-threshold / 2)``, but the maximum over overlapping splits and updates is
-        over-dispersed). 40: about twice the largest no-change value on the tuning seeds (22.2); the
-        measured false-alarm rate and detection delays on fresh seeds are in the module docstring.
+        over-dispersed). 40: about twice the largest no-change value seen on simulated streams (22.2); the
+        measured false-alarm rate and detection delays are in ``docs/validation/monitor.md``.
     ar_fit : float
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
     bj_reselect : int
