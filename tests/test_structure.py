@@ -57,9 +57,7 @@ PENDING: dict[str, tuple[str, ...]] = {
     "private_imports": (),
     "file_length": (),
     "shared_imports_methods": (),
-    # docstrings and help texts still carrying history: areas being rewritten on other branches
-    "history_in_docstrings": ("shipid.methods.dp", "shipid.methods.mmg", "shipid.methods.monitor",
-                              "shipid.report", "shipid.cli.report_cmds", "shipid.cli.simulate_cmds"),
+    "history_in_docstrings": (),
 }
 
 #: Layer of each top-level package of shipid (lower imports nothing higher; equal layers do not import each

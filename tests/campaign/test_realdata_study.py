@@ -76,7 +76,7 @@ def test_split_files_exist():
 def test_configuration_is_the_frozen_one():
     """Candidates, fitting weights, hyper-parameters and splits are those committed before the held-out
     evaluation (shipid.methods.mmg.study docstring). Changing any of them changes the fingerprint:
-    then the held-out numbers in the docstring no longer belong to the code, and must be recomputed."""
+    then the held-out numbers in docs/validation/mmg.md no longer belong to the code, and must be recomputed."""
     assert S.config_fingerprint() == S.FROZEN_FINGERPRINT
 
 
@@ -199,7 +199,7 @@ def test_kvlcc2_overshoots_close_to_measured():
     configuration gave 1.70 deg at most, 2nd overshoot of 20/10 starboard; the bound is the target)."""
     need("kvlcc2_hsva")
     st = S.kvlcc2_zigzag()
-    assert st["structure"] == "full/symmetric-gamma_R"       # chosen by the overshoot CV (docstring table)
+    assert st["structure"] == "full/symmetric-gamma_R"       # chosen by the overshoot CV (table in docs/validation/mmg.md)
     errs = [e for row in st["overshoots"] for e in row["identified_error_deg"]]
     assert len(errs) == 6
     assert max(abs(e) for e in errs) <= 2.0

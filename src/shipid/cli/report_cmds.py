@@ -1,4 +1,4 @@
-"""``shipid report RESULT.json --out report.html``: the HTML report of a result (issue 8)."""
+"""``shipid report RESULT.json --out report.html``: the HTML report of a result."""
 
 from __future__ import annotations
 

@@ -137,10 +137,7 @@ def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     demo step of each method; every part it leaves out (real data missing, an
     optional package absent) is listed at the end with the reason.
 
-    \b
-    Measured time (seed 0, 2026-12-01) on a 2-core AMD EPYC virtual machine shared
-    with other jobs (load average about 8): 41 s without the real data (16 s CPU),
-    69 s with ../shared/data present, which adds the KVLCC2 real-data step (25 s CPU).
+    Its measured run time is in docs/validation/index.md.
     """
     from shipid.demo import SKIPPED, DemoContext, closing_line, demo_steps, format_table
 

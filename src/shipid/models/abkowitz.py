@@ -16,7 +16,7 @@ Hydrodynamic forces without the added-mass part (eqs. 12–14)::
     X = H_X θ_X,   Y = H_Y θ_Y,   N = H_N θ_N,   H_N = L H_Y
 
 with the coefficient vectors of eq. 13 and the regressors of eqs. 14–15. The
-sway regressor list is garbled in the seed text; our reading (9 entries, every
+sway regressor list is garbled in the paper's text; our reading (9 entries, every
 one of dimension velocity², matching the 9 coefficients of θ_Y)::
 
     h_Y = [ (u_A∞/2)², U_r v_r, L U_r r, v_r³/U_r, L v_r² r/U_r, L² v_r r²/U_r,
@@ -24,7 +24,7 @@ one of dimension velocity², matching the 9 coefficients of θ_Y)::
 
 and ``h_X = [u_r², L n u_r, L² n², v_r², L v_r r, L² r², L² v_r² r²/U_r², c² e²]``.
 
-The rudder-inflow quantities are not defined in the seed; we use actuator-disc
+The rudder-inflow quantities are not defined in the paper; we use actuator-disc
 momentum theory with the propeller of the vessel file (state the reading):
 
 * ``u_a = (1 − w) u_r`` (advance speed), ``J = u_a / (n D)``,

@@ -1,4 +1,4 @@
-"""HTML reports for any :class:`shipid.result.Result` (issue 8).
+"""HTML reports for any :class:`shipid.result.Result` .
 
 ``shipid report RESULT.json --out report.html [--force]`` writes ONE self-contained
 HTML file (inline CSS, figures as base64 PNG data URIs drawn with matplotlib Agg, no
@@ -9,7 +9,7 @@ JavaScript, nothing fetched from the network). Python API::
     write_report(result, "report.html", force=False)
 
 The rest of this docstring is the convention every method follows so the report
-can draw its results (the same text is in ``/work/notes/report_convention.md``).
+can draw its results.
 
 `shipid report RESULT.json --out report.html [--force]` renders ANY `shipid.result.Result`. Everything below is
 optional: put in what you have; the report shows what is there and skips the rest.
@@ -74,7 +74,7 @@ The report imports `shipid.methods.<m>` and `shipid.methods.<m>.report` (m = met
 before building, so a `register_section` call in those modules is always picked up (import errors are shown as
 a report warning, never a crash).
 
-## What the three methods store (series modules, issue 8)
+## What the three methods store (series modules)
 `shipid.methods.masscm.series` (roll-rate overlays, equation errors, Fig. 4 map; Table 3 via
 `shipid study mass-cm-sensitivity --out`), `shipid.methods.dp.series` (innovations with σ),
 `shipid.methods.ebm.series` (signals, Tables 1–2 and 4, force fits; opt-in validation and Fig. 7 map,

@@ -49,7 +49,7 @@ def residual(t, values, unit: str, *, std=None, label: str | None = None, title:
 
 def history(t, value, std, unit: str, *, true: float | None = None, label: str | None = None,
             title: str | None = None, paper: str | None = None) -> dict:
-    """Recursive estimate of one parameter versus time with its standard deviation (seed 001 Fig. 8)."""
+    """Recursive estimate of one parameter versus time with its standard deviation (Fossen, Sagatun & Sørensen 1996, Fig. 8)."""
     return _extra({"t": _list(t), "value": _list(value), "unit": unit},
                   std=None if std is None else _list(std),
                   true=None if true is None else float(true), label=label, title=title, paper=paper)
@@ -57,7 +57,7 @@ def history(t, value, std, unit: str, *, true: float | None = None, label: str |
 
 def signal(t, lines: Mapping[str, Sequence[float]], unit: str, *, std: Mapping | None = None,
            label: str | None = None, title: str | None = None, paper: str | None = None) -> dict:
-    """One axis of time histories (e.g. smoothed states, forces; seed 002 Figs 4, 9)."""
+    """One axis of time histories (e.g. smoothed states, forces; Yoon & Rhee 2003, Figs 4, 9)."""
     return _extra({"t": _list(t), "lines": {str(k): _list(v) for k, v in lines.items()}, "unit": unit},
                   std=None if std is None else {str(k): _list(v) for k, v in std.items()},
                   label=label, title=title, paper=paper)
@@ -66,7 +66,7 @@ def signal(t, lines: Mapping[str, Sequence[float]], unit: str, *, std: Mapping |
 def matrix(values, rows: Iterable[str], cols: Iterable[str] | None = None, *, unit: str | None = None,
            vmin: float | None = None, vmax: float | None = None, annotate: bool | None = None,
            title: str | None = None, paper: str | None = None) -> dict:
-    """A matrix drawn as a heat map (e.g. regressor correlation, seed 002 Tables 1-2)."""
+    """A matrix drawn as a heat map (e.g. regressor correlation, Yoon & Rhee 2003, Tables 1-2)."""
     return _extra({"values": np.asarray(values, dtype=float).tolist(), "rows": [str(r) for r in rows]},
                   cols=None if cols is None else [str(c) for c in cols], unit=unit, vmin=vmin, vmax=vmax,
                   annotate=annotate, title=title, paper=paper)
@@ -74,7 +74,7 @@ def matrix(values, rows: Iterable[str], cols: Iterable[str] | None = None, *, un
 
 def table(columns: Sequence[str], rows: Sequence[Sequence[Any]], *, units: Sequence[str] | None = None,
           caption: str | None = None, title: str | None = None, paper: str | None = None) -> dict:
-    """An extra table (true vs estimated, kappa/R/Cp of seed 002 Table 4, Monte Carlo spread)."""
+    """An extra table (true vs estimated, kappa/R/Cp of Yoon & Rhee 2003, Table 4, Monte Carlo spread)."""
     def cell(v):
         if isinstance(v, (np.floating, np.integer)):
             return v.item()

@@ -352,7 +352,7 @@ def _settled_ylim(t, v, s, true) -> tuple[float, float] | None:
 
 @_styled
 def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> Figure:
-    """Parameter histories with ±σ bands (seed 001 Fig. 8 style); dashed red line at the true value."""
+    """Parameter histories with ±σ bands (Fossen, Sagatun & Sørensen 1996, Fig. 8 style); dashed red line at the true value."""
     nrows, ncols = _grid(len(entries), ncols)
     fig = new_figure(height=max(2.0, 1.9 * nrows + 0.3))
     axes = fig.subplots(nrows, ncols, squeeze=False, sharex=False)
@@ -394,7 +394,7 @@ def histories_figure(entries: Sequence[tuple[str, Mapping]], ncols: int = 3) -> 
 
 @_styled
 def signals_figure(entries: Sequence[tuple[str, Mapping]]) -> Figure:
-    """Stacked time histories sharing the time axis (seed 002 Figs 4, 9: smoothed motion, forces)."""
+    """Stacked time histories sharing the time axis (Yoon & Rhee 2003, Figs 4, 9: smoothed motion, forces)."""
     n = len(entries)
     fig = new_figure(height=max(2.2, 1.9 * n + 0.5))
     axes = fig.subplots(n, 1, squeeze=False, sharex=True)[:, 0]

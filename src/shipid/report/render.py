@@ -47,7 +47,7 @@ def sci_text(text: str) -> str:
 
 def plain_text(text: str) -> str:
     """Text of a method shown in the report: machine paths shortened, the project's internal paper
-    numbers ("seed 000") dropped (papers are named by authors and year), Python's 1.5e+08 as 1.5×10⁸."""
+    numbers (the word "seed" and three digits) dropped (papers are named by authors and year), Python's 1.5e+08 as 1.5×10⁸."""
     return sci_text(_SEED_REF.sub("", short_paths(text)))
 
 

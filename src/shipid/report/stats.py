@@ -5,7 +5,7 @@ autocorrelation at lags k ≥ 1 lies inside ±1.96/√N in about 95 % of lags
 (Box, Jenkins & Reinsel, *Time Series Analysis*, 4th ed., §2.1.6), and the
 Ljung–Box statistic Q = N(N+2) Σ_{k=1}^{h} ρ_k² / (N−k) is χ²(h) distributed
 (Ljung & Box 1978). For a Kalman filter the innovations should in addition lie
-inside their predicted ±2σ in about 95 % of samples (seed 001 innovation checks).
+inside their predicted ±2σ in about 95 % of samples (the innovation checks of Fossen, Sagatun & Sørensen 1996).
 """
 
 from __future__ import annotations

@@ -22,9 +22,9 @@ from shipid.vessels import load_vessel, vessel_names
 
 #: Model family module of each packaged vessel (canonical name as in its TOML file).
 FAMILIES: dict[str, str] = {
-    "esso-osaka": "shipid.models.abkowitz",    # seed 002, Yoon & Rhee 2003
-    "supply": "shipid.models.dp",              # seed 001, Fossen, Sagatun & Sørensen 1996
-    "fishing-vessel": "shipid.models.roll",    # seed 000, Linder et al. 2015
+    "esso-osaka": "shipid.models.abkowitz",    # Yoon & Rhee 2003
+    "supply": "shipid.models.dp",              # Fossen, Sagatun & Sørensen 1996
+    "fishing-vessel": "shipid.models.roll",    # Linder et al. 2015
 }
 
 #: Generic models without a data file: name → (title, factory).

@@ -70,7 +70,7 @@ def _noise_free_runs(rate_deg_s=np.inf):
 
 
 def test_regression_from_exact_states_recovers_the_truth_and_step1_smoothing_biases_it():
-    """Where the coverage study's bias came from (coverage module docstring): the differential form of step 2 on
+    """Where the coverage study's bias came from (docs/validation/mmg.md, simulated coverage study): the differential form of step 2 on
     the exact states and accelerations returns the simulated coefficients; on step 1's smoothed states of the same noise-free step-rudder
     runs N_r is far off (> 30 %), and less so with a rate-limited rudder (5 deg/s)."""
     from shipid.methods.mmg.estimator import FitConfig, fit

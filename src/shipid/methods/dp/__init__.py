@@ -1,4 +1,4 @@
-"""DP ship identification (Fossen, Sagatun & Sørensen 1996, seed 001).
+"""DP ship identification (Fossen, Sagatun & Sørensen 1996).
 
 ``identify`` runs the state-augmented EKF in parallel over the decoupled surge, sway-yaw and azimuth
 trials; ``Options`` is :class:`~shipid.methods.dp.estimator.DPOptions`.

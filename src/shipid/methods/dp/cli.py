@@ -1,4 +1,4 @@
-"""DP identification commands (seed 001, Fossen, Sagatun & Sørensen 1996).
+"""DP identification commands (Fossen, Sagatun & Sørensen 1996).
 
 ``shipid identify dp --surge S1.csv S2.csv --sway-yaw Y1.csv Y2.csv --azimuth A1.csv A2.csv [--json] [-o R.json]``
 ``shipid study dp-supply [--seed S] [--json] [-o R.json]`` and

@@ -1,4 +1,4 @@
-"""Coverage study of the DP identification's standard deviations (seed 001, issue 15).
+"""Coverage study of the DP identification's standard deviations (Fossen, Sagatun & Sørensen 1996).
 
 Each realisation simulates the six trials of Fossen, Sagatun & Sørensen (1996) §4.2 that
 ``shipid study dp-supply`` uses (surge ×2, sway–yaw ×2, azimuth ×2, 1 Hz; truth: the paper's
@@ -14,44 +14,12 @@ with s_m and s_p drawn independently from {0.5, 1, 2}. :func:`identify_dp` is ca
 defaults (it is told neither scale). :func:`summarise` reports, per θ, the coverage of ±1 and
 ±2 std, the RMS of error/std, the bias and RMS of the relative error.
 
-Seeds: run ``i`` of a campaign with seed S draws from ``SeedSequence([S, i])``. The settings of
-the method (Hessian steps, settling threshold, the Newton iteration) were chosen on campaign
-seed 1, runs 0–5 (``--seed 1 --runs 6``); seed 2 was the first report (below), seed 3 is the
-suite's coverage tests; the current figures are from campaign seed 4, used for nothing else.
-
-Measured on the fresh seed 4 (``shipid study dp-coverage --runs 24 --seed 4 --workers 2``, 24
-realisations, 1200-s trials): pooled ±2-std coverage 0.949 over θ1…θ9 (±1 std 0.67), every
-estimate with a std (no unsettled scheme; in one realisation q_h of SI2 was held as not
-determined), per θ 0.875 (θ5)–1.00; RMS of error/std 1.01 (0.76–1.28 per θ, θ3 the largest);
-RMS relative error 0.6–3.7 % except θ3 (23 %), largest |error| θ2 12.9 %, θ3 49 %. θ1, θ2,
-θ4…θ9 all within 10 % in 23 of 24 realisations (θ2 12.9 % at scales 2/2), θ3 within 25 % in
-17 of 24. On seed 2 (before undetermined noise levels were held, :func:`shipid.methods.dp.pem.undetermined_noise`)
-the figure was 0.917 over the estimates with a std and 0.866 counting the 12 without one
-(two realisations with measurement scale 2 whose SI2 Hessian was indefinite along q_h); both
-now settle with a finite std. Same seed-2 realisations with ``--covariance ekf`` (the EKF's
-P_θθ with assumed noise): pooled ±2-std coverage 0.72, RMS of error/std 2.24, 10 of 24 with
-an unsettled scheme.
-
-Accuracy against the paper's procedure (``covariance="ekf"``: the EKF's estimate with the noise
-levels assumed), the same 24 realisations of seed 4: mean |error| % of θ1…θ9 1.35 2.56 19.2
-2.17 1.10 0.38 1.22 1.08 0.91 (default) vs 1.33 3.51 27.0 4.64 1.49 0.43 1.90 1.42 0.88 (ekf);
-within the band (10 %, θ3 25 %) 24 23 17 24 24 24 24 24 24 vs 24 22 14 22 23 24 23 24 24 of 24.
-θ3's stated std is 8–37 % of its value (median 23 % at measurement scale 2), so its 25 % band
-is about one std on the noisiest data: 6 of the 7 realisations outside it have a noise scale
-of 2 and |error|/std 1.4–1.8; the seventh (scales 0.5/1) is 2.6 std off, and 27 % with ekf.
-
-Fresh seed 5 (the 24 realisations of ``--runs 24 --seed 5``, one worker, nothing chosen on it):
-pooled ±2-std coverage 0.963 (±1 std 0.68), per θ 0.917–1.00, RMS of error/std 0.97 pooled,
-0.70 (θ6, 0.698)–1.12 per θ, no unsettled scheme. Mean |error| % 1.22 2.74 17.0 1.99 0.88 0.28
-1.05 0.81 0.80 vs 1.35 4.25 22.2 5.35 1.30 0.29 1.21 2.04 0.93 with ekf; within the band 24 24
-17 23 24 24 24 24 24 vs 24 20 15 21 24 24 24 24 24 of 24 (θ4 10.7 % at 3.3 std once; the seven
-θ3 misses all have a noise scale of 2, |error|/std 0.8–2.0).
+Seeds: run ``i`` of a campaign with seed S draws from ``SeedSequence([S, i])``. 
 
 Hard regime (``--regime hard``, :func:`hard_draw`): measurement noise, white force noise, bias random
 walk (eq. 37) and initial bias each scaled log-uniformly over 0.3–3, separately; sampling 1–10 Hz
-(decimated by the estimator to about 1 s), trials of 600–1800 s. Its measured coverage is in
-``docs/validation/dp.md``. The figures above predate the profiling of undetermined noise levels
-(:func:`shipid.methods.dp.pem.noise_profile`) and are not re-measured.
+(decimated by the estimator to about 1 s), trials of 600–1800 s. The measured coverage of both regimes is in
+``docs/validation/dp.md``.
 """
 
 from __future__ import annotations
@@ -68,7 +36,7 @@ from shipid.methods.dp.loglik import momentum_loglik, surge_loglik
 
 #: Noise scales drawn per realisation (separately for measurement and process noise).
 SCALES = (0.5, 1.0, 2.0)
-#: Accuracy band of issue 15 for each θ (|relative error| within 10 %, the weak coupling θ3 within 25 %).
+#: Accuracy band for each θ (|relative error| within 10 %, the weak coupling θ3 within 25 %).
 ACCURACY_BAND = (0.10, 0.10, 0.25, 0.10, 0.10, 0.10, 0.10, 0.10, 0.10)
 #: Nominal levels of the study's simulated trials (see the module docstring).
 SIGMA_POS = 0.5

@@ -22,7 +22,7 @@ reported covariance is the *observed information*: the inverse Hessian of the ne
 log-likelihood at its optimum (θ block, the noise levels' uncertainty included). The filter's
 own P_θθ assumes the noise known and ignores that the gain depends on θ; on data whose noise
 levels differed from the assumed ones by factors 0.5–2 it covered the error within ±2σ in
-44 % of cases (issue 15). The estimated noise levels are in ``diagnostics["noise"]`` (SI
+44 % of cases (``docs/validation/dp.md``). The estimated noise levels are in ``diagnostics["noise"]`` (SI
 units). A noise level the data do not determine (at or next to the bound of its scale, or with
 a likelihood flat or concave along it, e.g. q_h under large measurement noise) is left out of the
 Hessian, marked ``"determined": False`` and warned about with the range the data allow: θ is
@@ -40,16 +40,7 @@ sensitivity of the likelihood optimum to them (``"observed"``), or as Schmidt–
 states (``"ekf"``: in the augmented state with their covariance, zero gain); the reported
 9 × 9 covariance holds the cross-scheme correlations.
 
-Measured with ``covariance="ekf"`` (the EKF's σ) on simulated supply-vessel trials
-(``shipid study dp-supply --seed S``, default noise of :class:`shipid.methods.dp.trials.TrialNoise`, 10 seeds, commit of 2026-11-21):
-
-* 1200-s trials: every |error|/σ < 3 (RMS of error/σ 0.5–1.3 per parameter); θ1, θ2,
-  θ5 … θ9 within 5 % in 10/10 seeds (RMS error 0.4–2.5 %), θ4 in 9/10 (RMS 2.5 %), the weak
-  sway-yaw coupling θ3 in 3/10 (RMS 14 %, with a σ of about 12 %); 9/10 runs flagged converged.
-* 600-s trials: RMS errors 0.5–3.7 % except θ3 (14 %) and θ4 (6 %); one seed in ten had
-  |error|/σ of 5–6 for θ4 and θ7 although flagged converged: the state-augmented EKF can
-  settle at a point that fits worse than the truth (it ignores the dependence of the gain on
-  θ), and on short trials its σ is then too small.
+Measured accuracy and coverage: ``docs/validation/dp.md``.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Compiled (numba) innovation log-likelihood of the DP models at fixed parameters (seed 001).
+"""Compiled (numba) innovation log-likelihood of the DP models at fixed parameters (Fossen, Sagatun & Sørensen 1996).
 
 Fossen, Sagatun & Sørensen (1996): with θ fixed, the state-augmented filter of Table 1 on the
 momentum model (eqs. 35–38, ERRATA 001 readings) or on the surge model (eqs. 31–32 in momentum

@@ -1,4 +1,4 @@
-"""Noise intensities and observed-information covariance of one DP scheme (seed 001).
+"""Noise intensities and observed-information covariance of one DP scheme (Fossen, Sagatun & Sørensen 1996).
 
 Fossen, Sagatun & Sørensen (1996) estimate θ with the state-augmented EKF (Table 1,
 eqs. 20–25) and assume the noise covariances known. Here, after the EKF passes of a scheme
@@ -21,8 +21,8 @@ biases re-estimated by the filter at every evaluation), and ``cov(θ̂_f) = [H�
 the θ block of the inverse, so the uncertainty of the estimated noise levels is included.
 Why not the filter's P_θθ: the augmented EKF's P_θθ after a pass assumes the noise
 intensities known and ignores that its gain depends on θ; with noise levels that differ from
-the assumed ones (a factor 2 either way) it was wrong by factors of 2–10 (issue 15: ±2σ
-coverage 44 %). The Hessian of the likelihood measures the information actually in the
+the assumed ones (a factor 2 either way) it was wrong by factors of 2–10 (±2σ
+coverage 44 %, ``docs/validation/dp.md``). The Hessian of the likelihood measures the information actually in the
 data under the noise levels the data show.
 
 Parameters frozen from an earlier scheme (θ_c, covariance Σ_c) are handled as in the

@@ -1,4 +1,4 @@
-"""Default report section for ``dp`` (Fossen, Sagatun & Sørensen 1996, seed 001).
+"""Default report section for ``dp`` (Fossen, Sagatun & Sørensen 1996).
 
 Draws, when the result carries them: every parameter history with its ±σ band
 (``histories``, paper Fig. 8, as small multiples), then the innovation checks:

@@ -1,4 +1,4 @@
-"""Report series of the DP identification (Fossen, Sagatun & Sørensen 1996, seed 001; issue 8).
+"""Report series of the DP identification (Fossen, Sagatun & Sørensen 1996).
 
 Adds to a ``dp`` :class:`~shipid.result.Result`, on request (:func:`with_series`), what ``shipid report``
 draws; ``identify`` never does this work:

@@ -13,7 +13,7 @@ from shipid.models import abkowitz as ab
 from shipid.simulate.trials import TRUE_UNITS, add_measurements, simulate_measured
 
 #: The trials of §5.1: name → (manoeuvre spec for run_manoeuvre, default duration in s).
-#: The PRBS clock period is ours: the seed's "commanded every 400 second" reads as
+#: The PRBS clock period is ours: the paper's "commanded every 400 second" reads as
 #: a garbled figure caption; 40 s is a period the ship follows (cf. Fig. 7's grid).
 STANDARD_TRIALS = {
     "turning-35-stbd": ("turning-35", 900.0),

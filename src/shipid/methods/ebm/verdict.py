@@ -50,10 +50,9 @@ OFFSET_TERMS = ("Y_0", "N_0")
 class VerdictOptions:
     """Thresholds of the verdict (module docstring).
 
-    ``max_rel_se = 0.5``: the sign must be determined (|θ̂| ≥ 2 se). ``max_vif = 1e4``: on the
-    tuning runs (:mod:`shipid.methods.ebm.coverage`, campaign seed 1) coefficients with VIF above
-    it were the cubic terms of the zig-zag-only trial; the linear ones stayed below 200 in the PRBS runs we
-    inspected. ``max_bias_share = 1``: the ridge shrinkage larger than the sampling std.
+    ``max_rel_se = 0.5``: the sign must be determined (|θ̂| ≥ 2 se). ``max_vif = 1e4``: in the
+    simulated coverage runs (:mod:`shipid.methods.ebm.coverage`) coefficients with VIF above
+    it were the cubic terms of the zig-zag-only trial; the linear ones stayed below 200 in the PRBS runs. ``max_bias_share = 1``: the ridge shrinkage larger than the sampling std.
     ``min_r2 = 0.5``: the mode's model explains less than half of the smoothed force. Rudder range
     2° and speed range 2 % (30-s means, so that the log noise of eq. 19 alone, well under 1 %, never passes).
     """

@@ -28,20 +28,10 @@ are split at random into two disjoint halves, each half fitted on its own, and e
 coefficient's difference between the halves is divided by the standard deviation the
 covariance states for it, ``z = (θ_A − θ_B) / sqrt(σ_A² + σ_B²)``; an honest covariance
 gives an RMS z near 1, an optimistic one far above. ``shipid study mmg-covariance
-{kvlcc2,esso}`` (10 splits, seed 0, 100 resamples per half) on the training runs of the
-frozen studies, RMS z / median |z| (a normal gives 1 / 0.67)::
-
-    case                               ridge          HAC            run bootstrap
-    KVLCC2, 10 HSVA zig-zags           8.64 / 4.78    2.58 / 1.39    1.08 / 0.40
-    Esso Osaka, 35 Wakita training     8.33 / 4.35    1.11 / 0.69    0.85 / 0.52
-
-(KVLCC2: the differential form of step 2, its default; Esso: the integral form, its default since
-2026-12-03 — with the differential form the Esso row was 4.96 / 2.07, 1.32 / 0.80, 1.06 / 0.65.)
-The ridge errors are 5–9 times too small; the HAC sandwich is 2.6 times too small on KVLCC2 and
-about right on Esso with the integral form (whose per-coefficient RMS z is still 1.7–1.9 for
-N_v, N_r); the run bootstrap is about right on KVLCC2 (heavy-tailed: most differences are small,
-a few are large) and somewhat conservative on Esso, so :func:`honest_covariance`, which
-``identify mmg`` stores in MODEL.json, uses it.
+{kvlcc2,esso}`` runs that check on the training runs of the frozen studies. On the KVLCC2 and Esso
+Osaka runs the ridge errors are several times too small, the HAC sandwich too small on KVLCC2, and the
+run bootstrap about right (figures: ``docs/validation/mmg.md``), so :func:`honest_covariance`, which
+``identify mmg`` stores in MODEL.json, uses the run bootstrap.
 """
 
 from __future__ import annotations

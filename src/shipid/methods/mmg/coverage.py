@@ -13,104 +13,16 @@ standard error MODEL.json carries (run bootstrap / HAC, :mod:`shipid.methods.mmg
 :func:`summarise` gives per coefficient bias and spread of the relative error and coverage of ±2 std.
 
 Rudder orders are followed at :data:`RUDDER_RATE` (the IMO steering-gear minimum, Froude-scaled;
-``--rudder-rate inf`` gives instantaneous steps, as before 2026-12-03).
+``--rudder-rate inf`` gives instantaneous steps).
 
-What the study found and what changed. With the differential form of step 2 (the forces of the
-smoothed accelerations, ``FitConfig(equation="differential")``) the estimates are biased far beyond
-their standard errors: at seed 700 with instantaneous rudder steps N_r +72 %, N_v +70 %, NR_arm
-+24 %, coverage 0.00. Two causes, both located with the exact simulated states
-(``tests/methods/mmg/test_coverage.py``): (1) the white-jerk smoother cannot follow the acceleration
-step after a rudder change, so the response lags its regressors — the integral form
-(``FitConfig.equation="integral"``, the default for this structure since 2026-12-03) needs no accelerations and on
-exact states returns the truth; (2) errors in variables: the smoothed states carry errors that
-bias a regression that is nonlinear in them towards zero (with exact regressors and smoothed
-responses the N row is unbiased) — the SIMEX correction (:mod:`shipid.methods.mmg.simex`) removes
-most of that. On the tuning seed 710 (30 runs, rudder at :data:`RUDDER_RATE`, SIMEX on with λ up to 2), the bias of
-N_r was +49 % differential, +12 / +3.1 / +0.5 % with 5 / 10 / 20-s integral windows; the default
-window (:data:`~shipid.methods.mmg.estimator.WINDOW_FROUDE`, 10 s here) is a compromise with the
-real KVLCC2 runs, where long windows fail. At fresh seed 730 the bias of N_v, N_r was then about +1 %
-and the ±2 std covered 0.84–0.86: short. On the tuning seed 710 (100 runs) the spread of the
-errors was 1.2–1.4 times the std for N_v, N_r, NR_arm, Y_v, Y_r with the bias a third of the spread,
-while with a tenth of the noise the HAC std matched the spread: the missing part is the measurement
-noise's effect through the smoothed states, which are wrong smoothly over a whole run and so do not
-show in the residuals within the HAC's lag window. Since then the covariance adds that part as the
-SIMEX draws measure it (:attr:`shipid.methods.mmg.simex.SimexInfo.noise_cov`, where the regression
-covariance is the HAC). Fresh seeds 750 and 760 (100 runs each, not used before) then gave ±2-std
-coverage N_v 0.95 / 0.97, N_r 0.93 / 0.97, NR_arm 0.96 / 0.99, Y_v 1.00 / 0.98, Y_r 0.99 / 1.00,
-bias within ±1.2 % for the N coefficients and ±3.5 % for the Y ones (README, MMG section); the
-propeller polynomial XP_k1, XP_k2 is mostly "not determined" and where estimated covers 0.84–0.89,
-which the study warns.
+Options (:func:`run_one`): ``refine="output-error"`` refines each fit by output error (the study then
+needs long runs, ``--seconds 1200``); ``imo_samples=N`` compares the IMO criteria and their bands with the
+truth's; ``vessel="kvlcc2"`` (:data:`VESSELS`) draws truths around the ``kvlcc2_hsva`` prior with seven
+150-s zig-zags and the structure ``full/symmetric-gamma_R``. :func:`summarise` also reports the coverage with
+the model-form term of :func:`shipid.methods.mmg.pipeline.form_check` (``coverage_2std_with_form``) and
+counts that check's flags (``summary["form_check"]``).
 
-The output-error refinement (``run_one(refine="output-error")``, ``--refine output-error``; since
-2026-12-06; the default of ``identify mmg`` on the Esso structure where the runs hold 5 horizons per
-coefficient, so the study needs long runs: ``--seconds 1200`` gives 80 horizons for 15 coefficients).
-Tuning seed 950 (30 runs, the Huber criterion of :class:`~shipid.methods.mmg.output_error.OEConfig`): the
-refined estimates moved far from the truth — Y_v, Y_r, YR_gain biased −760 to −1050 %, NR_arm −39 %, CD_N
-+73 % — while the regression estimates they started from were within ±3 % (spread 1–6 %), and the
-horizon-cluster sandwich covered the truth in 0.14–0.50 of the runs for 10 of 15 coefficients. The
-criterion restarts each horizon from the measured state; with noisy starts its optimum is the best 60-s
-predictor from such starts, not the ship (the real-data CV rewards exactly that). The least-squares
-criterion (``criterion="least-squares"``, same seed): see the CHANGELOG of 2026-12-06. Since then MODEL.json
-counts each refined coefficient's shift from the regression as one standard deviation
-(:func:`shipid.methods.mmg.pipeline._covariance`) and ``identify`` names the coefficients moved beyond two
-sandwich SE in one warning line. Fresh seed 960 (60 runs, 4 x 1200 s, 562 s on 2 workers): coverage 1.00 for
-every coefficient with an estimate (conservative: the shift is mostly bias); Y_r, YR_gain, X_0A, X_vr, XP_k2
-are "not determined" in every run, Y_v is "estimated" in 55 of 60 with a bias of −518 % (its std, the
-shift, is just below its inflated value), NR_arm −34 %, N_v −8 %, N_r −9 %: the refined model's
-coefficients are effective values for prediction and are labelled so.
-
-The IMO bands (``run_one(imo_samples=N)``, ``shipid study mmg-coverage --imo-samples N``): at seed 780
-(100 runs, 40 draws each) the truth lay inside the band 0.96–1.00 of the time for the overshoots but only
-0.73–0.74 for the 35° advance, 0.85–0.86 for the tactical diameter and 0.80 for the initial turning. Cause,
-on one tuning truth over 30 noise realisations: not a bias (advance +0.001 L) but a band too narrow, std
-0.012 L against an error RMS of 0.019 L, where the linearised std ``gᵀΣg`` was 0.026 L — every draw
-approached at the estimate's straight-line speed, which leaves out the share of the surge coefficients that
-set that speed. Since each draw approaches at its own equilibrium (:func:`shipid.methods.mmg.imo.approach_rows`)
-seed 780 gives 0.96 / 0.97 / 0.97 and the fresh seed 790 0.99–1.00 for the turning criteria and 0.98–1.00
-for the overshoots (advance bias +0.007 L, RMS 0.018 L, mean std 0.022 L: a little wide). At seed 780 the
-N_v, N_r, NR_arm coverage was 0.89, 0.87, 0.90 (bias +2.6, +3.1, +0.9 %), at 790 0.92, 0.92, 0.93 (bias
-+2.1, +2.2, +0.8 %): the residual errors-in-variables bias after the linear SIMEX extrapolation (its path in
-λ is concave; a rational-linear extrapolant removed the bias on the tuning truth but was unstable), which the
-study warns.
-
-The KVLCC2 campaign (``vessel="kvlcc2"``, ``shipid study mmg-coverage --vessel kvlcc2``, since 2026-12-04;
-:data:`VESSELS`): truths around the ``kvlcc2_hsva`` prior, seven zig-zags of 150 s (10/10 and 20/20 to
-each side, 15/5, 25/5, 35/5) at 10.23 rev/s with the rudder at 13 deg/s as in the HSVA runs, the
-structure ``full/symmetric-gamma_R`` the horizon selection chooses on those runs, run-bootstrap
-covariance (7 runs), SIMEX applied by its pilot. Explored on seed 900 (40 runs), reported on the fresh
-seed 910 (100 runs each form, 40 IMO draws per run). The KVLCC2 default, the differential form: N_v,
-N_r, NR_arm biased +4.0, +5.1, +2.4 % (towards zero) with spreads of 1.0, 1.3, 0.5 %, so their ±2 std
-covered the truth in 0.25, 0.18, 0.21 of the runs; Y_v, Y_r, YR_gain 0.81–0.87; the IMO bands held the
-truth 0.31–0.33 (initial turning), 0.53–0.70 (first overshoots), 0.88–0.89 (advance), 0.99–1.00
-(tactical diameter). The integral form (``--equation integral``) on the same truths and noise: biases
-within ±0.1 % for those six, spreads two to four times smaller, coverage 0.97–0.99; of the 21
-coefficients only XP_gain (0.87) and X_vr (0.80, 30 runs estimated) short; IMO bands 0.93–0.96 for the
-turning criteria, 0.81–0.89 for the overshoots (RMS error 0.01–0.03 deg, mean std 0.007–0.012 deg: the
-sampled rudder reversal's resolution). On the real HSVA runs the real-data CVs still favour the
-differential form (:data:`shipid.methods.mmg.estimator.EQUATION_BY_STRUCTURE`), so it stays the default
-there and every differential-form result is compared with the integral form
-(:func:`shipid.methods.mmg.pipeline.form_check`; the study counts its flags, ``summary["form_check"]``).
-In the differential campaign of seed 910 it flagged 87 of the 100 fits (N_r in 74, NR_arm 73, N_v 68,
-YR_gain 16, R_0 14, XP_gain 14). On all 13 HSVA runs they disagree by more than 2
-standard errors on 10 of 18 estimated coefficients (N_v −2.2, N_r −2.4, NR_arm −2.8 SE; the opposite
-direction to the simulated bias, so not that bias alone), which identify says in one line.
-
-The model-form term (since 2026-12-04, a fixed convention chosen before any campaign ran with it,
-:func:`shipid.methods.mmg.pipeline.form_check`): the difference between the two forms' estimates counts
-as one standard deviation of model-form error, per coefficient ``√(SE² + δ²)`` (``std_with_form``, the
-summary's ``coverage_2std_with_form``) and in the IMO draws ``Σ + δδᵀ`` over the whole coefficient vector
-(:func:`shipid.methods.mmg.imo.sample_coefficients`; the run keeps the same draws without it under
-``imo_estimation``). Fresh seed 930 (100 runs, differential form, 40 IMO draws): the reported std covered
-N_v, N_r, NR_arm in 0.28 / 0.18 / 0.17 of the runs (bias +4.3 / +5.5 / +2.5 %), 14 of 21 coefficients
-short; with the form term every coefficient 0.96–1.00. The IMO bands with it held the truth 0.99–1.00 for
-every criterion (conservative: tactical diameter mean std 0.032 L against an error RMS of 0.013 L,
-initial turning 0.007 / 0.007 L); the same draws without it 0.30–0.31 (initial turning), 0.52–0.63 (first
-overshoots), 0.88–0.89 (advance), 0.98–1.00 (second overshoots, tactical diameter). The check flagged 88
-of the 100 fits. A second fresh seed, 940 (same settings): with the term 1.00 for every coefficient and
-criterion, without it N_v / N_r / NR_arm 0.28 / 0.20 / 0.19 and 0.40–0.64 for the initial turning and first
-overshoots; flagged 87 of 100. On the model of all 13 HSVA runs (``shipid imo --samples 40``) the 35° tactical diameter
-becomes 3.67 ± 0.41 L starboard, 4.03 ± 0.44 L port (± 0.07 L without the term): the integral form's
-3.26 / 3.58 L lie inside, which of the two the other basin is nearer is not known here.
+What the campaigns measured, and the changes to the estimator they led to: ``docs/validation/mmg.md``.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ def real_data(seed: int):
     """EBM with the MMG model on real KVLCC2 model tests, or None without the data.
 
     Trained on two HSVA zig-zags; the third run is held out and simulated open loop with the
-    identified model: its heading and yaw rate become validation overlays (seed 002 Figs 6, 10).
+    identified model: its heading and yaw rate become validation overlays (Yoon & Rhee 2003, Figs 6, 10).
     """
     root = data_root()
     if root is None or not (root / "kvlcc2_hsva").is_dir():

@@ -1,6 +1,6 @@
 """Identify an MMG model from real free-running runs: estimation-before-modelling adapted to real logs.
 
-The two steps of Yoon & Rhee (2003, seed 002, §§2–4) with what the Esso Osaka and
+The two steps of Yoon & Rhee (2003, §§2–4) with what the Esso Osaka and
 KVLCC2 logs measure (midship position, heading, u, v, r; no current in the pond or
 tank, so no current states):
 
@@ -13,7 +13,7 @@ tank, so no current states):
 
    with measurements ``z = [x0, y0, ψ, u, v, r]``, followed by the RTS fixed-interval
    smoother (:func:`shipid.estimate.smoothers.rts_smoother`; eq. 10 gives the same
-   estimates on this nearly linear model). The seed's force states (its eqs. 5–6) are
+   estimates on this nearly linear model). The paper's force states (its eqs. 5–6) are
    replaced by acceleration states: the forces then follow from the equations of
    motion with the known masses, ``X = (m + m_x) u̇ − (m + m_y) v r − x_G m r²`` etc.
    (:func:`shipid.models.mmg.rigid_body_forces`), which is the same information
@@ -208,7 +208,7 @@ class FitConfig:
 
     ``equation``: ``"auto"`` (default) is :data:`EQUATION_BY_STRUCTURE` of the prior's structure;
     ``"differential"`` regresses the forces of the smoothed accelerations on
-    the regressors at the same instant (seed 002, eq. 16); ``"integral"`` regresses the
+    the regressors at the same instant (Yoon & Rhee 2003, eq. 16); ``"integral"`` regresses the
     impulse over a window of ``window_s`` seconds — the change of smoothed momentum plus
     the time integral of the velocity-dependent rigid-body terms — on the time integrals
     of the regressors (:func:`regression_data`). The integral form needs no accelerations:

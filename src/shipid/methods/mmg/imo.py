@@ -60,7 +60,7 @@ from shipid.methods.mmg.validate import model_from_result
 #: Quantiles of the band (the ±2-std probabilities of a normal).
 BAND = (2.275, 97.725)
 #: What :func:`assess` adds where the model's standard errors are flagged by
-#: :func:`shipid.methods.mmg.pipeline.form_check` (figures: :mod:`shipid.methods.mmg.coverage`).
+#: :func:`shipid.methods.mmg.pipeline.form_check` (figures: ``docs/validation/mmg.md``).
 FORM_BANDS = ("the bands are too narrow for such a model: on simulated seven-zig-zag KVLCC2 campaigns (shipid study "
               "mmg-coverage --vessel kvlcc2 --seed 910 --imo-samples 40) the differential form's bands held the truth "
               "0.31-0.33 of the time for the initial turning, 0.53-0.70 for the first overshoots and 0.88-0.89 for "
@@ -71,7 +71,7 @@ FORM_TERM_BANDS = ("the bands include the two forms' difference as one standard 
                    "--imo-samples 40) they held the truth 0.99-1.00 of the time for every criterion, conservative "
                    "(tactical diameter: mean std 0.032 L, error RMS 0.013 L); the same draws without the term "
                    "(--no-form-term) 0.30-0.31 for the initial turning, 0.52-0.63 for the first overshoots")
-#: What the bands do not hold, as the simulated coverage study measured it (:mod:`shipid.methods.mmg.coverage`).
+#: What the bands do not hold, as the simulated coverage study measured it (``docs/validation/mmg.md``).
 BAND_CAVEAT = ("the bands carry the coefficients' estimation uncertainty, not a bias of the fit: on simulated "
                "four-run campaigns of the Esso Osaka 3 m (shipid study mmg-coverage --seed 790 --imo-samples 40) "
                "they held the truth 0.98-1.00 of the time for every criterion, a little wide for the turning "
@@ -155,8 +155,8 @@ def approach_rows(model, Th: Mapping[str, np.ndarray], cond: MM.Conditions, *, s
     (:func:`~shipid.methods.mmg.manoeuvres.rows_equilibrium`): with a propeller rate (given or the training
     runs'), each draw's own equilibrium speed; with a speed only, each draw's own rate. Holding the nominal
     model's speed for every draw instead starts each draw off its equilibrium and leaves the surge
-    coefficients' share of the turning criteria out of the band: on the simulated coverage study's tuning
-    truth (30 noise realisations, :mod:`shipid.methods.mmg.coverage`) the advance's band std was then 0.012 L
+    coefficients' share of the turning criteria out of the band: on one simulated coverage-study
+    truth (30 noise realisations, ``docs/validation/mmg.md``) the advance's band std was then 0.012 L
     against an error RMS of 0.019 L. Row 0 keeps ``cond``'s values exactly. Returns ``(speed, rps, no_eq)``,
     ``no_eq`` True where a draw has no equilibrium."""
     R = next(iter(Th.values())).shape[0]

@@ -2,7 +2,7 @@
 
 The same algorithms as the reference path that :func:`shipid.methods.mmg.estimator.smooth_run`
 runs with ``compiled=False`` — :func:`shipid.estimate.cd_ekf.cd_ekf` (Yoon & Rhee 2003,
-seed 002, eq. 9) on the 9-state kinematic model ``s = [x0, y0, ψ, u, v, r, u̇, v̇, ṙ]``
+eq. 9) on the 9-state kinematic model ``s = [x0, y0, ψ, u, v, r, u̇, v̇, ṙ]``
 driven by white jerk noise, followed by :func:`shipid.estimate.smoothers.rts_smoother` —
 fused into one compiled pass that returns only what step 2 reads (smoothed states, their
 standard deviations, the NIS per sample and the log-likelihood). Tests require agreement

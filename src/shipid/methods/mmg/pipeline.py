@@ -93,11 +93,11 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
                fit_config: FitConfig) -> dict | None:
     """The differential form of step 2 checked against the integral form on the same smoothed runs.
 
-    The differential form (seed 002, eq. 16) regresses forces computed from the smoothed accelerations,
+    The differential form (Yoon & Rhee 2003, eq. 16) regresses forces computed from the smoothed accelerations,
     which lag the rudder (:mod:`shipid.methods.mmg.coverage`); its standard errors do not hold that bias:
     in the simulated KVLCC2 campaign (``shipid study mmg-coverage --vessel kvlcc2``) its ±2 std of
     N_v, N_r, NR_arm covered the truth in a fifth to a quarter of the runs, the integral form's in 0.95 or
-    more (figures in :mod:`shipid.methods.mmg.coverage`). So where the result is the differential form's
+    more (figures in ``docs/validation/mmg.md``). So where the result is the differential form's
     (and not refined by output error), the integral form's naive estimate (no SIMEX) is computed too,
     and each estimated coefficient's difference is expressed in the reported standard errors.
 
@@ -106,7 +106,7 @@ def form_check(res: Result, runs: Sequence[SmoothedRun], prior: mmg.MmgModel, fr
     ``δδᵀ`` (``δ`` the vector of differences) to the covariance of its draws: the other form's estimate
     counts as one standard deviation of the model-form error, the convention of a systematic error
     taken as the difference of two defensible methods. It is a fixed convention (no tuning); what it
-    gives in the simulated KVLCC2 campaign is in :mod:`shipid.methods.mmg.coverage`.
+    gives in the simulated KVLCC2 campaign is in ``docs/validation/mmg.md``.
 
     Returns None for the integral form; else ``{"integral": {name: value}, "difference_in_se": {name: z},
     "form_std": {name: |δ|}, "std_with_form": {name: s}, "over": [names with |z| > FORM_CHECK_SE,
@@ -248,7 +248,7 @@ def _covariance(f_reg: MmgFit, f: MmgFit, runs, prior: mmg.MmgModel, config: Fit
     integral form does (:func:`form_check`). Why: the criterion restarts every horizon from the measured,
     noisy state, so the estimate it converges to is the best 60-s predictor from such starts, not the ship's
     coefficients; in the simulated coverage study (:mod:`shipid.methods.mmg.coverage`, ``refine="output-error"``,
-    seed 950, 30 runs of 4 x 1200 s) the refined Y_v, Y_r, YR_gain were biased by −760 to −1050 %, NR_arm by
+    runs of 4 x 1200 s; ``docs/validation/mmg.md``) the refined Y_v, Y_r, YR_gain were biased by −760 to −1050 %, NR_arm by
     −39 %, and the sandwich covered the truth in 0.14–0.50 of the runs, while the regression they started from
     was within 3 %.
     With a SIMEX correction (``simex_info``) its Monte Carlo covariance is added to the regression's, and
@@ -285,7 +285,7 @@ def equilibrium_line(model: Mapping) -> str | None:
     A ship at a steady propeller rate settles at the speed where thrust balances resistance
     (:func:`~shipid.methods.mmg.manoeuvres.equilibrium_speed`). Where the identified surge model has no such
     speed its surge coefficients are not physical (in the simulated coverage study this happened once in 100
-    campaigns, seed 800, where the propeller polynomial was poorly excited), and ``shipid simulate`` /
+    campaigns, where the propeller polynomial was poorly excited), and ``shipid simulate`` /
     ``shipid imo`` need an approach speed. None when the model has an equilibrium or the runs have no
     forward propeller rate."""
     rps = (model.get("training_conditions") or {}).get("rps_ahead")

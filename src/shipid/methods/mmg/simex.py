@@ -15,20 +15,9 @@ channel (``σ̂`` per channel and run, :func:`shipid.methods.mmg.estimator.noise
 robust second-difference estimate), steps 1 and 2 are repeated, the mean estimate over
 ``draws`` noise draws is taken at each ``λ`` of :attr:`SimexConfig.lambdas`, and the estimates
 as a function of ``λ`` are extrapolated to ``λ = −1`` (no measurement noise). The extrapolant is
-linear by default, over ``λ`` = 0.125, 0.25, 0.375, 0.5 (:attr:`SimexConfig.lambdas`): chosen on the
-coverage study's tuning seed 710 (50 campaigns, ``shipid study mmg-coverage --runs 50 --seed 710``) among
-three grids, bias / ±2-std coverage of N_r +3.5 % / 0.88 with λ up to 2, +1.9 % / 0.98 up to 1, +0.8 % /
-0.98 up to 0.5 (the bias is not linear in λ at the larger added noises, so a grid close to 0 extrapolates
-better; its larger Monte Carlo variance is in the covariance). In an earlier exploratory run a quadratic
-extrapolant removed a little more bias and doubled the spread of Y_v, Y_r.
-
-The linear extrapolant under-corrects a little where the path curves (the coverage study's seed 780:
-N_v, N_r bias +2.6 / +3.1 %, 0.4 std; the quadratic extrapolant of the same paths +0.7 / +1.8 %). Counting
-the gap δ between the two extrapolants as one more std term (as the model-form term of
-:func:`shipid.methods.mmg.pipeline.form_check` does) was tried on those 100 stored runs and not adopted:
-δ is Monte Carlo noise (its mean |δ| 12 % of |N_v| against a predicted Monte Carlo std of δ of 16 %, from
-the draws' spread per unit λ), so √(std² + δ²) doubled the N_v, N_r error bars (coverage 0.89 → 0.98)
-without measuring the curvature, and δ² less its Monte Carlo variance was positive in a third of the runs.
+linear by default, over ``λ`` = 0.125, 0.25, 0.375, 0.5 (:attr:`SimexConfig.lambdas`): the bias is not
+linear in λ at larger added noises, so a grid close to 0 extrapolates better; its larger Monte Carlo
+variance is in the covariance. How the grid and the extrapolant were chosen: ``docs/validation/mmg.md``.
 
 On real data: on the Esso Osaka logs σ̂ is at the level the logger's own smoothing leaves, the
 pilot (:attr:`SimexConfig.pilot`) moves no estimate by 0.1 SE, and no correction is made; a forced
@@ -44,11 +33,8 @@ than 5 runs, :func:`shipid.methods.mmg.covariance.honest_covariance`), the noise
 :attr:`SimexInfo.noise_cov` measured by the draws themselves. The reason: the smoothed states'
 errors are smooth and correlated over a whole run, so they move the estimate without showing as
 score variance within the HAC's lag window; the draws move the estimate by exactly that
-mechanism. On the coverage study's tuning seed 710 (100 campaigns of four 120-s runs, SIMEX applied
-in all) the RMS of error / std of N_v, N_r, NR_arm, Y_v, Y_r was 1.27, 1.22, 1.36, 1.20, 1.17 with the
-HAC and Monte Carlo parts (±2-std coverage 0.88–0.93) and 0.96, 0.93, 1.00, 0.91, 0.89 with the
-noise's part added (0.95–0.97): about right, slightly conservative for Y_v, Y_r, where part of the
-noise's effect does show in the residuals. Fresh seeds: README, MMG section. The run bootstrap (5 runs or more) resamples whole runs and so already holds it.
+mechanism (measured coverage with and without it: ``docs/validation/mmg.md``). The run bootstrap (5 runs
+or more) resamples whole runs and so already holds it.
 """
 
 from __future__ import annotations
@@ -66,7 +52,7 @@ from shipid.models import mmg
 @dataclass(frozen=True)
 class SimexConfig:
     """``lambdas``: added noise variances in units of σ̂²; ``draws`` noise draws per λ; ``seed`` of the draws;
-    ``extrapolant``: ``"linear"`` or ``"quadratic"`` in λ (module docstring).
+    ``extrapolant``: ``"linear"`` or ``"quadratic"`` in λ (the two compared: ``docs/validation/mmg.md``).
 
     ``pilot``: first refit twice at ``λ = pilot_lambda`` (added noise of twice the measured variance); if no
     estimate moves by more than ``pilot_threshold`` of its (iid ridge, i.e. small) standard error, the measurement noise is too small to bias the

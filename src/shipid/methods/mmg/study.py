@@ -1,4 +1,4 @@
-"""Held-out studies on real free-running data (issue 6), with the structure frozen before evaluation.
+"""Held-out studies on real free-running data, with the structure frozen before evaluation.
 
 Protocol (why the held-out numbers can be trusted)
 --------------------------------------------------
@@ -10,23 +10,8 @@ Protocol (why the held-out numbers can be trusted)
    and nothing else (``tests/campaign/test_realdata_study.py`` checks that they never
    see a test-run name and that every selection happens before the first test run is
    read).
-3. The configuration was committed (its fingerprint :data:`FROZEN_FINGERPRINT`, checked
-   by a test) in a commit whose message says it is frozen BEFORE the held-out errors of
-   this version were computed; the held-out tables were then computed once and are
-   quoted below without any further change of structure, weights or hyper-parameters.
-
-History, stated plainly: in session 1 of issue 6 the engineer saw test-run scores while
-developing, and three candidate axes (non-dimensional regression weighting, symmetric
-γ_R, autopilot-delay variants) were added after that. Session 2 re-fixed the lists as
-*full factorial* designs over physically motivated axes — every combination, not the
-ones that looked good — with the reasons written below, did not look at held-out
-errors before the freeze, and made the CV scheme leave-one-run-out with errors pooled
-over all folds. What cannot be undone is that the axes themselves were once suggested
-by a look at test scores; weigh the margins accordingly. Session 2 also knew the
-session-1 summary (Esso better than published on both splits; KVLCC2 worst held-out
-overshoot error 2.19°), which is why it looked for KVLCC2 improvements at all; the one
-it made (the steering-gear model below) rests on the training rudder records and the
-training-run CV only.
+3. The configuration's fingerprint :data:`FROZEN_FINGERPRINT` is checked by a test, so a change
+   of structure, weights or hyper-parameters after the held-out evaluation cannot pass unnoticed.
 
 Esso Osaka 3 m (``esso_heldout(split)``)
 ----------------------------------------
@@ -39,8 +24,8 @@ Train-TZRB+, 35 runs / 6 test runs). Candidates, 2 × 3 × 2 = 12:
   standard MMG cubic expansion in ``v' = v/U``, ``r' = rL/U`` about forward motion
   (forces ∝ U²). Physics says the first for runs that include berthing (drift beyond
   90°, reversed propeller, median speed of the random training runs about 0.1 m/s
-  against 0.5 m/s service speed); the second is the conventional structure the issue
-  asks to compare against.
+  against 0.5 m/s service speed); the second is the conventional structure to compare
+  against.
 * **Free coefficients** — hull only (propeller and rudder at the published values,
   which their authors identified from runs of this data set) / hull + ahead thrust
   (K_T polynomial) + rudder force gain and lever arm / every coefficient including the
@@ -83,11 +68,7 @@ Candidates, 3 × 2 = 6 (prior: the KVLCC2 L7 coefficients on the HSVA particular
   training runs, reproducing the measured reversal times within 0.02 s), and the
   reversal is commanded a delay after the predicted heading crosses ±ψ_switch (median
   measured delay to a 0.5° rudder movement, 0.30 s, less the gear's 0.19 s to move
-  0.5° from rest). Session 1 used the 95th-percentile rate without acceleration
-  (16.8°/s) and the 0.30 s as the command delay: the gear moved faster than measured
-  (0.54 instead of 0.85 s for ±5°), and with the candidate the CV chose then
-  (``full/symmetric-gamma_R``) every left-out training zig-zag's first overshoot came
-  out too small (by 0.2–1.1°) — the training-side evidence for this change.
+  0.5° from rest).
 
 Selection: leave-one-training-zig-zag-out on the target measure itself: the RMS over
 the first and second overshoot errors (predicted − measured, deg) of the left-out
@@ -97,74 +78,8 @@ switch heading) counts as a predicted overshoot of 0.
 Nothing here is copied from the data: the runs are read from
 :func:`shipid.io.data_root` at run time.
 
-Cross-validation tables (training runs only; computed before the freeze)
-------------------------------------------------------------------------
-Score (lower is better); Esso: pooled RMS ψ [deg] / position [m] of the left-out runs'
-60-s horizons; KVLCC2: RMS overshoot error [deg] (1st / 2nd)::
-
-    Esso candidate                                  Miyauchi (6 runs)        Wakita (35 runs)
-    hull+rudder+thrust                              2.045  12.47 / 0.798     2.463  15.67 / 0.895
-    hull-only                                       2.278  13.97 / 0.881     2.217  13.99 / 0.818
-    hull+rudder+4-quadrant-propeller                2.263  14.27 / 0.835     2.425  15.19 / 0.906
-    cubic-hull-only                                 2.857  19.13 / 0.943     2.351  15.05 / 0.847
-    cubic-hull+rudder+thrust                        2.794  18.60 / 0.934     2.652  17.00 / 0.952
-    cubic-hull+rudder+4-quadrant-propeller          2.845  19.12 / 0.932     2.623  16.63 / 0.960
-    hull-only/nondimensional                        2.510  14.10 / 1.100     2.263  13.61 / 0.902
-    hull+rudder+thrust/nondimensional               1.851  10.70 / 0.782     1.945  11.67 / 0.779  <- Wakita
-    hull+rudder+4-quadrant-propeller/nondim.        1.841  10.73 / 0.768     1.947  11.60 / 0.787  <- Miyauchi
-    cubic-hull-only/nondimensional                  2.751  18.30 / 0.921     2.278  14.31 / 0.847
-    cubic-hull+rudder+thrust/nondimensional         2.383  16.07 / 0.776     2.107  13.28 / 0.780
-    cubic-hull+rudder+4-quadrant-propeller/nondim.  2.429  16.55 / 0.775     2.099  13.16 / 0.782
-
-    KVLCC2 candidate (10 zig-zags)                  RMS    1st / 2nd
-    full                                            2.204  1.017 / 2.946
-    linear-hull+rudder                              2.198  1.204 / 2.866
-    hull-only                                       2.250  0.998 / 3.022
-    full/symmetric-gamma_R                          1.728  0.294 / 2.426  <- chosen
-    linear-hull+rudder/symmetric-gamma_R            1.948  0.807 / 2.634
-    hull-only/symmetric-gamma_R                     2.117  0.346 / 2.973
-
-On the Miyauchi split the two best candidates differ by 0.01 in score: the choice
-between freeing the astern propeller or not is a coin toss there, and the rule (lowest
-score) was applied as frozen. The KVLCC2 second overshoots are the weak point already
-in CV: leaving out one of the two 10/10 zig-zags (the largest-amplitude training runs)
-leaves the model to extrapolate, and their second overshoots come out 4–6° too small.
-
-Results (computed once, after the freeze)
------------------------------------------
-The configuration was frozen in commit ef12b3a ("realdata: FREEZE the
-structure-selection configuration BEFORE the held-out evaluation", fingerprint
-5e4de07b27a9d62a); the held-out numbers below were then computed once with
-``shipid study esso-osaka-heldout`` and ``shipid study kvlcc2-zigzag`` and nothing was
-changed afterwards. Esso, pooled 60-s horizons on the test runs, RMS heading [deg] /
-position [m], identified vs published MMG set::
-
-    split          chosen candidate                                  identified     published
-    miyauchi2022   hull+rudder+4-quadrant-propeller/nondimensional   9.44 / 0.644   11.37 / 0.739
-    wakita2022     hull+rudder+thrust/nondimensional                 8.77 / 0.783   14.40 / 1.108
-
-Better on both splits pooled, not on every run: on the Miyauchi split the identified
-model is worse on berthing 11_49_21 in heading (17.4 vs 15.2°) and on zig-zag 14_10_05
-in position (0.89 vs 0.57 m); on the Wakita split worse in position on zig-zag
-13_42_53 (1.10 vs 1.06 m) and berthing 11_38_50 (0.68 vs 0.61 m).
-
-KVLCC2, held-out overshoots [deg], measured / identified (error) / L7 coefficients on
-the HSVA particulars (error), same autopilot for both::
-
-    20/10 port first   1st  11.97 / 11.94 (-0.03) / 11.22 (-0.75)
-                       2nd  13.87 / 13.41 (-0.46) / 12.51 (-1.36)
-    20/10 stbd first   1st  11.71 / 11.73 (+0.02) /  8.93 (-2.78)
-                       2nd  15.62 / 13.92 (-1.70) / 16.46 (+0.84)
-    35/5               1st  13.88 / 14.12 (+0.24) / 10.94 (-2.95)
-                       2nd  19.27 / 17.90 (-1.36) / 18.36 (-0.91)
-
-Largest error 1.70° (2nd overshoot of 20/10 starboard): within the 2° target; the
-second overshoots are predicted too small on all three runs, as in CV. 60-s horizons
-on the held-out zig-zags: heading RMS 3.11 vs 11.98°, position 0.91 vs 3.87 m.
-Run time on the shared 2-core machine: the Esso study (both splits) 110 s wall, 33 s CPU
-(``benchmarks/bench_mmg_cv.py --study``: step 1 compiled, :mod:`shipid.methods.mmg.kernels`;
-fold fits from per-run moments, :mod:`shipid.methods.mmg.moments`), with the same
-choices and held-out numbers as above.
+The cross-validation tables, the held-out results, and how the candidate lists came about:
+``docs/validation/mmg.md``.
 """
 
 from __future__ import annotations
@@ -258,7 +173,7 @@ def config_fingerprint() -> str:
 
 
 #: Fingerprint of the configuration frozen before the held-out evaluation (a test checks it). Changed
-#: deliberately on 2026-12-03 (was 5e4de07b27a9d62a): step 2's default became ``FitConfig.equation="auto"``
+#: deliberately (was 5e4de07b27a9d62a) when step 2's default became ``FitConfig.equation="auto"``
 #: (:data:`~shipid.methods.mmg.estimator.EQUATION_BY_STRUCTURE`: the integral equation for the Esso low-speed
 #: hull, the differential one for the KVLCC2 structure), chosen on simulated runs and the training-run
 #: CVs, not on any test run.

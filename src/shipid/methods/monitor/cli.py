@@ -1,4 +1,4 @@
-"""``shipid monitor mass-cm``: online mass / centre-of-mass monitoring of a loaded-condition stream (seed 000).
+"""``shipid monitor mass-cm``: online mass / centre-of-mass monitoring of a loaded-condition stream (Linder et al. 2015).
 
 A thin loop over :class:`shipid.methods.monitor.session.MonitorSession` (sensor faults handled, then
 :class:`shipid.methods.monitor.estimator.MassCMMonitor`): read the stream (a file, standard input, a growing

@@ -1,6 +1,6 @@
 """Online mass and centre-of-mass monitoring: Algorithm 1 of Linder et al. (2015) on a sliding window.
 
-Seed 000 is an *online* method: the ship's load changes while it sails. :class:`MassCMMonitor` is fed
+Monitoring is *online*: the ship's load changes while it sails. :class:`MassCMMonitor` is fed
 chunks of the loaded-condition IMU + rudder stream and returns one :class:`MonitorUpdate` every
 ``every`` seconds of stream time. It is built from the pieces of Algorithm 1
 (:mod:`shipid.methods.masscm.estimator`):
@@ -41,41 +41,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    growing window (``converged`` is False until it spans ``min_window`` seconds again). The detector
    waits until the new reference is ``ref_min`` long.
 
-Measured with the AR(40) prefilter (BJ default vs AR: README; fishing vessel; :mod:`shipid.simulate.masscm_stream`: 1800 s at 50 Hz, 0.5 deg wave
-roll, gyro 0.002 rad/s and accelerometer 0.02 m/s^2 noise, biases 0.001 rad/s / 0.01 m/s^2, 300-s nominal and
-calibration datasets, z_f known, load change at 900 s from 0.4 kg at -0.182 m to 0.7 kg at -0.14 m;
-``benchmarks/bench_masscm_monitor.py``; the threshold was chosen on other seeds, see below):
-
-* **Window trade-off** (3 change + 3 no-change streams per window, campaign seeds 31 / 32; means over the
-  updates from 300 s after the change): window 150 / 300 / 600 s gives a mean reported std of m of 0.138 /
-  0.103 / 0.085 kg after the change (rms error 0.146 / 0.117 / 0.106) and of zm_bar 0.022 / 0.017 / 0.015 m
-  (rms error 0.023 / 0.018 / 0.016); coverage of ±2 std 0.99 / 0.98 / 1.00 (m) and 0.95 / 0.94 / 0.96
-  (zm_bar). Past 300 s the gain is small: the shared error of the nominal and calibration datasets, which no
-  window reduces, dominates. The window does not set the detection delay (the detector has its own tails),
-  but it is the time over which a slow, undetected drift is averaged. A rectangular window is used (no
-  exponential forgetting): it makes the "data after change_at" reset exact.
-* **Detector**: ``threshold`` 40. On 12 no-change tuning streams (seeds 1..12) the largest statistic was
-  22.2 (heavier-tailed than chi^2: the tests overlap and the IV standard errors of 30-120-s tails are
-  slightly optimistic); the power at 20 / 30 s after the change was T = 35-55 / 63-94 on 4 tuning streams.
-  Fresh campaigns (seeds 100 / 101, 20 streams each): the change detected in 20 of 20 after 20-30 s,
-  located at 900 s in 19 and 890 s in 1; no false alarm in 20 x 1800 s without change plus 20 x 900 s before
-  the change (15 stream-hours; the rate is below 0.2 per hour at 95 % confidence, rule of three); largest
-  no-change statistic 21.7. The nominal rate of one split's test, ``exp(-40/2) = 2e-9``, is NOT the false-
-  alarm rate (the statistic is over-dispersed); the measured one is.
-* **Coverage** (same campaigns, updates from 300 s after the change): m 0.957, zm_bar 0.987 of all updates
-  within ±2 std; per stream >= 90 % for both in 17 of 20 streams (no change: 0.955 / 0.968, 16 of 20). The
-  updates of one stream share the nominal / calibration error, so a stream is mostly in or mostly out.
-* **Speed**: 2.7-3.7 s of processor time for an 1800-s stream in two runs (490-660x real time; 8-9 s wall on
-  a shared machine), 23-39x faster than the named peer, the offline Algorithm 1 re-run on the 300-s window at
-  every update.
-* **Smaller changes** (3 streams each, campaign seed 300): 0.4 -> 0.5 kg at -0.17 m detected in 2 of 3 (after
-  60 and 80 s), 0.4 -> 0.45 kg at -0.182 m in 1 of 3 (after 100 s), 0.4 kg from -0.182 to -0.15 m in 1 of 3
-  (after 30 s): the detector is tuned against false alarms, not for changes this small.
-* **Memory**: traced memory after 600 / 1800 / 3600 s of stream 1.20 / 1.19 / 1.24 MiB, peak
-  15.6 MiB (the start-up run): flat in the stream length.
-* **Wave roll with noise-free sensors** (AR(40) prefilter): of 10 streams the start-up run failed in 6 (unstable
-  model; :class:`~shipid.errors.ShipidError`); of the 4 that ran, 2 raised repeated false alarms, 1 had a biased
-  zm_bar. ``masscm.noise_model="auto"``: the Box-Jenkins prefilter (:mod:`shipid.methods.monitor.bj_prefilter`).
+The defaults (a 300-s rectangular window, ``threshold`` 40) and what they give on simulated streams (window
+trade-off, detection delay, false-alarm rate, coverage of ±2 std, speed, memory): ``docs/validation/monitor.md``.
 """
 
 from __future__ import annotations
@@ -123,8 +90,8 @@ class MonitorOptions:
     threshold : float
         Alarm when the largest Wald statistic over the splits exceeds this (chi^2, 2 dof for one split;
         ``chi2.sf(threshold, 2) = exp(-threshold / 2)``, but the maximum over overlapping splits and updates is
-        over-dispersed). 40: about twice the largest no-change value on the tuning seeds (22.2); the
-        measured false-alarm rate and detection delays on fresh seeds are in the module docstring.
+        over-dispersed). 40: about twice the largest no-change value seen on simulated streams (22.2); the
+        measured false-alarm rate and detection delays are in ``docs/validation/monitor.md``.
     ar_fit : float
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
     bj_reselect : int
