@@ -140,7 +140,6 @@ def test_readme_real_data_blocks_run(tmp_path, data_root):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="fixed on branch onepath")
 def test_readme_python_block_is_right(tmp_path, monkeypatch):
     assert len(PYTHON) == 1
     monkeypatch.chdir(tmp_path)
