@@ -64,7 +64,7 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
         return
     if Path(vessel).suffix.lower() in (".toml", ".yaml", ".yml"):     # a parameter file of `shipid export params`
         from shipid.cli.export_cmds import simulate_params_cmd
-        return simulate_params_cmd(vessel, manoeuvre, out, duration=duration, dt=dt, seed=seed, speed=speed, rps=rps,
+        return simulate_params_cmd(vessel, manoeuvre, out, duration=duration, dt=0.1 if dt is None else dt, seed=seed, speed=speed, rps=rps,
                                    rudder_rate=rudder_rate, noise=noise, force=force, water_depth=water_depth)
     from shipid.methods.mmg.cli_imo import is_model_spec, simulate_identified
 
