@@ -107,7 +107,7 @@ def test_identify_mmg_runs_on_the_hand_written_file(files, tmp_path, capsys):
     assert out.stat().st_size > 1000
 
 
-READERS = [("check",), ("convert",), ("validate",), ("identify", "mmg"), ("identify", "realdata"),
+READERS = [("check",), ("convert",), ("validate",), ("identify", "mmg"),
            ("identify", "ebm"), ("identify", "dp"), ("identify", "mass-cm"), ("monitor", "mass-cm")]
 
 

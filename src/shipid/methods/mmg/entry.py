@@ -27,6 +27,8 @@ from shipid.models import mmg as mmg_model
 from shipid.result import Result
 
 #: ``selection=`` values (the criterion and candidate list of the structure selection).
+#: The channels a training run must hold (those of :func:`shipid.methods.mmg.estimator.smooth_run`).
+SMOOTH_CHANNELS = ("x", "y", "psi", "u", "v", "r", "delta", "n")
 SELECTIONS = ("auto", "horizons", "turning", "turning-auto", "rudder-angle")
 #: ``simex=`` values.
 SIMEX = ("auto", "on", "off")
@@ -116,7 +118,7 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         raise InputError(f"unknown selection '{selection}' ({', '.join(SELECTIONS)})")
     if simex not in SIMEX:
         raise InputError(f"unknown simex '{simex}' ({', '.join(SIMEX)})")
-    raw = [PF.as_run(p, fmt, channels, method="shipid identify mmg") for p in paths]
+    raw = [PF.as_run(p, fmt, channels, method="identify mmg", required=SMOOTH_CHANNELS) for p in paths]
     if water_depth is not None:   # the runs' depth as given, over what a data profile records
         raw = [PF.with_meta(tr, water_depth=float(water_depth), water_depth_source="given") for tr in raw]
     profiles = {tr.meta.get("profile") for tr in raw}
