@@ -57,7 +57,7 @@ def cpu():
 out = {}
 c = cpu()
 from shipid.io.files import read_trial
-from shipid.methods.masscm.cli import read_known
+from shipid.methods.masscm.known import read_known
 from shipid.methods.masscm.estimator import MassCMOptions, REQUIRED, fit_mass_cm
 from shipid.methods.masscm.refine import apply as apply_refine
 from shipid.methods.masscm.series import with_series
@@ -109,10 +109,13 @@ def make_files(folder: Path, duration: float = 3600.0) -> None:
 
 
 def main() -> None:
-    rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 3
-    folder = Path(sys.argv[2]) if len(sys.argv) > 2 and sys.argv[2] != "-" else \
+    argv = [a for a in sys.argv[1:] if a != "--smoke"]
+    if len(argv) < len(sys.argv) - 1:          # --smoke: the test suite's smallest run
+        argv = ["1", "-", "300"]
+    rounds = int(argv[0]) if len(argv) > 0 else 3
+    folder = Path(argv[1]) if len(argv) > 1 and argv[1] != "-" else \
         Path(tempfile.mkdtemp(prefix="bench_read_masscm_"))
-    duration = float(sys.argv[3]) if len(sys.argv) > 3 else 3600.0
+    duration = float(argv[2]) if len(argv) > 2 else 3600.0
     if not (folder / "loaded.csv").is_file():
         make_files(folder, duration)
     files = [str(folder / f"{k}.csv") for k in ("nominal", "calibration", "loaded")]
