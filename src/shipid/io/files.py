@@ -117,6 +117,7 @@ def read_trial(
     trim_empty_rows: bool = False,
     method: str | None = None,
     skip_bad: bool = False,
+    validate: bool = True,
 ) -> Trial:
     """Read a trial file, convert it to SI and validate it.
 
@@ -146,6 +147,11 @@ def read_trial(
     skip_bad : bool
         NMEA logs only: skip corrupt sentences, counted in ``meta["skipped"]``
         (:func:`shipid.io.nmea.read_nmea`).
+    validate : bool
+        Check the values (:func:`shipid.io.validate.validate_arrays`: finite, time increasing, no gaps).
+        ``False`` hands the samples over as the file has them (NaN, repeated or out-of-order times included),
+        for a consumer that names and survives such faults itself (the online monitor's fault handler);
+        the columns, units and required channels are checked either way.
 
     Returns
     -------
@@ -212,10 +218,14 @@ def read_trial(
     check_required(chans, required, method, spare, problems)
     problems.raise_all(has=described(table, columns))
 
-    t, chans, repairs = validate_arrays(
-        t, chans, file=label, rows=table.rows, units=units, required=required,
-        interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows,
-        method=method, copy=False)
+    if validate:
+        t, chans, repairs = validate_arrays(
+            t, chans, file=label, rows=table.rows, units=units, required=required,
+            interpolate_gaps=interpolate_gaps, resample=resample, trim_empty_rows=trim_empty_rows,
+            method=method, copy=False)
+    else:
+        t, repairs = np.asarray(t, dtype=float), []
+        chans = {k: np.asarray(v, dtype=float) for k, v in chans.items()}
     repairs = derived + repairs
 
     meta: dict = {"source": label, "format": fmt, "profile": profile}

@@ -69,16 +69,51 @@ def test_report_of_a_run(stream, capsys, tmp_path):
 
 
 def test_bad_stream_is_one_line(stream, capsys, tmp_path):
+    """A cell that is not a number, or a missing file, is bad input: one line, exit 2."""
     lines = (stream / "s.csv").read_text().splitlines(True)
     bad = tmp_path / "bad.csv"
     row = lines[1000].split(",")
-    row[1] = "nan"
+    row[1] = "abc"
     bad.write_text("".join(lines[:1000]) + ",".join(row) + "".join(lines[1001:3000]))
     rc = main(_args(stream, "--stream", str(bad), "--jsonl"))
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "bad.csv" in err[0]
     rc = main(_args(stream, "--stream", str(tmp_path / "none.csv")))
     assert rc == 2
+
+
+def test_sensor_faults_in_a_file_are_named_and_survived(stream, capsys, tmp_path):
+    """A recorded stream with sensor faults (a 0.5-s gap, a 2-s NaN burst and a 60-s frozen roll rate, 5-sigma
+    spikes, 1 % repeated and 1 % swapped samples) goes through the monitor's fault handler as a live feed does:
+    exit 0, one warning per fault with its time and channel, no alarm before the change at 250 s, the change
+    found within 120 s, and 'cannot estimate' instead of a number while the roll rate is frozen."""
+    import numpy as np
+    import pandas as pd
+    from faultkit import CH, inject
+
+    from shipid.io.files import read_trial
+
+    st = read_trial(stream / "s.csv")
+    t, X, faults = inject(st, np.random.default_rng(5), gap_short=60.0, nan_burst=80.0, clock_jump=None,
+                          frozen=120.0, gap_long=None, n_spikes=3, spike_window=(30.0, 240.0))
+    faulty = tmp_path / "faulty.csv"
+    pd.DataFrame({"t [s]": t, **{f"{c} [{st.units[c]}]": X[:, i] for i, c in enumerate(CH)}}).to_csv(
+        faulty, index=False)
+    rc = main(_args(stream, "--stream", str(faulty), "--jsonl"))
+    cap = capsys.readouterr()
+    assert rc == 0, cap.err
+    warn = [w for w in cap.err.splitlines() if w.startswith("shipid: warning:")]
+    assert any("gap of 0.5 s" in w and "t = 60 s" in w for w in warn), warn
+    assert any("channel p" in w and "t = 80 s" in w for w in warn), warn
+    assert any("channel p frozen" in w and "t = 120 s" in w for w in warn), warn
+    spikes = [f for f in faults if f[0] == "spike"]
+    assert sum("spike in channel" in w for w in warn) == len(spikes), warn
+    assert any("repeated" in w for w in warn), warn
+    ups = [json.loads(x) for x in cap.out.splitlines()]
+    alarms = [u["t"] for u in ups if u.get("alarm")]
+    assert alarms and all(250.0 < a <= 370.0 for a in alarms), alarms
+    frozen = [u for u in ups if 130.0 <= u["t"] <= 170.0]
+    assert frozen and all(u.get("m") is None for u in frozen), frozen
 
 
 def test_live_panel_renders():

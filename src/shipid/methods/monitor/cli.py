@@ -50,7 +50,8 @@ def _csv_chunks(fh, header: list[str], label: str, lines_per_chunk: int, follow:
             nonlocal row0
             tmpf.write_text("".join(header + lines), encoding="utf-8")
             try:
-                tr = read_trial(tmpf, fmt="csv", required=_CHANNELS, method="mass-cm", channel_map=channels)
+                tr = read_trial(tmpf, fmt="csv", required=_CHANNELS, method="mass-cm", channel_map=channels,
+                                validate=False)         # faults are the session's to name and survive
             except InputError as err:
                 raise InputError(f"{label}: rows {row0 + 1}-{row0 + len(lines)}: {err}") from None
             row0 += len(lines)
@@ -167,8 +168,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, channels, listen, 
     "rho_std", "converged", "alarm", "change_at", ...} (shipid.methods.monitor.estimator). Channels as for
     `shipid identify mass-cm`: t, p, a_s, r, delta. Sensor faults in the samples that arrive (gaps, NaN,
     repeated or late samples, clock jumps, frozen channels, spikes) are one warning line each and survived
-    (shipid.methods.monitor.faults); while a channel stays bad the update says it cannot estimate. A file or
-    standard input is read as a trial first (a NaN or a gap there is an error, as for every trial).
+    (shipid.methods.monitor.faults) whether they come from a file, standard input or a live feed; while a
+    channel stays bad the update says it cannot estimate. A cell that is not a number is bad input (exit 2).
     Example: shipid simulate fishing-vessel mass-cm-stream --change-at 900 --to 0.7,-0.14 --out s.csv;
     shipid monitor mass-cm --nominal s.nominal.csv --calibration s.calibration.csv --known s.known.toml
     --stream s.csv -o run.jsonl
@@ -277,7 +278,8 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, channels, listen, 
         else:
             if not os.path.exists(stream):
                 raise InputError("no such file", file=stream)
-            tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm", channel_map=channels)
+            tr = read_trial(stream, required=["t", *REQUIRED], method="mass-cm", channel_map=channels,
+                            validate=False)             # faults are the session's to name and survive
             for a in range(0, len(tr.t), chunk_lines):
                 s = slice(a, a + chunk_lines)
                 push(tr.t[s], tr["p"][s], tr["a_s"][s], tr["r"][s], tr["delta"][s])
