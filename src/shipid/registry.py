@@ -150,3 +150,19 @@ def for_result(result_method: str) -> MethodInfo | None:
 def identifying() -> dict[str, MethodInfo]:
     """The methods that ``shipid.identify`` runs (those with an ``identify`` callable)."""
     return {k: v for k, v in methods().items() if v.identify is not None}
+
+
+def lazy_attributes(namespace: dict, table: dict[str, tuple[str, str]]):
+    """A module ``__getattr__`` (PEP 562) for a method package: ``table[name] = (module, attribute)`` is imported
+    on first use and kept in ``namespace`` (the package's ``globals()``), so that importing the package, which
+    the registry does to read ``METHOD``, loads none of its numerics."""
+
+    def __getattr__(name: str):
+        if name in table:
+            mod, attr = table[name]
+            value = getattr(importlib.import_module(mod), attr)
+            namespace[name] = value
+            return value
+        raise AttributeError(f"module {namespace.get('__name__')!r} has no attribute {name!r}")
+
+    return __getattr__

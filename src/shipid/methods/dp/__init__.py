@@ -4,7 +4,7 @@
 trials; ``Options`` is :class:`~shipid.methods.dp.estimator.DPOptions`.
 """
 
-from shipid.registry import MethodInfo
+from shipid.registry import MethodInfo, lazy_attributes
 
 METHOD = MethodInfo(
     name="dp", title="DP low-frequency model, parallel state-augmented EKF",
@@ -22,15 +22,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        mod, attr = _LAZY[name]
-        value = getattr(importlib.import_module(mod), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(globals(), _LAZY)
 
 
 __all__ = ["identify", "Options", "DPOptions", "COVERAGE", "REQUIRED", "METHOD"]

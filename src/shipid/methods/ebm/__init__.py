@@ -4,7 +4,7 @@
 hydrodynamic forces; ``Options`` is :class:`~shipid.methods.ebm.estimator.EbmConfig`.
 """
 
-from shipid.registry import MethodInfo
+from shipid.registry import MethodInfo, lazy_attributes
 
 METHOD = MethodInfo(
     name="ebm", title="Estimation-Before-Modelling of Abkowitz coefficients", paper="Yoon & Rhee 2003",
@@ -21,15 +21,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        mod, attr = _LAZY[name]
-        value = getattr(importlib.import_module(mod), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(globals(), _LAZY)
 
 
 __all__ = ["identify", "Options", "EbmConfig", "COVERAGE", "REQUIRED", "METHOD"]

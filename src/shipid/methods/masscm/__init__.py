@@ -4,7 +4,7 @@
 loaded datasets); ``Options`` is :class:`~shipid.methods.masscm.estimator.MassCMOptions`.
 """
 
-from shipid.registry import MethodInfo
+from shipid.registry import MethodInfo, lazy_attributes
 
 METHOD = MethodInfo(
     name="mass-cm", title="mass and centre of mass from IMU + rudder", paper="Linder et al. 2015",
@@ -22,15 +22,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        mod, attr = _LAZY[name]
-        value = getattr(importlib.import_module(mod), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(globals(), _LAZY)
 
 
 __all__ = ["identify", "Options", "MassCMOptions", "COVERAGE", "REQUIRED", "METHOD"]

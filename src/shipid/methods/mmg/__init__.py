@@ -5,7 +5,7 @@ regression per mode, choosing the structure by cross-validation; ``Options`` is
 :class:`~shipid.methods.mmg.estimator.FitConfig`.
 """
 
-from shipid.registry import MethodInfo
+from shipid.registry import MethodInfo, lazy_attributes
 
 METHOD = MethodInfo(
     name="mmg", title="MMG model from free-running model tests (EBM adapted)",
@@ -21,15 +21,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        mod, attr = _LAZY[name]
-        value = getattr(importlib.import_module(mod), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(globals(), _LAZY)
 
 
 __all__ = ["identify", "Options", "FitConfig", "METHOD"]

@@ -4,7 +4,7 @@ The monitor is run on a stream (``shipid monitor mass-cm``), not through ``shipi
 ``Options`` is :class:`~shipid.methods.monitor.estimator.MonitorOptions`.
 """
 
-from shipid.registry import MethodInfo
+from shipid.registry import MethodInfo, lazy_attributes
 
 METHOD = MethodInfo(
     name="monitor", title="online mass and centre-of-mass monitor with change detection",
@@ -19,15 +19,7 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        mod, attr = _LAZY[name]
-        value = getattr(importlib.import_module(mod), attr)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_attributes(globals(), _LAZY)
 
 
 __all__ = ["Options", "MonitorOptions", "METHOD"]
