@@ -27,31 +27,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+from shipid.numerics import numba_linalg
+from shipid.numerics.numba_linalg import cholesky_into as _chol
+from shipid.numerics.numba_linalg import source_key
+
+#: First 16 hex digits of the SHA-256 of ``shipid/numerics/numba_linalg.py``, whose Cholesky kernel the
+#: filter calls: numba keys the on-disk cache on this file only, so an edit there must update this key
+#: (``tests/numerics/test_numba_linalg.py`` checks it); if it does not match, the kernels compile without
+#: the disk cache, never run stale.
+NUMBA_LINALG_KEY = "355c3586dc6b4413"
+CACHE_VALID = source_key(numba_linalg) == NUMBA_LINALG_KEY
+_JIT = dict(cache=CACHE_VALID, nogil=True, error_model="numpy")
 LOG2PI = float(np.log(2.0 * np.pi))
 #: Model codes of :func:`parallel_aekf`.
 SURGE, MOMENTUM = 0, 1
-
-
-@njit(**_JIT)
-def _chol(A, n, L):
-    """Lower Cholesky factor of ``A`` (n × n) into ``L``; False when A is not positive definite."""
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= L[j, k] * L[j, k]
-        if not (s > 0.0):
-            return False
-        d = np.sqrt(s)
-        L[j, j] = d
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / d
-        for i in range(j):
-            L[i, j] = 0.0
-    return True
 
 
 @njit(**_JIT)
@@ -396,4 +385,4 @@ def parallel_aekf(kind, Z, lens, dt, U, th_full, est, x0, P0, qx, Qt, R, cons, w
     return X, TH, PTH, PD, INN, SS, NIS, NIS_TR, loglik, P, -1, 0
 
 
-__all__ = ["SURGE", "MOMENTUM", "LOG2PI", "parallel_aekf", "rk4_aug"]
+__all__ = ["SURGE", "MOMENTUM", "LOG2PI", "NUMBA_LINALG_KEY", "CACHE_VALID", "parallel_aekf", "rk4_aug"]
