@@ -47,7 +47,7 @@ from shipid.errors import ShipidError
 @click.option("--json", "as_json", is_flag=True, help="Print the error table as JSON.")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
               help="Write a figure of measured vs predicted motion (PNG/PDF/SVG).")
-@click.option("--out", "out_path", default=None, type=click.Path(dir_okay=False),
+@click.option("-o", "--out", "out_path", default=None, type=click.Path(dir_okay=False),
               help="Write the whole-run open-loop prediction beside the measured channels (CSV/Parquet).")
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
 @click.option("--no-retime", "no_retime", is_flag=True,
