@@ -301,20 +301,13 @@ def simulate_params(path: str | Path, manoeuvre: str, *, duration: float | None 
         The record, lines saying which conditions were used, and warnings (one line each).
     """
     src = read_params(path)
-    spec = parse_manoeuvre(manoeuvre)
+    parse_manoeuvre(manoeuvre)                   # an unknown manoeuvre is refused first
     if src.family != "mmg" and (rps is not None or rudder_rate is not None or water_depth is not None):
         raise InputError("--rps, --rudder-rate and --water-depth apply to MMG models only")
     if src.family == "mmg":
-        if spec.kind == "dp":
-            raise ShipidError(f"manoeuvre {manoeuvre!r} is a DP trial; an MMG model has rudder and propeller only")
-        model = src.model
         d = {"model": {"training_conditions": dict(src.conditions)}} if src.conditions else None
-        cond = MM.resolve_conditions(model, d, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate,
-                                     water_depth=water_depth)
-        dur = MM.default_duration(model, cond) if duration is None else duration
-        trial = run_manoeuvre(MM.ship_model(model, cond), manoeuvre, duration=dur, dt=dt, seed=seed, speed=cond.speed)
-        trial.meta.update(rps=cond.rps, conditions=cond.to_dict(), model=model.name,
-                          rudder_convention="MMG: positive delta turns the ship to starboard")
+        trial, cond = MM.simulate_model(src.model, d, manoeuvre, duration=duration, dt=dt, seed=seed, speed=speed,
+                                        rps=rps, rudder_rate=rudder_rate, water_depth=water_depth)
         return trial, list(cond.notes), list(cond.warnings)
     if src.family == "abkowitz":
         c = src.conditions

@@ -28,7 +28,7 @@ from shipid.methods.dp.trials import TrialNoise, simulate_dp_trials
 from shipid.models.dp import THETA_MEANING, THETA_NAMES, dp_vessel
 from shipid.vessels import load_vessel
 
-#: Channels a DP trial file must have (issue 4): t, x, y, psi, p1..p6, alpha6.
+#: Channels a DP trial file must have: t, x, y, psi, p1..p6, alpha6.
 REQUIRED = ["x", "y", "psi", "p1", "p2", "p3", "p4", "p5", "p6", "alpha6"]
 
 

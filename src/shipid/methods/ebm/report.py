@@ -112,7 +112,7 @@ def _conditioning_from_diagnostics(result) -> list:
 
 register_section("ebm", ebm_section, default=True)
 register_section("mmg-ebm", ebm_section, default=True)
-register_section("ebm-study", ebm_section, default=True)  # shipid study ebm-esso-osaka  # real-data EBM with the MMG model (issue 6)
+register_section("ebm-study", ebm_section, default=True)  # shipid study ebm-esso-osaka; real-data EBM with the MMG model
 
 
 def enrich(result):

@@ -18,9 +18,8 @@ from shipid.models import mmg
 if TYPE_CHECKING:
     from shipid.methods.mmg.estimator import FitConfig
 
-# The candidate lists below were FROZEN a priori (session 2 of issue 6) from physics and
-# training-run evidence only; see the module docstring of shipid.methods.mmg.study
-# for the reasons of each axis. They are full factorial designs over their axes, so that
+# The candidate lists below were fixed a priori from physics and training-run evidence only;
+# see docs/validation/mmg.md ("Frozen held-out studies") for the reasons of each axis. They are full factorial designs over their axes, so that
 # no combination is in or out because of how it scored on a test run.
 _ESSO_FREE = {
     # hull only: propeller and rudder stay at the published values (identified by their

@@ -40,23 +40,16 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
     """``shipid simulate MODEL.json MANOEUVRE``: the model in calm water at the resolved test conditions."""
     from shipid.io.files import write_trial
     from shipid.methods.mmg import manoeuvres as MM
-    from shipid.simulate.manoeuvres import parse_manoeuvre, run_manoeuvre
 
     path = Path(out)
     if path.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise ShipidError(f"{out}: output must end in .csv or .parquet")
     if path.exists() and not force:
         raise OutputExistsError(out)
-    spec_m = parse_manoeuvre(manoeuvre)
-    if spec_m.kind == "dp":
-        raise ShipidError(f"manoeuvre {manoeuvre!r} is a DP trial; an MMG model has rudder and propeller only")
+    spec_m = MM.check_manoeuvre(manoeuvre)      # refused before the model is read
     d, model = _load(spec)
-    cond = MM.resolve_conditions(model, d, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate,
-                                 water_depth=water_depth)
-    dur = MM.default_duration(model, cond) if duration is None else duration
-    trial = run_manoeuvre(MM.ship_model(model, cond), manoeuvre, duration=dur, dt=dt, seed=seed, speed=cond.speed)
-    trial.meta.update(rps=cond.rps, conditions=cond.to_dict(), model=model.name,
-                      rudder_convention="MMG: positive delta turns the ship to starboard")
+    trial, cond = MM.simulate_model(model, d, manoeuvre, duration=duration, dt=dt, seed=seed, speed=speed, rps=rps,
+                                    rudder_rate=rudder_rate, water_depth=water_depth)
     if noise:
         import numpy as np
 

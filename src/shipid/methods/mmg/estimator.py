@@ -230,26 +230,16 @@ class FitConfig:
 
 
 #: Default window of the integral equation in units of √(L/g): 10 s for the Esso Osaka 3 m, 15.3 s for
-#: the 7-m KVLCC2, 86 s for a 300-m ship. Chosen between the two kinds of evidence there is: on the
-#: simulated coverage study's tuning seed 710 (30 runs, rudder at the Froude-scaled IMO rate, SIMEX on with
-#: λ up to 2) the bias of N_r was +49 % (differential form), +12 % (5-s window), +3.1 % (10 s),
-#: +0.5 % (20 s); on the real HSVA KVLCC2 zig-zags (all 13) a 30-s window gives N_v ≈ 0 and N_r > 0
-#: (the hull unstable in yaw) where the 15-s one is within about one standard error of the differential form — long windows
-#: weight the low-frequency content, where an unmodelled steady yaw moment dominates. The KVLCC2
-#: structure keeps the differential form (:data:`EQUATION_BY_STRUCTURE`).
+#: the 7-m KVLCC2, 86 s for a 300-m ship. Long windows weight the low-frequency content, where an unmodelled
+#: steady yaw moment dominates; short ones keep the errors-in-variables bias of the differential form. The
+#: evidence behind the value is in docs/validation/mmg.md ("Step-2 form and window").
 WINDOW_FROUDE = 18.0
 
 
-#: Step-2 form per prior structure under ``FitConfig(equation="auto")``, each chosen on the evidence there
-#: is for it: the Esso low-speed hull by the simulated coverage study (bias of N_r +49 % differential,
-#: +3 % integral on the tuning seed) with its training-run CV unchanged or better (1.859 -> 1.812 before
-#: the refinement); the KVLCC2 (Yasukawa 2015) structure by its real-data CVs, which favour the
-#: differential form (forward rudder-angle CV 23.85 vs 24.65, worse in all three folds; the frozen
-#: zig-zag study's largest overshoot error 2.30 deg vs 1.70). The simulated KVLCC2 campaign made since
-#: (``shipid study mmg-coverage --vessel kvlcc2``, :mod:`shipid.methods.mmg.coverage`) favours the integral
-#: form as strongly as the Esso one did; the differential form stays the default here because the
-#: real-data CVs are what the Esso rule also asks for, and every differential-form result is checked
-#: against the integral form (:func:`shipid.methods.mmg.pipeline.form_check`), a disagreement said.
+#: Step-2 form per prior structure under ``FitConfig(equation="auto")``: the integral form for the Esso
+#: low-speed hull, the differential form for the KVLCC2 (Yasukawa 2015) structure, whose results are checked
+#: against the integral form (:func:`shipid.methods.mmg.pipeline.form_check`, a disagreement said). The
+#: evidence for each choice is in docs/validation/mmg.md ("Step-2 form and window").
 #: Structures not listed: integral.
 EQUATION_BY_STRUCTURE = {"esso-lowspeed": "integral", "yasukawa2015": "differential"}
 

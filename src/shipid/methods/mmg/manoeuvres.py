@@ -48,6 +48,7 @@ from shipid.models import mmg
 from shipid.io.files import read_trial
 from shipid.numerics.integrate import rk4_propagate
 from shipid.models.ship_model import ShipModel
+from shipid.simulate.manoeuvres import ManoeuvreSpec, parse_manoeuvre, run_manoeuvre
 
 #: Rudder limit (rad) of the manoeuvres (35° hard over, MSC.137(76) 4.2.1).
 RUDDER_LIMIT = np.deg2rad(35.0)
@@ -320,6 +321,35 @@ def default_duration(model: mmg.MmgModel, cond: Conditions) -> float:
     return T_APPROACH + 60.0 * model.particulars["L"] / cond.speed
 
 
+def check_manoeuvre(manoeuvre: str) -> ManoeuvreSpec:
+    """The parsed ``manoeuvre``; one :class:`ShipidError` for one an MMG model cannot run (unknown, or a DP
+    trial)."""
+    spec = parse_manoeuvre(manoeuvre)
+    if spec.kind == "dp":
+        raise ShipidError(f"manoeuvre {manoeuvre!r} is a DP trial; an MMG model has rudder and propeller only")
+    return spec
+
+
+def simulate_model(model: mmg.MmgModel, result: Mapping[str, Any] | None, manoeuvre: str, *,
+                   duration: float | None = None, dt: float = 0.1, seed: int = 0, speed: float | None = None,
+                   rps: float | None = None, rudder_rate: float | None = None,
+                   water_depth: float | None = None) -> tuple[Trial, Conditions]:
+    """``model`` through ``manoeuvre`` under the conditions :func:`resolve_conditions` sets (those recorded in
+    ``result``, overridden by the arguments); ``duration`` defaults to :func:`default_duration`.
+
+    Returns the record (``meta``: ``rps``, ``conditions``, ``model``, ``rudder_convention``) and the conditions,
+    whose ``notes`` and ``warnings`` the caller says.
+    """
+    check_manoeuvre(manoeuvre)
+    cond = resolve_conditions(model, result, speed=speed, rps=rps, rudder_rate_deg_s=rudder_rate,
+                              water_depth=water_depth)
+    dur = default_duration(model, cond) if duration is None else duration
+    trial = run_manoeuvre(ship_model(model, cond), manoeuvre, duration=dur, dt=dt, seed=seed, speed=cond.speed)
+    trial.meta.update(rps=cond.rps, conditions=cond.to_dict(), model=model.name,
+                      rudder_convention="MMG: positive delta turns the ship to starboard")
+    return trial, cond
+
+
 # ----------------------------------------------------------------------------- batched simulation
 def theta_rows(model: mmg.MmgModel, names: Sequence[str] = (), values: np.ndarray | None = None) -> dict:
     """Per-mode coefficient arrays ``{mode: (B, p)}``: the model's coefficients with ``names`` set per row."""
@@ -544,7 +574,7 @@ def simulate_stopping_batch(model: mmg.MmgModel, Th: Mapping[str, np.ndarray], c
     return BatchRecord(np.arange(m) * dt, X[:, :m], np.zeros((B, m)), cmd, Nn[:, :m])
 
 
-__all__ = ["Conditions", "DEPTH_CLASSES", "depth_class", "depth_check", "training_conditions", "recorded_conditions",
+__all__ = ["check_manoeuvre", "simulate_model", "Conditions", "DEPTH_CLASSES", "depth_class", "depth_check", "training_conditions", "recorded_conditions",
            "resolve_conditions", "equilibrium_speed",
            "equilibrium_rps", "rudder_turn_sign", "ship_model", "default_duration", "theta_rows", "BatchRecord",
            "simulate_rudder_batch", "simulate_stopping_batch", "rudder_move_rates", "rows_deriv", "rows_equilibrium", "rows_dynamics", "rows_rk4", "RUDDER_LIMIT", "T_APPROACH", "straight_du"]
