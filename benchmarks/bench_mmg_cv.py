@@ -1,4 +1,4 @@
-"""Benchmark: ``identify mmg`` with cross-validation on the Esso Osaka 3 m runs, and the Esso held-out study.
+"""Benchmark: ``identify mmg`` with cross-validation on the Esso Osaka 3 m runs, and the 9-run held-out study.
 
 Peer: the previous code path, measured in the same run — step 1 by the reference
 :func:`shipid.estimate.cd_ekf.cd_ekf` + :func:`shipid.estimate.smoothers.rts_smoother`
@@ -23,18 +23,16 @@ the ninth held-out run; ``--runs`` takes fewer). Needs ``$SHIPID_DATA`` (or ../s
    :mod:`shipid.methods.mmg.output_error` for the Esso structure): wall and CPU time, and the ratio
    to the same identify without the refinement measured just before; then the same with the reference
    simulation (3c): wall and CPU time, ratio, largest relative estimate difference.
-4. With ``--study``: ``shipid study esso-osaka-heldout`` (both splits, leave-one-run-out CV,
-   held-out evaluation) wall time; with ``--study-reference`` also the previous path's (slow).
-5. With ``--heldout9``: ``shipid study esso-osaka-heldout9`` (12 output-error CVs on the 32 training runs,
+4. With ``--heldout9``: ``shipid study esso-osaka-heldout9`` (12 output-error CVs on the 32 training runs,
    final fit, the 9 held-out runs): wall and CPU time, chosen candidate and held-out means; with
    ``--heldout9-reference`` also with the reference simulation (about 1000 s CPU), the ratio and the
    largest relative differences of the CV scores and the fitted coefficients.
-6. With ``--oe-reference``: the 4-fold output-error CV of the candidate the 9-run study chooses
+5. With ``--oe-reference``: the 4-fold output-error CV of the candidate the 9-run study chooses
    (``hull+rudder+thrust/nondimensional+prop-side+wind-gain``) and its final fit on the 32 training runs,
    compiled and with the reference simulation: CPU time, ratio, largest relative differences (a cheaper
-   same-run check than 5's reference).
+   same-run check than 4's reference).
 
-Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--study] [--study-reference] [--heldout9]
+Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--heldout9]
 [--heldout9-reference] [--oe-reference] [--skip-cv] [--smoke]`` (``--smoke``: 3 runs, 2 folds, steps 1-3a only).
 """
 
@@ -50,10 +48,10 @@ NINTH_HELDOUT = "random/random_31-Jul-2020_14_52_18.csv"
 
 
 def _runs(limit: int | None):
-    from shipid.methods.mmg import study as S
+    from shipid.io.basins import SPLITS, esso_dir
 
-    d = S._esso_dir(None)
-    test = set(S.SPLITS["miyauchi2022"]["test"]) | set(S.SPLITS["wakita2022"]["test"]) | {NINTH_HELDOUT}
+    d = esso_dir(None)
+    test = set(SPLITS["miyauchi2022"]["test"]) | set(SPLITS["wakita2022"]["test"]) | {NINTH_HELDOUT}
     rel = sorted(f"{p.parent.name}/{p.name}" for p in d.glob("*/*.csv"))
     rel = [r for r in rel if r not in test]
     return rel[:limit] if limit else rel
@@ -102,18 +100,6 @@ def _timed(fn):
     return out, time.process_time() - c0, time.perf_counter() - w0
 
 
-def _study():
-    from shipid.methods.mmg import study as S
-
-    out = {}
-    for sp in ("miyauchi2022", "wakita2022"):
-        out[sp] = S.esso_train(sp)
-    for sp in out:
-        out[sp]["heldout"] = S.esso_evaluate(out[sp])
-    return {sp: (o["structure"], o["heldout"]["pooled"]["identified"]["psi"]["rms"],
-                 o["heldout"]["pooled"]["identified"]["pos"]["rms"]) for sp, o in out.items()}
-
-
 def _heldout9():
     from shipid.methods.mmg import study_oe as S
 
@@ -157,7 +143,7 @@ def _oe_chosen():
         ref, c0, _ = _timed(go)
     q = ("score", "psi_rms", "pos_rms", "psi_mean_of_runs", "pos_mean_of_runs")
     dcv = max(abs(new[0][k][x] / ref[0][k][x] - 1) for k in ref[0] for x in q)
-    print(f"6. output-error CV of '{chosen}' (4 folds) + its final fit: compiled {c1:.1f} s, reference "
+    print(f"5. output-error CV of '{chosen}' (4 folds) + its final fit: compiled {c1:.1f} s, reference "
           f"{c0:.1f} s CPU, ratio {c0 / c1:.1f}x; output-error CV score "
           f"{new[0][chosen + '/output-error']['score']:.4f}; "
           f"largest relative differences: CV {dcv:.1e}, fitted coefficient {_max_rel(new[1], ref[1]):.1e}, "
@@ -168,8 +154,6 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=None)
     ap.add_argument("--folds", type=int, default=4)
-    ap.add_argument("--study", action="store_true", help="Also time the full Esso held-out study.")
-    ap.add_argument("--study-reference", action="store_true", help="... and the previous path's study (slow).")
     ap.add_argument("--heldout9", action="store_true", help="Also time the 9-run held-out study (output-error CVs).")
     ap.add_argument("--heldout9-reference", action="store_true", help="... and with the reference simulation (slow).")
     ap.add_argument("--oe-reference", action="store_true",
@@ -183,13 +167,13 @@ def main() -> None:
     import numpy as np
 
     from shipid.methods.mmg import cv_fast, estimator as R, kernels, pipeline as P  # noqa: F401  (compiles / loads the cache)
-    from shipid.methods.mmg import study as S
+    from shipid.io.basins import read_esso
     from shipid.models import mmg
 
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
     if not a.skip_cv:
         names = _runs(a.runs)
-        trials = [S.read_esso(r) for r in names]
+        trials = [read_esso(r) for r in names]
         print(f"{len(trials)} runs, {sum(len(t) for t in trials)} samples, {a.folds} folds")
         R.smooth_run(trials[0])                                    # compile / load the cache outside the timing
         new, c_new, _ = _timed(lambda: [R.smooth_run(tr) for tr in trials])
@@ -237,26 +221,12 @@ def main() -> None:
               f"ratio {c3 / c2:.1f}x CPU, {w3 / w2:.1f}x wall; chosen '{res2.model['structure_candidate']}' "
               f"(reference '{res3.model['structure_candidate']}'); largest relative estimate difference "
               f"{_max_rel(e2, e3):.1e}, horizon cost {abs(oe.get('cost_end', 0) / oe3.get('cost_end', 1) - 1):.1e}")
-    if a.study or a.study_reference:
-        out, cs, ws = _timed(_study)
-        print(f"4. study esso-osaka-heldout (both splits, LOO CV, held-out evaluation): {ws:.1f} s wall "
-              f"({cs:.1f} s CPU)")
-        for sp, (st, psi, pos) in out.items():
-            print(f"   {sp}: '{st}', held-out pooled {psi:.2f} deg / {pos:.3f} m")
-        if a.study_reference:
-            with previous_path():
-                out0, cs0, ws0 = _timed(_study)
-            same = all(out0[sp][0] == out[sp][0] and abs(out0[sp][1] - out[sp][1]) < 1e-6
-                       and abs(out0[sp][2] - out[sp][2]) < 1e-6 for sp in out)
-            print(f"   previous path: {ws0:.1f} s wall ({cs0:.1f} s CPU); ratio {ws0 / ws:.1f}x wall, "
-                  f"{cs0 / cs:.1f}x CPU; "
-                  f"same structures and held-out errors (to 1e-6): {same}")
     if a.oe_reference:
         _oe_chosen()
     if a.heldout9 or a.heldout9_reference:
         st, c9, w9 = _timed(_heldout9)
         ev = st["heldout"]["identified"]
-        print(f"5. study esso-osaka-heldout9 ({len(st['refinement_cv']) // 2} output-error CVs, final fit, held-out "
+        print(f"4. study esso-osaka-heldout9 ({len(st['refinement_cv']) // 2} output-error CVs, final fit, held-out "
               f"evaluation): {w9:.1f} s wall ({c9:.1f} s CPU); chosen '{st['chosen']}', held-out mean over runs "
               f"{ev['psi_mean_of_runs']:.2f} deg / {ev['pos_mean_of_runs']:.3f} m")
         if a.heldout9_reference:

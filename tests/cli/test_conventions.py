@@ -47,7 +47,7 @@ def _option(cmd: click.Command, flag: str) -> click.Option | None:
 def test_the_walk_finds_every_method_command():
     names = {" ".join(p) for p, _ in RESULTS}
     for expected in ("identify mass-cm", "identify dp", "identify ebm", "identify mmg", "study mass-cm-contour",
-                     "study dp-supply", "study ebm-esso-osaka", "study kvlcc2-zigzag", "design prbs",
+                     "study dp-supply", "study ebm-esso-osaka", "study mmg-coverage", "design prbs",
                      "analyse crlb mass-cm", "imo", "check", "monitor mass-cm"):
         assert expected in names
 

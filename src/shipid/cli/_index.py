@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '187417de6644daf6'
+SOURCES = 'a361f16dcfbc31fd'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -63,32 +63,16 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.ebm.cli_coverage', 'Coverage of the EBM std: noise seeds x ships with every Table-3 coefficient scaled by U[0.7, 1.3].', False),
     ('study', 'ebm-esso-osaka'):
         ('shipid.methods.ebm.cli', 'Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials.', False),
-    ('study', 'esso-osaka-heldout'):
-        ('shipid.methods.mmg.cli', 'Esso Osaka 3 m: CV table over the candidate structures (training runs only), the chosen one, then the held-out error table of the identified model vs the published MMG set.', False),
     ('study', 'esso-osaka-heldout9'):
         ('shipid.methods.mmg.cli_heldout9', "Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on the other 32 (structure; regression vs output-error refinement; port/starboard terms; surge and slipstream-rudder terms), then the held-out table.", False),
     ('study', 'export'):
         ('shipid.cli.campaign_cmds', 'Export a campaign store to Parquet or CSV, one row per run.', False),
-    ('study', 'kvlcc2-large-angle'):
-        ('shipid.methods.mmg.cli', "KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the kvlcc2-zigzag study's held-out runs.", False),
-    ('study', 'kvlcc2-nested'):
-        ('shipid.methods.mmg.cli_turning_nested', 'KVLCC2 HSVA: default, turning and automatic selection, leave-one-rudder-angle-out (nested CV).', False),
-    ('study', 'kvlcc2-prop-side'):
-        ('shipid.methods.mmg.cli_prop_side', 'KVLCC2 HSVA: neutral rudder angle and propeller side force, trained on smaller and scored on larger angles.', False),
-    ('study', 'kvlcc2-rudder-angle'):
-        ('shipid.methods.mmg.cli_rudder_angle', 'KVLCC2 HSVA: angle-dependent rudder terms, trained on smaller and scored on larger rudder angles.', False),
-    ('study', 'kvlcc2-sides'):
-        ('shipid.methods.mmg.cli_side_calibration', 'KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.', False),
-    ('study', 'kvlcc2-zigzag'):
-        ('shipid.methods.mmg.cli', 'KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots.', False),
     ('study', 'mass-cm-contour'):
         ('shipid.methods.masscm.cli', 'Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate.', False),
     ('study', 'mass-cm-coverage'):
         ('shipid.methods.masscm.cli', 'Coverage of Algorithm 1 per noise regime: bias, spread, spread/bound, ±2-std coverage of m, zm_bar, rho.', False),
     ('study', 'mass-cm-sensitivity'):
         ('shipid.methods.masscm.cli', 'Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).', False),
-    ('study', 'mmg-covariance'):
-        ('shipid.methods.mmg.cli_covariance', 'Which MMG parameter covariance is honest: split-half check on real training runs.', False),
     ('study', 'mmg-coverage'):
         ('shipid.methods.mmg.cli_coverage', 'Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).', False),
     ('study', 'store-info'):

@@ -2,7 +2,9 @@
 
 ``own_run``: a noise-free zig-zag (the model's own prediction of it is exact); ``noisy_run``: random
 rudder/propeller orders in a steady wind with seeded measurement noise (for identification).
-Both are session-scoped factories (pure functions of their arguments). ``esso_published``: the published Esso
+Both are session-scoped factories (pure functions of their arguments). ``replay_ref``: the reference
+open-loop replay of one run (one :func:`shipid.models.mmg.simulate_batch` per run), against which the batched
+replays of :mod:`shipid.methods.mmg.turning_selection` are checked. ``esso_published``: the published Esso
 Osaka 3-m model (skips without the shared data); :func:`esso_states`: a factory of seeded states for force comparisons.
 """
 
@@ -85,3 +87,29 @@ def _random_states(seed: int = 0, k: int = 200, n_max: float = 15.0):
 def esso_states():
     """A factory ``(seed=0, k=200, n_max=15.0) -> (u, v, r, delta, n)`` of seeded low-speed Esso states."""
     return _random_states
+
+
+def replay_one(model: mmg.MmgModel, tr: Trial) -> dict:
+    """Open-loop replay of ``tr``'s measured rudder and propeller from its measured state at execute, one run
+    at a time: whole-run heading RMS error (deg) and the peak-yaw-rate error per side (%)."""
+    from shipid.methods.mmg import validate as V
+    from shipid.methods.mmg.turning_selection import execute_index
+
+    Z = V.measured_states(tr)
+    U = V.trial_inputs(tr)
+    k0 = execute_index(tr["delta"])
+    t = np.asarray(tr.t[k0:], float)
+    X = mmg.simulate_batch(model, t - t[0], Z[k0][None], U[k0:][None])[0]
+    zr, xr = Z[k0:, 5], X[:, 5]
+    e_psi = np.degrees(np.unwrap(X[:, 2]) - np.unwrap(Z[k0:, 2]))
+    out = {"psi_rms": float(np.sqrt(np.mean(e_psi ** 2))) if np.all(np.isfinite(e_psi)) else float("inf")}
+    for side, sg in (("stbd", 1.0), ("port", -1.0)):
+        m_pk, p_pk = float(np.max(sg * zr)), float(np.max(sg * xr)) if np.all(np.isfinite(xr)) else float("nan")
+        out[f"r_peak_{side}_err_pct"] = 100.0 * (p_pk - m_pk) / m_pk if np.isfinite(p_pk) else float("inf")
+    return out
+
+
+@pytest.fixture(scope="session")
+def replay_ref():
+    """:func:`replay_one`, the reference open-loop replay of one run."""
+    return replay_one

@@ -1,14 +1,12 @@
-"""Parameter covariance of identified MMG models: run bootstrap, HAC, and the split-half check."""
+"""Parameter covariance of identified MMG models: run bootstrap and HAC."""
 
 import numpy as np
 import pytest
 
 from shipid.io import data_root
-from shipid.io.basins import read_kvlcc2
 from shipid.methods.mmg import covariance as C
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import pipeline as P
-from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.models import mmg
 
 ROOT = data_root()
@@ -64,21 +62,3 @@ def test_identify_stores_the_run_bootstrap_and_falls_back_to_hac(sim_runs, noisy
         assert d["se_ridge"][n] > 0
     res2 = P.identify(trials[:2], truth, structure="linear-hull+rudder", select=False)
     assert res2.diagnostics["covariance"]["kind"].startswith("HAC")
-
-
-@pytest.mark.realdata
-def test_split_half_ridge_is_optimistic_bootstrap_is_not():
-    """Real HSVA zig-zags (the ten training runs of the frozen study) split at random into halves:
-    the coefficient differences between halves are many ridge SEs apart (RMS z >> 1) but about
-    one run-bootstrap SE (RMS z within [0.5, 2])."""
-    need("kvlcc2_hsva")
-    from shipid.methods.mmg.study import KVLCC2_TRAIN
-
-    runs = [R.smooth_run(read_kvlcc2(f)) for f in KVLCC2_TRAIN]
-    prior = mmg.load_published("kvlcc2_hsva")
-    cand = CANDIDATES["yasukawa2015"]["full/symmetric-gamma_R"]
-    cp, free = apply_candidate(prior, cand)
-    z = C.split_half_z(runs, cp, free, candidate_config(R.FitConfig(), cand), splits=4, seed=0, draws=100)
-    assert z["ridge"]["rms_z"] > 3.0
-    assert z["hac"]["rms_z"] > 1.3
-    assert 0.5 < z["run-bootstrap"]["rms_z"] < 2.0

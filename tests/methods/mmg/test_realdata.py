@@ -4,7 +4,7 @@ Fast checks: the pipeline recovers known coefficients from runs simulated with a
 known MMG model (no noise and with seeded measurement noise); the Result is a
 self-describing MODEL.json that ``shipid validate`` reads back; the CLI with a
 channel map on renamed columns. The full held-out studies are in
-tests/campaign/test_realdata_study.py (marked slow).
+``studies/`` and docs/validation/mmg.md.
 """
 
 import json
@@ -171,7 +171,7 @@ def test_fold_groups_leave_one_out_and_interleaved():
 
 
 def test_candidate_lists_are_full_factorial():
-    """The frozen a-priori lists (shipid.methods.mmg.study docstring): Esso 2 hulls x 3 free sets x
+    """The frozen a-priori lists (docs/validation/mmg.md, the frozen held-out studies): Esso 2 hulls x 3 free sets x
     2 weightings, KVLCC2 3 free sets x 2 gamma_R treatments; the default (first) is the published structure."""
     es = R.CANDIDATES["esso-lowspeed"]
     assert len(es) == 12 and next(iter(es)) == "hull+rudder+thrust"

@@ -1,9 +1,6 @@
-"""The automatic turning selection's guard, heading constraint and decision rule (shipid.methods.mmg.turning_nested)."""
+"""The automatic turning selection's guard and heading constraint (shipid.methods.mmg.turning_nested)."""
 
 from types import SimpleNamespace
-
-import numpy as np
-import pytest
 
 from shipid.methods.mmg import turning_nested as N
 
@@ -52,39 +49,3 @@ def test_select_auto_falls_back_to_default_on_few_runs(monkeypatch):
     cands = _tables(monkeypatch, peak={"a": 6.0, "b": 1.0}, psi={"a": 4.0, "b": 4.0}, horizon={"a": 2.0, "b": 1.0})
     name, table, method = N.select_auto(_runs("10_05", "15_05"), None, SimpleNamespace(structure="s"), cands)
     assert name == "b" and "not used" in method and set(table) == {"a", "b"}
-
-
-def _fold(score, hor):
-    return {"score": score, "horizon_score": hor}
-
-
-@pytest.mark.parametrize("auto_big, auto_small, expect", [(10.0, 1.0, True), (10.0, 1.2, False), (16.0, 1.0, False)])
-def test_decision_rule(auto_big, auto_small, expect):
-    folds = {}
-    for a in (5, 10, 15, 20, 25, 30):
-        big = a >= 20
-        folds[str(a)] = {"default": _fold(15.0 if big else float("nan"), 1.1 if big else 1.0),
-                         "auto": _fold(auto_big if big else float("nan"), 1.1 if big else auto_small)}
-    s = N.summarise(folds, ("default", "auto"))
-    assert s["auto_becomes_default"] is expect
-    assert np.isclose(s["default"]["large_score_mean"], 15.0) and s["default"]["large_score_sd"] == 0.0
-
-
-@pytest.mark.slow
-def test_nested_cv_with_two_training_runs_falls_back_to_the_default(monkeypatch):
-    """Three zig-zags, one per angle: every outer fold trains on two runs, so the guard keeps the default
-    choice, and the automatic procedure scores exactly as the default; no other run is read."""
-    from shipid.io.basins import read_kvlcc2
-
-    read = []
-    monkeypatch.setattr(N, "read_kvlcc2", lambda f, root=None: read.append(f) or read_kvlcc2(f, root))
-    names = ("HSVA_CPMC_KVLCC2_Z_10_05.dat", "HSVA_CPMC_KVLCC2_Z_15_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat")
-    try:
-        res = N.nested_cv(names, procedures=("default", "auto"))
-    except FileNotFoundError:
-        pytest.skip("HSVA data not available")
-    assert sorted(read) == sorted(names)
-    assert list(res["folds"]) == ["10", "15", "20"]
-    for row in res["folds"].values():
-        assert row["auto"]["chosen"] == row["default"]["chosen"]
-        assert row["auto"]["score"] == row["default"]["score"]

@@ -1,15 +1,13 @@
-"""KVLCC2 selection on what a turning circle measures: candidates, batched replays, per-fold calibration."""
+"""KVLCC2 selection on what a turning circle measures: candidates, batched replays, per-fold calibration,
+zig-zag names and the calibration helpers (shipid.methods.mmg.turning_selection)."""
 
 import numpy as np
 import pytest
 
 from shipid.io import data_root
 from shipid.methods.mmg import estimator as R
-from shipid.methods.mmg import side_calibration as S
-from shipid.methods.mmg import study
 from shipid.methods.mmg import turning_selection as T
 from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate
-from shipid.methods.mmg.extrapolation import replay
 from shipid.models import mmg
 
 ROOT = data_root()
@@ -32,8 +30,7 @@ def setup(own_run):
     return prior, trials, runs
 
 
-def test_frozen_lists_unchanged_and_turning_list_extends_them():
-    assert study.config_fingerprint() == study.FROZEN_FINGERPRINT
+def test_turning_list_extends_the_candidate_list():
     C = T.TURNING_CANDIDATES["yasukawa2015"]
     assert list(C)[:6] == list(CANDIDATES["yasukawa2015"]) and len(C) == 15
     cal = [c for c in C if C[c].get(T.CALIBRATE)]
@@ -41,25 +38,59 @@ def test_frozen_lists_unchanged_and_turning_list_extends_them():
     assert all(C[c]["particulars"]["gamma_R"] == "symmetric" for c in cal)
 
 
-def test_batch_replay_matches_the_replay_of_each_row(setup):
+def test_zigzag_angles_from_names():
+    assert np.degrees(T.zigzag_angles("HSVA_CPMC_KVLCC2_Z_20_10_P.dat")) == pytest.approx((20, 10))
+    assert np.degrees(T.zigzag_angles("HSVA_CPMC_KVLCC2_Z_35_05.dat")) == pytest.approx((35, 5))
+    with pytest.raises(Exception, match="cannot read the zig-zag angles"):
+        T.zigzag_angles("turn.csv")
+
+
+def test_refine_minimum_is_the_vertex_of_the_parabola_clipped_to_the_span():
+    assert T.refine_minimum([0.0, 1.0, 2.0], [(x - 1.3) ** 2 for x in (0.0, 1.0, 2.0)]) == pytest.approx(1.3)
+    assert T.refine_minimum([0.0, 1.0, 2.0], [1.0, 1.0, 1.0]) == 1.0          # flat: the middle point
+    assert T.refine_minimum([0.0, 1.0, 2.0], [(x - 5.0) ** 2 for x in (0.0, 1.0, 2.0)]) == 2.0
+
+
+def test_batch_replay_matches_the_replay_of_each_row(setup, replay_ref):
     prior, trials, runs = setup
-    m1 = S.fit_candidate(runs, prior, S.with_asymmetry(CAL, -0.05, "rudder_side_gain"))
-    m2 = S.fit_candidate(runs, prior, S.with_asymmetry(CAL, 0.1, "rudder_side_gain"))
-    m3 = S.fit_candidate(runs, prior, dict(FREE))
+    m1 = T.fit_candidate(runs, prior, T.with_asymmetry(CAL, -0.05, "rudder_side_gain"))
+    m2 = T.fit_candidate(runs, prior, T.with_asymmetry(CAL, 0.1, "rudder_side_gain"))
+    m3 = T.fit_candidate(runs, prior, dict(FREE))
     rows = [(m1, 0), (m2, 1), (m3, 1), (m1, 2)]
     got = T.batch_replay(rows, [T.replay_data(t) for t in trials])
     for (m, i), g in zip(rows, got):
-        ref = replay(m, trials[i])
+        ref = replay_ref(m, trials[i])
         for k, v in g.items():
             np.testing.assert_allclose(v, ref[k], rtol=1e-9, atol=1e-9)
 
 
-def test_calibrate_folds_is_the_calibration_of_side_calibration(setup):
+def _calibrate_ref(runs, trials, prior, cand, grid, parameter, replay_ref):
+    """The reference calibration: each value's model fitted and every run with switch >= 5 deg replayed one at
+    a time; the grid's best, then the parabola's vertex through it and its neighbours, kept if lower."""
+    use = T.peak_runs(trials)
+
+    def score(a):
+        m = T.fit_candidate(runs, prior, T.with_asymmetry(cand, a, parameter))
+        e = np.array([replay_ref(m, tr)[f"r_peak_{s}_err_pct"] for tr, u in zip(trials, use) if u
+                      for s in ("stbd", "port")], float)
+        return float(np.sqrt(np.mean(e ** 2)))
+
+    table = {float(a): score(a) for a in grid}
+    best = min(table, key=lambda a: table[a])
+    g = sorted(table)
+    i = g.index(best)
+    if 0 < i < len(g) - 1:
+        a = T.refine_minimum(g[i - 1:i + 2], [table[g[j]] ** 2 for j in (i - 1, i, i + 1)])
+        table[a] = score(a)
+        best = a if table[a] < table[best] else best
+    return best, table
+
+
+def test_calibrate_folds_is_the_reference_calibration(setup, replay_ref):
     prior, trials, runs = setup
-    names = [t.meta["source"] for t in trials]
     idx = [0, 1, 3]
-    a_ref, tab_ref = S.calibrate([runs[i] for i in idx], [trials[i] for i in idx], [names[i] for i in idx], prior,
-                                 CAL, S.SIDE_GAIN_GRID, parameter="rudder_side_gain")
+    a_ref, tab_ref = _calibrate_ref([runs[i] for i in idx], [trials[i] for i in idx], prior, CAL,
+                                    T.SIDE_GAIN_GRID, "rudder_side_gain", replay_ref)
     (a, tab), = T.calibrate_folds(runs, [T.replay_data(t) for t in trials], T.peak_runs(trials), prior, CAL, [idx])
     assert a == pytest.approx(a_ref, abs=1e-9)
     # the grid points are the same numbers; the parabola's vertex (a key computed from the scores) agrees to

@@ -1,4 +1,4 @@
-"""MMG commands: validate a model on a run, identify MMG models, held-out studies.
+"""MMG commands: validate a model on a run, identify MMG models.
 
 The commands parse their options, call the library and print; what decides the model (data profile,
 rudder sign, prior, re-timing, checks, selection) is :mod:`shipid.methods.mmg.entry` and
@@ -10,13 +10,6 @@ rudder sign, prior, re-timing, checks, selection) is :mod:`shipid.methods.mmg.en
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``;
   ``--selection``: the structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`)
   or by what a turning circle measures (:mod:`shipid.methods.mmg.turning_selection`)
-* ``shipid study esso-osaka-heldout [--split miyauchi2022|wakita2022|both] [--train-only] [--json] [-o R.json]``
-* ``shipid study kvlcc2-large-angle [--json] [-o R.json]`` (:mod:`shipid.methods.mmg.extrapolation`)
-* ``shipid study kvlcc2-zigzag [--train-only] [--json] [-o R.json]``
-
-The studies print the cross-validation table over the candidate structures (training
-runs only) and the chosen one before any test run is read (``--train-only`` stops
-there); see :mod:`shipid.methods.mmg.study` for the frozen protocol.
 """
 
 from __future__ import annotations
@@ -26,7 +19,7 @@ import math
 
 import click
 
-from shipid.cli import CONTEXT, cli, identify, study
+from shipid.cli import CONTEXT, cli, identify
 from shipid.cli._common import CHANNELS_HELP, channels_option, emit, loud, loud_lines, out_options, strict_option
 from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
@@ -322,81 +315,3 @@ def identify_mmg(trials, fmt, channels, prior, structure, folds, selection, refi
     """
     _identify(trials, fmt, channels, prior, structure, folds, rudder_sign, as_json, out, force, refine, selection,
               simex, equation, water_depth, no_retime)
-
-
-# ----------------------------------------------------------------------------- studies
-@study.command("esso-osaka-heldout", context_settings=CONTEXT)
-@click.option("--split", type=click.Choice(["miyauchi2022", "wakita2022", "both"]), default="both",
-              show_default=True, help="Training/test split of the data set's README.")
-@click.option("--folds", default=0, show_default=True, type=int,
-              help="CV folds within the training runs (0: leave one run out, the frozen scheme).")
-@click.option("--train-only", is_flag=True,
-              help="Stop after the CV table and the chosen structure: no test run is read.")
-@out_options(json_help="Print everything as JSON on stdout.")
-@strict_option
-def esso_heldout_cmd(split, folds, train_only, as_json, out, force):
-    """Esso Osaka 3 m: CV table over the candidate structures (training runs only), the chosen one,
-    then the held-out error table of the identified model vs the published MMG set."""
-    from shipid.methods.mmg import study as S
-
-    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
-    splits = ["miyauchi2022", "wakita2022"] if split == "both" else [split]
-    res = {}
-    for sp in splits:                      # every selection is made (and printed) before any test run is read
-        res[sp] = S.esso_train(sp, folds=folds or None, progress=say)
-        if not as_json:
-            click.echo(S.format_esso_training(res[sp]))
-    if not train_only:
-        for sp in splits:
-            res[sp]["heldout"] = S.esso_evaluate(res[sp], progress=say)
-            if not as_json:
-                click.echo(S.format_esso_heldout(res[sp]))
-    warns = loud_lines([])
-    emit({**res, "warnings": warns} if warns else res, as_json=as_json, out=out, force=force, indent=1)
-
-
-@study.command("kvlcc2-zigzag", context_settings=CONTEXT)
-@click.option("--folds", default=0, show_default=True, type=int,
-              help="CV folds within the training zig-zags (0: leave one out, the frozen scheme).")
-@click.option("--train-only", is_flag=True,
-              help="Stop after the CV table and the chosen structure: no held-out zig-zag is read.")
-@out_options(json_help="Print everything as JSON on stdout.")
-@strict_option
-def kvlcc2_cmd(folds, train_only, as_json, out, force):
-    """KVLCC2 HSVA: structure by overshoot CV on ten zig-zags; predict 20/10 (both sides) and 35/5 overshoots."""
-    from shipid.methods.mmg import study as S
-
-    say = (lambda s: None) if as_json else (lambda s: click.echo(s, err=True))
-    st = S.kvlcc2_train(folds=folds or None, progress=say)
-    if not as_json:
-        click.echo(S.format_kvlcc2_training(st))
-    if not train_only:
-        st.update(S.kvlcc2_evaluate(st, progress=say))
-        if not as_json:
-            click.echo(S.format_kvlcc2_heldout(st))
-    st["warnings"] = loud_lines(st.get("warnings", []))
-    emit(st, as_json=as_json, out=out, force=force, indent=1)
-
-
-@study.command("kvlcc2-large-angle", context_settings=CONTEXT)
-@out_options(json_help="Print the table as JSON.")
-@strict_option
-def kvlcc2_large_angle_cmd(as_json, out, force):
-    """KVLCC2 HSVA: fit every candidate on the 10 and 15 deg zig-zags, predict the 20-30 deg ones
-    (open-loop replay: peak yaw rate per side and heading; closed-loop overshoots). Reads none of the
-    kvlcc2-zigzag study's held-out runs."""
-    from shipid.methods.mmg import extrapolation as E
-
-    say = (lambda s: None) if as_json else (lambda s: click.echo(f"  fitted and scored: {s}", err=True))
-    table = E.cross_validate(progress=say)
-    warns = loud_lines([])
-    payload = {"train": list(E.TRAIN), "validate": list(E.VALIDATE), "table": table}
-    if warns:
-        payload["warnings"] = warns
-
-    def text():
-        click.echo(f"KVLCC2 large-angle CV: trained on {len(E.TRAIN)} zig-zags (10, 15 deg), "
-                   f"scored on {', '.join(E.VALIDATE)}")
-        click.echo(E.format_table(table))
-
-    emit(payload, as_json=as_json, out=out, force=force, indent=1, text=text)

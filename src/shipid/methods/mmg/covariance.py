@@ -23,22 +23,19 @@ small. Two covariances that do not assume independent rows:
   runs it is itself uncertain (the number of distinct resamples is small), and it is
   scaled by ``R/(R − 1)`` for ``R`` runs (the usual small-cluster correction).
 
-:func:`split_half_z` is the check on real runs of which covariance is honest: the runs
-are split at random into two disjoint halves, each half fitted on its own, and every
-coefficient's difference between the halves is divided by the standard deviation the
-covariance states for it, ``z = (θ_A − θ_B) / sqrt(σ_A² + σ_B²)``; an honest covariance
-gives an RMS z near 1, an optimistic one far above. ``shipid study mmg-covariance
-{kvlcc2,esso}`` runs that check on the training runs of the frozen studies. On the KVLCC2 and Esso
+Which covariance is honest was checked on real runs by splitting the training runs at random into two
+halves, fitting each, and dividing every coefficient's difference between the halves by the standard
+deviation the covariance states for it (an honest one gives an RMS z near 1): on the KVLCC2 and Esso
 Osaka runs the ridge errors are several times too small, the HAC sandwich too small on KVLCC2, and the
-run bootstrap about right (figures: ``docs/validation/mmg.md``), so :func:`honest_covariance`, which
-``identify mmg`` stores in MODEL.json, uses the run bootstrap.
+run bootstrap about right (``studies/mmg_covariance``; figures: ``docs/validation/mmg.md``), so
+:func:`honest_covariance`, which ``identify mmg`` stores in MODEL.json, uses the run bootstrap.
 """
 
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import Mapping, NamedTuple, Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
@@ -197,50 +194,6 @@ def honest_covariance(f: MmgFit, runs: Sequence[SmoothedRun], prior: mmg.MmgMode
                             "optimistic when runs differ by more than noise", "hac")
 
 
-def split_half_z(runs: Sequence[SmoothedRun], prior: mmg.MmgModel, free: Mapping[str, Sequence[str]],
-                 config: FitConfig = FitConfig(), *, splits: int = 10, seed: int = 0,
-                 kinds: Sequence[str] = KINDS, draws: int = 100) -> dict[str, dict]:
-    """RMS over coefficients and random half-splits of ``z = (θ_A − θ_B)/sqrt(σ_A² + σ_B²)`` per kind.
-
-    Returns per kind ``{"rms_z", "median_abs_z", "n"}`` and per coefficient ``"by_coef"`` the RMS z;
-    only coefficients estimated in both halves count.
-    """
-    R = len(runs)
-    if R < 4:
-        raise InputError("split-half check needs at least 4 runs")
-    rng = np.random.default_rng(seed)
-    zs: dict[str, list] = {k: [] for k in kinds}
-    byc: dict[str, dict[str, list]] = {k: {} for k in kinds}
-    for s in range(splits):
-        perm = rng.permutation(R)
-        halves = [sorted(perm[: R // 2]), sorted(perm[R // 2:])]
-        fits, sds = [], []
-        for h in halves:
-            sub = [runs[i] for i in h]
-            fh = fit(sub, prior, free, config)
-            nm = free_names(fh)
-            sd = {}
-            for k in kinds:
-                S = parameter_covariance(fh, sub, prior, config, CovarianceOptions(k, draws, int(seed * 1000 + s)))
-                sd[k] = dict(zip(nm, np.sqrt(np.maximum(np.diag(S), 0.0))))
-            fits.append({n: fh.model.coef[n] for n in nm})
-            sds.append(sd)
-        common = [n for n in fits[0] if n in fits[1]]
-        for k in kinds:
-            for n in common:
-                den = np.hypot(sds[0][k][n], sds[1][k][n])
-                if den > 0:
-                    z = (fits[0][n] - fits[1][n]) / den
-                    zs[k].append(z)
-                    byc[k].setdefault(n, []).append(z)
-    out = {}
-    for k in kinds:
-        z = np.asarray(zs[k])
-        out[k] = {"rms_z": float(np.sqrt(np.mean(z ** 2))) if z.size else float("nan"),
-                  "median_abs_z": float(np.median(np.abs(z))) if z.size else float("nan"), "n": int(z.size),
-                  "by_coef": {n: float(np.sqrt(np.mean(np.square(v)))) for n, v in byc[k].items()}}
-    return out
-
-
 __all__ = ["KINDS", "CovarianceOptions", "free_names", "hac_covariance", "bootstrap_draws", "bootstrap_covariance",
-           "ridge_covariance", "parameter_covariance", "honest_covariance", "HonestCovariance", "split_half_z", "MIN_BOOTSTRAP_RUNS"]
+           "ridge_covariance", "parameter_covariance", "honest_covariance", "HonestCovariance",
+           "MIN_BOOTSTRAP_RUNS"]

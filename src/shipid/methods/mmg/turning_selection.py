@@ -1,37 +1,21 @@
 """Structure selection for the KVLCC2 (Yasukawa 2015 structure) on what a turning circle measures.
 
-``shipid identify mmg --prior kvlcc2_hsva`` chooses among :data:`TURNING_CANDIDATES` by
+``shipid identify mmg --prior kvlcc2_hsva --selection turning`` chooses among :data:`TURNING_CANDIDATES` by
 :func:`select_for_turning`, a leave-one-run-out (or ``folds``-fold) cross-validation over
 the TRAINING runs whose fold errors are those of an open-loop replay of each left-out run
-(:func:`shipid.methods.mmg.extrapolation.replay`: the measured rudder and propeller replayed
-from the measured state at execute over the whole run, the way a turning circle of another
-basin is predicted):
+(:func:`batch_replay`: the measured rudder and propeller replayed from the measured state at execute over
+the whole run, the way a turning circle of another basin is predicted):
 
 * the relative error of the peak yaw rate reached on each side (%), the quantity that sets
   a turning circle's diameter (``D ≈ 2 U / r`` in the steady turn), and
 * the RMS heading error over the whole replay (deg),
 
-pooled over all folds' left-out zig-zags with a switch heading of
-:data:`~shipid.methods.mmg.side_calibration.MIN_SWITCH_DEG` or more (the 1°-switch runs
-are excluded a priori, as in :mod:`shipid.methods.mmg.side_calibration`; a run whose
-file name does not give its angles is kept). Score (:data:`DEFAULT_CRITERION` ``"peak"``) =
-RMS over runs and sides of the peak-yaw-rate errors (%), lower is better, the first listed on
-a tie; ``"peak+heading"`` adds the RMS over runs of the heading RMS (deg), the score of
-:mod:`shipid.methods.mmg.extrapolation`. The heading RMS is reported in the table either way.
-
-Choice of the criterion, on HSVA runs only (:func:`nested_criterion_check`): each
-criterion selects among the candidates by leave-one-out on the 10°/15° zig-zags, and its
-choice, fitted on them, predicts the 20°–30° ones (score of the large-angle study: RMS
-peak-yaw-rate error % + RMS heading error deg; mean peak error per side; overshoot RMS)::
-
-    criterion     chosen                          20-30 score  r_pk%  stbd%  port%  psi°   ovs°
-    peak+heading  hull-only/sym/cf                37.08        7.85   -3.00  -10.32 29.23  0.26
-    peak          linear-hull+rudder/sym/cf/sg    11.58        3.74   +2.09  -4.57  7.84   0.87
-
-The whole-run heading of a left-out small-angle zig-zag, replayed open loop, accumulates the
-timing of every reversal; as a selection criterion it did not carry to larger angles, the peak
-yaw rates did. (This comparison was made after the 13-run table below, computed with
-``"peak+heading"``, had been seen; it reads no run of another basin.)
+pooled over all folds' left-out zig-zags with a switch heading of :data:`MIN_SWITCH_DEG` or more (the
+1°-switch runs are excluded a priori: their yaw-rate peaks are a few tenths of a degree per second and set
+by the switching, not by the turn; a run whose file name does not give its angles is kept). Score
+(:data:`DEFAULT_CRITERION` ``"peak"``) = RMS over runs and sides of the peak-yaw-rate errors (%), lower is
+better, the first listed on a tie; ``"peak+heading"`` adds the RMS over runs of the heading RMS (deg). The
+heading RMS is reported in the table either way.
 
 Candidates (fixed a priori; a full factorial over the first three axes):
 free set (``full``, ``linear-hull+rudder``, ``hull-only``) × flow straightening γ_R (the
@@ -40,12 +24,9 @@ prior's per-side values | their symmetric mean) × rudder normal force (standard
 Fluid-Dynamic Lift 1985 ch. 3, not tuned; ``rudder_crossflow`` of
 :func:`shipid.models.mmg_forces.basis_yasukawa`), plus, for the three free sets with symmetric
 γ_R and ``C_Dc = 1``, the port/starboard rudder effectiveness ``F_N (1 + s sign δ)``
-(``rudder_side_gain``) calibrated on the training runs' peak yaw rates
-(:func:`shipid.methods.mmg.side_calibration.calibrate`: grid
-:data:`~shipid.methods.mmg.side_calibration.SIDE_GAIN_GRID` refined by a parabola). The
-first six are the frozen list :data:`shipid.methods.mmg.candidates.CANDIDATES` of the
-``yasukawa2015`` structure, which stays unchanged (the frozen ``kvlcc2-zigzag`` study and
-its fingerprint use it).
+(``rudder_side_gain``) calibrated on the training runs' peak yaw rates (:func:`calibrate_folds`: grid
+:data:`SIDE_GAIN_GRID` refined by the vertex of a parabola, :func:`refine_minimum`). The first six are
+the candidate list :data:`shipid.methods.mmg.candidates.CANDIDATES` of the ``yasukawa2015`` structure.
 
 A calibrated candidate is calibrated INSIDE each fold on that fold's training runs only
 (and, for the identified model, on all training runs): the left-out runs never enter its
@@ -53,36 +34,15 @@ side gain. The replays of all candidates, folds and grid values are integrated t
 one RK4 batch per structure and particulars (the side gain varies per row;
 :func:`shipid.methods.mmg.manoeuvres.rows_rk4`).
 
-Leave-one-run-out on all 13 HSVA zig-zags (``select_for_turning`` with
-``criterion="peak+heading"``; 10 left-out runs with switch ≥ 5°; peak errors %, heading deg;
-``sg``: side-gain calibrated, ``cf``: ``C_Dc = 1``, ``sym``: symmetric γ_R)::
-
-    candidate                       score   r_pk   psi    stbd%   port%
-    full                            26.41   7.82  18.59  -7.48   +1.57
-    linear-hull+rudder              33.84   8.44  25.40  -8.59   +3.98
-    hull-only                       24.56   7.29  17.27  -7.00   +0.79
-    full/sym                        12.65   5.85   6.80  +2.57   -5.43
-    linear-hull+rudder/sym          14.74   5.32   9.42  +3.15   -4.98
-    hull-only/sym                   12.69   6.33   6.37  +1.67   -6.87
-    full/cf                         28.23   7.88  20.35  -8.35   +1.61
-    linear-hull+rudder/cf           35.69   9.04  26.66  -9.61   +4.17
-    hull-only/cf                    30.42   8.09  22.33  -7.43   +4.14
-    full/sym/cf                     12.90   5.17   7.73  +1.92   -5.36
-    linear-hull+rudder/sym/cf       13.98   5.04   8.93  +2.61   -5.10
-    hull-only/sym/cf                12.73   5.04   7.69  +2.95   -4.63
-    full/sym/cf/sg                  14.25   4.42   9.83  -1.08   -3.57
-    linear-hull+rudder/sym/cf/sg    15.18   3.77  11.41  -0.95   -2.62
-    hull-only/sym/cf/sg             15.31   3.89  11.41  -0.47   -2.13
-
-The side gains calibrated in the folds lie between −0.029 and −0.050. The side-gain
-candidates have the smallest peak-yaw-rate errors and the most balanced sides, but a larger
-whole-run heading error, so under ``"peak+heading"`` the frozen list's ``full/symmetric-gamma_R``
-is chosen; under ``"peak"`` (the default) ``linear-hull+rudder/sym/cf/sg``.
+The cross-validation tables behind the candidates and the criterion (HSVA zig-zags only):
+``docs/validation/mmg.md``, "KVLCC2 HSVA zig-zags", "Selection for turning".
 """
+
 
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace as _replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -94,13 +54,14 @@ from shipid.errors import InputError, ShipidError
 from shipid.methods.mmg import estimator as R
 from shipid.methods.mmg import manoeuvres as MM
 from shipid.methods.mmg import validate as V
-from shipid.methods.mmg.candidates import CANDIDATES
-from shipid.methods.mmg.extrapolation import VALIDATE, large_angle_split, score_validation
-from shipid.methods.mmg.side_calibration import (MIN_SWITCH_DEG, SIDE_GAIN_GRID, fit_candidate, refine_minimum,
-                                                 with_asymmetry)
-from shipid.methods.mmg.zigzag import execute_index, zigzag_angles
+from shipid.methods.mmg.candidates import CANDIDATES, apply_candidate, candidate_config
 from shipid.models import mmg
 from shipid.models.mmg_forces import RUDDER_LARGE_ANGLE
+
+#: Port/starboard rudder-effectiveness values tried (``rudder_side_gain``).
+SIDE_GAIN_GRID = (-0.15, -0.1, -0.05, 0.0, 0.05, 0.1, 0.15)
+#: Smallest switch heading (deg) of a zig-zag whose peak yaw rates enter the criterion.
+MIN_SWITCH_DEG = 5.0
 
 #: Key of a candidate whose particular of that name is calibrated on the training runs.
 CALIBRATE = "calibrate"
@@ -109,7 +70,8 @@ PARAMETER = "rudder_side_gain"
 
 
 def turning_candidates() -> dict[str, dict]:
-    """The frozen six, each with ``C_Dc = 1``, and three side-gain-calibrated ones: 15 (module docstring)."""
+    """The six yasukawa2015 candidates, each also with ``C_Dc = 1``, and three side-gain-calibrated ones: 15
+    (module docstring)."""
     base = CANDIDATES["yasukawa2015"]
     out = dict(base)
     for name, c in base.items():
@@ -125,9 +87,56 @@ def turning_candidates() -> dict[str, dict]:
 TURNING_CANDIDATES: dict[str, dict[str, dict]] = {"yasukawa2015": turning_candidates()}
 
 
+# ----------------------------------------------------------------------------- zig-zags and candidates
+def zigzag_angles(name: str) -> tuple[float, float]:
+    """(rudder, switch heading) in rad from an HSVA file name ``..._Z_20_10_P.dat``."""
+    m = re.search(r"_Z_(\d+)_(\d+)", name)
+    if not m:
+        raise InputError(f"cannot read the zig-zag angles from '{name}'")
+    return np.deg2rad(float(m.group(1))), np.deg2rad(float(m.group(2)))
+
+
+def execute_index(delta: np.ndarray, threshold: float = np.deg2rad(1.0)) -> int:
+    """First sample where the rudder has moved more than ``threshold`` from its initial value."""
+    k = np.flatnonzero(np.abs(delta - delta[0]) > threshold)
+    if k.size == 0:
+        raise InputError("no rudder execute found")
+    return max(int(k[0]) - 1, 0)
+
+
+def with_asymmetry(cand: Mapping, a: float, parameter: str = "gamma_R_asymmetry") -> dict:
+    """``cand`` with the particular ``parameter`` set to ``a`` (for the γ_R asymmetry fraction, in place
+    of any γ_R override of its own; ``"rudder_side_gain"``: the port/starboard rudder effectiveness
+    ``F_N (1 + s sign δ)`` of :func:`shipid.models.mmg_forces.basis_yasukawa`)."""
+    c = dict(cand)
+    drop = ("gamma_R", "gamma_R_asymmetry") if parameter == "gamma_R_asymmetry" else (parameter,)
+    part = {k: v for k, v in (cand.get("particulars") or {}).items() if k not in drop}
+    part[parameter] = float(a)
+    c["particulars"] = part
+    return c
+
+
+def fit_candidate(runs: Sequence[R.SmoothedRun], prior: mmg.MmgModel, cand: Mapping,
+                  config: R.FitConfig = R.FitConfig()) -> mmg.MmgModel:
+    """The regression fit of ``cand`` on ``runs``."""
+    cprior, free = apply_candidate(prior, cand)
+    return R.fit(runs, cprior, free, candidate_config(config, cand)).model
+
+
+def refine_minimum(x: Sequence[float], y: Sequence[float]) -> float:
+    """Vertex of the parabola through three points whose middle one is lowest (clipped to their span)."""
+    (x0, x1, x2), (y0, y1, y2) = x, y
+    den = (x0 - x1) * (x0 - x2) * (x1 - x2)
+    A = (x2 * (y1 - y0) + x1 * (y0 - y2) + x0 * (y2 - y1)) / den
+    B = (x2 * x2 * (y0 - y1) + x1 * x1 * (y2 - y0) + x0 * x0 * (y1 - y2)) / den
+    if not A > 0:
+        return float(x1)
+    return float(np.clip(-B / (2 * A), x0, x2))
+
+
 # ----------------------------------------------------------------------------- batched replays
 def replay_data(tr: Trial) -> dict[str, Any]:
-    """What :func:`shipid.methods.mmg.extrapolation.replay` integrates: state at execute, inputs, steps."""
+    """What :func:`batch_replay` integrates for one run: the measured state at execute, the inputs, the steps."""
     Z = V.measured_states(tr)
     U = V.trial_inputs(tr)
     k0 = execute_index(tr["delta"])
@@ -146,8 +155,10 @@ def _group_key(m: mmg.MmgModel) -> str:
 
 
 def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mapping]) -> list[dict[str, float]]:
-    """The :func:`~shipid.methods.mmg.extrapolation.replay` numbers (``psi_rms``, ``r_peak_{stbd,port}_err_pct``)
-    of every row ``(model, run index into data)``, integrated as one batch per structure and particulars."""
+    """Open-loop replay of every row ``(model, run index into data)`` from the measured state at execute with
+    the measured rudder and propeller, integrated as one batch per structure and particulars: the whole-run
+    heading RMS error ``psi_rms`` (deg) and the relative error of the peak yaw rate reached on each side,
+    ``r_peak_{stbd,port}_err_pct`` (%)."""
     out: list[dict[str, float] | None] = [None] * len(rows)
     groups: dict[str, list[int]] = {}
     for j, (m, _) in enumerate(rows):
@@ -185,7 +196,7 @@ def batch_replay(rows: Sequence[tuple[mmg.MmgModel, int]], data: Sequence[Mappin
 
 def trial_angles(tr: Trial) -> tuple[float, float] | None:
     """``(rudder, switch)`` angles (rad) of a zig-zag run named by its source file, or None when the name says none
-    (:func:`shipid.methods.mmg.zigzag.zigzag_angles`)."""
+    (:func:`zigzag_angles`)."""
     try:
         return zigzag_angles(Path(str(tr.meta.get("source", ""))).name)
     except InputError:
@@ -199,7 +210,7 @@ def peak_runs(trials: Sequence[Trial]) -> list[bool]:
 
 
 def _fit(runs, prior, cand, config):
-    """:func:`~shipid.methods.mmg.side_calibration.fit_candidate`, or None where the fit fails."""
+    """:func:`fit_candidate`, or None where the fit fails."""
     try:
         return fit_candidate(runs, prior, cand, config)
     except (ShipidError, ValueError, np.linalg.LinAlgError):
@@ -216,9 +227,14 @@ def calibrate_folds(runs: Sequence[R.SmoothedRun], data: Sequence[Mapping], use:
                     prior: mmg.MmgModel, cand: Mapping, train_sets: Sequence[Sequence[int]], *,
                     config: R.FitConfig = R.FitConfig(), grid: Sequence[float] = SIDE_GAIN_GRID,
                     parameter: str = PARAMETER) -> list[tuple[float, dict[float, float]]]:
-    """:func:`shipid.methods.mmg.side_calibration.calibrate` (grid, then the parabola's vertex kept if it
-    scores lower) once per training set, each on ITS runs only (indices into ``runs``/``data``), with the
-    replays of all training sets batched. Returns ``(value, {value tried: peak score})`` per set."""
+    """The value of ``parameter`` with the lowest peak score on each training set, each on ITS runs only
+    (indices into ``runs``/``data``), the replays of all training sets batched.
+
+    Peak score: the RMS over the set's runs with ``use`` (switch ≥ :data:`MIN_SWITCH_DEG`) and both sides
+    of the open-loop peak-yaw-rate error (%) of the candidate fitted on the set with that value. The
+    grid's best (the first on a tie), then, for an interior best, the vertex of the parabola through it
+    and its neighbours' mean-square scores (:func:`refine_minimum`), kept if it scores lower. Returns
+    ``(value, {value tried: peak score})`` per set."""
     def scores(todo):           # todo: list of (set index, value) -> peak score of each
         rows, owner, res = [], [], {}
         for key in todo:
@@ -280,7 +296,7 @@ def resolve(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior: mmg.M
 #: ``"peak+heading"`` that plus the RMS of their whole-run heading RMS (deg).
 CRITERIA = ("peak", "peak+heading")
 #: The criterion :func:`select_for_turning` uses unless told (module docstring: chosen by
-#: :func:`nested_criterion_check` on HSVA runs only).
+#: ``docs/validation/mmg.md``: chosen on HSVA runs only).
 DEFAULT_CRITERION = "peak"
 METHOD = ("CV on the training runs ({folds}); each left-out zig-zag replayed open loop (measured rudder and "
           "propeller from the measured state at execute); a side-gain-calibrated candidate is calibrated in each "
@@ -343,26 +359,7 @@ def select_for_turning(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], p
                                     heading=" + RMS of their heading RMS (deg)" if criterion == "peak+heading" else "")
 
 
-def nested_criterion_check(*, root: Path | None = None) -> dict[str, Any]:
-    """Which criterion's choice carries to larger rudder angles, within the HSVA zig-zags only.
-
-    For each of :data:`CRITERIA`: the selection (:func:`select_for_turning`, leave one run out) on the
-    10°/15° zig-zags (:data:`shipid.methods.mmg.extrapolation.TRAIN`), the chosen candidate fitted
-    (and calibrated, :func:`resolve`) on them, and scored on the 20°–30° ones
-    (:data:`~shipid.methods.mmg.extrapolation.VALIDATE`) by
-    :func:`shipid.methods.mmg.extrapolation.score_validation`. Reads no other run."""
-    prior, trs, runs, ap, val = large_angle_split(root)
-    cands = TURNING_CANDIDATES[prior.structure]
-    out: dict[str, Any] = {}
-    for crit in CRITERIA:
-        best, table, _ = select_for_turning(trs, runs, prior, cands, criterion=crit)
-        c, cal = resolve(trs, runs, prior, cands[best])
-        row = score_validation(fit_candidate(runs, prior, c), val, VALIDATE, ap)
-        row.pop("runs")
-        out[crit] = {"chosen": best, "calibration": cal, "validation": row, "cv_score": table[best]["score"]}
-    return out
-
-
 __all__ = ["CALIBRATE", "PARAMETER", "ROW_PARTICULARS", "TURNING_CANDIDATES", "turning_candidates", "replay_data", "batch_replay",
-           "trial_angles", "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD", "CRITERIA", "DEFAULT_CRITERION",
-           "nested_criterion_check"]
+           "trial_angles", "peak_runs", "calibrate_folds", "resolve", "select_for_turning", "METHOD", "CRITERIA",
+           "DEFAULT_CRITERION", "SIDE_GAIN_GRID", "MIN_SWITCH_DEG", "zigzag_angles", "execute_index", "with_asymmetry",
+           "fit_candidate", "refine_minimum"]
