@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
-from shipid.cli._common import channels_option, emit, loud, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, out_options
 from shipid.errors import ShipidError
 
 
@@ -81,7 +81,6 @@ def _print_coefficients(res) -> None:
               help="DGPS antenna position in body axes [m] for trials that do not state it [default: body origin].")
 @click.option("--log-offset", "log_offset", default=None, type=float, metavar="Y",
               help="Speed-log athwartship position [m] for trials that do not state it [default: 0].")
-@strict_option
 def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_variant, figures, antenna, log_offset):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
@@ -118,7 +117,6 @@ def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_varia
               help="Scale the trial durations (quick runs < 1).")
 @out_options(json_help="Print the Result as JSON on stdout.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
-@strict_option
 def study_ebm(kind, seed, scale, as_json, out, force, paper):
     """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
     from shipid.methods.ebm.study import make_trials, study as run_study
@@ -202,7 +200,6 @@ def _values(text: str) -> list[float]:
 @out_options(json_help="Print the map as a shipid Result (JSON) on stdout.", metavar="RESULT.json",
              out_help="Write the map as a shipid Result for `shipid report` (Fig. 7), atomically; an existing "
                       "file needs --force.")
-@strict_option
 def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
     """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7).
 

@@ -22,7 +22,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
-from shipid.cli._common import channels_option, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, loud_lines, out_options
 from shipid.cli.campaign_cmds import campaign_options, failure_lines
 from shipid.errors import InputError, ShipidError
 from shipid.methods.masscm.known import KNOWN_KEYS, read_known  # noqa: F401  (read_known re-exported for monitor)
@@ -60,7 +60,6 @@ def _fmt(v: float) -> str:
                    "that fails keeps Algorithm 1's estimate, with a warning; the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
-@strict_option
 def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_iter, no_prefilter, noise_model, refine,
                      cost_map, as_json, out, force):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
@@ -114,7 +113,6 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_ite
 @out_options(json_help="Print the Table-3 summary as JSON on stdout.",
              out_help="Write the study as a result JSON (Table 3 spread, for `shipid report`) to FILE "
                       "(atomically; an existing FILE needs --force).")
-@strict_option
 @campaign_options
 def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
     """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
@@ -235,7 +233,6 @@ _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
              out_help="Write the result to FILE: the figure for .png/.pdf/.svg, the cost grid as JSON for "
                       "any other name (atomically; an existing FILE needs --force).",
              force_help="Overwrite an existing --out file.")
-@strict_option
 def mass_cm_contour(zf_mode, data_seed, as_json, out, force):
     """Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate."""
     from shipid.methods.masscm.contour import contour_figure, cost_grid

@@ -11,7 +11,7 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, out_options, strict_option
+from shipid.cli._common import emit, out_options
 
 _CASES = {"kvlcc2": ("yasukawa2015", "full/symmetric-gamma_R"),
           "esso": ("esso-lowspeed", "hull+rudder+thrust/nondimensional")}
@@ -23,7 +23,6 @@ _CASES = {"kvlcc2": ("yasukawa2015", "full/symmetric-gamma_R"),
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the splits and bootstraps.")
 @click.option("--draws", default=100, show_default=True, type=int, help="Bootstrap resamples per half.")
 @out_options(json_help="Print the table as JSON.")
-@strict_option
 def mmg_covariance_cmd(case, splits, seed, draws, as_json, out, force):
     """Which MMG parameter covariance is honest: split-half check on real training runs.
 

@@ -11,7 +11,7 @@ from dataclasses import replace
 import click
 
 from shipid.cli import study
-from shipid.cli._common import emit, loud_lines, out_options, strict_option
+from shipid.cli._common import emit, loud_lines, out_options
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 
 
@@ -47,7 +47,6 @@ def _fmt(x, spec):
                    "Carlo draws per run (0: no IMO check).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
-@strict_option
 def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, refine, criterion, imo_samples,
                  as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).

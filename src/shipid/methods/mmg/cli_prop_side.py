@@ -5,12 +5,11 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, out_options, strict_option
+from shipid.cli._common import emit, out_options
 
 
 @study.command("kvlcc2-prop-side", context_settings=CONTEXT)
 @out_options(json_help="Print the folds, the yaw balance and the decision as JSON.")
-@strict_option
 def kvlcc2_prop_side_cmd(as_json, out, force):
     """KVLCC2 HSVA: neutral rudder angle and propeller side force, trained on smaller and scored on larger angles.
 

@@ -5,12 +5,11 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, out_options, strict_option
+from shipid.cli._common import emit, out_options
 
 
 @study.command("kvlcc2-rudder-angle", context_settings=CONTEXT)
 @out_options(json_help="Print the folds and the decision as JSON.")
-@strict_option
 def kvlcc2_rudder_angle_cmd(as_json, out, force):
     """KVLCC2 HSVA: angle-dependent rudder terms, trained on smaller and scored on larger rudder angles.
 

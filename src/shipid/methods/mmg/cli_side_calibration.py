@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, out_options, strict_option
+from shipid.cli._common import emit, out_options
 
 
 @study.command("kvlcc2-sides", context_settings=CONTEXT)
@@ -17,7 +17,6 @@ from shipid.cli._common import emit, out_options, strict_option
               show_default=True, help="The asymmetry parameter calibrated.")
 @click.option("--every-grid-value", is_flag=True, help="Also score each grid value's model (diagnostic).")
 @out_options(json_help="Print the table as JSON.")
-@strict_option
 def kvlcc2_side_calibration_cmd(bases, crossflow, parameter, every_grid_value, as_json, out, force):
     """KVLCC2 HSVA: port/starboard asymmetry fitted to 10/15 deg zig-zag yaw peaks, scored on 20-30 deg.
 

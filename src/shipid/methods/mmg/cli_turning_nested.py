@@ -5,12 +5,11 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, out_options, strict_option
+from shipid.cli._common import emit, out_options
 
 
 @study.command("kvlcc2-nested", context_settings=CONTEXT)
 @out_options(json_help="Print the folds and summary as JSON.")
-@strict_option
 def kvlcc2_nested_cmd(as_json, out, force):
     """KVLCC2 HSVA: default, turning and automatic selection, leave-one-rudder-angle-out (nested CV).
 
