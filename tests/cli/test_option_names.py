@@ -31,7 +31,7 @@ FLAGS = ("--json", "--force")
 SYNONYMS = {
     "--output": "-o/--out", "--jsonl": "--json", "--json-out": "--json", "--outfile": "-o/--out", "--out-file": "-o/--out",
     "--file": "--trial", "--run": "--trial", "--n-workers": "--workers", "--jobs": "--workers", "-j": "--workers",
-    "--random-seed": "--seed", "--rng-seed": "--seed", "--time": "--duration", "--length": "--duration",
+    "--random-seed": "--seed", "--rng-seed": "--seed", "--time": "--duration", "--length": "--duration", "--seconds": "--duration",
     "--step": "--dt", "--timestep": "--dt", "--sample-time": "--dt", "--ship": "--vessel",
     "--channel-map": "--channels", "--map": "--channels",
 }

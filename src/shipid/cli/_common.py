@@ -70,6 +70,7 @@ MOVED_OPTIONS = {
     "--strict": "--strict is an option of shipid itself: put it before the command",
     "--output": "write -o/--out FILE",
     "--jsonl": "write --json",
+    "--seconds": "write --duration S",
 }
 
 

@@ -1,6 +1,6 @@
 """``shipid study mmg-coverage``: simulated coverage of the MMG standard errors.
 
-* ``shipid study mmg-coverage --runs N [--vessel esso-osaka|kvlcc2] [--seed S] [--workers W ...] [--seconds T]
+* ``shipid study mmg-coverage --runs N [--vessel esso-osaka|kvlcc2] [--seed S] [--workers W ...] [--duration T]
   [--json] [-o R.json]``
 """
 
@@ -26,7 +26,7 @@ def _fmt(x, spec):
               help="Ship, fixed structure and test programme (shipid.methods.mmg.coverage.VESSELS): the Esso Osaka "
                    "3 m with turns, a zig-zag and a random run, or the KVLCC2 L7 with seven HSVA-like zig-zags "
                    "(needs the shared data folder).")
-@click.option("--seconds", type=click.FloatRange(30.0, 1200.0), default=None,
+@click.option("--duration", "seconds", type=click.FloatRange(30.0, 1200.0), default=None,
               help="Length of each simulated manoeuvre (s) [default: the vessel's, 120 Esso / 150 KVLCC2].")
 @click.option("--equation", type=click.Choice(["differential", "integral"]), default=None,
               help="Step-2 regression form (FitConfig.equation); default: identify mmg's.")
