@@ -92,6 +92,11 @@ def test_each_option_has_one_long_name():
     assert shorts <= {("-o", ("--out", "-o")), ("-V", ("--version", "-V"))}, shorts
 
 
+def test_every_option_says_what_it_does():
+    bad = [f"{c}: {'/'.join(p.opts)}" for c, p in OPTIONS if not (p.help or "").strip()]
+    assert not bad, f"options without a help text: {bad}"
+
+
 def test_strict_is_an_option_of_shipid_only():
     on_commands = sorted(c for c, p in OPTIONS if c and "--strict" in (*p.opts, *p.secondary_opts))
     assert not on_commands, f"--strict on commands (it belongs to shipid itself): {on_commands}"

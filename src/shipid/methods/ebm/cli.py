@@ -112,7 +112,8 @@ def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_varia
 @study.command("ebm-esso-osaka", context_settings=CONTEXT)
 @click.option("--input", "kind", type=click.Choice(["standard", "optimal-prbs"]), default="standard",
               show_default=True, help="Standard manoeuvres (Table 3) or the D-optimal PRBS (Table 5).")
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=int,
+              help="Seed of the simulated trials' random draws.")
 @click.option("--scale", default=1.0, show_default=True, type=click.FloatRange(0.1, 10.0),
               help="Scale the trial durations (quick runs < 1).")
 @out_options(json_help="Print the Result as JSON on stdout.")
@@ -185,12 +186,14 @@ def _values(text: str) -> list[float]:
 
 
 @design.command("prbs", context_settings=CONTEXT)
-@click.option("--vessel", default="esso-osaka", show_default=True)
+@click.option("--vessel", default="esso-osaka", show_default=True,
+              help="Packaged vessel whose manoeuvring model the PRBS is designed for (shipid vessels).")
 @click.option("--amplitudes", default="5:35:10", show_default=True,
               help="deg: comma-separated values or START:STOP:STEP (stop included).")
 @click.option("--periods", default="15:200:5", show_default=True,
               help="s: comma-separated values or START:STOP:STEP (stop included).")
-@click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000))
+@click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000),
+              help="Length of each simulated PRBS trial (s).")
 @click.option("--seeds", default=3, show_default=True, type=click.IntRange(1, 50),
               help="PRBS realisations averaged per grid point (with 2 or more, the comparison with the "
                    "paper's optimum carries a standard error).")

@@ -21,7 +21,8 @@ def _fmt(x, spec):
 
 
 @study.command("mmg-coverage")
-@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
+@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True,
+              help="Simulated experiments (one identification each).")
 @click.option("--vessel", type=click.Choice(["esso-osaka", "kvlcc2"]), default="esso-osaka", show_default=True,
               help="Ship, fixed structure and test programme (shipid.methods.mmg.coverage.VESSELS): the Esso Osaka "
                    "3 m with turns, a zig-zag and a random run, or the KVLCC2 L7 with seven HSVA-like zig-zags "
