@@ -4,8 +4,9 @@ Every command's options are walked: an option of the conventions table has the s
 an integer, ``--dt`` and ``--duration`` seconds as floats, ``--json`` and ``--force`` flags, ``-o/--out`` and
 ``--trial`` paths, ``--channels`` one string), ``--out`` always comes with ``-o``, no option uses a synonym of a
 conventional name and none is hidden (no alias kept for old scripts: ``shipid`` answers an old spelling with one
-line naming the new one), ``--strict`` is an option of ``shipid`` itself and of no command, and no command is
-registered twice. ``--input`` is not a synonym: here it names the rudder input (standard manoeuvres or a PRBS),
+line naming the new one), ``--strict`` is an option of ``shipid`` itself and of no command, no command is
+registered twice, every option has a help text, and an option name takes one kind of value (flag, int, float,
+path or text) on every command that has it. ``--input`` is not a synonym: here it names the rudder input (standard manoeuvres or a PRBS),
 not a file.
 """
 
@@ -90,6 +91,43 @@ def test_each_option_has_one_long_name():
     shorts = {(o, tuple(sorted(p.opts))) for c, p in OPTIONS for o in (*p.opts, *p.secondary_opts)
               if not o.startswith("--")}
     assert shorts <= {("-o", ("--out", "-o")), ("-V", ("--version", "-V"))}, shorts
+
+
+def _kind(p: click.Option) -> str:
+    """The kind of value an option takes: flag, int, float, path or text (a choice is text)."""
+    if p.is_flag:
+        return "flag"
+    for kind, types in (("int", (click.types.IntParamType,)), ("float", (click.types.FloatParamType,)),
+                        ("path", (click.Path, click.File)), ("text", (click.types.StringParamType, click.Choice))):
+        if isinstance(p.type, types):
+            return kind
+    return type(p.type).__name__
+
+
+def _kinds_by_name() -> dict[str, dict[str, list[str]]]:
+    out: dict[str, dict[str, list[str]]] = {}
+    for c, p in OPTIONS:
+        for o in p.opts:
+            if o.startswith("--"):
+                out.setdefault(o, {}).setdefault(_kind(p), []).append(c)
+    return out
+
+
+#: one name on two concepts, left for the owners of those commands (each fails the test below once fixed:
+#: then take it off this list)
+TWO_KINDS = {
+    "--init": "monitor mass-cm: start-up seconds; study mass-cm-sensitivity: where Algorithm 1 starts",
+    "--simex": "identify mmg: auto|on|off; study mmg-coverage: a --simex/--no-simex flag",
+}
+
+
+@pytest.mark.parametrize("name", sorted({o for _, p in OPTIONS for o in p.opts if o.startswith("--")}))
+def test_one_name_one_kind_of_value(name):
+    kinds = _kinds_by_name()[name]
+    if name in TWO_KINDS:
+        assert len(kinds) > 1, f"{name} has one kind now: take it off TWO_KINDS"
+        pytest.xfail(TWO_KINDS[name])
+    assert len(kinds) == 1, f"{name} takes different kinds of value: {kinds}"
 
 
 def test_every_option_says_what_it_does():
