@@ -63,15 +63,6 @@ def test_json_out_force(path, cmd):
     assert force is not None and force.is_flag and force.name == "force"
 
 
-@pytest.mark.parametrize("path", [("identify", "mmg")], ids=str)
-def test_output_is_a_hidden_alias_where_it_existed(path):
-    cmd = cli.commands[path[0]].commands[path[1]]
-    alias = _option(cmd, "--output")
-    assert alias is not None and alias.hidden
-    help_text = cmd.get_help(click.Context(cmd, info_name=path[1]))
-    assert "--output" not in help_text and "-o, --out" in help_text
-
-
 def test_every_format_option_is_a_choice():
     seen = 0
     for path, cmd in ALL:
@@ -165,10 +156,10 @@ def test_store_info_and_export_follow_the_convention(tmp_path, capsys):
     assert main(["study", "export", str(store), "-o", str(table)]) == 2
 
 
-def test_output_alias_and_out_disagreeing_is_a_usage_error(tmp_path, capsys):
-    rc = main(["identify", "mmg", "--trial", "x.csv", "-o", str(tmp_path / "a.json"),
-               "--output", str(tmp_path / "b.json")])
-    assert rc == 2 and "once" in capsys.readouterr().err
+def test_output_is_refused_with_the_option_to_use(tmp_path, capsys):
+    rc = main(["identify", "mmg", "--trial", "x.csv", "--output", str(tmp_path / "b.json")])
+    assert rc == 2 and "--output; write -o/--out FILE" in capsys.readouterr().err
+    assert not (tmp_path / "b.json").exists()
 
 
 def test_out_options_is_one_decorator():

@@ -116,13 +116,13 @@ def test_identify_mmg_not_converged_is_loud_and_validate_warns(tmp_path, capsys)
     assert d["provenance"]["step2"]["equation_used"] == "differential"
     assert d["diagnostics"]["simex"]["applied"] is False     # the pilot: the logs' noise does not bias the fit
     assert [f"shipid: warning: {x}" for x in d["diagnostics"]["warnings"]] == w
-    assert main([*argv, "--force", "--strict"]) == 3
+    assert main(["--strict", *argv, "--force"]) == 3
     capsys.readouterr()
     # validate says so too, and --strict turns it into exit 3
     run = str(ROOT / ZZ.format("13_57_45"))
     assert main(["validate", str(model), "--trial", run]) == 0
     assert any("did not converge when it was identified" in x for x in _warnings(capsys.readouterr().err))
-    assert main(["validate", str(model), "--trial", run, "--strict"]) == 3
+    assert main(["--strict", "validate", str(model), "--trial", run]) == 3
     capsys.readouterr()
 
 

@@ -4,7 +4,8 @@
 * The ``<!-- test-command -->`` block is exactly ``pip install -e '.[test]' && python -m pytest`` (``.ci/run``
   reads it) and the README names ``python -m pytest -m slow``.
 * Fast check of every shell block and every inline ``shipid ...`` code span: the command path exists in the
-  click tree and every option given is an option of that command (or the global ``--strict``).
+  click tree and every option given is an option of that command; ``shipid``'s own options (``--strict``,
+  ``--version``) only before the command.
 * Slow: the shell blocks run as written, in order, in one fresh folder (``shipid`` is ``python -m shipid`` of this
   interpreter); the blocks that read the shared data (``$SHIPID_DATA``) or the model they produce are marked
   ``realdata``. The install block (``pip install``) is not run.
@@ -33,7 +34,10 @@ FENCE = re.compile(r"^```(\w*)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
 BLOCKS = [(m.group(1), m.group(2)) for m in FENCE.finditer(TEXT)]
 SHELL = [b for lang, b in BLOCKS if lang == "bash" and "pip install" not in b]
 PYTHON = [b for lang, b in BLOCKS if lang == "python"]
+#: the options of ``shipid`` itself, given before the command
 GLOBAL_OPTIONS = {"--strict", "-h", "--help", "-V", "--version"}
+#: the options every command takes too
+HELP_OPTIONS = {"-h", "--help"}
 
 
 def _needs_data(block: str) -> bool:
@@ -61,7 +65,10 @@ def _inline_calls() -> list[list[str]]:
 
 
 def _resolve(args: list[str]) -> tuple[click.Command, list[str], list[str]]:
-    """(command, the names of its path, the option tokens given) for ``shipid ARGS``."""
+    """(command, the names of its path, the option tokens given after the command's name) for ``shipid ARGS``.
+
+    Options before the first command name are ``shipid``'s own: they must be :data:`GLOBAL_OPTIONS`.
+    """
     from shipid.cli import cli
 
     cmd: click.Command = cli
@@ -71,7 +78,10 @@ def _resolve(args: list[str]) -> tuple[click.Command, list[str], list[str]]:
     while rest:
         tok = rest.pop(0)
         if tok.startswith("-"):
-            opts.append(tok.split("=")[0])
+            if not path:
+                assert tok.split("=")[0] in GLOBAL_OPTIONS, f"`shipid {tok}`: not an option of shipid itself"
+            else:
+                opts.append(tok.split("=")[0])
             continue
         if re.fullmatch(r"[A-Z][A-Z_.]*|.*\*.*|\.\.\.", tok):   # a placeholder (CMD, FILE, ...) or a pattern
             if isinstance(cmd, click.Group):
@@ -108,7 +118,7 @@ def test_readme_test_command_is_the_ci_command():
 def test_readme_commands_exist_with_their_options(args):
     cmd, path, opts = _resolve(args)
     names = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)}
-    unknown = [o for o in opts if o not in names and o not in GLOBAL_OPTIONS]
+    unknown = [o for o in opts if o not in names and o not in HELP_OPTIONS]
     assert not unknown, f"README: `shipid {' '.join(path)}` has no option {unknown}"
 
 

@@ -13,7 +13,7 @@ What "state", "input" and "output" are is the method's business: its ``validate`
 a ``simulate(starts, length)`` callable that returns the predicted output columns of each horizon
 and an ``errors(pred, meas)`` callable that turns predicted and measured columns into one error
 array per reported quantity. This module holds the bookkeeping only (windows, horizons,
-:class:`Validation`, the table, the JSON, the plot and the CSV of the whole-run prediction).
+:class:`Validation` with its summary table, the JSON, the plot and the CSV of the whole-run prediction).
 """
 
 from __future__ import annotations
@@ -213,21 +213,6 @@ def error_table(t: np.ndarray, measured: np.ndarray,
     return win, hz, pred
 
 
-def format_table(v: Validation) -> str:
-    """Plain-text table of a :class:`Validation` (rows: windows and horizons; columns: quantities)."""
-    qs, un = v.quantities, v.units
-    rows = list(v.windows.items()) + [(f"{v.horizons['length_s']:g}-s horizons (n={v.horizons['count']})",
-                                       v.horizons)]
-    head = f"{'window':<26}" + "".join(f"{q + ' [' + un[q] + ']':>22}" for q in qs)
-    lines = [f"model {v.model_name} on {v.source}", head,
-             f"{'':<26}" + "".join(f"{'rms / max':>22}" for _ in qs)]
-    for name, s in rows:
-        if not qs or qs[0] not in s:
-            continue
-        lines.append(f"{name:<26}" + "".join(f"{s[q]['rms']:>11.3g} /{s[q]['max']:>9.3g}" for q in qs))
-    return "\n".join(lines)
-
-
 def plot_series(v: Validation, path: str | Path, panels: Sequence[tuple[int, Callable, str]], *,
                 trajectory: tuple[int, int] | None = None, force: bool = False) -> Path:
     """Measured (black) against predicted (red dashed) whole-run columns; written atomically.
@@ -385,5 +370,5 @@ def check_finite(trial_source: str | None, arrays: Mapping[str, np.ndarray]) -> 
                              file=trial_source, channel=name, row=k + 1)
 
 
-__all__ = ["Validation", "summarise", "summary_text", "figure", "horizon_starts", "error_table", "format_table", "plot_series",
+__all__ = ["Validation", "summarise", "summary_text", "figure", "horizon_starts", "error_table", "plot_series",
            "write_csv", "local_fit", "wrap_deg", "check_finite"]

@@ -27,8 +27,9 @@ Errors: anything derived from :class:`shipid.errors.ShipidError` is printed as o
 line on stderr (``shipid: error: ...``) and the process exits with status 2.
 Warnings (non-convergence, implausible or undetermined estimates, data repairs,
 Python warnings of a method) are one line each, ``shipid: warning: ...``, and in
-the JSON; with ``--strict`` a command that warned exits with status 3
-(:mod:`shipid.cli._common`).
+the JSON; with ``shipid --strict CMD ...`` a command that warned exits with status 3
+(:mod:`shipid.cli._common`). ``--strict`` is an option of ``shipid`` itself, given before
+the command; no command has its own.
 """
 
 from __future__ import annotations
@@ -124,13 +125,15 @@ def _print_version(ctx: click.Context, param: click.Parameter, value: bool) -> N
               help="Show the version and exit.")
 @click.option("--strict", is_flag=True, expose_value=False, callback=_common.set_strict,
               help="Exit with status 3 if the command warns (non-convergence, implausible or undetermined "
-                   "estimates, data repairs).")
+                   "estimates, data repairs). Before the command: shipid --strict identify ...")
 def cli() -> None:
     """Identify ship dynamics from motion data.
 
-    Mass and centre of mass from an IMU and the rudder (Linder et al. 2015), DP
-    low-frequency models (Fossen, Sagatun & Sørensen 1996), manoeuvring
-    coefficients by Estimation-Before-Modelling (Yoon & Rhee 2003).
+    Mass and centre of mass from an IMU and the rudder (Linder et al. 2015), online
+    too; DP low-frequency models (Fossen, Sagatun & Sørensen 1996); manoeuvring
+    coefficients by Estimation-Before-Modelling (Yoon & Rhee 2003), of the Abkowitz
+    model and of an MMG model from real runs. Warnings are one 'shipid: warning:'
+    line each; 'shipid --strict CMD ...' exits with status 3 when any was raised.
     """
 
 
@@ -270,7 +273,8 @@ def dispatch(argv: list[str] | None) -> int:
         click.echo("shipid: aborted", err=True)
         return 130
     except click.ClickException as err:
-        click.echo(f"shipid: error: {' '.join(err.format_message().split())}", err=True)
+        moved = _common.moved_option(err) if isinstance(err, click.NoSuchOption) else None
+        click.echo(f"shipid: error: {moved or ' '.join(err.format_message().split())}", err=True)
         return err.exit_code
     except click.exceptions.Exit as err:
         return err.exit_code

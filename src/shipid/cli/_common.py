@@ -8,8 +8,8 @@ repair made to the input data, any Python warning raised inside a method — is
   ``file.py:123: RuntimeWarning: ...`` with a source path and a code line),
 * recorded in the result's JSON (``result.diagnostics["warnings"]``, or the
   ``"warnings"`` list of a command whose output is a plain table), and
-* under ``shipid --strict`` or a command's own ``--strict`` turned into exit
-  status 3 once the command has written its output.
+* under ``shipid --strict CMD ...`` (an option of ``shipid`` itself, not of a
+  command) turned into exit status 3 once the command has written its output.
 
 :func:`shipid.cli.main` records every Python warning of the command
 (:func:`recording`); a command hands its :class:`~shipid.result.Result` to
@@ -58,16 +58,35 @@ _S = _Session()
 
 
 def set_strict(ctx: click.Context | None = None, param: Any = None, value: bool = True) -> bool:
-    """Turn ``--strict`` on for this invocation (a click callback for the global and per-command flag)."""
+    """Turn ``--strict`` on for this invocation (the click callback of ``shipid --strict``)."""
     if value:
         _S.strict = True
     return value
 
 
-#: ``--strict`` for a single command (same effect as ``shipid --strict CMD``).
-strict_option = click.option("--strict", is_flag=True, expose_value=False, is_eager=True, callback=set_strict,
-                             help="Exit with status 3 if the command warns (non-convergence, implausible or "
-                                  "undetermined estimates, data repairs).")
+#: Spellings no command accepts, each with the option that replaces it: ``shipid`` answers
+#: them with one line saying what to type instead (:func:`moved_option`).
+MOVED_OPTIONS = {
+    "--strict": "--strict is an option of shipid itself: put it before the command",
+    "--output": "write -o/--out FILE",
+    "--jsonl": "write --json",
+    "--seconds": "write --duration S",
+}
+
+
+def moved_option(err: click.NoSuchOption) -> str | None:
+    """The one-line error for an option of :data:`MOVED_OPTIONS` given where no command takes it, else ``None``.
+
+    For ``--strict`` after a command the line shows where it goes (``shipid --strict validate ...``).
+    """
+    name = err.option_name
+    if name not in MOVED_OPTIONS:
+        return None
+    cmd = err.ctx.command_path.partition(" ")[2] if err.ctx is not None else ""
+    text = f"no such option{f' of {cmd!r}' if cmd else ''}: {name}; {MOVED_OPTIONS[name]}"
+    if name == "--strict" and cmd:
+        text += f" (shipid --strict {cmd} ...)"
+    return text
 
 
 def warn(text: str) -> None:
@@ -183,23 +202,18 @@ def refuse_existing(*paths, force: bool = False) -> None:
 
 def out_options(f: Callable | None = None, *, json_flag: bool = True, json_help: str = JSON_HELP,
                 out_help: str = OUT_HELP, metavar: str = "FILE", required: bool = False,
-                force_help: str = "Overwrite an existing --out file.", alias: bool = False):
+                force_help: str = "Overwrite an existing --out file."):
     """Click decorator: ``--json`` (``as_json``), ``-o/--out FILE`` (``out``) and ``--force`` (``force``).
 
     Before the command runs, an existing ``--out`` without ``--force`` is refused
     (:func:`refuse_existing`): the error comes before a long computation, never after it,
-    and never clobbers the file. ``alias=True`` also accepts the hidden spelling
-    ``--output`` (kept for commands that had it). Use it as ``@out_options`` or
+    and never clobbers the file. Use it as ``@out_options`` or
     ``@out_options(out_help=...)``; write the result with :func:`emit`.
     """
 
     def decorate(func):
         @functools.wraps(func)
-        def wrapper(*args, out=None, output_alias=None, force=False, **kw):
-            if output_alias is not None:
-                if out is not None and out != output_alias:
-                    raise click.UsageError("give -o/--out once (--output is the same option)")
-                out = output_alias
+        def wrapper(*args, out=None, force=False, **kw):
             refuse_existing(out, force=force)
             return func(*args, out=out, force=force, **kw)
 
@@ -208,9 +222,6 @@ def out_options(f: Callable | None = None, *, json_flag: bool = True, json_help:
             opts.append(click.option("--json", "as_json", is_flag=True, help=json_help))
         opts.append(click.option("-o", "--out", "out", type=click.Path(dir_okay=False), default=None,
                                  required=required, metavar=metavar, help=out_help))
-        if alias:
-            opts.append(click.option("--output", "output_alias", type=click.Path(dir_okay=False), default=None,
-                                     hidden=True))
         opts.append(click.option("--force", is_flag=True, help=force_help))
         for opt in reversed(opts):
             wrapper = opt(wrapper)

@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import emit, out_options, strict_option, warn
+from shipid.cli._common import emit, out_options, warn
 from shipid.errors import InputError, OutputExistsError, ShipidError
 
 MODEL_HELP = """\b
@@ -37,7 +37,6 @@ def export() -> None:
 @click.option("--kinematics", is_flag=True,
               help="Add the positions: heading and cross-track y (manoeuvring), x, y, psi (DP).")
 @out_options(json_help="Print A, B, C, D with names and units as JSON on stdout.")
-@strict_option
 def state_space_cmd(model, speed, units, alpha_deg, kinematics, as_json, out, force):
     """Linear state space A, B, C, D of MODEL, with named states and inputs.
 
@@ -64,7 +63,6 @@ state_space_cmd.help += MODEL_HELP
               help="MMG models of step 2's differential form: the estimation covariance alone, without the "
                    "model-form term (as shipid imo --no-form-term).")
 @out_options(json_help="Print K, T, T1, T2, T3 with their std as JSON on stdout.")
-@strict_option
 def nomoto_cmd(model, speed, samples, seed, no_form_term, as_json, out, force):
     """Nomoto K, T (first order) and K, T1, T2, T3 (second order) of a manoeuvring MODEL, with std.
 
@@ -93,7 +91,6 @@ nomoto_cmd.help += MODEL_HELP
               help="Parameter file to write: .toml, or .yaml/.yml (needs PyYAML) [default: TOML on stdout].")
 @click.option("--json", "as_json", is_flag=True, help="Print the parameter mapping as JSON on stdout.")
 @click.option("--force", is_flag=True, help="Overwrite an existing --out file.")
-@strict_option
 def params_cmd(model, out, as_json, force):
     """Write MODEL's coefficients as a plain TOML/YAML parameter file with units and sources.
 
@@ -124,7 +121,6 @@ params_cmd.help += MODEL_HELP
 @export.command("shipmmg", context_settings=CONTEXT)
 @click.argument("model")
 @out_options(json_help="Print shipmmg's parameters and the differing terms as JSON on stdout.")
-@strict_option
 def shipmmg_cmd(model, as_json, out, force):
     """An MMG MODEL (structure yasukawa2015) as the parameters of shipmmg, naming the terms it lacks.
 

@@ -128,7 +128,8 @@ def vessels_cmd() -> None:
 @cli.command("demo", context_settings=CONTEXT)
 @click.option("--out-dir", type=click.Path(file_okay=False), default=None,
               help="Where to write [default: a fresh folder ./shipid-demo/run-YYYYmmdd-HHMMSS].")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of every simulated record of the demo (the same seed gives the same numbers).")
 @click.option("--force", is_flag=True, help="Overwrite existing files in --out-dir.")
 def demo_cmd(out_dir: str | None, seed: int, force: bool) -> None:
     """Run shipid on its bundled vessels and print what it did.

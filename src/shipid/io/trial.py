@@ -21,13 +21,13 @@ CHANNELS: dict[str, str] = {
     "x": "m", "y": "m", "psi": "rad",          # earth-fixed position and heading
     "u": "m/s", "v": "m/s", "r": "rad/s",      # body-fixed surge, sway, yaw rate
     "p": "rad/s", "phi": "rad",                # roll rate and roll angle
-    "x_dot": "m/s", "y_dot": "m/s",            # earth-fixed velocities (DGPS, seed 002 eq. 8)
+    "x_dot": "m/s", "y_dot": "m/s",            # earth-fixed velocities (DGPS, Yoon & Rhee 2003 eq. 8)
     "U": "m/s",                                # speed (log)
-    "u_r": "m/s", "v_r": "m/s",                # velocities relative to the water (seed 002 eq. 2)
+    "u_r": "m/s", "v_r": "m/s",                # velocities relative to the water (Yoon & Rhee 2003 eq. 2)
     "delta": "rad", "n": "1/s",                # rudder angle, propeller revolutions
-    "a_s": "m/s^2",                            # IMU tangential acceleration (seed 000 eq. 8)
+    "a_s": "m/s^2",                            # IMU tangential acceleration (Linder et al. 2015 eq. 8)
     "p1": "-", "p2": "-", "p3": "-", "p4": "-", "p5": "-", "p6": "-",  # thruster pitch ratios
-    "alpha6": "rad",                           # azimuth angle of thruster 6 (seed 001 eq. 7)
+    "alpha6": "rad",                           # azimuth angle of thruster 6 (Fossen et al. 1996 eq. 7)
     "X": "N", "Y": "N", "N": "N*m",            # forces and yaw moment
     "thrust": "N", "torque": "N*m",
     "wind_speed": "m/s", "wind_dir": "rad",

@@ -141,7 +141,7 @@ def simulate_stream_cmd(vessel: str, out: str, *, duration: float | None, seed: 
     import click
 
     if vessel not in ("fishing-vessel", "fishing_vessel", "linder2015"):
-        raise ShipidError(f"mass-cm-stream is defined for the fishing-vessel (seed 000), not {vessel!r}")
+        raise ShipidError(f"mass-cm-stream is defined for the fishing-vessel (Linder et al. 2015), not {vessel!r}")
     if not str(out).lower().endswith(".csv"):
         raise ShipidError(f"{out}: the stream must be a .csv file")
     spec = StreamSpec() if duration is None else StreamSpec(duration=float(duration))

@@ -72,6 +72,9 @@ def test_cli_prints_the_table_and_json(supply, held_out, tmp_path, capsys):
     rc = main(["validate", str(model), "--trial", str(run), "--plot", str(tmp_path / "v.png")])
     out = capsys.readouterr().out
     assert rc == 0 and "x [m]" in out and "60-s horizons (n=10)" in out
+    # the library's summary(), as shipid.validate gives it, then where the plot went
+    assert out == f"{shipid.validate(str(model), str(run)).summary()}\nplot written to {tmp_path / 'v.png'}\n"
+    assert max(map(len, out.splitlines())) <= 100
     assert (tmp_path / "v.png").stat().st_size > 1000
     rc = main(["validate", str(model), "--trial", str(run), "--json", "--horizon", "120"])
     d = json.loads(capsys.readouterr().out)

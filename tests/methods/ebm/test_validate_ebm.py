@@ -75,6 +75,8 @@ def test_cli_prints_the_table_json_plot_and_prediction(identified, held_out, tmp
     out = capsys.readouterr().out
     assert rc == 0
     assert "psi [deg]" in out and "60-s horizons (n=5)" in out and "whole" in out
+    assert out.startswith("shipid validate: ") and max(map(len, out.splitlines())) <= 100     # the summary()
+    assert out.startswith(shipid.validate(str(model), str(run)).summary() + "\n")          # the library's
     assert png.stat().st_size > 1000
     head = pred.read_text().splitlines()[0].split(",")
     assert head[:3] == ["t [s]", "x [m]", "x_pred [m]"] and "U_pred [m/s]" in head

@@ -67,6 +67,8 @@ def test_cli_table_json_and_unknown_method(identified, held_out, tmp_path, capsy
     rc = main(["validate", str(model), "--trial", str(run), "--out", str(tmp_path / "pred.csv")])
     out = capsys.readouterr().out
     assert rc == 0 and "p [deg/s]" in out and "phi [deg]" in out and "10-s horizons (n=6)" in out
+    assert out.startswith("shipid validate: ") and max(map(len, out.splitlines())) <= 100     # the summary()
+    assert out.startswith(shipid.validate(str(model), str(run)).summary() + "\n")          # the library's
     assert (tmp_path / "pred.csv").read_text().splitlines()[0] == ("t [s],p [rad/s],p_pred [rad/s],phi [rad],"
                                                                         "phi_pred [rad]")
     rc = main(["validate", str(model), "--trial", str(run), "--json"])

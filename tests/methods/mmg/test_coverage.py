@@ -98,8 +98,8 @@ def test_study_says_loudly_that_the_std_do_not_cover(runs, capsys):
 
     from shipid.cli import main
 
-    assert main(["study", "mmg-coverage", "--runs", str(runs), "--seed", "701", "--workers", "1", "--seconds", "60",
-                 "--json", "--strict"]) == 3
+    assert main(["--strict", "study", "mmg-coverage", "--runs", str(runs), "--seed", "701", "--workers", "1",
+                 "--duration", "60", "--json"]) == 3
     cap = capsys.readouterr()
     s = json.loads(cap.out)
     assert len(s["warnings"]) == 1 and "cover the truth less often" in s["warnings"][0]

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+import shipid
 from shipid.cli import main
 from shipid.io import data_root
 from shipid.methods.mmg import validate as V
@@ -61,6 +62,11 @@ def test_cli_validate_published_on_real_zigzag(tmp_path, capsys):
     # a real model on a real run: finite, non-zero errors of sensible size (heading within 180 deg)
     assert 0 < h["psi"]["rms"] < 180 and 0 < h["pos"]["rms"] < 50
     assert png.stat().st_size > 1000
+    # without --json: the library's summary(), at most 100 columns
+    assert main(["validate", "published:esso_osaka_3m", "--trial", str(ROOT / ZIGZAG)]) == 0
+    out = capsys.readouterr().out
+    assert out == shipid.validate("published:esso_osaka_3m", str(ROOT / ZIGZAG)).summary() + "\n"
+    assert max(map(len, out.splitlines())) <= 100 and "psi [deg]" in out and "pos [m]" in out
     # no clobbering of the plot without --force
     assert main(["validate", "published:esso_osaka_3m", "--trial", str(ROOT / ZIGZAG), "--plot", str(png)]) == 2
 

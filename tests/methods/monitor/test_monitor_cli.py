@@ -35,7 +35,7 @@ def test_simulate_writes_the_files(stream):
 
 
 def test_monitor_file_and_stdin_agree(stream, capsys, monkeypatch):
-    rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl"))
+    rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--json"))
     cap = capsys.readouterr()
     assert rc == 0
     lines = [json.loads(x) for x in cap.out.splitlines()]
@@ -75,7 +75,7 @@ def test_bad_stream_is_one_line(stream, capsys, tmp_path):
     row = lines[1000].split(",")
     row[1] = "abc"
     bad.write_text("".join(lines[:1000]) + ",".join(row) + "".join(lines[1001:3000]))
-    rc = main(_args(stream, "--stream", str(bad), "--jsonl"))
+    rc = main(_args(stream, "--stream", str(bad), "--json"))
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "bad.csv" in err[0]
     rc = main(_args(stream, "--stream", str(tmp_path / "none.csv")))
@@ -99,7 +99,7 @@ def test_sensor_faults_in_a_file_are_named_and_survived(stream, capsys, tmp_path
     faulty = tmp_path / "faulty.csv"
     pd.DataFrame({"t [s]": t, **{f"{c} [{st.units[c]}]": X[:, i] for i, c in enumerate(CH)}}).to_csv(
         faulty, index=False)
-    rc = main(_args(stream, "--stream", str(faulty), "--jsonl"))
+    rc = main(_args(stream, "--stream", str(faulty), "--json"))
     cap = capsys.readouterr()
     assert rc == 0, cap.err
     warn = [w for w in cap.err.splitlines() if w.startswith("shipid: warning:")]
@@ -133,19 +133,19 @@ def test_monitor_noise_model_option(stream, capsys):
     """``--noise-model ar`` runs the AR(40) prefilter: a different run from the Box-Jenkins default, same stream."""
     outs = {}
     for nm in ("ar", "auto"):
-        rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl", "--noise-model", nm))
+        rc = main(_args(stream, "--stream", str(stream / "s.csv"), "--json", "--noise-model", nm))
         assert rc == 0
         outs[nm] = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
         assert len(outs[nm]) == 40 and any(x["alarm"] for x in outs[nm])
-    default = main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl"))
+    default = main(_args(stream, "--stream", str(stream / "s.csv"), "--json"))
     assert default == 0
     assert [json.loads(x) for x in capsys.readouterr().out.splitlines()] == outs["auto"]
     assert [x["m"] for x in outs["ar"]] != [x["m"] for x in outs["auto"]]
 
 
-def test_monitor_warnings_are_counted_by_the_global_and_the_command_strict(stream, capsys, monkeypatch):
-    """Each update's warnings are one 'shipid: warning:' line each; `shipid --strict monitor ...` and
-    `monitor ... --strict` both exit 3 after the stream (the global flag used to be ignored here)."""
+def test_monitor_warnings_are_counted_by_strict(stream, capsys, monkeypatch):
+    """Each update's warnings are one 'shipid: warning:' line each; `shipid --strict monitor ...` exits 3
+    after the stream."""
     import dataclasses
 
     from shipid.methods.monitor import estimator as E
@@ -157,11 +157,9 @@ def test_monitor_warnings_are_counted_by_the_global_and_the_command_strict(strea
         return dataclasses.replace(u, warnings=u.warnings + (f"t = {u.t:g} s: a test warning",))
 
     monkeypatch.setattr(E.MassCMMonitor, "_update", with_warning)
-    for args in (["--strict", *_args(stream, "--stream", str(stream / "s.csv"), "--jsonl")],
-                 _args(stream, "--stream", str(stream / "s.csv"), "--jsonl", "--strict")):
-        assert main(args) == 3
-        cap = capsys.readouterr()
-        lines = [json.loads(x) for x in cap.out.splitlines()]
-        est = sum(x["m"] is not None for x in lines)          # the updates after the start-up window
-        assert len(lines) == 40 and est > 20 and cap.err.count("shipid: warning: t = ") == est
-    assert main(_args(stream, "--stream", str(stream / "s.csv"), "--jsonl")) == 0
+    assert main(["--strict", *_args(stream, "--stream", str(stream / "s.csv"), "--json")]) == 3
+    cap = capsys.readouterr()
+    lines = [json.loads(x) for x in cap.out.splitlines()]
+    est = sum(x["m"] is not None for x in lines)          # the updates after the start-up window
+    assert len(lines) == 40 and est > 20 and cap.err.count("shipid: warning: t = ") == est
+    assert main(_args(stream, "--stream", str(stream / "s.csv"), "--json")) == 0

@@ -16,7 +16,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, identify, study
-from shipid.cli._common import ManyValues, channels_option, emit, loud, loud_lines, out_options, refuse_existing, strict_option
+from shipid.cli._common import ManyValues, channels_option, emit, loud, loud_lines, out_options, refuse_existing
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 from shipid.io.files import read_trial
 from shipid.errors import ShipidError
@@ -88,7 +88,6 @@ def _print_table(result, theta_true=None) -> None:
 @out_options(force_help="Overwrite existing --out/--plot files.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
-@strict_option
 def identify_dp_cmd(surge, sway_yaw, azimuth, channels, vessel, sigma_pos, sigma_psi, as_json, out, plot, force):
     """Identify a DP vessel's LF model from decoupled trials (Fossen, Sagatun & Sorensen 1996).
 
@@ -128,7 +127,6 @@ def _emit(res, as_json, out, plot, force, theta_true=None, trials=()):
 @out_options(force_help="Overwrite existing --out/--plot files.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Write parameter estimates vs time (Fig. 8 style) as PNG.")
-@strict_option
 def study_dp_supply(seed, duration, n_trials, as_json, out, plot, force):
     """Simulate the six trials of §4.2 for the supply vessel and identify it.
 

@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from shipid.cli import CONTEXT, design, identify, study
-from shipid.cli._common import channels_option, emit, loud, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, out_options
 from shipid.errors import ShipidError
 
 
@@ -81,7 +81,6 @@ def _print_coefficients(res) -> None:
               help="DGPS antenna position in body axes [m] for trials that do not state it [default: body origin].")
 @click.option("--log-offset", "log_offset", default=None, type=float, metavar="Y",
               help="Speed-log athwartship position [m] for trials that do not state it [default: 0].")
-@strict_option
 def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_variant, figures, antenna, log_offset):
     """Estimation-Before-Modelling (Yoon & Rhee 2003): EKF + MBF smoother, then ridge regression."""
     from dataclasses import replace
@@ -113,12 +112,12 @@ def identify_ebm(trials, channels, vessel, as_json, out, force, paper, yaw_varia
 @study.command("ebm-esso-osaka", context_settings=CONTEXT)
 @click.option("--input", "kind", type=click.Choice(["standard", "optimal-prbs"]), default="standard",
               show_default=True, help="Standard manoeuvres (Table 3) or the D-optimal PRBS (Table 5).")
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=int,
+              help="Seed of the simulated trials' random draws.")
 @click.option("--scale", default=1.0, show_default=True, type=click.FloatRange(0.1, 10.0),
               help="Scale the trial durations (quick runs < 1).")
 @out_options(json_help="Print the Result as JSON on stdout.")
 @click.option("--paper", is_flag=True, help="Constant-Q force model exactly as in the paper.")
-@strict_option
 def study_ebm(kind, seed, scale, as_json, out, force, paper):
     """Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials."""
     from shipid.methods.ebm.study import make_trials, study as run_study
@@ -187,12 +186,14 @@ def _values(text: str) -> list[float]:
 
 
 @design.command("prbs", context_settings=CONTEXT)
-@click.option("--vessel", default="esso-osaka", show_default=True)
+@click.option("--vessel", default="esso-osaka", show_default=True,
+              help="Packaged vessel whose manoeuvring model the PRBS is designed for (shipid vessels).")
 @click.option("--amplitudes", default="5:35:10", show_default=True,
               help="deg: comma-separated values or START:STOP:STEP (stop included).")
 @click.option("--periods", default="15:200:5", show_default=True,
               help="s: comma-separated values or START:STOP:STEP (stop included).")
-@click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000))
+@click.option("--duration", default=1200.0, show_default=True, type=click.FloatRange(100, 20000),
+              help="Length of each simulated PRBS trial (s).")
 @click.option("--seeds", default=3, show_default=True, type=click.IntRange(1, 50),
               help="PRBS realisations averaged per grid point (with 2 or more, the comparison with the "
                    "paper's optimum carries a standard error).")
@@ -202,7 +203,6 @@ def _values(text: str) -> list[float]:
 @out_options(json_help="Print the map as a shipid Result (JSON) on stdout.", metavar="RESULT.json",
              out_help="Write the map as a shipid Result for `shipid report` (Fig. 7), atomically; an existing "
                       "file needs --force.")
-@strict_option
 def design_prbs(vessel, amplitudes, periods, duration, seeds, currents, dt, as_json, out, force):
     """D-optimal PRBS rudder input: log10 |W'W| over amplitude x period (Fig. 7).
 

@@ -20,7 +20,8 @@ def _fmt(x, spec):
 
 
 @study.command("ebm-coverage")
-@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
+@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True,
+              help="Simulated experiments (one identification each).")
 @click.option("--duration", type=click.FloatRange(300.0, 7200.0), default=1200.0, show_default=True,
               help="Length of each run's PRBS 35 deg / 105 s trial (s).")
 @out_options(json_help="Print the summary as JSON on stdout.")

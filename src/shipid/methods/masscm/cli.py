@@ -22,7 +22,7 @@ import click
 import numpy as np
 
 from shipid.cli import analyse, identify, study
-from shipid.cli._common import channels_option, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import channels_option, emit, loud, loud_lines, out_options
 from shipid.cli.campaign_cmds import campaign_options, failure_lines
 from shipid.errors import InputError, ShipidError
 from shipid.methods.masscm.known import KNOWN_KEYS, read_known  # noqa: F401  (read_known re-exported for monitor)
@@ -42,7 +42,8 @@ def _fmt(v: float) -> str:
 @click.option("--known", "known_path", required=True, type=click.Path(dir_okay=False),
               help="TOML with U, M, zg_bar, m_c, zc_bar, zs_bar, g [, z_f | z_f_prior, theta0].")
 @channels_option
-@click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True)
+@click.option("--max-iter", type=click.IntRange(min=1), default=50, show_default=True,
+              help="Most iterations of Algorithm 1's iterative IV before it stops unconverged (with a warning).")
 @click.option("--no-prefilter", is_flag=True, help="Plain iterative IV without the ARMA prefilters (43).")
 @click.option("--noise-model", type=click.Choice(["auto", "ar", "ar-structured", "arma", "bj"]), default="auto",
               show_default=True,
@@ -60,7 +61,6 @@ def _fmt(v: float) -> str:
                    "that fails keeps Algorithm 1's estimate, with a warning; the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")
-@strict_option
 def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_iter, no_prefilter, noise_model, refine,
                      cost_map, as_json, out, force):
     """Estimate load mass m and its centre zm_bar (Linder et al. 2015, Algorithm 1).
@@ -105,7 +105,8 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_ite
 
 
 @study.command("mass-cm-sensitivity")
-@click.option("--runs", type=click.IntRange(min=1), default=10_000, show_default=True)
+@click.option("--runs", type=click.IntRange(min=1), default=10_000, show_default=True,
+              help="Random initial values drawn (one Algorithm 1 run each).")
 @click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True,
               help="known: z_f given (identifiable m); free: estimated as in the paper (m then not identifiable).")
 @click.option("--init", type=click.Choice(["given", "linear"]), default="given", show_default=True,
@@ -114,7 +115,6 @@ def identify_mass_cm(nominal, calibration, loaded, known_path, channels, max_ite
 @out_options(json_help="Print the Table-3 summary as JSON on stdout.",
              out_help="Write the study as a result JSON (Table 3 spread, for `shipid report`) to FILE "
                       "(atomically; an existing FILE needs --force).")
-@strict_option
 @campaign_options
 def mass_cm_sensitivity(runs, zf_mode, init, data_seed, as_json, out, force, campaign):
     """Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).
@@ -158,7 +158,8 @@ def _sensitivity_table(s: dict, zf_mode: str, init: str) -> None:
 @click.option("--regime", type=click.Choice(["waves", "sensors", "both"]), required=True,
               help="waves: 0.5 deg wave roll, noise-free sensors; sensors: gyro/accelerometer noise and biases, "
                    "no waves; both: the two together.")
-@click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True)
+@click.option("--runs", type=click.IntRange(min=2), default=100, show_default=True,
+              help="Simulated experiments (three datasets and one identification each).")
 @click.option("--duration", type=click.FloatRange(min=30.0), default=300.0, show_default=True,
               help="Length of each of the three datasets (s).")
 @click.option("--noise-model", type=click.Choice(["ar", "ar-structured", "arma", "auto", "bj"]), default=None,
@@ -229,13 +230,13 @@ _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 @study.command("mass-cm-contour")
-@click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True)
-@click.option("--data-seed", type=int, default=0, show_default=True)
+@click.option("--z-f", "zf_mode", type=click.Choice(["known", "free"]), default="known", show_default=True,
+              help="known: z_f given (identifiable m); free: estimated as in the paper (m then not identifiable).")
+@click.option("--data-seed", type=int, default=0, show_default=True, help="Seed of the three synthetic datasets.")
 @out_options(json_help="Print the cost grid, its minimum and the estimate as JSON on stdout.",
              out_help="Write the result to FILE: the figure for .png/.pdf/.svg, the cost grid as JSON for "
                       "any other name (atomically; an existing FILE needs --force).",
              force_help="Overwrite an existing --out file.")
-@strict_option
 def mass_cm_contour(zf_mode, data_seed, as_json, out, force):
     """Fig. 4: cost of (40) over (m, zm_bar) with the other parameters at the estimate."""
     from shipid.methods.masscm.contour import contour_figure, cost_grid
@@ -267,7 +268,8 @@ def crlb_group():
 
 
 @crlb_group.command("mass-cm")
-@click.option("--vessel", default="fishing-vessel", show_default=True)
+@click.option("--vessel", default="fishing-vessel", show_default=True,
+              help="Packaged vessel giving the ship model and its particulars (shipid vessels).")
 @click.option("--duration", type=float, default=300.0, show_default=True, help="Length of each dataset (s).")
 @click.option("--fs", type=float, default=50.0, show_default=True, help="Sampling rate (Hz).")
 @click.option("--rudder-deg", type=float, default=5.0, show_default=True, help="PRBS rudder amplitude (deg).")
@@ -275,7 +277,8 @@ def crlb_group():
 @click.option("--acc-std", type=float, default=0.02, show_default=True, help="Accelerometer white noise (m/s^2).")
 @click.option("--wave-roll", type=float, default=0.5, show_default=True, help="Roll std from waves alone (deg).")
 @click.option("--wave-period", type=float, default=1.0, show_default=True, help="Wave peak period (s).")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the simulated datasets (rudder PRBS and noise) the bounds are evaluated on.")
 @click.option("--method", type=click.Choice(["kf", "spectrum", "ar"]), default="kf", show_default=True,
               help="kf: Cramér–Rao bound of the data-generating model (ship (11), wave filter, sensor noise, biases; "
                    "exact Kalman-filter likelihood, sway/yaw rows and noise levels as nuisance); spectrum: optimal-IV "

@@ -20,7 +20,7 @@ import math
 import click
 
 from shipid.cli import CONTEXT, cli, identify
-from shipid.cli._common import CHANNELS_HELP, channels_option, emit, loud, loud_lines, out_options, strict_option
+from shipid.cli._common import CHANNELS_HELP, channels_option, emit, loud, loud_lines, out_options
 from shipid.io.files import FORMATS
 from shipid.errors import ShipidError
 
@@ -37,7 +37,8 @@ from shipid.errors import ShipidError
 @click.option("--rudder-sign", default=None, type=int,
               help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                    "[default: MODEL.json's training convention, else from the data profile: -1 for HSVA KVLCC2].")
-@click.option("--json", "as_json", is_flag=True, help="Print the error table as JSON.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the error table as JSON (every window and quantity, the settings and the warnings).")
 @click.option("--plot", "plot_path", default=None, type=click.Path(dir_okay=False),
               help="Write a figure of measured vs predicted motion (PNG/PDF/SVG).")
 @click.option("-o", "--out", "out_path", default=None, type=click.Path(dir_okay=False),
@@ -45,10 +46,13 @@ from shipid.errors import ShipidError
 @click.option("--force", is_flag=True, help="Overwrite the plot / --out file.")
 @click.option("--no-retime", "no_retime", is_flag=True,
               help="MMG: do not re-time the run by the offsets MODEL.json records (estimated on its training runs).")
-@strict_option
 def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path, force,
                  no_retime):
     """Simulate MODEL open loop on a held-out run and report RMS/max errors.
+
+    Prints the error table of Validation.summary() (windows and restarted horizons by
+    quantity, at most 100 columns); --json gives it in full with the settings and the
+    warnings, -o the whole-run prediction beside the measured channels.
 
     MODEL is a result JSON of 'shipid identify mmg | ebm | dp | mass-cm --json' (the
     method is read from its 'method' field), or 'published:esso_osaka_3m' /
@@ -67,8 +71,6 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
     converge and when the run's yaw response to its first rudder step contradicts
     the convention.
     """
-    from shipid.methods.mmg import validate as V
-
     if horizon is not None and horizon <= 0:
         raise ShipidError("--horizon must be positive")
     if rudder_sign not in (None, 1, -1):
@@ -97,13 +99,13 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
             warns += loud_lines([f"the prediction diverged at t = {pt.meta['diverged_from_s']:g} s; "
                                  f"{out_path} has empty predicted cells from there"])
     if plot_path:
-        V.plot(v, plot_path, force=force)
+        v.plot(plot_path, force=force)
     if as_json:
         d = v.to_dict()
         d["warnings"] = warns
         click.echo(json.dumps(d, indent=2))
     else:
-        click.echo(V.format_table(v))
+        click.echo(v.summary())
         if plot_path:
             click.echo(f"plot written to {plot_path}")
         if out_path:
@@ -135,7 +137,7 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
                     force):
     """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
     from shipid import registry
-    from shipid.analysis.openloop import format_table, write_csv
+    from shipid.analysis.openloop import write_csv
     from shipid.errors import InputError
     from shipid.result import Result
 
@@ -163,13 +165,13 @@ def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign,
     if out_path:
         write_csv(v, out_path, force=force)
     if plot_path:
-        mod.plot(v, plot_path, force=force)
+        v.plot(plot_path, force=force)
     if as_json:
         d = v.to_dict()
         d["warnings"] = warns
         click.echo(json.dumps(d, indent=2))
     else:
-        click.echo(format_table(v))
+        click.echo(v.summary())
         if plot_path:
             click.echo(f"plot written to {plot_path}")
         if out_path:
@@ -288,14 +290,13 @@ _ID_OPTS = [
                       "offsets of heading, velocities, yaw rate, rudder, propeller and wind are estimated on the "
                       "training runs, recorded in MODEL.json and applied by 'shipid validate'; one data-repair "
                       "line]."),
-    out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json", alias=True,
+    out_options(json_help="Print the Result (MODEL.json) on stdout.", metavar="MODEL.json",
                 out_help="Write MODEL.json (the Result, for 'shipid validate') to FILE, atomically; an existing "
                          "file needs --force."),
 ]
 
 
 def _with_id_opts(f):
-    f = strict_option(f)
     for opt in reversed(_ID_OPTS):
         f = opt(f)
     return f

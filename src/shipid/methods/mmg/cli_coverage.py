@@ -1,6 +1,6 @@
 """``shipid study mmg-coverage``: simulated coverage of the MMG standard errors.
 
-* ``shipid study mmg-coverage --runs N [--vessel esso-osaka|kvlcc2] [--seed S] [--workers W ...] [--seconds T]
+* ``shipid study mmg-coverage --runs N [--vessel esso-osaka|kvlcc2] [--seed S] [--workers W ...] [--duration T]
   [--json] [-o R.json]``
 """
 
@@ -11,7 +11,7 @@ from dataclasses import replace
 import click
 
 from shipid.cli import study
-from shipid.cli._common import emit, loud_lines, out_options, strict_option
+from shipid.cli._common import emit, loud_lines, out_options
 from shipid.cli.campaign_cmds import campaign_options, echo_campaign_summary, failure_lines
 
 
@@ -21,12 +21,13 @@ def _fmt(x, spec):
 
 
 @study.command("mmg-coverage")
-@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True)
+@click.option("--runs", type=click.IntRange(min=1), default=50, show_default=True,
+              help="Simulated experiments (one identification each).")
 @click.option("--vessel", type=click.Choice(["esso-osaka", "kvlcc2"]), default="esso-osaka", show_default=True,
               help="Ship, fixed structure and test programme (shipid.methods.mmg.coverage.VESSELS): the Esso Osaka "
                    "3 m with turns, a zig-zag and a random run, or the KVLCC2 L7 with seven HSVA-like zig-zags "
                    "(needs the shared data folder).")
-@click.option("--seconds", type=click.FloatRange(30.0, 1200.0), default=None,
+@click.option("--duration", "seconds", type=click.FloatRange(30.0, 1200.0), default=None,
               help="Length of each simulated manoeuvre (s) [default: the vessel's, 120 Esso / 150 KVLCC2].")
 @click.option("--equation", type=click.Choice(["differential", "integral"]), default=None,
               help="Step-2 regression form (FitConfig.equation); default: identify mmg's.")
@@ -47,7 +48,6 @@ def _fmt(x, spec):
                    "Carlo draws per run (0: no IMO check).")
 @out_options(json_help="Print the summary as JSON on stdout.")
 @campaign_options(seed_default=700)
-@strict_option
 def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, refine, criterion, imo_samples,
                  as_json, out, force, campaign):
     """Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).

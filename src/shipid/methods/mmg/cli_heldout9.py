@@ -15,7 +15,7 @@ from __future__ import annotations
 import click
 
 from shipid.cli import CONTEXT, study
-from shipid.cli._common import emit, loud_lines, out_options, strict_option
+from shipid.cli._common import emit, loud_lines, out_options
 
 
 @study.command("esso-osaka-heldout9", context_settings=CONTEXT)
@@ -35,7 +35,6 @@ from shipid.cli._common import emit, loud_lines, out_options, strict_option
               help="With --retime, re-time the rudder angle, propeller rate and wind too, by offsets estimated on "
                    "the training runs (shipid.methods.mmg.timing_inputs); in the same data-repair line.")
 @out_options(json_help="Print everything as JSON on stdout.")
-@strict_option
 def heldout9_cmd(ninth, folds, train_only, symmetric_only, no_surge_terms, retime, input_lags, as_json, out,
                  force):
     """Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on

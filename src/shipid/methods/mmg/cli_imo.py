@@ -15,7 +15,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import emit, loud_lines, out_options, strict_option, warn
+from shipid.cli._common import emit, loud_lines, out_options, warn
 from shipid.errors import InputError, OutputExistsError, ShipidError
 
 
@@ -85,7 +85,6 @@ def simulate_identified(spec: str, manoeuvre: str, out: str, *, duration: float 
 @click.option("--no-form-term", "no_form_term", is_flag=True,
               help="Draw from the estimation covariance alone, without the model-form term of a "
                    "differential-form model (diagnostics.form_check).")
-@strict_option
 def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, rudder_rate, dt, water_depth,
             no_form_term):
     """IMO MSC.137(76) manoeuvres and criteria of an identified MMG model, with Monte Carlo bands.
@@ -105,6 +104,6 @@ def imo_cmd(model, as_json, out, force, samples, seed, ship_length, speed, rps, 
     d, _ = _load(model)
     rep = I.assess(d, samples=samples, seed=seed, ship_length=ship_length, speed=speed, rps=rps,
                    rudder_rate_deg_s=rudder_rate, dt=dt, form_term=not no_form_term, water_depth=water_depth)
-    # one line each on stderr, counted for --strict (this command's or the global one), and in the JSON
+    # one line each on stderr, counted for shipid --strict, and in the JSON
     rep["warnings"] = loud_lines(rep["warnings"])
     emit(rep, as_json=as_json, out=out, force=force, indent=1, text=lambda: click.echo(I.format_report(rep)))

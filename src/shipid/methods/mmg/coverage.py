@@ -16,7 +16,7 @@ Rudder orders are followed at :data:`RUDDER_RATE` (the IMO steering-gear minimum
 ``--rudder-rate inf`` gives instantaneous steps).
 
 Options (:func:`run_one`): ``refine="output-error"`` refines each fit by output error (the study then
-needs long runs, ``--seconds 1200``); ``imo_samples=N`` compares the IMO criteria and their bands with the
+needs long runs, ``--duration 1200``); ``imo_samples=N`` compares the IMO criteria and their bands with the
 truth's; ``vessel="kvlcc2"`` (:data:`VESSELS`) draws truths around the ``kvlcc2_hsva`` prior with seven
 150-s zig-zags and the structure ``full/symmetric-gamma_R``. :func:`summarise` also reports the coverage with
 the model-form term of :func:`shipid.methods.mmg.pipeline.form_check` (``coverage_2std_with_form``) and

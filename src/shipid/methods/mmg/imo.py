@@ -61,22 +61,22 @@ from shipid.methods.mmg.validate import model_from_result
 BAND = (2.275, 97.725)
 #: What :func:`assess` adds where the model's standard errors are flagged by
 #: :func:`shipid.methods.mmg.pipeline.form_check` (figures: ``docs/validation/mmg.md``).
-FORM_BANDS = ("the bands are too narrow for such a model: on simulated seven-zig-zag KVLCC2 campaigns (shipid study "
-              "mmg-coverage --vessel kvlcc2 --seed 910 --imo-samples 40) the differential form's bands held the truth "
-              "0.31-0.33 of the time for the initial turning, 0.53-0.70 for the first overshoots and 0.88-0.89 for "
-              "the advance; identified with --equation integral, 0.93-0.96 for the turning criteria")
+FORM_BANDS = ("the bands are too narrow for such a model: in the simulated seven-zig-zag KVLCC2 coverage study "
+              "(docs/validation/mmg.md) the differential form's bands held the truth 0.31-0.33 of the time for "
+              "the initial turning, 0.53-0.70 for the first overshoots and 0.88-0.89 for the advance; identified "
+              "with --equation integral, 0.93-0.96 for the turning criteria")
 #: What :func:`assess` adds for such a model when its bands include the model-form term (the default).
 FORM_TERM_BANDS = ("the bands include the two forms' difference as one standard deviation of model-form error: "
-                   "on simulated seven-zig-zag KVLCC2 campaigns (shipid study mmg-coverage --vessel kvlcc2 --seed 930 "
-                   "--imo-samples 40) they held the truth 0.99-1.00 of the time for every criterion, conservative "
+                   "in the simulated seven-zig-zag KVLCC2 coverage study (docs/validation/mmg.md) they held the "
+                   "truth 0.99-1.00 of the time for every criterion, conservative "
                    "(tactical diameter: mean std 0.032 L, error RMS 0.013 L); the same draws without the term "
                    "(--no-form-term) 0.30-0.31 for the initial turning, 0.52-0.63 for the first overshoots")
 #: What the bands do not hold, as the simulated coverage study measured it (``docs/validation/mmg.md``).
-BAND_CAVEAT = ("the bands carry the coefficients' estimation uncertainty, not a bias of the fit: on simulated "
-               "four-run campaigns of the Esso Osaka 3 m (shipid study mmg-coverage --seed 790 --imo-samples 40) "
+BAND_CAVEAT = ("the bands carry the coefficients' estimation uncertainty, not a bias of the fit: in the simulated "
+               "coverage studies (docs/validation/mmg.md), on four-run campaigns of the Esso Osaka 3 m "
                "they held the truth 0.98-1.00 of the time for every criterion, a little wide for the turning "
                "ones (advance: mean std 0.022 L, error RMS 0.018 L, bias +0.007 L); on seven-zig-zag KVLCC2 "
-               "campaigns in the integral form (--vessel kvlcc2 --equation integral --seed 910) 0.93-0.96 for the "
+               "campaigns in the integral form (identified with --equation integral) 0.93-0.96 for the "
                "turning criteria and 0.81-0.89 for the overshoots, whose errors (RMS 0.01-0.03 deg) are at the "
                "resolution of the simulation; in the differential form much less (a warning says so)")
 #: Maximum stopping track reach (ship lengths).

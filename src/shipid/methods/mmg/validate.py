@@ -25,7 +25,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from shipid.analysis.openloop import Validation, format_table, horizon_starts, plot_series, summarise
+from shipid.analysis.openloop import Validation, horizon_starts, plot_series, summarise
 from shipid.io.trial import Trial
 from shipid.errors import InputError
 from shipid.models import mmg
@@ -235,4 +235,4 @@ def plot(v: Validation, path: str | Path, *, force: bool = False) -> Path:
 
 __all__ = ["validate", "validate_result", "DEFAULT_HORIZON", "Validation", "load_model", "model_from_result", "measured_states", "trial_inputs",
            "first_step_yaw_sign", "load_model_document",
-           "format_table", "plot", "horizon_starts", "QUANTITIES", "UNITS"]
+           "plot", "horizon_starts", "QUANTITIES", "UNITS"]

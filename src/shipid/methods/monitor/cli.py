@@ -19,7 +19,7 @@ from pathlib import Path
 import click
 
 from shipid.cli import CONTEXT, cli
-from shipid.cli._common import channels_option, refuse_existing, strict_option, warn
+from shipid.cli._common import channels_option, refuse_existing, warn
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -149,7 +149,7 @@ def live_panel(u, nominal_label: str):
 @click.option("--noise-model", type=click.Choice(["ar", "auto"]), default=None,
               help="Noise model of the prefilter: 'ar' AR(40), 'auto' the Box-Jenkins model (1 - c q^-2)^k/D(q) "
                    "(shipid.methods.monitor.bj_prefilter) [default: MonitorOptions().masscm.noise_model].")
-@click.option("--json", "--jsonl", "as_json", is_flag=True,
+@click.option("--json", "as_json", is_flag=True,
               help="One JSON line per update on stdout (the default when stdout is not a terminal).")
 @click.option("-o", "--out", "out", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Also write each JSON line to FILE as it is produced (an existing FILE needs --force, unless "
@@ -159,7 +159,6 @@ def live_panel(u, nominal_label: str):
 @click.option("--idle-timeout", type=click.FloatRange(min=0), default=None,
               help="With --follow or --listen: stop after this many seconds without new data (with --listen: once "
                    "data have come) [default: never].")
-@strict_option
 def monitor_mass_cm(nominal, calibration, known_path, stream, channels, listen, state_path, emit_url, window, every,
                     init_s, threshold, noise_model, as_json, out, force, follow, idle_timeout):
     """Estimate the load mass m and its centre zm_bar online, with an alarm when the loading changes.
@@ -233,7 +232,7 @@ def monitor_mass_cm(nominal, calibration, known_path, stream, channels, listen, 
         for w in warns:
             warn(w)
         for u in ups:
-            for w in u.warnings:        # one line each, counted for --strict (global or this command's)
+            for w in u.warnings:        # one line each, counted for shipid --strict
                 warn(w)
             if u.alarm:
                 click.echo(f"shipid: alarm at t = {u.t:g} s: loading changed (change at {u.change_at:g} s, "
