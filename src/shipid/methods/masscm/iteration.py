@@ -61,7 +61,22 @@ def step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.nd
     return L, float(lam), ((yh, ah) if stable else None), iv_compress_products_compiled(ZtZ, ZtP, ds.y.size - s)
 
 
-def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, conds) -> bool:
+def _physical(theta_q: np.ndarray, known: KnownParams, conds, memo: dict | None) -> bool:
+    """Whether the identified roll mode of ``theta_q`` (moment parameterisation) is physical
+    (:func:`implausible_identifiable` finds nothing); ``memo`` keeps the judgements by the iterate's bytes."""
+    key = theta_q.tobytes()
+    if memo is not None and key in memo:
+        return memo[key]
+    ok = not implausible_identifiable(from_moment(theta_q), known, conds)
+    if memo is not None:
+        if len(memo) > 4:
+            memo.clear()
+        memo[key] = ok
+    return ok
+
+
+def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, conds,
+                         memo: dict | None = None) -> bool:
     """Whether a search moved from an iterate whose identified roll mode is physical to one whose is not
     (:func:`shipid.methods.masscm.plausibility.implausible_identifiable`, point values; moment parameterisation).
 
@@ -70,12 +85,15 @@ def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: K
     ``(T/2 z_s)(a_t - a_{t-2})`` for any motion, rudder- or wave-driven); the IV criterion (40) then has a second
     near-zero minimum at ``alpha1 ~ -2, alpha2 ~ 1`` (all physical coefficients -> infinity, no restoring), which
     an iteration can jump to after a prefilter update (seen in wave roll without sensor noise, a few runs in 100).
+
+    ``memo``: a dict the caller keeps between calls (:func:`iterate`: each iterate is judged once, as the new
+    iterate and then again as the previous one); None judges both afresh.
     """
     if not np.all(np.isfinite(theta_q)):
         return True
-    if implausible_identifiable(from_moment(theta_prev_q), known, conds):
+    if not _physical(theta_prev_q, known, conds, memo):
         return False
-    return bool(implausible_identifiable(from_moment(theta_q), known, conds))
+    return not _physical(theta_q, known, conds, memo)
 
 
 def search_bounds(free: np.ndarray, prior, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
@@ -168,6 +186,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         free_held[I_ZF] = False
         held = (free_held, np.delete(lo, izf), np.delete(hi, izf), np.delete(lo_in, izf), np.delete(hi_in, izf))
     search_state = state
+    physical_memo: dict = {}
     for j in range(1, options.max_iter + 1):
         prev_search, search_state = search_state, state
         if flat and j == 2:
@@ -198,7 +217,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         theta[free] = x
         if cold_flat:
             theta = held_cold_search(theta, theta_start, fun, x, state, known, held, prior, options)
-        if j >= 2 and left_physical_region(theta, theta_start, known, conds):
+        if j >= 2 and left_physical_region(theta, theta_start, known, conds, physical_memo):
             # (*) the search left the physical region (identified roll mode not that of a ship) from a physical
             # iterate: the criterion's second, degenerate minimum (see left_physical_region); the last physical
             # iterate is kept and the iteration stops, not converged, with a warning
