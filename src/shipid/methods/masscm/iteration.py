@@ -13,7 +13,7 @@ from scipy.optimize import least_squares
 
 from shipid.estimate.arma import ARMA
 from shipid.estimate.iv import iv_compress_products_compiled
-from shipid.methods.masscm.criterion import (CONDITION_CODES, IVState, coeffs, compiled_search, floored_weights,
+from shipid.methods.masscm.criterion import (IVState, coeffs, compiled_search, condition_codes, floored_weights,
                                              gauss_newton, held_cold_search, jacobian_cs, kernel_args,
                                              known_constants, linear_initial, residual_function)
 from shipid.methods.masscm.data import Dataset, first_row
@@ -152,6 +152,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         prior = (float(z_f_prior[0]), float(z_f_prior[1]))
     conds = [ds.condition for ds in prep]
     Ts = np.array([ds.T for ds in prep])
+    code = condition_codes(conds, options)          # None: the map (33) by the reference path
     warn: list[str] = []
     y_hats = [ds.y_hat0 for ds in prep]
     a_hats = [ds.a_hat0 for ds in prep]
@@ -225,7 +226,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
                         f"the estimate of iteration {j - 1} is kept")
             theta, search_state = theta_start, prev_search
             break
-        G = coeffs(theta, known, conds, Ts, options)
+        G = coeffs(theta, known, conds, Ts, options, code)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
             warn.append(f"iteration {j}: non-finite estimate")
@@ -249,12 +250,11 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             th_mid = np.mean(recent, axis=0)
         else:
             th_mid = theta if len(recent) == 1 else 0.5 * (recent[-1] + recent[-2])
-        G_mid = coeffs(th_mid, known, conds, Ts, options)
+        G_mid = coeffs(th_mid, known, conds, Ts, options, code)
         newL, lam = [], []
-        if fused(options) and all(c in CONDITION_CODES for c in conds):
+        if fused(options) and code is not None:
             # the same steps (b)-(c) by one compiled call per dataset (shipid.methods.masscm.step)
-            sims = sim_terms(th_mid, np.array([CONDITION_CODES[c] for c in conds], dtype=np.int64), Ts,
-                             known_constants(known))
+            sims = sim_terms(th_mid, code, Ts, known_constants(known))
             moms = []
             for i, ds in enumerate(prep):
                 L_i, lam_i, sim, mom = step_compiled(ds, G_mid[i], sims[i], th_mid, i, known, y_hats[i],
