@@ -308,20 +308,15 @@ def project_qr(s, V, ZtP, rtol):
         if s[i] > thr:
             kept += 1
     P = np.empty((kept, nc))
-    acc = np.empty(nc)
     r = 0
     for i in range(nz):
         if s[i] > thr:
             w = 1.0 / np.sqrt(s[i])
-            # the nc sums side by side (independent chains), each in the order j = 0 .. nz-1
             for c in range(nc):
-                acc[c] = 0.0
-            for j in range(nz):
-                v = V[j, i]
-                for c in range(nc):
-                    acc[c] += v * ZtP[j, c]
-            for c in range(nc):
-                P[r, c] = acc[c] * w
+                acc = 0.0
+                for j in range(nz):
+                    acc += V[j, i] * ZtP[j, c]
+                P[r, c] = acc * w
             r += 1
     # Householder QR of P (kept x nc), R in the upper triangle
     m = kept
