@@ -8,7 +8,8 @@ init "given", data seed 0, campaign seed 0, runs 0 .. RUNS-1) once per rule, the
 ``shipid.methods.masscm.iteration.iv_compress_products_compiled`` in this process only (nothing in the package
 changes):
 
-* ``eigh``: the package's rule; also counts how many directions each decomposition keeps;
+* ``eigh``: the package's rule; also counts how many directions each decomposition keeps (one more
+  ``eigvalsh`` per decomposition, included in its time);
 * ``ridge``: Cholesky of ``Z^T Z + 1e-12 tr(Z^T Z) I`` (Tikhonov instead of truncation), then the same QR;
 * ``pivoted``: LAPACK's pivoted Cholesky (``dpstrf``, tolerance 1e-12 of the largest diagonal entry), the IV
   criterion of the instruments it selects.
