@@ -38,10 +38,21 @@ class IVState:
 CONDITION_CODES = {NOMINAL: 0, CALIBRATION: 1, LOADED: 2}
 
 
-def coeffs(theta, known: KnownParams, conds, Ts, options: MassCMOptions) -> np.ndarray:
-    """``discrete_coeffs(theta, known, conds, Ts, moment=True)`` (33); compiled (same formulas) when fast."""
+def condition_codes(conds, options: MassCMOptions) -> np.ndarray | None:
+    """The condition codes of the compiled kernels (:data:`CONDITION_CODES`) when the fast path evaluates the
+    map (33) for these conditions, else None (:func:`coeffs`)."""
     if options.compute == "fast" and all(c in CONDITION_CODES for c in conds):
-        code = np.array([CONDITION_CODES[c] for c in conds], dtype=np.int64)
+        return np.array([CONDITION_CODES[c] for c in conds], dtype=np.int64)
+    return None
+
+
+def coeffs(theta, known: KnownParams, conds, Ts, options: MassCMOptions, code: np.ndarray | None = None) -> np.ndarray:
+    """``discrete_coeffs(theta, known, conds, Ts, moment=True)`` (33); compiled (same formulas) when fast.
+
+    ``code``: :func:`condition_codes` of ``conds`` made once by a caller that evaluates the map many times."""
+    if code is None:
+        code = condition_codes(conds, options)
+    if code is not None:
         return g_and_jac(np.asarray(theta, dtype=float), code, np.asarray(Ts, dtype=float), known_constants(known),
                          False)[0]
     return discrete_coeffs(theta, known, conds, Ts, moment=True)
@@ -276,5 +287,5 @@ def linear_initial(state: "IVState", known: KnownParams, z_f: float) -> np.ndarr
     return np.array([k, A_x, d, K_r, K_v, K_d, z_f, q, zm])
 
 
-__all__ = ["IVState", "CONDITION_CODES", "coeffs", "residual_function", "kernel_args", "known_constants",
+__all__ = ["IVState", "CONDITION_CODES", "condition_codes", "coeffs", "residual_function", "kernel_args", "known_constants",
            "compiled_search", "floored_weights", "held_cold_search", "jacobian_cs", "gauss_newton", "linear_initial"]

@@ -13,7 +13,7 @@ from scipy.optimize import least_squares
 
 from shipid.estimate.arma import ARMA
 from shipid.estimate.iv import iv_compress_products_compiled
-from shipid.methods.masscm.criterion import (CONDITION_CODES, IVState, coeffs, compiled_search, floored_weights,
+from shipid.methods.masscm.criterion import (IVState, coeffs, compiled_search, condition_codes, floored_weights,
                                              gauss_newton, held_cold_search, jacobian_cs, kernel_args,
                                              known_constants, linear_initial, residual_function)
 from shipid.methods.masscm.data import Dataset, first_row
@@ -61,7 +61,22 @@ def step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.nd
     return L, float(lam), ((yh, ah) if stable else None), iv_compress_products_compiled(ZtZ, ZtP, ds.y.size - s)
 
 
-def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, conds) -> bool:
+def _physical(theta_q: np.ndarray, known: KnownParams, conds, memo: dict | None) -> bool:
+    """Whether the identified roll mode of ``theta_q`` (moment parameterisation) is physical
+    (:func:`implausible_identifiable` finds nothing); ``memo`` keeps the judgements by the iterate's bytes."""
+    key = theta_q.tobytes()
+    if memo is not None and key in memo:
+        return memo[key]
+    ok = not implausible_identifiable(from_moment(theta_q), known, conds)
+    if memo is not None:
+        if len(memo) > 4:
+            memo.clear()
+        memo[key] = ok
+    return ok
+
+
+def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: KnownParams, conds,
+                         memo: dict | None = None) -> bool:
     """Whether a search moved from an iterate whose identified roll mode is physical to one whose is not
     (:func:`shipid.methods.masscm.plausibility.implausible_identifiable`, point values; moment parameterisation).
 
@@ -70,12 +85,15 @@ def left_physical_region(theta_q: np.ndarray, theta_prev_q: np.ndarray, known: K
     ``(T/2 z_s)(a_t - a_{t-2})`` for any motion, rudder- or wave-driven); the IV criterion (40) then has a second
     near-zero minimum at ``alpha1 ~ -2, alpha2 ~ 1`` (all physical coefficients -> infinity, no restoring), which
     an iteration can jump to after a prefilter update (seen in wave roll without sensor noise, a few runs in 100).
+
+    ``memo``: a dict the caller keeps between calls (:func:`iterate`: each iterate is judged once, as the new
+    iterate and then again as the previous one); None judges both afresh.
     """
     if not np.all(np.isfinite(theta_q)):
         return True
-    if implausible_identifiable(from_moment(theta_prev_q), known, conds):
+    if not _physical(theta_prev_q, known, conds, memo):
         return False
-    return bool(implausible_identifiable(from_moment(theta_q), known, conds))
+    return not _physical(theta_q, known, conds, memo)
 
 
 def search_bounds(free: np.ndarray, prior, options: MassCMOptions) -> tuple[np.ndarray, np.ndarray]:
@@ -134,6 +152,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         prior = (float(z_f_prior[0]), float(z_f_prior[1]))
     conds = [ds.condition for ds in prep]
     Ts = np.array([ds.T for ds in prep])
+    code = condition_codes(conds, options)          # None: the map (33) by the reference path
     warn: list[str] = []
     y_hats = [ds.y_hat0 for ds in prep]
     a_hats = [ds.a_hat0 for ds in prep]
@@ -168,6 +187,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         free_held[I_ZF] = False
         held = (free_held, np.delete(lo, izf), np.delete(hi, izf), np.delete(lo_in, izf), np.delete(hi_in, izf))
     search_state = state
+    physical_memo: dict = {}
     for j in range(1, options.max_iter + 1):
         prev_search, search_state = search_state, state
         if flat and j == 2:
@@ -198,7 +218,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         theta[free] = x
         if cold_flat:
             theta = held_cold_search(theta, theta_start, fun, x, state, known, held, prior, options)
-        if j >= 2 and left_physical_region(theta, theta_start, known, conds):
+        if j >= 2 and left_physical_region(theta, theta_start, known, conds, physical_memo):
             # (*) the search left the physical region (identified roll mode not that of a ship) from a physical
             # iterate: the criterion's second, degenerate minimum (see left_physical_region); the last physical
             # iterate is kept and the iteration stops, not converged, with a warning
@@ -206,7 +226,7 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
                         f"the estimate of iteration {j - 1} is kept")
             theta, search_state = theta_start, prev_search
             break
-        G = coeffs(theta, known, conds, Ts, options)
+        G = coeffs(theta, known, conds, Ts, options, code)
         history.append(from_moment(theta))
         if not np.all(np.isfinite(theta)):
             warn.append(f"iteration {j}: non-finite estimate")
@@ -230,12 +250,11 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
             th_mid = np.mean(recent, axis=0)
         else:
             th_mid = theta if len(recent) == 1 else 0.5 * (recent[-1] + recent[-2])
-        G_mid = coeffs(th_mid, known, conds, Ts, options)
+        G_mid = coeffs(th_mid, known, conds, Ts, options, code)
         newL, lam = [], []
-        if fused(options) and all(c in CONDITION_CODES for c in conds):
+        if fused(options) and code is not None:
             # the same steps (b)-(c) by one compiled call per dataset (shipid.methods.masscm.step)
-            sims = sim_terms(th_mid, np.array([CONDITION_CODES[c] for c in conds], dtype=np.int64), Ts,
-                             known_constants(known))
+            sims = sim_terms(th_mid, code, Ts, known_constants(known))
             moms = []
             for i, ds in enumerate(prep):
                 L_i, lam_i, sim, mom = step_compiled(ds, G_mid[i], sims[i], th_mid, i, known, y_hats[i],

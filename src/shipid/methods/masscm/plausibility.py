@@ -92,8 +92,9 @@ def implausible_identifiable(theta: np.ndarray, known: KnownParams, conds=(NOMIN
     with np.errstate(divide="ignore", invalid="ignore"):
         ratios = {"A1/A2": t["A1"] / A2, "d/A2": t["d"] / A2, "k1/A2": t["k1"] / A2}
     for name, v in ratios.items():
-        bad = [c for c, x in zip(conds, v) if not (np.isfinite(x) and x > 0)]
-        if bad:
+        good = np.isfinite(v) & (v > 0)
+        if not good.all():
+            bad = [c for c, g in zip(conds, good) if not g]
             why.append(f"identified roll mode not physical ({name} <= 0 in {', '.join(sorted(set(bad)))})")
     return why
 

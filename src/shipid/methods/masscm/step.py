@@ -29,19 +29,28 @@ from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
 
 
 @njit(cache=True)
-def _iir2(b, a, x):
-    """``lfilter(b, a, x)`` for second-order ``b``, ``a`` with ``a[0] = 1`` (direct form II transposed)."""
-    n = x.size
+def _iir2_pair(b1, a1, b2, a2, Kyaw, r, Kd, delta, U):
+    """``y = lfilter(b1, a1, u)`` and ``w = lfilter(b2, a2, u) - U r`` of ``u = Kyaw r + Kd delta``, second-order
+    ``b``, ``a`` with ``a[0] = 1`` (direct form II transposed), in one pass: the two independent recursions
+    interleaved, each sample's arithmetic that of one ``lfilter`` at a time."""
+    n = r.size
     y = np.empty(n)
-    z0 = 0.0
-    z1 = 0.0
+    w = np.empty(n)
+    p0 = 0.0
+    p1 = 0.0
+    q0 = 0.0
+    q1 = 0.0
     for t in range(n):
-        xt = x[t]
-        yt = b[0] * xt + z0
-        z0 = b[1] * xt - a[1] * yt + z1
-        z1 = b[2] * xt - a[2] * yt
+        xt = Kyaw * r[t] + Kd * delta[t]
+        yt = b1[0] * xt + p0
+        p0 = b1[1] * xt - a1[1] * yt + p1
+        p1 = b1[2] * xt - a1[2] * yt
         y[t] = yt
-    return y
+        vt = b2[0] * xt + q0
+        q0 = b2[1] * xt - a2[1] * vt + q1
+        q1 = b2[2] * xt - a2[2] * vt
+        w[t] = vt - U * r[t]
+    return y, w
 
 
 @njit(cache=True)
@@ -103,14 +112,20 @@ def delayed_y_columns(F, nls, yf, Sy, s, ZtP):
 @njit(cache=True)
 def equation_error(y, PhiT, g_mid, s):
     """Equation error (42) ``y_t - Phi_t^T g_mid`` for ``t = s .. n-1``, mean removed and scaled by its std
-    (the normalisation of :func:`shipid.estimate.arma.fit_ar`); returns ``(e, scale)``."""
+    (the normalisation of :func:`shipid.estimate.arma.fit_ar`); returns ``(e, scale)``.
+
+    Regressor by regressor over the samples (each sample's terms subtracted in the order ``j = 0 .. 4``,
+    contiguous rows: a vectorised loop with each sample's arithmetic unchanged)."""
     n = y.size
-    e = np.empty(n - s)
-    for t in range(s, n):
-        v = y[t]
-        for j in range(5):
-            v -= PhiT[j, t] * g_mid[j]
-        e[t - s] = v
+    m = n - s
+    e = np.empty(m)
+    for t in range(m):
+        e[t] = y[s + t]
+    for j in range(5):
+        gj = g_mid[j]
+        pj = PhiT[j, s:]
+        for t in range(m):
+            e[t] -= pj[t] * gj
     mu = _mean(e)
     var = 0.0
     for t in range(e.size):
@@ -136,11 +151,9 @@ def instrument_signals(sim, r_hat0, delta, y_hat, a_hat, X):
     A1, d, k1, Kyaw, Kd, zs, g, U, T = sim[0], sim[1], sim[2], sim[3], sim[4], sim[5], sim[6], sim[7], sim[8]
     stable = A1 > 0 and d > 0 and k1 > 0
     if stable:
-        u = Kyaw * r_hat0 + Kd * delta
         b1, a1 = _bilinear(0.0, 1.0, 0.0, A1, d, k1, T)
-        y_hat = _iir2(b1, a1, u)
         b2, a2 = _bilinear(zs, 0.0, g, A1, d, k1, T)
-        a_hat = _iir2(b2, a2, u) - U * r_hat0
+        y_hat, a_hat = _iir2_pair(b1, a1, b2, a2, Kyaw, r_hat0, Kd, delta, U)
     my = _mean(y_hat)
     for t in range(n):
         X[0, t] = y_hat[t] - my
