@@ -1,4 +1,4 @@
-"""Benchmark: ``identify mmg`` with cross-validation on the Esso Osaka 3 m runs, and the 9-run held-out study.
+"""Benchmark: ``identify mmg`` with cross-validation on the Esso Osaka 3 m runs.
 
 Peer: the previous code path, measured in the same run — step 1 by the reference
 :func:`shipid.estimate.cd_ekf.cd_ekf` + :func:`shipid.estimate.smoothers.rts_smoother`
@@ -19,21 +19,17 @@ the ninth held-out run; ``--runs`` takes fewer). Needs ``$SHIPID_DATA`` (or ../s
 2. The batched CV table, ``--folds`` folds over all 12 candidates: moments vs stacked fits.
 3. ``identify`` (step 1, CV, final fit) without the output-error refinement: wall and CPU time of
    the current path and of the previous one; the ratio. Then as ``shipid identify mmg --folds 4``
-   runs it (``--refine auto``: the output-error refinement of
-   :mod:`shipid.methods.mmg.output_error` for the Esso structure): wall and CPU time, and the ratio
+   runs it (``--refine auto``: with enough horizons the staged selection of
+   :mod:`shipid.methods.mmg.staged`, output-error CVs included): wall and CPU time, and the ratio
    to the same identify without the refinement measured just before; then the same with the reference
    simulation (3c): wall and CPU time, ratio, largest relative estimate difference.
-4. With ``--heldout9``: ``shipid study esso-osaka-heldout9`` (12 output-error CVs on the 32 training runs,
-   final fit, the 9 held-out runs): wall and CPU time, chosen candidate and held-out means; with
-   ``--heldout9-reference`` also with the reference simulation (about 1000 s CPU), the ratio and the
-   largest relative differences of the CV scores and the fitted coefficients.
-5. With ``--oe-reference``: the 4-fold output-error CV of the candidate the 9-run study chooses
-   (``hull+rudder+thrust/nondimensional+prop-side+wind-gain``) and its final fit on the 32 training runs,
-   compiled and with the reference simulation: CPU time, ratio, largest relative differences (a cheaper
-   same-run check than 4's reference).
+4. With ``--oe-reference``: the 4-fold output-error CV
+   (:func:`shipid.methods.mmg.staged.cv_refinement`) of one candidate of the staged selection
+   (``hull+rudder+thrust/nondimensional+prop-side+wind-gain``) and its final fit on the training runs,
+   compiled and with the reference simulation: CPU time, ratio, largest relative differences.
 
-Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--heldout9]
-[--heldout9-reference] [--oe-reference] [--skip-cv] [--smoke]`` (``--smoke``: 3 runs, 2 folds, steps 1-3a only).
+Run: ``python benchmarks/bench_mmg_cv.py [--runs 32] [--folds 4] [--oe-reference] [--skip-cv] [--smoke]``
+(``--smoke``: 3 runs, 2 folds, steps 1-3a only).
 """
 
 from __future__ import annotations
@@ -100,16 +96,6 @@ def _timed(fn):
     return out, time.process_time() - c0, time.perf_counter() - w0
 
 
-def _heldout9():
-    from shipid.methods.mmg import study_oe as S
-
-    st = S.heldout9_train()
-    st["heldout"] = S.heldout9_evaluate(st)
-    return st
-
-
-def _flat_estimates(st):
-    return {k: v["value"] for k, v in st["result"]["estimates"].items()}
 
 
 def _max_rel(a, b):
@@ -118,13 +104,12 @@ def _max_rel(a, b):
 
 def _oe_chosen():
     from shipid.io.basins import read_esso
-    from shipid.methods.mmg import estimator as R, pipeline as P, study_oe as SO
+    from shipid.methods.mmg import estimator as R, pipeline as P, staged as SG
     from shipid.methods.mmg.candidates_asym import asym_variants
     from shipid.methods.mmg.candidates_surge import surge_variants
     from shipid.models import mmg
 
-    sp = SO.heldout9_split()
-    trials = [read_esso(f) for f in sp["train"]]
+    trials = [read_esso(f) for f in _runs(None)]
     prior = mmg.load_published("esso_osaka_3m")
     runs = [R.smooth_run(tr) for tr in trials]
     pool = dict(R.CANDIDATES[prior.structure])
@@ -134,7 +119,7 @@ def _oe_chosen():
     chosen = base + "+prop-side+wind-gain"
 
     def go():
-        cv = SO.cv_refinement(trials, runs, prior, [chosen], folds=4, pool=pool)
+        cv = SG.cv_refinement(trials, runs, prior, [chosen], folds=4, pool=pool)
         res = P.identify(trials, prior, structure=chosen, select=False, candidates=pool, refine="output-error")
         return cv, {k: e.value for k, e in res.estimates.items()}, res.diagnostics["output_error"]["cost_end"]
 
@@ -154,11 +139,9 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=None)
     ap.add_argument("--folds", type=int, default=4)
-    ap.add_argument("--heldout9", action="store_true", help="Also time the 9-run held-out study (output-error CVs).")
-    ap.add_argument("--heldout9-reference", action="store_true", help="... and with the reference simulation (slow).")
     ap.add_argument("--oe-reference", action="store_true",
                     help="The chosen candidate's output-error CV and final fit, compiled vs reference.")
-    ap.add_argument("--skip-cv", action="store_true", help="Skip steps 1-3 (only the studies).")
+    ap.add_argument("--skip-cv", action="store_true", help="Skip steps 1-3 (only step 4).")
     ap.add_argument("--smoke", action="store_true", help="3 runs, 2 folds, steps 1-3a (the test suite's smoke test).")
     a = ap.parse_args()
     if a.smoke:
@@ -223,27 +206,6 @@ def main() -> None:
               f"{_max_rel(e2, e3):.1e}, horizon cost {abs(oe.get('cost_end', 0) / oe3.get('cost_end', 1) - 1):.1e}")
     if a.oe_reference:
         _oe_chosen()
-    if a.heldout9 or a.heldout9_reference:
-        st, c9, w9 = _timed(_heldout9)
-        ev = st["heldout"]["identified"]
-        print(f"4. study esso-osaka-heldout9 ({len(st['refinement_cv']) // 2} output-error CVs, final fit, held-out "
-              f"evaluation): {w9:.1f} s wall ({c9:.1f} s CPU); chosen '{st['chosen']}', held-out mean over runs "
-              f"{ev['psi_mean_of_runs']:.2f} deg / {ev['pos_mean_of_runs']:.3f} m")
-        if a.heldout9_reference:
-            with reference_simulation():
-                st0, c90, w90 = _timed(_heldout9)
-            sc = {k: v["score"] for k, v in st["refinement_cv"].items()}
-            sc0 = {k: v["score"] for k, v in st0["refinement_cv"].items()}
-            rg = {k: v["score"] for k, v in st["regression_cv"].items()}
-            rg0 = {k: v["score"] for k, v in st0["regression_cv"].items()}
-            ev0 = st0["heldout"]["identified"]
-            print(f"   reference simulation: {w90:.1f} s wall ({c90:.1f} s CPU); ratio {c90 / c9:.1f}x CPU, "
-                  f"{w90 / w9:.1f}x wall; chosen '{st0['chosen']}'; largest relative differences: refinement-CV "
-                  f"score {_max_rel(sc, sc0):.1e}, regression-CV score {_max_rel(rg, rg0):.1e}, fitted "
-                  f"coefficient {_max_rel(_flat_estimates(st), _flat_estimates(st0)):.1e}, held-out psi "
-                  f"{abs(ev['psi_mean_of_runs'] / ev0['psi_mean_of_runs'] - 1):.1e}, pos "
-                  f"{abs(ev['pos_mean_of_runs'] / ev0['pos_mean_of_runs'] - 1):.1e}")
-
 
 if __name__ == "__main__":
     main()

@@ -17,6 +17,7 @@ import argparse
 import json
 import os
 import sys
+import time
 from pathlib import Path
 
 import shipid
@@ -37,8 +38,13 @@ def main(argv=None) -> int:
     runs = sorted(str(p.relative_to(root)) for p in root.glob("*/*.csv"))
     train = [r for r in runs if r not in TEST]
     assert len(train) == 32 and len(TEST) == 9 and not set(train) & set(TEST)
+    t0, c0 = time.perf_counter(), time.process_time()
     res = shipid.identify("mmg", [str(root / r) for r in train], fmt="esso", folds=4)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     Path(a.model).write_text(res.to_json(), encoding="utf-8")
+    sel = res.diagnostics.get("structure_selection") or {}
+    print(f"identify: {wall:.0f} s wall, {cpu:.0f} s CPU (load average {os.getloadavg()[0]:.1f}); "
+          f"selection: {sel.get('criterion')}; {sel.get('why')}")
     print(f"identified on {len(train)} runs: structure {res.model.get('structure_candidate')}, "
           f"refined: {bool((res.diagnostics.get('output_error') or {}).get('refined'))}, "
           f"re-timed: {res.model.get('retime') is not None}; model written to {a.model}")

@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = 'cecb963762ee290c'
+SOURCES = '77e960cdd4aa0e3a'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -63,8 +63,6 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.ebm.cli_coverage', 'Coverage of the EBM std: noise seeds x ships with every Table-3 coefficient scaled by U[0.7, 1.3].', False),
     ('study', 'ebm-esso-osaka'):
         ('shipid.methods.ebm.cli', 'Reproduce Table 3 / Table 5 of Yoon & Rhee (2003) on simulated ESSO OSAKA trials.', False),
-    ('study', 'esso-osaka-heldout9'):
-        ('shipid.methods.mmg.cli_heldout9', "Esso Osaka 3 m, 9 held-out runs (both papers' test runs + one seeded random run): choices by CV on the other 32 (structure; regression vs output-error refinement; port/starboard terms; surge and slipstream-rudder terms), then the held-out table.", False),
     ('study', 'export'):
         ('shipid.cli.campaign_cmds', 'Export a campaign store to Parquet or CSV, one row per run.', False),
     ('study', 'mass-cm-contour'):

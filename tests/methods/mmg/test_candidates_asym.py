@@ -82,12 +82,12 @@ def test_regression_recovers_a_propeller_yaw_moment(esso_published, own_run):
 @pytest.mark.parametrize("kind, terms", [("asym", "prop-side"),
                                          pytest.param("surge", "surge-hull+wind-gain", marks=pytest.mark.slow)])
 def test_refinement_cv_takes_the_variants_from_a_pool(esso_published, own_run, kind, terms):
-    """study_oe.cv_refinement looks the port/starboard (and the surge / wind, candidates_surge) variants
+    """staged.cv_refinement looks the port/starboard (and the surge / wind, candidates_surge) variants
     up in ``pool``; on runs the esso_published model made itself both criteria of the variant predict them
     (scores finite, rows for both)."""
     from shipid.methods.mmg import candidates_surge as SG
     from shipid.methods.mmg import output_error as OE
-    from shipid.methods.mmg import study_oe as S
+    from shipid.methods.mmg import staged as S
 
     pool = dict(C.CANDIDATES["esso-lowspeed"])
     pool.update((A.asym_variants if kind == "asym" else SG.surge_variants)(BASE, pool[BASE]))
@@ -98,12 +98,3 @@ def test_refinement_cv_takes_the_variants_from_a_pool(esso_published, own_run, k
                           oe_config=OE.OEConfig(max_iter=1))
     assert set(ref) == {name + "/regression", name + "/output-error"}
     assert all(np.isfinite(r["score"]) and r["runs"] == 2 for r in ref.values())
-
-
-def test_cli_offers_the_symmetric_only_switch():
-    from click.testing import CliRunner
-
-    from shipid.cli import cli
-
-    out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
-    assert "--symmetric-only" in out

@@ -135,12 +135,3 @@ def test_regression_recovers_surge_and_slipstream_terms(esso_published):
     est = {c: th for m in mmg.MODES for c, th in zip(f.free[m], f.fits[m].theta)}
     for c, true in (("X_vv", -0.4), ("X_rr", 0.03), ("YR_s", 0.3), ("NR_s", -0.45)):
         assert est[c] == pytest.approx(true, rel=0.02), c
-
-
-def test_cli_offers_the_no_surge_terms_switch():
-    from click.testing import CliRunner
-
-    from shipid.cli import cli
-
-    out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
-    assert "--no-surge-terms" in out and "--symmetric-only" in out

@@ -33,3 +33,20 @@ def test_a_candidate_that_could_not_be_scored_is_explained_once(capsys):
     assert out.count("score inf: the candidate's fit failed or its simulation diverged") == 1
     _print_result(_result(est, {"structure_selection": dict(sel, table={"full": row})}))
     assert "score inf" not in capsys.readouterr().out
+
+
+def test_the_staged_selection_prints_its_second_table_the_choice_and_why(capsys):
+    """With the staged selection (shipid.methods.mmg.staged) the text output has the regression table, the
+    refinement table with the chosen row and criterion marked, and the 'why' line of MODEL.json."""
+    row = {"score": 1.86, "psi_rms": 10.6, "pos_rms": 0.79}
+    ref = {"full/regression": dict(row), "full/output-error": dict(row, score=1.40),
+           "full+rudder-offset/output-error": dict(row, score=1.25)}
+    sel = {"method": "staged CV", "table": {"full": row}, "refinement_table": ref, "chosen": "full+rudder-offset",
+           "chosen_criterion": "output-error", "why": "lowest CV score of the 3 rows scored: 1.2500"}
+    res = _result({"N_r": Estimate(-0.034, 0.0026, "-", "estimated", "")}, {"structure_selection": sel})
+    res.model = {"structure": "yasukawa2015", "structure_candidate": "full+rudder-offset"}
+    _print_result(res)
+    lines = capsys.readouterr().out.splitlines()
+    marked = [ln for ln in lines if ln.endswith("<-")]
+    assert len(marked) == 1 and marked[0].split()[0] == "full+rudder-offset/output-error"
+    assert "  why: lowest CV score of the 3 rows scored: 1.2500" in lines

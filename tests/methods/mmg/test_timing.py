@@ -53,13 +53,3 @@ def test_retime_undoes_the_delay_and_records_one_repair():
     (rep,) = out.meta["repairs"]
     assert rep["kind"] == "retimed" and "0.80 s" in rep["text"] and "\n" not in rep["text"]
     assert lagged.meta.get("repairs") is None
-
-
-def test_heldout9_offers_the_retime_switch():
-    from click.testing import CliRunner
-
-    from shipid.cli import cli
-
-    out = CliRunner().invoke(cli, ["study", "esso-osaka-heldout9", "--help"]).output
-    assert "--retime / --no-retime" in out
-    assert "--input-lags / --no-input-lags" in out

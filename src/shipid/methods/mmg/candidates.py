@@ -5,7 +5,9 @@ values), optionally a different hull structure (``structure``), a regression wei
 (``weighting``, :func:`shipid.methods.mmg.estimator.row_weights`) and particular
 overrides (``particulars``, e.g. a symmetric flow-straightening γ_R). The lists are full
 factorial designs over axes fixed a priori; the reasons for each axis are in
-:mod:`shipid.methods.mmg.study`.
+``docs/validation/mmg.md``. For the Esso low-speed structure the default selection also scores the
+port/starboard (:mod:`shipid.methods.mmg.candidates_asym`) and surge
+(:mod:`shipid.methods.mmg.candidates_surge`) variants of the best (:mod:`shipid.methods.mmg.staged`).
 """
 
 from __future__ import annotations

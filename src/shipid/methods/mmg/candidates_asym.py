@@ -2,8 +2,8 @@
 
 The training runs' 60-s restarted horizons of the straight approach of the turning runs
 (rudder near zero, propeller ahead) drift to starboard in the simulation of the regression +
-output-error model, in nearly every run (4-fold CV on the 32 training runs of the 9-run split,
-:mod:`shipid.methods.mmg.study_oe`): a yaw moment at zero rudder that the low-speed model
+output-error model, in nearly every run (4-fold CV on the 32 training runs of the Esso Osaka 9-run split,
+``docs/validation/mmg.md``): a yaw moment at zero rudder that the low-speed model
 lacks. Two physical sources, each one pair of terms of
 :data:`shipid.models.mmg.COEFS` ``["esso-lowspeed-asym"]`` (zero in the published model):
 
@@ -16,7 +16,7 @@ lacks. Two physical sources, each one pair of terms of
 
 :func:`asym_variants` adds one, the other or both to a candidate of
 :data:`shipid.methods.mmg.candidates.CANDIDATES` ``["esso-lowspeed"]``; which (if any) is
-kept is chosen by the training-run CV of :func:`shipid.methods.mmg.study_oe.cv_refinement`.
+kept is chosen by the staged training-run CV of :func:`shipid.methods.mmg.staged.select_staged`.
 """
 
 from __future__ import annotations

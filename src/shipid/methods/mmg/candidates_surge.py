@@ -1,7 +1,7 @@
 """Surge and slipstream-rudder variants of the Esso candidate structures (structure ``esso-lowspeed-ext``).
 
-Diagnosis from the 4-fold CV residuals of the 32 training runs of the 9-run split
-(:mod:`shipid.methods.mmg.study_oe`; regression + output error of
+Diagnosis from the 4-fold CV residuals of the 32 training runs of the Esso Osaka 9-run split
+(``docs/validation/mmg.md``; regression + output error of
 ``hull+rudder+thrust/nondimensional+prop-side``): the 60-s position error grows with the
 propeller rate, from 0.3–0.7 m at n ≤ 10 1/s to 1.0–2.8 m in the four zig-zags at
 n ≈ 14–16 1/s; there it is partly along-track (a surge-speed error, 0.8–1.6 m) and mostly
@@ -25,7 +25,7 @@ hull terms of drift and turning. The terms are those of
 
 :func:`surge_variants` adds them (alone and combined, a fixed list) to a candidate of
 ``esso-lowspeed`` or ``esso-lowspeed-asym``; which (if any) is kept is chosen by the
-training-run CV of :func:`shipid.methods.mmg.study_oe.cv_refinement`.
+staged training-run CV of :func:`shipid.methods.mmg.staged.select_staged`.
 """
 
 from __future__ import annotations

@@ -192,7 +192,20 @@ def _print_result(res) -> None:
         for c, row in sel["table"].items():
             mark = "  <-" if c == res.model.get("structure_candidate") else ""
             click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs) + mark)
-        if any(not math.isfinite(row["score"]) for row in sel["table"].values()):
+        ref = sel.get("refinement_table") or {}
+        if ref:
+            click.echo("  then regression and output error of the best and their variants (score, pooled RMS "
+                       "psi [deg] / pos [m]):")
+            pick = f"{sel['chosen']}/{sel.get('chosen_criterion')}"
+            for c, row in ref.items():
+                click.echo(f"  {c:<68} score {row['score']:8.3f}  psi_rms {row['psi_rms']:8.3f}  "
+                           f"pos_rms {row['pos_rms']:8.3f}" + ("  <-" if c == pick else ""))
+        if sel.get("why"):
+            click.echo(f"  why: {sel['why']}")
+        if sel.get("note"):
+            click.echo(f"  note: {sel['note']}")
+        rows = [*sel["table"].values(), *ref.values()]
+        if any(not math.isfinite(row["score"]) for row in rows):
             click.echo("  (score inf: the candidate's fit failed or its simulation diverged in at least one fold, "
                        "so it cannot be chosen)")
     cal = res.diagnostics.get("calibration")
@@ -245,26 +258,28 @@ _ID_OPTS = [
                       "[default: from the data profile (Esso CSV: esso_osaka_3m, HSVA .dat: kvlcc2_hsva); "
                       "other files: esso_osaka_3m with a warning]."),
     click.option("--structure", default="auto", show_default=True,
-                 help="Free-coefficient set (see shipid.methods.mmg.estimator.CANDIDATES) or 'auto' (cross-validated)."),
-    click.option("--folds", default=None, type=int, help="CV folds for 'auto' (default: leave one run out)."),
+                 help="Free-coefficient set (shipid.methods.mmg.candidates.CANDIDATES) or 'auto' (chosen by "
+                      "cross-validation over the given runs; see --selection)."),
+    click.option("--folds", default=None, type=int,
+                 help="CV folds for 'auto' [default: leave one run out; the output-error stages of the Esso "
+                      "selection: 4]."),
     click.option("--selection", default="auto", show_default=True,
                  type=click.Choice(["auto", "horizons", "turning", "turning-auto", "rudder-angle"]),
-                 help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors, "
-                      "shipid.methods.mmg.candidates.CANDIDATES), 'turning' (open-loop peak yaw rate per side and "
-                      "heading of the left-out zig-zags, shipid.methods.mmg.turning_selection; Yasukawa-2015 "
-                      "structure only, opt-in: its criterion was fixed after seeing a CV table, and on two training runs it chose a model "
-                      "with 11.9 deg heading RMS on a third run where horizons gave 2.4); 'turning-auto' (the peak criterion "
-                      "under a heading limit, with the horizon choice below 4 runs with switch >= 5 deg at 2 "
-                      "rudder angles, shipid.methods.mmg.turning_nested); 'rudder-angle' (Yasukawa-2015 only: no "
-                      "selection, the candidate with the rudder cross-flow part per side that the forward CV by "
-                      "rudder angle of 'shipid study kvlcc2-rudder-angle' chose on HSVA runs, its side parameter "
-                      "calibrated on the given runs; shipid.methods.mmg.rudder_angle); 'auto': horizons."),
+                 help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors; "
+                      "for the Esso low-speed prior with enough horizons the staged CV of "
+                      "shipid.methods.mmg.staged: regression, output error, port/starboard and surge variants; "
+                      "else the regression CV over shipid.methods.mmg.candidates.CANDIDATES); 'turning' "
+                      "(open-loop peak yaw rate per side and heading of the left-out zig-zags, Yasukawa-2015 "
+                      "structure only, shipid.methods.mmg.turning_selection); 'turning-auto' (the peak criterion "
+                      "under a heading limit, shipid.methods.mmg.turning_nested); 'rudder-angle' (Yasukawa-2015 "
+                      "only: the candidate with the rudder cross-flow part per side, its side parameter calibrated "
+                      "on the given runs, shipid.methods.mmg.rudder_angle); 'auto': horizons."),
     click.option("--refine", default="auto", show_default=True,
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "
-                      "(shipid.methods.mmg.output_error); 'auto': for the Esso low-speed structure, where "
-                      "training-run CV favours it (shipid study esso-osaka-heldout9), and only with at least "
-                      "5 horizons per refined coefficient; else none."),
+                      "(shipid.methods.mmg.output_error); 'auto': as the staged selection chose, else for the "
+                      "Esso low-speed structure with at least 5 horizons per refined coefficient; 'output-error' "
+                      "with --structure auto: the staged selection chooses among refined candidates only."),
     click.option("--rudder-sign", default=None, type=int,
                  help="-1 if the log's rudder is positive to port (MMG: positive turns to starboard) "
                       "[default: from the data profile: -1 for HSVA KVLCC2 .dat, else +1]."),
@@ -273,7 +288,7 @@ _ID_OPTS = [
                  help="Step-2 regression form (shipid.methods.mmg.estimator.FitConfig): 'integral' regresses the "
                       "impulse over Froude-scaled windows (10 s at L = 3 m) and needs no smoothed accelerations; "
                       "'differential' the forces of the smoothed accelerations (Yoon & Rhee eq. 16; biased after "
-                      "fast rudder changes, see 'shipid study mmg-coverage'); 'auto' the form chosen for the "
+                      "fast rudder changes); 'auto' the form chosen for the "
                       "prior's structure (EQUATION_BY_STRUCTURE: integral for the Esso low-speed hull, "
                       "differential for KVLCC2)."),
     click.option("--simex", default="auto", show_default=True, type=click.Choice(["auto", "on", "off"]),

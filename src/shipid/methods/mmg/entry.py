@@ -79,9 +79,13 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         Each run's yaw response to its first rudder step is checked against it (one warning per run
         that contradicts it).
     structure : str, optional
-        A candidate name, or None / ``"auto"`` to choose by cross-validation over the runs.
+        A candidate name, or None / ``"auto"`` to choose by cross-validation over the runs: for the Esso
+        low-speed prior with enough restarted horizons the staged selection of
+        :func:`shipid.methods.mmg.staged.select_staged` (port/starboard and surge variants, regression or
+        output error), else the regression CV (:func:`shipid.methods.mmg.pipeline.select_structure`); the
+        criterion, the tables and why are in ``diagnostics["structure_selection"]``.
     folds : int, optional
-        CV folds (default: leave one run out).
+        CV folds (default: leave one run out; the output-error stages of the staged selection: 4).
     selection : {"auto", "horizons", "turning", "turning-auto", "rudder-angle"}
         Criterion and candidate list of the structure selection (``shipid identify mmg --help``).
     refine : {"auto", "none", "output-error"}

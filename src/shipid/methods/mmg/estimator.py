@@ -41,7 +41,7 @@ restarted from the measured state (:func:`shipid.methods.mmg.validate.validate`,
 RMS ψ/10° + RMS position/1 m), leave-one-run-out by default. Only training runs are
 ever passed in. The candidate lists are full factorial designs over axes fixed a
 priori; the reasons for each axis, the frozen hyper-parameters and the CV tables are
-in :mod:`shipid.methods.mmg.study`.
+in ``docs/validation/mmg.md``.
 
 Why a low-speed structure for the Esso Osaka: the random and berthing runs spend
 most of their time below 0.2 m/s (median speed 0.11 m/s on the random runs, against
@@ -52,7 +52,7 @@ ship moving sideways; the low-speed hull (drag blending with |β|, cross-flow
 integrals) holds at any drift angle. The leave-one-run-out CV on the training runs
 agrees: the best low-speed candidate scores 1.84 against 2.38 for the best cubic-hull
 one on the Miyauchi training runs, 1.95 against 2.10 on the Wakita training runs
-(``shipid study esso-osaka-heldout --train-only`` prints the tables).
+(tables in ``docs/validation/mmg.md``).
 """
 
 from __future__ import annotations
@@ -484,7 +484,7 @@ def heldout_score(model: mmg.MmgModel, trials: Sequence[Trial], horizon: float =
 
 
 def horizon_score(rms: Mapping[str, float]) -> float:
-    """CV score of the Esso study: RMS ψ / 10° + RMS position / 1 m (10° of heading ~ 1 m of position)."""
+    """CV score of the horizon criteria: RMS ψ / 10° + RMS position / 1 m (10° of heading ~ 1 m of position)."""
     return float(rms["psi"] / 10.0 + rms["pos"] / 1.0)
 
 

@@ -1,7 +1,7 @@
 """Output-error refinement of an MMG fit on restarted horizons (multiple shooting from the measured state).
 
 The step-2 regression (:func:`shipid.methods.mmg.estimator.fit`) minimises the equation
-error of the smoothed forces. What the Esso study scores is different: the heading and
+error of the smoothed forces. What the horizon CV scores is different: the heading and
 position errors of the model simulated open loop over 60-s horizons restarted from the
 measured state (:func:`shipid.methods.mmg.validate.validate`). This module takes the
 regression estimate as the starting point and minimises that output error directly
@@ -68,8 +68,8 @@ ROBUST_K = 2.0
 class OEConfig:
     """Settings of the output-error refinement.
 
-    ``horizon`` (s) and ``decimate`` (simulate every n-th sample) as the CV of the
-    study; ``max_iter`` Levenberg–Marquardt iterations; ``rtol`` stop when the cost
+    ``horizon`` (s) and ``decimate`` (simulate every n-th sample) as the horizon
+    CV; ``max_iter`` Levenberg–Marquardt iterations; ``rtol`` stop when the cost
     falls by less than this fraction; ``fd_step`` forward-difference step in the
     scaled coordinates; ``exclude`` coefficients never refined (their regressors are
     rarely excited, e.g. the astern side-force polynomials), which keep the

@@ -25,6 +25,7 @@ from shipid.methods.mmg.estimator import (MEAS, FitConfig, MmgFit, SmoothConfig,
 from shipid.methods.mmg.manoeuvres import equilibrium_speed, training_conditions
 from shipid.methods.mmg.output_error import OEConfig, cluster_index, refinable, refined_fit, stack_horizons
 from shipid.methods.mmg.simex import SimexConfig, simex_fit
+from shipid.methods.mmg.staged import STAGED_STRUCTURES, enough_horizons, select_staged
 from shipid.models import mmg
 from shipid.result import Estimate, Result
 
@@ -212,8 +213,8 @@ def build_result(f: MmgFit, prior: mmg.MmgModel, runs: Sequence[SmoothedRun], *,
                   diagnostics=diag, provenance=prov)
 
 
-#: Prior structures whose identification is refined by output error by default: chosen by
-#: training-run CV (:func:`shipid.methods.mmg.study_oe.cv_refinement`).
+#: Prior structures whose identification is refined by output error by default where the staged selection
+#: does not decide it (:func:`shipid.methods.mmg.staged.cv_refinement` compares both on the training runs).
 REFINE_BY_DEFAULT = ("esso-lowspeed",)
 #: ``refine="auto"`` refines only with at least this many restarted horizons per refined
 #: coefficient: the horizons are the clusters of the sandwich covariance (its rank is at most
@@ -314,7 +315,14 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
     prior : MmgModel
         Supplies the structure, the fixed constants and the values of non-free coefficients.
     structure : str, optional
-        A candidate name of :data:`CANDIDATES`; with ``select`` and no name, chosen by CV.
+        A candidate name of :data:`CANDIDATES`; with ``select`` and no name, chosen by CV: for a prior of
+        :data:`~shipid.methods.mmg.staged.STAGED_STRUCTURES` with the default ``candidates`` and ``selector``,
+        ``refine`` other than ``"none"`` and enough horizons
+        (:func:`~shipid.methods.mmg.staged.enough_horizons`), by the staged CV of
+        :func:`shipid.methods.mmg.staged.select_staged`, which also decides the refinement (its chosen
+        criterion; ``refine="output-error"`` restricts the choice to the refined rows); else by
+        :func:`select_structure`. ``diagnostics["structure_selection"]`` records the criterion, the
+        tables and why.
     selector : callable, optional
         ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
@@ -332,7 +340,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         the refined coefficients carry the horizon-cluster sandwich standard errors.
         ``"auto"``: :func:`default_refine`, and refine only when the training runs hold at least
         :data:`MIN_HORIZONS_PER_COEFFICIENT` horizons per refined coefficient (else the
-        regression estimate, with the reason in ``diagnostics["output_error"]``).
+        regression estimate, with the reason in ``diagnostics["output_error"]``). Where the staged
+        selection runs (``structure`` above), the criterion it chose replaces ``"auto"``.
     simex : SimexConfig or None
         Correct the chosen structure's regression estimate for the errors of the smoothed states
         (:func:`shipid.methods.mmg.simex.simex_fit`: with the default ``SimexConfig()`` only where its pilot
@@ -348,14 +357,34 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         progress()
     cands = CANDIDATES[prior.structure] if candidates is None else candidates
     selection = None
+    staged_note = None
+    if (structure is None and select and len(trials) >= 2 and selector is None and candidates is None
+            and refine in ("auto", "output-error") and prior.structure in STAGED_STRUCTURES):
+        ok, count = enough_horizons(trials, prior, oe_config, MIN_HORIZONS_PER_COEFFICIENT)
+        if ok:
+            st = select_staged(trials, runs, prior, config=fit_config, folds=folds, oe_config=oe_config,
+                               criteria=("output-error",) if refine == "output-error" else
+                               ("regression", "output-error"))
+            structure, cands, selection = st["chosen"], st["pool"], st["selection"]
+            refine = st["criterion"] if st["criterion"] == "output-error" else "none"
+        else:
+            staged_note = (f"staged selection not run: {count} (it needs {MIN_HORIZONS_PER_COEFFICIENT} per "
+                           "coefficient, as refine='auto'); regression CV only")
     if structure is None and select and len(trials) >= 2:
         if selector is None:
             structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
             method = horizon_method(folds)
         else:
             structure, table, method = selector(trials, runs, prior, cands, fit_config, folds)
-        selection = {"method": method, "table": table, "chosen": structure,
-                     "training_runs": [r.source for r in runs]}
+        scores = sorted((row.get("score", np.inf), c) for c, row in table.items() if c != structure)
+        why = (f"lowest CV score of the {len(table)} candidates: "
+               f"{table.get(structure, {}).get('score', np.nan):.4f} ({structure})")
+        if scores:
+            why += f"; next {scores[0][0]:.4f} ({scores[0][1]})"
+        selection = {"method": method, "criterion": "regression CV" if selector is None else "selector",
+                     "table": table, "chosen": structure, "why": why, "training_runs": [r.source for r in runs]}
+        if staged_note:
+            selection["note"] = staged_note
     elif structure is None:
         structure = next(iter(cands))
     if structure not in cands:
