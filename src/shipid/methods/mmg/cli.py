@@ -271,7 +271,7 @@ _ID_OPTS = [
                       "else the regression CV over shipid.methods.mmg.candidates.CANDIDATES); 'turning' "
                       "(open-loop peak yaw rate per side and heading of the left-out zig-zags, Yasukawa-2015 "
                       "structure only, shipid.methods.mmg.turning_selection); 'turning-auto' (the peak criterion "
-                      "under a heading limit, shipid.methods.mmg.turning_nested); 'rudder-angle' (Yasukawa-2015 "
+                      "under a heading limit, shipid.methods.mmg.turning_auto); 'rudder-angle' (Yasukawa-2015 "
                       "only: the candidate with the rudder cross-flow part per side, its side parameter calibrated "
                       "on the given runs, shipid.methods.mmg.rudder_angle); 'auto': horizons."),
     click.option("--refine", default="auto", show_default=True,

@@ -18,7 +18,7 @@ from shipid.methods.mmg import pipeline as P
 from shipid.methods.mmg import profile as PF
 from shipid.methods.mmg import rudder_angle as RA
 from shipid.methods.mmg import simex as SX
-from shipid.methods.mmg import turning_nested as TN
+from shipid.methods.mmg import turning_auto as TN
 from shipid.methods.mmg import turning_selection as TS
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.estimator import FitConfig

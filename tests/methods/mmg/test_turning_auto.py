@@ -1,8 +1,8 @@
-"""The automatic turning selection's guard and heading constraint (shipid.methods.mmg.turning_nested)."""
+"""The automatic turning selection's guard and heading constraint (shipid.methods.mmg.turning_auto)."""
 
 from types import SimpleNamespace
 
-from shipid.methods.mmg import turning_nested as N
+from shipid.methods.mmg import turning_auto as N
 
 
 def _runs(*names):
