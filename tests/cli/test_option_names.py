@@ -117,7 +117,6 @@ def _kinds_by_name() -> dict[str, dict[str, list[str]]]:
 #: then take it off this list)
 TWO_KINDS = {
     "--init": "monitor mass-cm: start-up seconds; study mass-cm-sensitivity: where Algorithm 1 starts",
-    "--simex": "identify mmg: auto|on|off; study mmg-coverage: a --simex/--no-simex flag",
 }
 
 

@@ -33,8 +33,9 @@ def _fmt(x, spec):
               help="Step-2 regression form (FitConfig.equation); default: identify mmg's.")
 @click.option("--window", "window_s", type=click.FloatRange(0.1, 120.0), default=None,
               help="Window of the integral form (s); default: FitConfig's.")
-@click.option("--simex/--no-simex", default=True, show_default=True,
-              help="Correct the regression for step-1 state errors (shipid.methods.mmg.simex).")
+@click.option("--simex", type=click.Choice(["on", "off"]), default="on", show_default=True,
+              help="Correct the regression for step-1 state errors (shipid.methods.mmg.simex): 'on' always, "
+                   "'off' never.")
 @click.option("--rudder-rate", type=click.FloatRange(min=0.1), default=None,
               help="Rudder rate of the simulated steering gear, deg/s [default: Esso the IMO 2.32 deg/s Froude-scaled "
                    "to the 3-m model, 24.1; KVLCC2 the HSVA runs' 13]; 'inf' for instantaneous steps.")
@@ -61,6 +62,7 @@ def mmg_coverage(runs, vessel, seconds, equation, window_s, simex, rudder_rate, 
 
     ves = VESSELS[vessel]
     seconds = ves.seconds if seconds is None else float(seconds)
+    simex = simex == "on"
     kw = {"seconds": seconds, "equation": equation, "window_s": window_s, "simex": simex,
           **({"imo_samples": imo_samples} if imo_samples else {}),
           **({"refine": refine, "criterion": criterion} if refine != "none" else {}),
