@@ -7,6 +7,11 @@ by monkeypatching) and the results compared bit for bit.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -40,6 +45,12 @@ CASES = {
     "spaces after the last row": HEAD + "\n".join(ROWS) + "\n  \n",
     "own headers": "Time (ms),X_m,Heading (deg)\n" + "\n".join(ROWS) + "\n",
 }
+
+
+@pytest.fixture(autouse=True)
+def _fast_path_for_small_files(monkeypatch):
+    """These files are small: let them take the fast path (by default a small file skips pyarrow)."""
+    monkeypatch.setattr(csv_read, "FAST_MIN_BYTES", 0)
 
 
 def _read(path):
@@ -92,3 +103,17 @@ def test_underscore_units_read_where_nothing_else_names_the_unit(tmp_path):
     (tmp_path / "u.csv").write_text("time_s,speed_kn,a_s [m/s^2]\n0,1,0\n0.5,2,0\n")
     u = read_trial(tmp_path / "u.csv", channel_map="t=time")
     assert u.names == ["speed", "a_s"] and u["speed"][1] == pytest.approx(2 * 1852 / 3600)
+
+
+def test_a_small_file_is_read_without_loading_pyarrow(tmp_path):
+    """Under FAST_MIN_BYTES the checked path reads the file and pyarrow is not imported (start-up of
+    ``shipid check`` / ``shipid validate``); the numbers are those of the fast path."""
+    p = tmp_path / "f.csv"
+    p.write_text(CASES["plain"])
+    code = ("import sys; from shipid.io.files import read_trial; tr = read_trial(sys.argv[1]); "
+            "print('pyarrow' in sys.modules, repr(float(tr['psi'][7])))")
+    env = {**os.environ, "PYTHONPATH": str(Path(csv_read.__file__).parents[2])}
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, check=True,
+                         env=env).stdout.split()
+    assert out[0] == "False"
+    assert float(out[1]) == read_trial(p)["psi"][7]          # this process: the fast path (fixture above)
