@@ -80,6 +80,18 @@ def test_fast_and_careful_paths_agree(tmp_path, monkeypatch, name):
     np.testing.assert_array_equal(fast.rows, slow.rows)
 
 
+def test_many_record_batches_give_the_same_doubles(tmp_path, monkeypatch):
+    """A file parsed in many blocks (batch boundaries inside it) equals the cell-by-cell read."""
+    p = tmp_path / "f.csv"
+    p.write_bytes(CASES["empty cell"].encode("utf-8"))
+    monkeypatch.setattr(csv_read, "BLOCK_BYTES", 1 << 10)
+    fast = _read(p)
+    monkeypatch.setattr(csv_read, "_fast", lambda *a, **k: None)
+    slow = _read(p)
+    same = (fast.data == slow.data) | (np.isnan(fast.data) & np.isnan(slow.data))
+    assert fast.data.shape == (300, 3) and same.all() and np.isnan(fast.data[5, 1])
+
+
 def test_a_good_file_takes_the_fast_path_and_its_columns_are_contiguous(tmp_path, monkeypatch):
     p = tmp_path / "f.csv"
     p.write_text(CASES["plain"])
