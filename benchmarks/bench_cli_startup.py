@@ -47,18 +47,21 @@ import shipid
 
 SRC = str(Path(shipid.__file__).resolve().parents[1])
 
+#: How a command-line case ends: as the console script does (an older tree without ``exit_now``: ``sys.exit``).
+EXIT = "; import shipid.cli as _c, sys as _s; getattr(_c, 'exit_now', _s.exit)(rc)"
+
 CASES = {
     "python": "pass",
     "import shipid": "import shipid",
     "shipid --help": "from shipid.cli import main; main(['--help'])",
-    "shipid vessels": "from shipid.cli import main, exit_now; rc = main(['vessels']){probe}; exit_now(rc)",
+    "shipid vessels": "from shipid.cli import main; rc = main(['vessels']){probe}" + EXIT,
     "eager --help": "import shipid.cli as c; c.load_all_commands(); c.main(['--help'])",
     "numpy+scipy+pandas": "import numpy, scipy, pandas",
     "shipid.identify": "import shipid; shipid.identify",
     "identify mass-cm": "import shipid; shipid.identify; from shipid import registry; registry.get('mass-cm').identify",
-    "shipid check FILE": "from shipid.cli import main, exit_now; rc = main(['check', {file!r}]){probe}; exit_now(rc)",
-    "shipid validate ESSO": "from shipid.cli import main, exit_now; rc = main(['validate', 'published:esso_osaka_3m', "
-                            "'--trial', {esso!r}]){probe}; exit_now(rc)",
+    "shipid check FILE": "from shipid.cli import main; rc = main(['check', {file!r}]){probe}" + EXIT,
+    "shipid validate ESSO": "from shipid.cli import main; rc = main(['validate', 'published:esso_osaka_3m', "
+                            "'--trial', {esso!r}]){probe}" + EXIT,
 }
 #: The Esso Osaka run of the validate case (shared data, ``shipid.io.paths.data_root``).
 ESSO_RUN = ("esso_osaka_3m", "data", "zigzag", "zigzag_31-Jul-2020_13_04_24.csv")
