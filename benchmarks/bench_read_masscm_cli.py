@@ -15,7 +15,10 @@ temporary folder, or an existing folder holding ``nominal.csv``, ``calibration.c
 * ``split``: the same work in stages inside one process (imports, reading the three trials,
   Algorithm 1 with its report series, the refinement), CPU time per stage, to say where the time goes.
 
-Printed: each, the ratio command / peer (target <= 5), the peak RSS against 300 MB, and the split.
+Printed: each, the ratios command / peer (the target, <= 5, is against the whole pandas process: a user of
+the command waits for the interpreter and its imports too), the peak RSS against 300 MB, and the split.
+``BENCH_BEFORE=SRC`` also times the command with another source tree (an older checkout's ``src``) in the same
+rounds, so that before/after ratios come from one run.
 
 Usage:  python benchmarks/bench_read_masscm_cli.py [ROUNDS=3] [FOLDER or - for a new one] [DURATION_S=3600]
 """
@@ -36,6 +39,7 @@ ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREAD
             "SHIPID_NO_PROGRESS": "1"}
 TARGET_RATIO, TARGET_MB = 5.0, 300.0
 SRC = os.environ.get("BENCH_SRC") or str(Path(__file__).resolve().parents[1] / "src")  # BENCH_SRC: another tree
+BEFORE = os.environ.get("BENCH_BEFORE")     # a second tree timed in the same rounds
 
 PEER = """
 import sys, time, resource
@@ -79,8 +83,8 @@ print(json.dumps(out))
 """
 
 
-def child(cmd: list[str], stdout=subprocess.PIPE) -> tuple[dict, str]:
-    env = dict(os.environ, PYTHONPATH=SRC, **ONE_CORE)
+def child(cmd: list[str], stdout=subprocess.PIPE, src: str = SRC) -> tuple[dict, str]:
+    env = dict(os.environ, PYTHONPATH=src, **ONE_CORE)
     p = subprocess.Popen(cmd, env=env, stdout=stdout, stderr=subprocess.PIPE, text=True)
     out = p.stdout.read() if p.stdout else ""
     _, status, ru = os.wait4(p.pid, 0)
@@ -125,27 +129,32 @@ def main() -> None:
     cmd = [sys.executable, "-m", "shipid", "identify", "mass-cm", "--nominal", files[0], "--calibration", files[1],
            "--loaded", files[2], "--known", str(folder / "known.toml"), "-o", str(folder / "result.json"),
            "--force"]
-    peer, peer_proc, command = [], [], []
+    peer, peer_proc, command, before = [], [], [], []
     for k in range(rounds):
-        order = ("peer", "command") if k % 2 == 0 else ("command", "peer")
-        for who in order:
+        order = ["peer", "command"] + (["before"] if BEFORE else [])
+        for who in (order if k % 2 == 0 else order[::-1]):
             if who == "peer":
                 r, out = child([sys.executable, "-c", PEER, *files])
                 peer.append(float(out.strip().splitlines()[-1]))
                 peer_proc.append(r["cpu_s"])
             else:
-                r, _ = child(cmd, stdout=subprocess.DEVNULL)
-                command.append(r)
+                r, _ = child(cmd, stdout=subprocess.DEVNULL, src=SRC if who == "command" else BEFORE)
+                (command if who == "command" else before).append(r)
+        was = (f"; before {before[-1]['cpu_s']:.2f} s CPU, max RSS {before[-1]['maxrss_mib']:.1f} MiB"
+               if before else "")
         print(f"  round {k + 1}: pandas.read_csv {peer[-1]:.3f} s CPU (its whole process {peer_proc[-1]:.2f} s); command {command[-1]['cpu_s']:.2f} s CPU, "
-              f"max RSS {command[-1]['maxrss_mib']:.1f} MiB; load {os.getloadavg()[0]:.1f}", flush=True)
+              f"max RSS {command[-1]['maxrss_mib']:.1f} MiB{was}; load {os.getloadavg()[0]:.1f}", flush=True)
     p = float(np.median(peer))
-    c = float(np.median([r["cpu_s"] for r in command]))
-    rss = max(r["maxrss_mib"] for r in command)
-    print(f"command / pandas.read_csv (CPU, medians): {c:.2f} / {p:.3f} s = {c / p:.1f} (target <= {TARGET_RATIO:g})")
     pp = float(np.median(peer_proc))
-    print(f"command / the whole pandas process (interpreter, import pandas, read_csv): {c:.2f} / {pp:.2f} s = "
-          f"{c / pp:.1f}")
-    print(f"command peak RSS {rss:.1f} MiB = {rss * 2**20 / 1e6:.1f} MB (target <= {TARGET_MB:g} MB)")
+    for tag, runs in (("command", command), ("before", before)):
+        if not runs:
+            continue
+        c = float(np.median([r["cpu_s"] for r in runs]))
+        rss = max(r["maxrss_mib"] for r in runs)
+        print(f"{tag} / pandas.read_csv (CPU, medians): {c:.2f} / {p:.3f} s = {c / p:.1f}")
+        print(f"{tag} / the whole pandas process (interpreter, import pandas, read_csv): {c:.2f} / {pp:.2f} s = "
+              f"{c / pp:.1f} (target <= {TARGET_RATIO:g})")
+        print(f"{tag} peak RSS {rss:.1f} MiB = {rss * 2**20 / 1e6:.1f} MB (target <= {TARGET_MB:g} MB)")
     r, out = child([sys.executable, "-c", SPLIT, str(folder)])
     split = json.loads(out.strip().splitlines()[-1])
     print("split (one process, CPU s): " + ", ".join(f"{k} {v:.2f}" for k, v in split.items()))

@@ -97,7 +97,7 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     **kwargs
         Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``); an MMG
         model takes ``fmt=``, ``channels=``, ``rudder_sign=`` and ``retime=`` too
-        (:func:`shipid.methods.mmg.entry.validate`: the run is read as its file says, in the model's
+        (:func:`shipid.methods.mmg.validate_run.validate`: the run is read as its file says, in the model's
         conventions, and re-timed by the model's offsets).
 
     Returns
@@ -110,7 +110,7 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     without a ``validate`` module raises :class:`~shipid.errors.InputError`.
     """
     from shipid.methods._trials import as_trial
-    from shipid.methods.mmg import entry as _mmg
+    from shipid.methods.mmg import validate_run as _mmg
     from shipid.models import mmg as _mmg_model
 
     given = model

@@ -7,6 +7,11 @@ by monkeypatching) and the results compared bit for bit.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -42,6 +47,12 @@ CASES = {
 }
 
 
+@pytest.fixture(autouse=True)
+def _fast_path_for_small_files(monkeypatch):
+    """These files are small: let them take the fast path (by default a small file skips pyarrow)."""
+    monkeypatch.setattr(csv_read, "FAST_MIN_BYTES", 0)
+
+
 def _read(path):
     try:
         t = csv_read.read_csv_table(path, str(path))
@@ -69,6 +80,18 @@ def test_fast_and_careful_paths_agree(tmp_path, monkeypatch, name):
     np.testing.assert_array_equal(fast.rows, slow.rows)
 
 
+def test_many_record_batches_give_the_same_doubles(tmp_path, monkeypatch):
+    """A file parsed in many blocks (batch boundaries inside it) equals the cell-by-cell read."""
+    p = tmp_path / "f.csv"
+    p.write_bytes(CASES["empty cell"].encode("utf-8"))
+    monkeypatch.setattr(csv_read, "BLOCK_BYTES", 1 << 10)
+    fast = _read(p)
+    monkeypatch.setattr(csv_read, "_fast", lambda *a, **k: None)
+    slow = _read(p)
+    same = (fast.data == slow.data) | (np.isnan(fast.data) & np.isnan(slow.data))
+    assert fast.data.shape == (300, 3) and same.all() and np.isnan(fast.data[5, 1])
+
+
 def test_a_good_file_takes_the_fast_path_and_its_columns_are_contiguous(tmp_path, monkeypatch):
     p = tmp_path / "f.csv"
     p.write_text(CASES["plain"])
@@ -92,3 +115,17 @@ def test_underscore_units_read_where_nothing_else_names_the_unit(tmp_path):
     (tmp_path / "u.csv").write_text("time_s,speed_kn,a_s [m/s^2]\n0,1,0\n0.5,2,0\n")
     u = read_trial(tmp_path / "u.csv", channel_map="t=time")
     assert u.names == ["speed", "a_s"] and u["speed"][1] == pytest.approx(2 * 1852 / 3600)
+
+
+def test_a_small_file_is_read_without_loading_pyarrow(tmp_path):
+    """Under FAST_MIN_BYTES the checked path reads the file and pyarrow is not imported (start-up of
+    ``shipid check`` / ``shipid validate``); the numbers are those of the fast path."""
+    p = tmp_path / "f.csv"
+    p.write_text(CASES["plain"])
+    code = ("import sys; from shipid.io.files import read_trial; tr = read_trial(sys.argv[1]); "
+            "print('pyarrow' in sys.modules, repr(float(tr['psi'][7])))")
+    env = {**os.environ, "PYTHONPATH": str(Path(csv_read.__file__).parents[2])}
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True, check=True,
+                         env=env).stdout.split()
+    assert out[0] == "False"
+    assert float(out[1]) == read_trial(p)["psi"][7]          # this process: the fast path (fixture above)

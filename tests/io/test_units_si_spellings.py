@@ -1,10 +1,11 @@
-"""The canonical SI spellings that :mod:`shipid.io.units` reads without pint give what pint gives."""
+"""The units that :mod:`shipid.io.units` reads without pint (canonical SI spellings, common trial-file units)
+give what pint gives."""
 
 import numpy as np
 import pytest
 
 from shipid.io.trial import CHANNELS
-from shipid.io.units import SI_SPELLINGS, parse_unit, to_si
+from shipid.io.units import COMMON_UNITS, SI_SPELLINGS, _parse, _parse_pint, _pint_expr, parse_unit, registry, to_si
 
 #: each canonical spelling written so that only pint can read it
 LONG = {"s": "second", "m": "meter", "m/s": "meter/second", "m/s^2": "meter/second**2", "rad": "radian",
@@ -23,3 +24,14 @@ def test_si_spelling_is_what_pint_says(unit):
 
 def test_every_channel_unit_is_read_without_pint():
     assert set(CHANNELS.values()) <= set(SI_SPELLINGS)
+
+
+@pytest.mark.parametrize("unit", sorted(COMMON_UNITS))
+def test_common_unit_is_what_pint_says(unit):
+    expr = _pint_expr(unit)
+    assert _parse(unit) == _parse_pint(unit, expr)            # the same SI unit and the same double as pint
+    x = np.array([1.5, -2.25e-3, 1e300])
+    v, si = to_si(x, unit)
+    ureg = registry()
+    want = np.asarray(ureg.Quantity(x, expr).to_base_units().magnitude, dtype=np.float64)
+    assert si == parse_unit(unit) and np.array_equal(v, want)

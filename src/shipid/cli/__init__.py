@@ -295,7 +295,32 @@ def dispatch(argv: list[str] | None) -> int:
 
 
 def run() -> None:  # pragma: no cover - console script shim
-    sys.exit(main())
+    exit_now(main())
+
+
+def exit_now(rc: int | None) -> None:
+    """End the ``shipid`` process with status ``rc``: the atexit handlers run, the interpreter's teardown does not.
+
+    After a command that ran compiled code, freeing numba's and LLVM's objects at interpreter exit costs about a
+    quarter of a second of CPU (``benchmarks/bench_cli_startup.py``), more than many commands take. Output is
+    flushed and every ``atexit`` handler (temporary files, campaign clean-up, logging) runs first. Where another
+    thread is still alive, or flushing fails, the ordinary exit is taken.
+    """
+    import atexit
+    import threading
+
+    code = int(rc or 0)
+    if threading.active_count() > 1:
+        sys.exit(code)
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        atexit._run_exitfuncs()
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except BaseException:  # a closed pipe or a failing handler: let Python exit (and report) as usual
+        sys.exit(code)
+    os._exit(code)
 
 
 #: True when :data:`INDEX` was built from the command modules on disk; otherwise (a command module was

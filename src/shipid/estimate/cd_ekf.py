@@ -26,7 +26,6 @@ from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
-import scipy.linalg as sla
 
 from shipid.numerics.linalg import check_positive_definite, symmetrize
 from shipid.numerics.integrate import Dynamics, rk4_propagate
@@ -110,7 +109,9 @@ def van_loan(F: np.ndarray, Q: np.ndarray, h: float) -> tuple[np.ndarray, np.nda
     A[:n, :n] = -F * h
     A[:n, n:] = Q * (h / qs)
     A[n:, n:] = F.T * h
-    E = sla.expm(A)
+    from scipy.linalg import expm  # scipy.linalg only where it is called (start-up of the commands that load this)
+
+    E = expm(A)
     Phi = E[n:, n:].T
     Qd = (Phi @ E[:n, n:]) * qs
     return Phi, symmetrize(Qd)
@@ -185,6 +186,8 @@ def cd_ekf(f: Dynamics, F: Callable[[float, np.ndarray, np.ndarray, Any], np.nda
     -------
     FilterResult
     """
+    from scipy.linalg import cho_solve  # scipy.linalg only where it is called
+
     t = np.asarray(t, dtype=float)
     z = np.asarray(z, dtype=float)
     N, m = z.shape
@@ -233,7 +236,7 @@ def cd_ekf(f: Dynamics, F: Callable[[float, np.ndarray, np.ndarray, Any], np.nda
             except np.linalg.LinAlgError:
                 check_positive_definite(S, f"innovation covariance at sample {k} (t = {t[k]:.6g} s)")
                 raise
-            SiB = sla.cho_solve((L, True), np.column_stack([Hm, nu]), check_finite=False)
+            SiB = cho_solve((L, True), np.column_stack([Hm, nu]), check_finite=False)
             SiH = SiB[:, :-1]
             Sinv_nu = SiB[:, -1]
             K = (SiH @ P).T  # P Hᵀ S⁻¹ (P symmetric)

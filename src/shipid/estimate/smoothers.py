@@ -31,7 +31,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
 from shipid.estimate.cd_ekf import FilterResult
 from shipid.numerics.linalg import symmetrize
@@ -79,6 +78,8 @@ def mbf_smoother(fr: FilterResult) -> SmootherResult:
 
 def rts_smoother(fr: FilterResult) -> SmootherResult:
     """Rauch–Tung–Striebel fixed-interval smoother on the filter's Φ and predictions."""
+    import scipy.linalg as sla  # scipy.linalg only where it is called
+
     N, n = fr.x_filt.shape
     xs = np.empty_like(fr.x_filt)
     Ps = np.empty_like(fr.P_filt)

@@ -23,6 +23,7 @@ Every SI unit is written in the canonical spelling used by
 
 from __future__ import annotations
 
+import math
 import re
 from functools import lru_cache
 
@@ -109,12 +110,42 @@ def _format_si(units: dict[str, float]) -> str:
 SI_SPELLINGS = ("s", "m", "m/s", "m/s^2", "rad", "rad/s", "rad/s^2", "1/s", "kg", "kg*m^2", "N", "N*m", "-")
 
 
+_DEG = math.pi / 180.0
+#: Units of trial files other than the SI spellings, read without the pint registry: unit as written -> (SI unit,
+#: factor to SI). Each factor is the double pint gives (``tests/io/test_units_si_spellings.py`` checks every entry
+#: against the registry); any other unit goes through pint.
+COMMON_UNITS: dict[str, tuple[str, float]] = {
+    **dict.fromkeys(("deg", "degs", "degree", "degrees", "°"), ("rad", _DEG)),
+    **dict.fromkeys(("deg/s", "°/s"), ("rad/s", _DEG)),
+    **dict.fromkeys(("deg/s^2", "deg/s2"), ("rad/s^2", _DEG)),
+    "rad/s2": ("rad/s^2", 1.0), "m/s2": ("m/s^2", 1.0),
+    **dict.fromkeys(("rps", "rev/s", "r/s", "Hz", "hz"), ("1/s", 1.0)),
+    **dict.fromkeys(("rpm", "rev/min", "r/min", "1/min"), ("1/s", 1.0 / 60.0)),
+    **dict.fromkeys(("kn", "kt", "kts", "knot", "knots"), ("m/s", 1852.0 / 3600.0)),
+    "km/h": ("m/s", 1000.0 / 3600.0),
+    "%": ("-", 0.01),
+    "ms": ("s", 0.001), "min": ("s", 60.0), "h": ("s", 3600.0),
+    "mm": ("m", 0.001), "cm": ("m", 0.01), "km": ("m", 1000.0),
+    "t": ("kg", 1000.0),
+    **dict.fromkeys(("Nm", "N m"), ("N*m", 1.0)),
+    "kN": ("N", 1000.0), **dict.fromkeys(("kN*m", "kNm"), ("N*m", 1000.0)),
+}
+
+
 @lru_cache(maxsize=512)
 def _parse(unit: str) -> tuple[str, str, float, bool]:
     """(pint expression, SI unit string, factor to SI, has offset) or raise ValueError."""
     expr = _pint_expr(unit)
     if unit in SI_SPELLINGS:
         return expr, unit, 1.0, False
+    if unit in COMMON_UNITS:
+        si, factor = COMMON_UNITS[unit]
+        return expr, si, factor, False
+    return _parse_pint(unit, expr)
+
+
+def _parse_pint(unit: str, expr: str) -> tuple[str, str, float, bool]:
+    """:func:`_parse` through the pint registry."""
     ureg = registry()
     try:
         q = ureg.Quantity(1.0, expr)

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from shipid.errors import ConvergenceError
 
@@ -147,6 +146,8 @@ def simulate(f: Dynamics, t: np.ndarray, x0: np.ndarray, u: np.ndarray | InputLa
     u0 = np.atleast_1d(np.asarray(u(t[0], x), dtype=float)) if closed_loop else u_arr[0]
     U = np.empty((n, u0.size))
     U[0] = u0
+    if method != "rk4":
+        from scipy.integrate import solve_ivp  # scipy.integrate (half a second of start-up) only where it is used
     for k in range(n - 1):
         uk = U[k]
         h = t[k + 1] - t[k]

@@ -17,8 +17,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from scipy import linalg as sla
-from threadpoolctl import ThreadpoolController
 
 
 _TPC: list = []
@@ -37,6 +35,8 @@ def one_blas_thread():
     (a scan of the loaded libraries, ~2 ms) is made once per process.
     """
     if not _TPC:
+        from threadpoolctl import ThreadpoolController
+
         _TPC.append(ThreadpoolController())
     return _TPC[0].limit(limits=1)
 
@@ -80,8 +80,10 @@ def check_positive_definite(a: np.ndarray, what: str = "covariance") -> np.ndarr
 
 def psd_solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve ``a x = b`` for symmetric positive definite ``a`` through its Cholesky factor."""
-    c, low = sla.cho_factor(symmetrize(a), lower=True, check_finite=False)
-    return sla.cho_solve((c, low), b, check_finite=False)
+    from scipy.linalg import cho_factor, cho_solve  # scipy.linalg only where it is called
+
+    c, low = cho_factor(symmetrize(a), lower=True, check_finite=False)
+    return cho_solve((c, low), b, check_finite=False)
 
 
 def kalman_gain(P: np.ndarray, H: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

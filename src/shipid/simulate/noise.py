@@ -32,7 +32,6 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
-from scipy.linalg import expm, solve_continuous_lyapunov
 
 from shipid.io.trial import Trial
 
@@ -131,6 +130,8 @@ def linear_process(A: np.ndarray, B: np.ndarray, C: np.ndarray, dt: float,
         raise ValueError("A must be stable for a stationary process")
     if not (dt > 0 and variance >= 0):
         raise ValueError("need dt > 0 and variance >= 0")
+    from scipy.linalg import expm, solve_continuous_lyapunov  # scipy.linalg only where it is called
+
     P1 = solve_continuous_lyapunov(A, -B @ B.T)       # stationary covariance for unit intensity
     P1 = 0.5 * (P1 + P1.T)
     P = P1 * (variance / float(C @ P1 @ C)) if variance > 0 else np.zeros_like(P1)

@@ -17,7 +17,6 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from shipid.methods.masscm.options import I_ZF, MassCMOptions
 from shipid.methods.masscm.search import g_and_jac, g_and_jac_py, gauss_newton as gauss_newton_compiled, known_array, \
@@ -184,6 +183,8 @@ def held_cold_search(theta: np.ndarray, theta_start: np.ndarray, fun, x: np.ndar
         x2 = compiled_search(kernel_args(state, known, free_h, th_fix, prior), x0, lo_h, hi_h, cold=True)
     fun2 = residual_function(state, known, free_h, th_fix, prior)[0]
     if x2 is None:
+        from scipy.optimize import least_squares  # the fallback only: scipy.optimize where it is used
+
         x2 = least_squares(fun2, x0, jac=fun2.jac, method="trf", bounds=(lo_h, hi_h), xtol=1e-10, ftol=1e-10,
                            gtol=1e-10, max_nfev=2000, x_scale="jac").x
     r1, r2 = fun(x), fun2(x2)

@@ -9,7 +9,6 @@ steps (b)–(c) of one dataset by the compiled kernels of :mod:`shipid.methods.m
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from shipid.estimate.arma import ARMA
 from shipid.estimate.iv import iv_compress_products_compiled
@@ -211,6 +210,8 @@ def iterate(prep: list[Dataset], known: KnownParams, theta0: np.ndarray, *, z_f:
         if x is None:
             if fun is None:
                 fun = residual_function(state, known, free, theta, prior)[0]
+            from scipy.optimize import least_squares  # the fallback only: scipy.optimize where it is used
+
             x = least_squares(fun, x0, jac=fun.jac, method="trf", bounds=(lo, hi), xtol=1e-10, ftol=1e-10,
                               gtol=1e-10, max_nfev=2000, x_scale="jac").x
         theta_start = theta

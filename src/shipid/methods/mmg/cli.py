@@ -86,7 +86,7 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         _validate_other(model, other, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path,
                         out_path, force)
         return
-    from shipid.methods.mmg.entry import validate_with_run
+    from shipid.methods.mmg.validate_run import validate_with_run
 
     v, tr = validate_with_run(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
                               retime=not no_retime)
