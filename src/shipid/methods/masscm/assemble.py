@@ -126,7 +126,8 @@ def fit_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
                 options: MassCMOptions = MassCMOptions(), noise_check: bool = True) -> MassCMFit:
     """:func:`estimate_mass_cm` returning a :class:`MassCMFit` (the same Result, and its core and datasets)."""
     t0 = time.perf_counter()
-    prep = prepare(datasets, options)
+    with one_blas_thread():                                # the same bits whatever the BLAS thread count
+        prep = prepare(datasets, options)
     th0 = DEFAULT_THETA0 if theta0 is None else np.asarray(theta0, dtype=float)
     if th0.size != len(THETA_NAMES):
         raise InputError(f"theta0 needs {len(THETA_NAMES)} values ({', '.join(THETA_NAMES)})")
