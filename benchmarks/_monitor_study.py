@@ -25,18 +25,18 @@ from shipid.vessels import load_vessel
 
 def monitor_run(i: int, seed=0, *, change_at: float | None = 900.0, duration: float = 1800.0,
                 m1: float = 0.7, zm1: float = -0.14, settle: float = 300.0, window: float = 300.0,
-                threshold: float | None = None, vessel: str = "fishing-vessel", noise: str = "issue3",
+                threshold: float | None = None, vessel: str = "fishing-vessel", noise: str = "combined",
                 noise_model: str | None = None, bj_reselect: int = 0) -> dict:
     """One stream through the monitor; see the module docstring.
 
-    ``noise``: ``"issue3"`` (0.5 deg wave roll, gyro / accelerometer noise and biases) or ``"waves-only"``
+    ``noise``: ``"combined"`` (0.5 deg wave roll, gyro / accelerometer noise and biases) or ``"waves-only"``
     (the same wave roll, noise-free sensors: the case where the AR(40) prefilter of the offline
     estimator is known to fail, :mod:`shipid.methods.masscm.estimator` "Known limitations").
     ``noise_model``: the monitor's ``masscm.noise_model`` ("ar", or "auto" for the Box-Jenkins prefilter;
     None: the monitor's default); ``bj_reselect``: :class:`MonitorOptions` ``bj_reselect``.
     """
 
-    spec_noise = {"issue3": NoiseSpec.issue3(), "waves-only": NoiseSpec(wave_roll_deg=0.5)}[noise]
+    spec_noise = {"combined": NoiseSpec.combined(), "waves-only": NoiseSpec(wave_roll_deg=0.5)}[noise]
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     sim = simulate_stream(StreamSpec(duration=duration, change_at=change_at, m1=m1, zm1=zm1, noise=spec_noise),
                           vessel=vessel, seed=ss)

@@ -25,7 +25,7 @@ def main():
     runs = int(argv[0]) if len(argv) > 0 else 100
     workers = int(argv[1]) if len(argv) > 1 else 2
     duration = float(argv[2]) if len(argv) > 2 else 300.0
-    b = crlb(duration=duration, noise=NoiseSpec.issue3())["bounds"]
+    b = crlb(duration=duration, noise=NoiseSpec.combined())["bounds"]
     rows = {}
     for label, pf in (("Algorithm 1 (ARMA prefilters)", True), ("peer: plain IV (no prefilter)", False)):
         t0 = time.perf_counter()

@@ -1,7 +1,7 @@
 """Benchmark (issue 17): cost of one ``identify mass-cm`` on long records, against a named peer, in the same run.
 
 Three datasets (nominal, calibration, loaded) of ``DURATION`` s at 50 Hz each with the issue-3 noise
-(white gyro / accelerometer noise, biases, 0.5 deg wave roll; :meth:`shipid.models.roll_sim.NoiseSpec.issue3`),
+(white gyro / accelerometer noise, biases, 0.5 deg wave roll; :meth:`shipid.models.roll_sim.NoiseSpec.combined`),
 z_f known, default options (what ``shipid identify mass-cm`` runs, noise-model cross-check included).
 Each code tree is measured in a fresh process, one after the other (one core: BLAS limited to one thread):
 
@@ -56,7 +56,7 @@ except ImportError:                       # a peer from before the masscm packag
     from shipid.methods.masscm import estimate_mass_cm
 warnings.simplefilter("ignore")
 T = float(sys.argv[1])
-d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=T, noise=NoiseSpec.issue3())
+d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=T, noise=NoiseSpec.combined())
 known = KnownParams.from_vessel("fishing-vessel")
 rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 with threadpool_limits(1):

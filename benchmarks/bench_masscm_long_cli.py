@@ -3,7 +3,7 @@
 Not a test: it prints timings, memory and sizes and asserts nothing.
 
 Three datasets (nominal, calibration, loaded) of ``DURATION`` s at 50 Hz each with the issue-3 noise
-(:meth:`shipid.models.roll_sim.NoiseSpec.issue3`, seed ``SeedSequence([17, 0])`` as ``bench_masscm_long.py``)
+(:meth:`shipid.models.roll_sim.NoiseSpec.combined`, seed ``SeedSequence([17, 0])`` as ``bench_masscm_long.py``)
 are written once as CSV files (by this tree), with the vessel's known quantities (z_f given) as TOML. Then
 ``python -m shipid identify mass-cm --nominal N --calibration C --loaded L --known K`` runs in a fresh process
 per tree (``PYTHONPATH`` = its ``src``; every thread pool limited to one thread, :data:`ONE_CORE`): this tree with ``-o FILE`` (the result
@@ -113,7 +113,7 @@ def main():
     here = str(Path(__file__).resolve().parents[1] / "src")
     tmp = Path(tempfile.mkdtemp(prefix="bench_long_cli_"))
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,
-                          noise=NoiseSpec.issue3())
+                          noise=NoiseSpec.combined())
     files = {}
     for cond, tr in d.items():
         files[cond] = str(tmp / f"{cond}.csv")

@@ -13,7 +13,7 @@ every update, timed on 5 updates and scaled to the 168 updates of the stream; re
 ``memory``: tracemalloc peak while monitoring 600-, 1800- and 3600-s streams (flat = independent of length).
 ``tradeoff``: window 150 / 300 / 600 s on the same streams (std of the updates, coverage, delay).
 
-Usage:  python benchmarks/bench_masscm_monitor.py study RUNS [SEED [issue3|waves-only [ar|auto [RESELECT]]]]
+Usage:  python benchmarks/bench_masscm_monitor.py study RUNS [SEED [combined|waves-only [ar|auto [RESELECT]]]]
         python benchmarks/bench_masscm_monitor.py speed | memory | tradeoff [RUNS]
         python benchmarks/bench_masscm_monitor.py --smoke     (speed on a 700-s stream, one peer update)
 """
@@ -31,7 +31,7 @@ from shipid.campaign.engine import run_campaign
 TASK = "_monitor_study:monitor_run"   # benchmarks/_monitor_study.py (this folder is on sys.path; in-process runs)
 
 
-def study(runs: int, seed: int, noise: str = "issue3", noise_model: str | None = None, reselect: int = 0) -> None:
+def study(runs: int, seed: int, noise: str = "combined", noise_model: str | None = None, reselect: int = 0) -> None:
     extra = {"noise_model": noise_model, "bj_reselect": reselect}
     for label, kw, sd in (("change at 900 s", {"change_at": 900.0, "noise": noise, **extra}, seed),
                           ("no change", {"change_at": None, "noise": noise, **extra}, seed + 1)):
@@ -126,7 +126,7 @@ if __name__ == "__main__":
         speed(700.0, 1)
     elif mode == "study":
         study(int(sys.argv[2]) if len(sys.argv) > 2 else 10, int(sys.argv[3]) if len(sys.argv) > 3 else 100,
-              sys.argv[4] if len(sys.argv) > 4 else "issue3", sys.argv[5] if len(sys.argv) > 5 else None,
+              sys.argv[4] if len(sys.argv) > 4 else "combined", sys.argv[5] if len(sys.argv) > 5 else None,
               int(sys.argv[6]) if len(sys.argv) > 6 else 0)
     elif mode == "speed":
         speed()

@@ -37,7 +37,7 @@ def make_files(duration: float) -> list[Path]:
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_read_"))
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,
-                          noise=NoiseSpec.issue3())
+                          noise=NoiseSpec.combined())
     out = []
     for cond, tr in d.items():
         out.append(tmp / f"{cond}.csv")

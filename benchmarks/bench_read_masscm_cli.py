@@ -104,7 +104,7 @@ def make_files(folder: Path, duration: float = 3600.0) -> None:
     from bench_masscm_long_cli import KNOWN
 
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, 0]), duration=duration,
-                          noise=NoiseSpec.issue3())
+                          noise=NoiseSpec.combined())
     for cond, tr in d.items():
         write_trial(tr, folder / f"{cond}.csv", force=True)
     kn = KnownParams.from_vessel("fishing-vessel")

@@ -35,7 +35,7 @@ from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 SETTINGS = {"none": NoiseSpec(), "gyro_bias": NoiseSpec(gyro_bias=0.001), "acc_bias": NoiseSpec(acc_bias=0.01),
             "gyro_noise": NoiseSpec(gyro_std=0.002), "acc_noise": NoiseSpec(acc_std=0.02),
             "sensors": NoiseSpec(gyro_std=0.002, acc_std=0.02, gyro_bias=0.001, acc_bias=0.01),
-            "waves": NoiseSpec(wave_roll_deg=0.5), "both": NoiseSpec.issue3()}
+            "waves": NoiseSpec(wave_roll_deg=0.5), "both": NoiseSpec.combined()}
 _INTERCEPT = [False]
 
 

@@ -80,7 +80,8 @@ def identify(method: str, trials, *, vessel: str | None = None, options=None, **
 
 
 @single_threaded
-def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
+def validate(model, trial: Trialish, *, horizon: float | None = None, fmt: str | None = None, channels=None,
+             rudder_sign: int | None = None, retime: bool = True, out=None, force: bool = False, **kwargs):
     """Open-loop prediction of a held-out run by an identified model (``shipid validate``).
 
     Parameters
@@ -90,10 +91,26 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
         ``dp``, ``mass-cm``), a result JSON path, ``"published:<name>"`` (a published MMG set) or an
         :class:`~shipid.models.mmg.MmgModel`.
     trial : Trial or path
-        The measured run (not used for training), with the channels the method needs.
+        The measured run (not used for training), with the channels the method needs. A file is read with
+        empty rows trimmed and gaps up to 1 s interpolated (each repair one warning line).
     horizon : float, optional
         Length of the restarted horizons, s (default: the method's ``DEFAULT_HORIZON``; 60 s, and
         10 s for mass-cm's 60-s records).
+    fmt, channels : optional
+        How to read a trial file (:func:`shipid.io.files.read_trial`'s ``fmt`` and ``channel_map``); an MMG
+        model uses its training runs' settings for a file of their kind unless these are given.
+    rudder_sign : {1, -1}, optional
+        -1 when the run's rudder is positive to port (the run's rudder is multiplied by it); an MMG model
+        takes its training convention by default.
+    retime : bool
+        MMG: re-time the run by the offsets the model records (estimated on its training runs; one
+        data-repair line); False compares the run as recorded (one line). Other methods record no offsets.
+    out : path, optional
+        Write the whole-run prediction beside the measured channels there (CSV or Parquet for MMG, in the
+        file's column names and units; CSV for the other methods); an existing file is an error unless
+        ``force``, checked before the simulation.
+    force : bool
+        Overwrite ``out``.
     **kwargs
         Passed to the method's ``validate_result`` (``stride=``, ``windows=``; mass-cm ``condition=``); an MMG
         model takes ``fmt=``, ``channels=``, ``rudder_sign=`` and ``retime=`` too
@@ -104,39 +121,84 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, **kwargs):
     -------
     shipid.analysis.openloop.Validation
         RMS and maximum errors over 30 s, 60 s, the whole run and restarted horizons, in the
-        quantities the method predicts (``Validation.quantities``).
+        quantities the method predicts (``Validation.quantities``); ``settings["warnings"]`` holds the
+        warning lines (a model that did not converge, data repairs, the method's own, a prediction written
+        to ``out`` that diverged).
 
     The method is found from ``Result.method`` through :func:`shipid.registry.for_result`; one
     without a ``validate`` module raises :class:`~shipid.errors.InputError`.
     """
-    from shipid.methods._trials import as_trial
     from shipid.methods.mmg import validate_run as _mmg
     from shipid.models import mmg as _mmg_model
 
-    given = model
-    if isinstance(model, os.PathLike) or (isinstance(model, str) and not model.startswith("published:")):
-        path = os.fspath(model)
-        if not os.path.isfile(path):
-            raise InputError("no such model file", file=path)
-        try:
-            with open(path, encoding="utf-8") as fh:
-                model = Result.from_json(fh.read())
-        except (UnicodeDecodeError, ValueError, KeyError, TypeError) as err:
-            raise InputError(f"not a result JSON file ({type(err).__name__}: {err})", file=path) from None
-    if (isinstance(model, (str, _mmg_model.MmgModel))
-            or (isinstance(model, Result) and (model.model or {}).get("family") == "mmg")):
-        spec = os.fspath(given) if isinstance(given, (str, os.PathLike)) else model
-        return _mmg.validate(spec, trial, horizon=horizon, **kwargs)
+    if out is not None and not force and os.path.exists(os.fspath(out)):
+        from shipid.errors import OutputExistsError
+        raise OutputExistsError(os.fspath(out))          # before the simulation, not after
+    label = os.fspath(model) if isinstance(model, (str, os.PathLike)) else None
+    if label is not None:
+        doc = _other_method_document(label)
+        if doc is not None:                 # a result of EBM, DP, mass-cm ...
+            try:
+                model = Result.from_dict(doc)
+            except (KeyError, TypeError, ValueError) as err:
+                raise InputError(f"malformed result ({type(err).__name__}: {err})", file=label) from None
+    if (label is not None and not isinstance(model, Result)) or isinstance(model, _mmg_model.MmgModel) \
+            or (isinstance(model, Result) and (model.model or {}).get("family") == "mmg"):
+        v, tr = _mmg.validate_with_run(label if label is not None else model, trial, horizon=horizon, fmt=fmt,
+                                       channels=channels, rudder_sign=rudder_sign, retime=retime, **kwargs)
+        if out is not None:
+            from shipid.methods.mmg.export import write_prediction
+            _, pt = write_prediction(v, tr, out, rudder_sign=v.settings["rudder_sign"], force=force)
+            if pt.meta["diverged_from_s"] is not None:
+                v.settings.setdefault("warnings", []).append(
+                    f"the prediction diverged at t = {pt.meta['diverged_from_s']:g} s; "
+                    f"{os.fspath(out)} has empty predicted cells from there")
+        return v
     if not isinstance(model, Result):
         raise InputError("validate: model must be a Result, an MmgModel or a model path")
     info = registry.for_result(model.method)
     if info is None or not info.has_module("validate"):
-        raise InputError(f"validate: a {model.method!r} result cannot be validated (methods with an open-loop "
-                         f"model: {', '.join(k for k, v in registry.methods().items() if v.has_module('validate'))})")
+        raise InputError(f"a {model.method!r} result cannot be validated (methods with an open-loop model: "
+                         f"{', '.join(k for k, v in registry.methods().items() if v.has_module('validate'))})",
+                         file=label)
+    if rudder_sign not in (None, 1, -1):
+        raise InputError("rudder_sign must be 1 or -1")
+    from shipid.analysis.openloop import write_csv
+    from shipid.methods._trials import as_trial
+    from shipid.methods.mmg.profile import flip
+    from shipid.warning_lines import repair_warnings
+
     mod = info.submodule("validate")
-    tr = as_trial(trial, trim_empty_rows=True, interpolate_gaps=1.0, method="shipid.validate",
-                  required=list(getattr(mod, "REQUIRED", ())) or None)
-    return mod.validate_result(model, tr, horizon=horizon, **kwargs)
+    tr = as_trial(trial, fmt=fmt, channel_map=channels, trim_empty_rows=True, interpolate_gaps=1.0,
+                  method="shipid validate", required=list(getattr(mod, "REQUIRED", ())) or None)
+    notes = [] if tr is trial else repair_warnings([tr])        # the repairs of a file read here
+    tr = flip(tr, rudder_sign or 1)
+    if (model.diagnostics or {}).get("converged") is False:
+        notes.append(f"model {label or 'the model'} did not converge when it was identified "
+                     "(diagnostics.converged false): its predictions must not be trusted")
+    v = mod.validate_result(model, tr, horizon=horizon, **kwargs)
+    v.settings["warnings"] = notes + list(v.settings.get("warnings", []))
+    if out is not None:
+        write_csv(v, out, force=force)
+    return v
+
+
+def _other_method_document(path: str) -> dict | None:
+    """The JSON document at ``path`` when it is a result of a method other than MMG, else None
+    (``published:`` sets, MMG results and unreadable files go to the MMG reader, which reports them)."""
+    import json
+
+    if path.startswith("published:") or not os.path.isfile(path):
+        return None
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except (UnicodeDecodeError, ValueError):
+        return None
+    if not isinstance(doc, dict) or "method" not in doc or (doc.get("model") or {}).get("family") == "mmg":
+        return None
+    info = registry.for_result(str(doc["method"]))
+    return None if info is not None and info.name == "mmg" else doc
 
 
 def __getattr__(name: str):

@@ -3,7 +3,7 @@
 shipmmg (``shipmmg.mmg_3dof``, version 0.0.11) codes the MMG standard method of Yasukawa & Yoshimura
 (2015) with two dataclasses, ``Mmg3DofBasicParams`` (particulars, propeller and rudder constants) and
 ``Mmg3DofManeuveringParams`` (``K_T`` polynomial and hull coefficients ``R_0'``, ``X_vv'`` …
-``N_rrr'``). Only shipid's ``yasukawa2015`` structures share that form. The mapping:
+``N_rrr'``). Only shipid's ``yasukawa2015`` structure shares that form. The mapping:
 
 * hull coefficients one to one (``Y_v`` → ``Y_v_dash`` …; ``R_0`` → ``R_0_dash``);
 * the identified gains of the propeller and rudder forces (Yasukawa & Yoshimura eqs. 9, 11):
@@ -21,9 +21,8 @@ Where the two codes differ, :attr:`ShipmmgExport.differences` names the term:
 * the drift angle and speed: shipmmg computes ``U`` and ``β`` from ``v − x_G r`` while its hull forces
   and equations of motion take ``v`` at midship; shipid uses the midship ``v`` throughout (they agree
   when ``x_G = 0``);
-* terms shipmmg lacks: the port/starboard asymmetry coefficients of ``yasukawa2015-asym``
-  (``YP_T, YR_asym, NP_T, NR_asym``) and the optional sub-models of the particulars (rudder cross-flow,
-  side gain, neutral angle, propeller side force, wind), each named when it is non-zero.
+* terms shipmmg lacks: the optional sub-models of the particulars (rudder cross-flow, stall, side gain
+  and slope, wind), each named when it is non-zero.
 """
 
 from __future__ import annotations
@@ -53,10 +52,7 @@ OPTIONAL_TERMS = {"rudder_crossflow": "rudder cross-flow drag C_Dc in the normal
                   "rudder_stall_plus": "rudder stall (alpha_R >= 0)", "rudder_stall_minus": "rudder stall (alpha_R < 0)",
                   "rudder_side_gain": "port/starboard rudder effectiveness F_N (1 + s sign(delta))",
                   "rudder_side_slope": "port/starboard rudder effectiveness F_N (1 + k delta)",
-                  "rudder_neutral_angle": "rudder neutral angle offset delta_0",
-                  "prop_side_thrust": "propeller side force and moment proportional to the thrust",
                   "A_T": "wind forces (Fujiwara regression)"}
-ASYM_TERMS = ("YP_T", "YR_asym", "NP_T", "NR_asym")
 
 
 @dataclass(frozen=True)
@@ -141,7 +137,7 @@ def to_shipmmg(spec: Any) -> ShipmmgExport:
     if src.family != "mmg":
         raise InputError(f"{src.name!r} is a model of the {src.family} family; shipmmg takes MMG models")
     model = src.model
-    if model.structure not in ("yasukawa2015", "yasukawa2015-asym"):
+    if model.structure != "yasukawa2015":
         raise InputError(f"MMG structure {model.structure!r} has no shipmmg form: shipmmg codes the MMG standard "
                          "method (shipid structure yasukawa2015); the low-speed Esso hull, its propeller and "
                          "rudder sub-models have no counterpart there")
@@ -163,9 +159,6 @@ def to_shipmmg(spec: Any) -> ShipmmgExport:
     if p["x_G"] != 0:
         diff.append(f"drift angle and speed: shipmmg takes U and beta from v - x_G r (x_G {p['x_G']:g} m), its hull "
                     "forces from the midship v; shipid uses the midship v throughout")
-    for k in ASYM_TERMS:
-        if c.get(k, 0.0) != 0.0:
-            diff.append(f"{k} = {c[k]:.4g}: port/starboard asymmetry term, not in shipmmg")
     for k, what in OPTIONAL_TERMS.items():
         v = p.get(k)
         if v is not None and np.any(np.asarray(v, dtype=float) != 0):

@@ -57,7 +57,7 @@ Chosen from the first line that holds a sentence:
     seconds; a value above 1e11 is read as milliseconds). Every line must have one.
 ``prefix_epoch`` / ``prefix_iso``
     A receive time before the ``$``: epoch seconds (``1700000000.25 $GPGGA...``) or
-    ISO 8601 (``2026-11-22T02:30:00.250Z,$GPGGA...``; a time without zone is taken
+    ISO 8601 (``YYYY-MM-DDThh:mm:ss.sssZ,$GPGGA...``; a time without zone is taken
     as UTC). Every line must have one.
 ``sentence_utc``
     Otherwise the UTC time in RMC, GGA and ZDA. Sentences without a time are

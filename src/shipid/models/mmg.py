@@ -60,7 +60,7 @@ from shipid.models.ship_model import ShipModel
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 INPUT_NAMES = ("delta", "n", "wind_speed", "wind_dir")
-STRUCTURES = ("esso-lowspeed", "yasukawa2015", "esso-cubic-hull", "yasukawa2015-asym", "esso-lowspeed-asym")
+STRUCTURES = ("esso-lowspeed", "yasukawa2015", "esso-cubic-hull", "esso-lowspeed-asym")
 MODES = ("X", "Y", "N")
 
 # ----------------------------------------------------------------------------- coefficients
@@ -86,15 +86,6 @@ _HULL_CUBIC = {"X": ("R_0", "X_vv", "X_vr", "X_rr", "X_vvvv"),
                "Y": ("Y_v", "Y_r", "Y_vvv", "Y_vvr", "Y_vrr", "Y_rrr"),
                "N": ("N_v", "N_r", "N_vvv", "N_vvr", "N_vrr", "N_rrr")}
 COEFS["esso-cubic-hull"] = {m: _HULL_CUBIC[m] + COEFS["esso-lowspeed"][m][3:] for m in MODES}
-# The standard MMG with port/starboard asymmetry terms: a propeller side force and moment
-# proportional to the thrust (``YP_T``, ``NP_T``: the lateral force of a propeller working
-# behind a hull, which has one sense of rotation) and a rudder force that differs with the
-# side the rudder is put to (``YR_asym``, ``NR_asym``: the rudder inflow differs per side in
-# the propeller's swirl); all zero in the symmetric model.
-COEFS["yasukawa2015-asym"] = {"X": COEFS["yasukawa2015"]["X"],
-                              "Y": COEFS["yasukawa2015"]["Y"] + ("YP_T", "YR_asym"),
-                              "N": COEFS["yasukawa2015"]["N"] + ("NP_T", "NR_asym")}
-
 # The low-speed Esso model with two port/starboard terms that are zero in it: the side force and
 # moment of the ahead-turning propeller, ``Y = YP_n ρ n² D⁴``, ``N = NP_n ρ n² D⁴ L`` (n > 0; the
 # lateral force of a single propeller behind the hull), and a rudder neutral offset, the force of
@@ -205,12 +196,6 @@ def basis(model: MmgModel, u, v, r, delta, n, U_A=0.0, gamma_A=0.0):
             out[m] = (np.concatenate([out[m][0], np.stack(extra, axis=-1)], axis=-1), out[m][1])
         if model.structure == "esso-lowspeed-ext":
             out = ext_columns(p, u, v, r, delta, n, out, U_A, gamma_A)
-    elif model.structure == "yasukawa2015-asym":
-        out = basis_yasukawa(p, u, v, r, delta, n)
-        T, FNc = out["aux"]["T"], out["aux"]["FN_cos"]
-        side = np.sign(delta)
-        for m in ("Y", "N"):
-            out[m] = (np.concatenate([out[m][0], np.stack([T, FNc * side], axis=-1)], axis=-1), out[m][1])
     else:
         out = basis_yasukawa(p, u, v, r, delta, n)
     XA, YA, NA = wind_forces(p, np.asarray(U_A, float), np.asarray(gamma_A, float))

@@ -15,7 +15,6 @@ from typing import Mapping
 
 import numpy as np
 
-from shipid.models.mmg_prop_side import PROP_SIDE_TERMS, neutral_angle_offset, propeller_side_force
 
 # Hachii's reverse-propeller side-force regimes (mmg-1p1r-simulator propellerforce.py).
 _JSYN, _JSYN0 = -0.35, -0.06
@@ -210,10 +209,9 @@ def cubic_hull(p, u, v, r):
 
 # ----------------------------------------------------------------------------- rudder at large angles
 #: Particulars of the optional angle-dependent rudder terms (:func:`rudder_lift_and_crossflow`,
-#: :func:`rudder_side_slope`) and of the asymmetry terms of :mod:`shipid.models.mmg_prop_side`; each absent
-#: or 0 leaves the standard method's forces unchanged, each may be a scalar or one value per row of a batch.
-RUDDER_LARGE_ANGLE = ("rudder_stall_plus", "rudder_stall_minus", "rudder_crossflow_side",
-                      "rudder_side_slope") + PROP_SIDE_TERMS
+#: :func:`rudder_side_slope`); each absent or 0 leaves the standard method's forces unchanged, each may be a
+#: scalar or one value per row of a batch.
+RUDDER_LARGE_ANGLE = ("rudder_stall_plus", "rudder_stall_minus", "rudder_crossflow_side", "rudder_side_slope")
 
 
 def stalled_sine(sa, alpha_s):
@@ -299,7 +297,7 @@ def basis_yasukawa(p, u, v, r, delta, n):
     gam = np.where(beta_R < 0, p["gamma_R_minus"], p["gamma_R_plus"])
     vR = U * gam * beta_R
     UR2 = uR * uR + vR * vR
-    aR = neutral_angle_offset(p, delta - np.arctan2(vR, uR))   # optional neutral rudder angle (mmg_prop_side)
+    aR = delta - np.arctan2(vR, uR)
     sa = np.sin(aR)
     # optional cross-flow drag part of the normal force (Hoerner 1965: C_N = f_a sin a + C_Dc sin a |sin a|);
     # "rudder_crossflow" = C_Dc, absent or 0 for the standard method; optional angle-dependent terms per side
@@ -318,9 +316,7 @@ def basis_yasukawa(p, u, v, r, delta, n):
     HN = np.stack([qN * h for h in hull] + [-FN * np.cos(delta)], axis=-1)
     zero = np.zeros_like(u)
     aux = {"U_R": np.sqrt(UR2), "alpha_R": aR, "J": J, "F_N": FN, "beta": beta, "T": T, "FN_cos": -FN * np.cos(delta)}
-    side = propeller_side_force(p, T)        # optional propeller side force and moment (mmg_prop_side)
-    FY, FNz = (zero.copy(), zero.copy()) if side is None else (zero + side[0], zero + side[1])
-    return {"X": (HX, zero), "Y": (HY, FY), "N": (HN, FNz), "aux": aux}
+    return {"X": (HX, zero), "Y": (HY, zero.copy()), "N": (HN, zero.copy()), "aux": aux}
 
 
 __all__ = ["apparent_wind", "fujiwara_coefficients", "wind_forces", "crossflow_integrals", "fujii_f_alpha", "basis_esso",

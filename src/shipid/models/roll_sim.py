@@ -52,8 +52,13 @@ class NoiseSpec:
     wave_damping: float = 0.1
 
     @classmethod
-    def issue3(cls) -> "NoiseSpec":
-        """The combined noise of the efficiency check: 0.002 rad/s, 0.02 m/s^2, biases 0.001 / 0.01, 0.5 deg waves."""
+    def combined(cls) -> "NoiseSpec":
+        """Sensor noise, sensor biases and wave roll together, the disturbances of the IMU outputs (9).
+
+        White noise 0.002 rad/s on the roll- and yaw-rate gyros and 0.02 m/s^2 on the tangential
+        accelerometer, biases b_1 = b_3 = 0.001 rad/s and b_2 = 0.01 m/s^2, and a 0.5 deg (std) wave roll:
+        the noise of the mass-cm simulated trials, efficiency bounds and coverage (``both``).
+        """
         return cls(gyro_std=0.002, acc_std=0.02, gyro_bias=0.001, acc_bias=0.01, wave_roll_deg=0.5)
 
     @property

@@ -42,7 +42,7 @@ class StreamSpec:
     reference_duration: float = 300.0      # nominal and calibration datasets
     delta_amp: float = float(np.deg2rad(5.0))
     delta_clock: float = 0.5
-    noise: NoiseSpec = NoiseSpec.issue3()
+    noise: NoiseSpec = NoiseSpec.combined()
 
 
 def simulate_stream(spec: StreamSpec = StreamSpec(), *, vessel: str = "fishing-vessel",

@@ -101,3 +101,25 @@ def test_identified_model_predicts_held_out_run(supply, held_out):
     assert v.horizons["pos"]["rms"] < 1.25 * truth.horizons["pos"]["rms"]
     assert v.horizons["psi"]["rms"] < wrong.horizons["psi"]["rms"]
     assert v.horizons["pos"]["rms"] < wrong.horizons["pos"]["rms"]
+
+
+def test_cli_out_and_warnings_are_the_librarys(supply, held_out, tmp_path, capsys):
+    """``validate -o`` writes the file ``shipid.validate(..., out=)`` writes, and the JSON's warnings are the
+    library's ``settings["warnings"]`` (here: a model that did not converge)."""
+    res = _result(supply.theta)
+    res.diagnostics["converged"] = False
+    model = tmp_path / "dp.json"
+    res.write_json(model)
+    run = tmp_path / "run.csv"
+    write_trial(held_out, run)
+    v = shipid.validate(str(model), str(run), out=tmp_path / "lib.csv")
+    assert len(v.settings["warnings"]) == 1 and "did not converge" in v.settings["warnings"][0]
+    rc = main(["validate", str(model), "--trial", str(run), "--json", "-o", str(tmp_path / "cli.csv")])
+    cap = capsys.readouterr()
+    assert rc == 0 and json.loads(cap.out)["warnings"] == v.settings["warnings"]
+    assert cap.err.strip() == f"shipid: warning: {v.settings['warnings'][0]}"
+    assert (tmp_path / "cli.csv").read_text() == (tmp_path / "lib.csv").read_text()
+    # an existing file is refused before the simulation, by the library as by the command
+    with pytest.raises(shipid.errors.OutputExistsError):
+        shipid.validate(str(model), str(run), out=tmp_path / "lib.csv")
+    assert main(["validate", str(model), "--trial", str(run), "-o", str(tmp_path / "cli.csv")]) == 2

@@ -45,7 +45,7 @@ def test_exact_equation_error_spectrum_matches_simulated_noise():
     """The spectral density of the equation error, built from the noise sources' transfers, has the variance
     and the low/high-frequency split of a simulated noise-only record (waves and sensor noise together)."""
     from shipid.methods.masscm.crlb import equation_error_spectrum
-    noise = NoiseSpec.issue3()
+    noise = NoiseSpec.combined()
     n = 4096
     spec = equation_error_spectrum(noise=noise, n_fft=n)
     sim = _noise_only_equation_error(noise)

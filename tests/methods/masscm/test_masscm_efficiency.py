@@ -15,7 +15,7 @@ from shipid.models.roll_sim import NoiseSpec
 @pytest.fixture(scope="module")
 def bound():
     # the optimal-IV bound this test was calibrated on (spread/bound ~0.85); crlb_kf is checked in test_crlb_kf
-    return crlb(duration=300.0, noise=NoiseSpec.issue3(), method="spectrum")["bounds"]
+    return crlb(duration=300.0, noise=NoiseSpec.combined(), method="spectrum")["bounds"]
 
 
 def _spread(outs, k):

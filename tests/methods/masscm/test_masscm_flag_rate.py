@@ -1,4 +1,4 @@
-"""Share of mass-cm estimates flagged implausible on the issue-3 noise (Linder et al. 2015, beyond the paper).
+"""Share of mass-cm estimates flagged implausible on the combined noise (Linder et al. 2015, beyond the paper).
 
 The flag is judged on what the data determine (:func:`shipid.methods.masscm.plausibility.implausible_identifiable`);
 the finite-sample IV bias of K_vdot, K_r, K_delta under sensor noise is reported apart, not flagged.
@@ -38,8 +38,8 @@ def test_coverage_text_prints_the_flag_rate():
 
 
 @pytest.mark.slow
-def test_issue3_noise_flags_at_most_5_percent():
-    """100 fresh realisations (seed 3117; nothing was chosen on them) of three 300-s datasets with the issue-3
+def test_combined_noise_flags_at_most_5_percent():
+    """100 fresh realisations (seed 3117; nothing was chosen on them) of three 300-s datasets with the combined
     noise (regime 'both'), default options, z_f known: since refine='auto' every run is refined and judged on the
     refined estimate (passed, 2026-12-02, 6:45 on 2 workers). Measured with Algorithm 1 alone before: 0 of 100
     flagged (upper 95 % limit 3.0 %), 18 with a nuisance coefficient outside its physical range (reported)."""

@@ -70,14 +70,14 @@ def _noise_warning(r) -> bool:
 
 def test_noise_model_check_warns_on_the_wave_failure_and_not_on_sensor_noise():
     """The AR(40) failure of the wave-only case is no longer silent: m 1.29 ± 0.20 (seed 0) is 4 combined std
-    from the structured AR's 0.40 ± 0.03, and the result says so; the issue-3 noise (waves plus sensor noise)
+    from the structured AR's 0.40 ± 0.03, and the result says so; the combined noise (waves plus sensor noise)
     gives no such warning (fresh seeds 100-119: 0 of 20 warned, and all 9 wave-only estimates beyond 3 std
     were warned or flagged)."""
-    # the check belongs to the plain AR(40) model of Algorithm 1 (not refined: the issue-3 case would be by default)
+    # the check belongs to the plain AR(40) model of Algorithm 1 (not refined: combined noise would be by default)
     ar = MassCMOptions(noise_model="ar", refine="none")
     wave = _estimate(0, 300.0, NoiseSpec(wave_roll_deg=0.5), noise_check=True, options=ar)
     chk = wave.diagnostics["noise_model_check"]
     assert chk["z"] > 1.5 and _noise_warning(wave)
     assert abs(chk["m"] - M_TRUE) < 3 * chk["m_std"]
-    ok = _estimate(0, 300.0, NoiseSpec.issue3(), noise_check=True, options=ar)
+    ok = _estimate(0, 300.0, NoiseSpec.combined(), noise_check=True, options=ar)
     assert ok.diagnostics["noise_model_check"]["z"] < 1.5 and not _noise_warning(ok)

@@ -20,7 +20,7 @@ ZF = true_value("z_f")
 KNOWN = KnownParams.from_vessel("fishing-vessel")
 
 
-def _data(seed, duration, noise=NoiseSpec.issue3()):
+def _data(seed, duration, noise=NoiseSpec.combined()):
     return list(simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([17, seed]), duration=duration,
                                   noise=noise).items())
 

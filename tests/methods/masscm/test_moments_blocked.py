@@ -61,7 +61,7 @@ def test_iir_prefiltered_moments_equal_the_explicit_path(compute):
     from shipid.models.roll_sim import NoiseSpec, simulate_datasets
 
     d = simulate_datasets("fishing-vessel", seed=np.random.SeedSequence([23, 1]), duration=60.0,
-                          noise=NoiseSpec.issue3())
+                          noise=NoiseSpec.combined())
     rng = np.random.default_rng(11)
     opt = MassCMOptions(compute=compute)
     prep = prepare(list(d.items()), opt)

@@ -1,58 +1,19 @@
-"""Candidate particulars of the KVLCC2 rudder and flow straightening (shipid.methods.mmg.candidates.apply_candidate,
-shipid.models.mmg): the port/starboard asymmetry structure, swapped gamma_R, the rudder cross-flow part and the
-side gain."""
+"""Candidate particulars of the KVLCC2 rudder (shipid.methods.mmg.candidates.apply_candidate, shipid.models.mmg):
+the rudder cross-flow part and the side gain."""
 
 import numpy as np
 import pytest
 
 from shipid.io import data_root
-from shipid.methods.mmg import candidates as C
 from shipid.methods.mmg.candidates import apply_candidate
 from shipid.models import mmg
 
 ROOT = data_root()
-ASYM = {"Y": ("YP_T", "YR_asym"), "N": ("NP_T", "NR_asym")}
 
 
 def need(sub):
     if ROOT is None or not (ROOT / sub).is_dir():
         pytest.skip(f"shared data ({sub}/) not found (set SHIPID_DATA)")
-
-
-def _state(k=50):
-    rng = np.random.default_rng(5)
-    return (1.1 + 0.05 * rng.standard_normal(k), 0.05 * rng.standard_normal(k), 0.01 * rng.standard_normal(k),
-            np.deg2rad(rng.uniform(-35, 35, k)), np.full(k, 10.2))
-
-
-def test_asymmetric_structure_reduces_to_the_standard_mmg_and_adds_its_terms():
-    need("params")
-    prior = mmg.load_published("kvlcc2_hsva")
-    full = C.CANDIDATES["yasukawa2015"]["full"]
-    cand = dict(full, structure="yasukawa2015-asym", **{m: tuple(full[m]) + ASYM[m] for m in ASYM})
-    asym, _ = C.apply_candidate(prior, cand)
-    assert asym.structure == "yasukawa2015-asym"
-    assert all(asym.coef[c] == 0.0 for m in ASYM for c in ASYM[m])
-    u, v, r, d, n = _state()
-    f0 = mmg.forces(prior, u, v, r, d, n)
-    f1 = mmg.forces(asym, u, v, r, d, n)
-    for a, b in zip(f0, f1):
-        assert np.allclose(a, b, rtol=1e-13, atol=0)
-    # a propeller side force ∝ thrust, and a rudder force that changes sign with the side
-    b = mmg.basis(asym, u, v, r, d, n)
-    T = b["aux"]["T"]
-    H = b["Y"][0]
-    names = mmg.COEFS["yasukawa2015-asym"]["Y"]
-    assert np.allclose(H[:, names.index("YP_T")], T)
-    assert np.allclose(H[:, names.index("YR_asym")], np.sign(d) * H[:, names.index("YR_gain")])
-
-
-def test_swapped_gamma_swaps_the_sides():
-    need("params")
-    prior = mmg.load_published("kvlcc2_hsva")
-    p, _ = C.apply_candidate(prior, dict(C.CANDIDATES["yasukawa2015"]["full"], particulars={"gamma_R": "swapped"}))
-    assert p.particulars["gamma_R_minus"] == prior.particulars["gamma_R_plus"]
-    assert p.particulars["gamma_R_plus"] == prior.particulars["gamma_R_minus"]
 
 
 def test_rudder_crossflow_adds_the_sin_abs_sin_part_of_the_normal_force():

@@ -9,7 +9,7 @@ one regime:
 * ``waves``: 0.5 deg wave roll (1-s peak period, relative damping 0.1), noise-free sensors;
 * ``sensors``: white gyro noise 0.002 rad/s, accelerometer noise 0.02 m/s^2, biases 0.001 rad/s and
   0.01 m/s^2, no waves;
-* ``both``: the two together (the combined wave and sensor noise, :meth:`~shipid.models.roll_sim.NoiseSpec.issue3`).
+* ``both``: the two together (the combined wave and sensor noise, :meth:`~shipid.models.roll_sim.NoiseSpec.combined`).
 
 and runs :func:`shipid.methods.masscm.estimator.estimate_mass_cm` with z_f known (the vessel file's value), the
 linear initialisation and the options given (the estimator is told neither the noise levels nor the true
@@ -45,7 +45,7 @@ from shipid.vessels import load_vessel
 REGIMES = {
     "waves": NoiseSpec(wave_roll_deg=0.5),
     "sensors": NoiseSpec(gyro_std=0.002, acc_std=0.02, gyro_bias=0.001, acc_bias=0.01),
-    "both": NoiseSpec.issue3(),
+    "both": NoiseSpec.combined(),
 }
 QUANTITIES = ("m", "zm_bar", "rho")
 NUISANCE = ("K_vdot", "K_r", "K_delta")

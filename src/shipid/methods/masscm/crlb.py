@@ -139,7 +139,7 @@ def equation_error_spectrum(vessel="fishing-vessel", *, fs: float = 50.0, noise:
 
 
 def crlb(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
-         delta_amp: float = np.deg2rad(5.0), noise: NoiseSpec = NoiseSpec.issue3(), seed=0,
+         delta_amp: float = np.deg2rad(5.0), noise: NoiseSpec = NoiseSpec.combined(), seed=0,
          n_datasets_per_condition: int = 1, method: str = "kf", nuisance: str = "free-rows") -> dict:
     """Lower bounds on the standard deviations of the estimates (z_f known).
 

@@ -331,7 +331,7 @@ def spectral_info(F, G, H, J, R, dmats, N):
 
 
 def fisher_information(vessel="fishing-vessel", *, duration=300.0, fs=50.0, delta_amp=np.deg2rad(5.0),
-                       delta_clock=0.5, noise: NoiseSpec = NoiseSpec.issue3(), seed=0, n_rudder: int = 1,
+                       delta_clock=0.5, noise: NoiseSpec = NoiseSpec.combined(), seed=0, n_rudder: int = 1,
                        nuisance: str = "free-rows", floor: float = 1e-3) -> dict:
     """Fisher information of ``[theta (8) | per dataset: c_v, c_r, wave, sensor variances, biases]``.
 
@@ -420,7 +420,7 @@ def theta_covariance(info: np.ndarray, theta_index, nuisance_index) -> np.ndarra
 
 
 def crlb_kf(vessel="fishing-vessel", *, duration: float = 300.0, fs: float = 50.0,
-            delta_amp: float = np.deg2rad(5.0), noise: NoiseSpec = NoiseSpec.issue3(), seed=0,
+            delta_amp: float = np.deg2rad(5.0), noise: NoiseSpec = NoiseSpec.combined(), seed=0,
             n_rudder: int = 1, nuisance: str = "free-rows", floor: float = 1e-3) -> dict:
     """Bounds on the standard deviations of ``theta``, ``m``, ``zm_bar`` and ``rho`` (z_f known).
 

@@ -204,12 +204,12 @@ def efficiency_run(i: int, seed=0, *, duration: float = 300.0, prefilter: bool =
                    instruments: str = "lags", vessel: str = "fishing-vessel") -> dict:
     """One noise realisation of the efficiency check (combined wave and sensor noise) of Algorithm 1 (beyond the paper; no refinement).
 
-    Three datasets of ``duration`` s with :meth:`NoiseSpec.issue3` noise (white gyro / accelerometer
+    Three datasets of ``duration`` s with :meth:`NoiseSpec.combined` noise (white gyro / accelerometer
     noise, constant biases, 0.5 deg wave roll), z_f known, linear initialisation; returns the
     estimates of m, zm_bar, rho with their standard errors.
     """
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
-    d = simulate_datasets(vessel, seed=ss, duration=duration, noise=NoiseSpec.issue3())
+    d = simulate_datasets(vessel, seed=ss, duration=duration, noise=NoiseSpec.combined())
     known = KnownParams.from_vessel(vessel)
     z_f = float(load_vessel(vessel).value("general", "z_f"))
     with warnings.catch_warnings():

@@ -110,8 +110,6 @@ def apply_candidate(prior: mmg.MmgModel, cand: Mapping) -> tuple[mmg.MmgModel, d
         elif k == "gamma_R_asymmetry":              # fraction of the prior's asymmetry kept about the mean
             g, h = 0.5 * (p["gamma_R_minus"] + p["gamma_R_plus"]), 0.5 * (p["gamma_R_plus"] - p["gamma_R_minus"])
             p["gamma_R_minus"], p["gamma_R_plus"] = g - float(v) * h, g + float(v) * h
-        elif k == "gamma_R" and v == "swapped":      # the prior's asymmetry applied to the other side
-            p["gamma_R_minus"], p["gamma_R_plus"] = p["gamma_R_plus"], p["gamma_R_minus"]
         else:
             p[k] = float(v)
     return _replace(prior, particulars=p), free

@@ -75,95 +75,11 @@ def validate_cmd(model, trial_path, fmt, channels, horizon, rudder_sign, as_json
         raise ShipidError("--horizon must be positive")
     if rudder_sign not in (None, 1, -1):
         raise ShipidError("--rudder-sign must be 1 or -1")
-    if out_path and not force:
-        from pathlib import Path
+    from shipid.api import validate
 
-        from shipid.errors import OutputExistsError
-        if Path(out_path).exists():          # before the simulation, not after
-            raise OutputExistsError(out_path)
-    other = _result_of_other_method(model)
-    if other is not None:
-        _validate_other(model, other, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path,
-                        out_path, force)
-        return
-    from shipid.methods.mmg.validate_run import validate_with_run
-
-    v, tr = validate_with_run(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
-                              retime=not no_retime)
-    rudder_sign = v.settings["rudder_sign"]
-    warns = loud_lines(v.settings.pop("warnings"))
-    if out_path:
-        from shipid.methods.mmg.export import write_prediction
-        _, pt = write_prediction(v, tr, out_path, rudder_sign=rudder_sign, force=force)
-        if pt.meta["diverged_from_s"] is not None:
-            warns += loud_lines([f"the prediction diverged at t = {pt.meta['diverged_from_s']:g} s; "
-                                 f"{out_path} has empty predicted cells from there"])
-    if plot_path:
-        v.plot(plot_path, force=force)
-    if as_json:
-        d = v.to_dict()
-        d["warnings"] = warns
-        click.echo(json.dumps(d, indent=2))
-    else:
-        click.echo(v.summary())
-        if plot_path:
-            click.echo(f"plot written to {plot_path}")
-        if out_path:
-            click.echo(f"prediction written to {out_path}")
-
-
-def _result_of_other_method(model: str) -> dict | None:
-    """The JSON document of ``model`` when it is a result of a method other than MMG, else None
-    (``published:`` sets, MMG results and unreadable files take the MMG path, which reports them)."""
-    from pathlib import Path
-
-    from shipid import registry
-
-    if str(model).startswith("published:") or not Path(model).is_file():
-        return None
-    try:
-        doc = json.loads(Path(model).read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
-        return None
-    if not isinstance(doc, dict) or "method" not in doc:
-        return None
-    if (doc.get("model") or {}).get("family") == "mmg":
-        return None
-    info = registry.for_result(str(doc["method"]))
-    return None if info is not None and info.name == "mmg" else doc
-
-
-def _validate_other(model, doc, trial_path, fmt, channels, horizon, rudder_sign, as_json, plot_path, out_path,
-                    force):
-    """``shipid validate`` of a non-MMG result: the method's ``validate_result`` found through the registry."""
-    from shipid import registry
-    from shipid.analysis.openloop import write_csv
-    from shipid.errors import InputError
-    from shipid.result import Result
-
-    method = str(doc["method"])
-    info = registry.for_result(method)
-    if info is None or not info.has_module("validate"):
-        can = ", ".join(k for k, v in registry.methods().items() if v.has_module("validate"))
-        raise InputError(f"a {method!r} result cannot be validated (methods with an open-loop model: {can})",
-                         file=model)
-    mod = info.submodule("validate")
-    try:
-        res = Result.from_dict(doc)
-    except (KeyError, TypeError, ValueError) as err:
-        raise InputError(f"malformed result ({type(err).__name__}: {err})", file=model) from None
-    from shipid.methods.mmg.profile import flip, read_run
-
-    tr = flip(read_run(trial_path, fmt, channels, method="shipid validate",
-                       required=list(getattr(mod, "REQUIRED", ())) or None), rudder_sign)
-    notes = []
-    if (res.diagnostics or {}).get("converged") is False:
-        notes.append(f"model {model} did not converge when it was identified (diagnostics.converged false): "
-                     "its predictions must not be trusted")
-    v = mod.validate_result(res, tr, horizon=horizon)
-    warns = loud_lines(notes + list(v.settings.get("warnings", [])), trials=[tr])
-    if out_path:
-        write_csv(v, out_path, force=force)
+    v = validate(model, trial_path, horizon=horizon, fmt=fmt, channels=channels, rudder_sign=rudder_sign,
+                 retime=not no_retime, out=out_path, force=force)
+    warns = loud_lines(v.settings.pop("warnings", []))
     if plot_path:
         v.plot(plot_path, force=force)
     if as_json:
