@@ -371,6 +371,7 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
             staged_note = (f"staged selection not run: {count} (it needs {MIN_HORIZONS_PER_COEFFICIENT} per "
                            "coefficient, as refine='auto'); regression CV only")
     if structure is None and select and len(trials) >= 2:
+        more: list = []
         if selector is None:
             structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
             method = horizon_method(folds)
