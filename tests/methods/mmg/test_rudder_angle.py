@@ -80,3 +80,100 @@ def test_cli_rudder_angle_selection_refuses_another_structure(capsys):
     err = capsys.readouterr().err
     assert rc == 2 and "rudder-angle: for the structure 'yasukawa2015' only (not 'esso-lowspeed')" in err
     assert "Traceback" not in err
+
+
+# ----------------------------------------------------------------------------- selection for manoeuvres
+@pytest.fixture(scope="module")
+def ladder(own_run):
+    """Five noise-free zig-zags of a truth with an angle-dependent side term, named as HSVA runs: 10°/1°
+    (switch under 5°: trains, never scored) and 10°, 15°, 20°, 25° with switch 5°."""
+    if ROOT is None or not (ROOT / "params").exists():
+        pytest.skip("shared data not found (set SHIPID_DATA)")
+    prior = mmg.load_published("kvlcc2_hsva")
+    truth, _ = apply_candidate(prior, {m: () for m in mmg.MODES}
+                               | {"particulars": {"gamma_R": "symmetric", "rudder_crossflow": 1.0,
+                                                  "rudder_side_slope": -0.2}})
+    spec = ((10.0, 20.0, "own_Z_10_01.dat"), (10.0, 36.0, "own_Z_10_05.dat"), (15.0, 40.0, "own_Z_15_05.dat"),
+            (20.0, 50.0, "own_Z_20_05.dat"), (25.0, 56.0, "own_Z_25_05.dat"))
+    trials = [own_run(truth, 80.0, rudder_deg=d, period=p, source=n) for d, p, n in spec]
+    return prior, trials, [R.smooth_run(t) for t in trials]
+
+
+def test_run_angles_from_the_name_else_from_the_largest_rudder(ladder):
+    from dataclasses import replace as _r
+
+    _, trials, _ = ladder
+    assert RA.run_angles(trials[:2]) == [(10.0, 1.0), (10.0, 5.0)]
+    anon = _r(trials[4], meta={"source": "run.csv"})
+    assert RA.run_angles([anon]) == [(25.0, None)]
+
+
+def test_forward_folds_cut_at_the_largest_angles_with_two_below(ladder):
+    _, trials, _ = ladder
+    folds, why = RA.forward_folds(trials)
+    # scored angles 10, 15, 20, 25: cuts with >= 2 scored angles below are 20 and 25
+    assert [(a, tr, sc) for a, tr, sc in folds] == [(20.0, [0, 1, 2], [3, 4]), (25.0, [0, 1, 2, 3], [4])]
+    assert "4 rudder angle(s)" in why
+    few, why = RA.forward_folds(trials[:3])          # 10 and 15 only: the guard fails
+    assert few == [] and "needs 3" in why
+
+
+def test_select_manoeuvres_applies_its_rule_to_its_fold_table(ladder):
+    prior, trials, runs = ladder
+    cands = RA.manoeuvre_candidates()
+    chosen, table, method, rec = RA.select_manoeuvres(trials, runs, prior, cands)
+    h = rec["horizon_choice"]
+    from shipid.methods.mmg.candidates import CANDIDATES
+    from shipid.methods.mmg.pipeline import select_structure
+
+    assert h == select_structure(trials, runs, prior, CANDIDATES["yasukawa2015"])[0]
+    assert set(table) == {h, h + RA.INTEGRAL, RA.RA_NAME, RA.RA_NAME + RA.INTEGRAL}
+    assert [f["cut_deg"] for f in rec["folds"]] == [20.0, 25.0] and "2 folds" in method
+    for c, row in table.items():
+        fs = [f["rows"][c]["score"] for f in rec["folds"]]
+        assert row["fold_scores"] == fs and row["score"] == pytest.approx(np.mean(fs))
+        assert row["folds_better_than_H"] == sum(f["rows"][c]["score"] < f["rows"][h]["score"] for f in rec["folds"])
+    assert all("calibrated" in f["rows"][RA.RA_NAME] for f in rec["folds"])
+    best = min(table, key=lambda c: table[c]["score"])
+    want = best if table[best]["folds_better_than_H"] >= 2 else h       # ceil(2 x 2 / 3) = 2
+    assert chosen == want and rec["criterion"] == RA.CRITERION and rec["why"]
+
+
+def test_select_manoeuvres_below_three_angles_is_the_horizon_selection(ladder):
+    from shipid.methods.mmg.pipeline import select_structure
+    from shipid.methods.mmg.candidates import CANDIDATES
+
+    prior, trials, runs = ladder
+    chosen, table, _, rec = RA.select_manoeuvres(trials[:3], runs[:3], prior, RA.manoeuvre_candidates())
+    h, htable = select_structure(trials[:3], runs[:3], prior, CANDIDATES["yasukawa2015"])
+    assert chosen == h and table == htable and "not run" in rec["note"]
+
+
+def test_auto_is_manoeuvres_for_yasukawa_only_and_manoeuvres_refuses_another_structure(esso_published):
+    from shipid.errors import InputError
+    from shipid.methods.mmg import entry as E
+
+    assert E.default_selection(mmg.load_published("kvlcc2_hsva")) == "manoeuvres"
+    assert E.default_selection(esso_published) == "horizons"
+    with pytest.raises(InputError, match="manoeuvres: for the structure 'yasukawa2015' only"):
+        E._selection_kw("manoeuvres", esso_published, None)
+    assert "H" not in RA.manoeuvre_candidates(equation_given=True)
+    assert not any(k.endswith(RA.INTEGRAL) for k in RA.manoeuvre_candidates(equation_given=True))
+
+
+@pytest.mark.slow
+def test_default_identify_on_the_hsva_runs_records_the_forward_cv():
+    """The 13 HSVA zig-zags through ``shipid.identify`` defaults: the forward CV ran (three cuts), its choice
+    follows its rule, and the chosen row's calibrated parameter is recorded (about a minute)."""
+    import shipid
+
+    d = None if ROOT is None else ROOT / "kvlcc2_hsva"
+    if d is None or not d.is_dir():
+        pytest.skip("shared data (kvlcc2_hsva/) not found (set SHIPID_DATA)")
+    res = shipid.identify("mmg", sorted(str(p) for p in d.glob("*.dat")))
+    sel = res.diagnostics["structure_selection"]
+    assert sel["criterion"] == RA.CRITERION and [f["cut_deg"] for f in sel["folds"]] == [25.0, 30.0, 35.0]
+    t, h = sel["table"], sel["horizon_choice"]
+    best = min(t, key=lambda c: t[c]["score"])
+    assert sel["chosen"] == (best if t[best]["folds_better_than_H"] >= 2 else h)
+    assert res.model["structure_candidate"] == sel["chosen"]

@@ -8,8 +8,9 @@ rudder sign, prior, re-timing, checks, selection) is :mod:`shipid.methods.mmg.en
 * ``shipid validate MODEL.json --trial RUN.csv [--json] [--plot out.png] [--no-retime]``
   (``MODEL`` may also be ``published:esso_osaka_3m`` or ``published:kvlcc2_L7``)
 * ``shipid identify mmg --trial RUN.csv [--trial ...] [--channels MAP | --format esso] [--json] [-o MODEL.json]``;
-  ``--selection``: the structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`)
-  or by what a turning circle measures (:mod:`shipid.methods.mmg.turning_selection`)
+  ``--selection``: the structure by 60-s horizon errors (:data:`shipid.methods.mmg.candidates.CANDIDATES`),
+  by a forward CV by rudder angle (:func:`shipid.methods.mmg.rudder_angle.select_manoeuvres`, the
+  Yasukawa-2015 default) or by what a turning circle measures (:mod:`shipid.methods.mmg.turning_selection`)
 """
 
 from __future__ import annotations
@@ -107,7 +108,10 @@ def _print_result(res) -> None:
         qs = [q for q in next(iter(sel["table"].values())) if q.endswith("_rms") or q.endswith("_mean_pct")]
         for c, row in sel["table"].items():
             mark = "  <-" if c == res.model.get("structure_candidate") else ""
-            click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs) + mark)
+            folds = "".join(f" {x:.2f}" for x in row.get("fold_scores", ()))
+            folds = f"  folds{folds} (better than H in {row['folds_better_than_H']})" if folds else ""
+            click.echo(f"  {c:<68} score {row['score']:8.3f}" + "".join(f"  {q} {row[q]:8.3f}" for q in qs)
+                       + folds + mark)
         ref = sel.get("refinement_table") or {}
         if ref:
             click.echo("  then regression and output error of the best and their variants (score, pooled RMS "
@@ -180,8 +184,12 @@ _ID_OPTS = [
                  help="CV folds for 'auto' [default: leave one run out; the output-error stages of the Esso "
                       "selection: 4]."),
     click.option("--selection", default="auto", show_default=True,
-                 type=click.Choice(["auto", "horizons", "turning", "turning-auto", "rudder-angle"]),
-                 help="Criterion and candidate list of --structure auto: 'horizons' (60-s restarted horizon errors; "
+                 type=click.Choice(["auto", "horizons", "manoeuvres", "turning", "turning-auto", "rudder-angle"]),
+                 help="Criterion and candidate list of --structure auto: 'manoeuvres' (Yasukawa-2015 only: a forward "
+                      "CV by rudder angle on the given zig-zags, trained below a cut angle and scored above it by "
+                      "open-loop peak yaw rate per side and heading, among the horizon choice, the 'rudder-angle' "
+                      "candidate and both with the integral form; the horizon choice below 3 rudder angles; "
+                      "shipid.methods.mmg.rudder_angle.select_manoeuvres); 'horizons' (60-s restarted horizon errors; "
                       "for the Esso low-speed prior with enough horizons the staged CV of "
                       "shipid.methods.mmg.staged: regression, output error, port/starboard and surge variants; "
                       "else the regression CV over shipid.methods.mmg.candidates.CANDIDATES); 'turning' "
@@ -189,7 +197,8 @@ _ID_OPTS = [
                       "structure only, shipid.methods.mmg.turning_selection); 'turning-auto' (the peak criterion "
                       "under a heading limit, shipid.methods.mmg.turning_auto); 'rudder-angle' (Yasukawa-2015 "
                       "only: the candidate with the rudder cross-flow part per side, its side parameter calibrated "
-                      "on the given runs, shipid.methods.mmg.rudder_angle); 'auto': horizons."),
+                      "on the given runs, shipid.methods.mmg.rudder_angle); 'auto': manoeuvres for the Yasukawa-2015 "
+                      "structure, else horizons."),
     click.option("--refine", default="auto", show_default=True,
                  type=click.Choice(["auto", "none", "output-error"]),
                  help="Refine the regression estimate by output error on the runs' 60-s restarted horizons "

@@ -27,15 +27,30 @@ from shipid.result import Result
 #: ``selection=`` values (the criterion and candidate list of the structure selection).
 #: The channels a training run must hold (those of :func:`shipid.methods.mmg.estimator.smooth_run`).
 SMOOTH_CHANNELS = ("x", "y", "psi", "u", "v", "r", "delta", "n")
-SELECTIONS = ("auto", "horizons", "turning", "turning-auto", "rudder-angle")
+SELECTIONS = ("auto", "horizons", "manoeuvres", "turning", "turning-auto", "rudder-angle")
 #: ``simex=`` values.
 SIMEX = ("auto", "on", "off")
 
 
-def _selection_kw(selection: str, pm, st: str | None) -> tuple[str | None, dict]:
+def default_selection(pm) -> str:
+    """What ``selection="auto"`` means for a prior: ``"manoeuvres"`` for the Yasukawa-2015 structure
+    (:func:`shipid.methods.mmg.rudder_angle.select_manoeuvres`), else ``"horizons"``."""
+    return "manoeuvres" if pm.structure == "yasukawa2015" else "horizons"
+
+
+def _selection_kw(selection: str, pm, st: str | None, equation_given: bool = False) -> tuple[str | None, dict]:
     """The structure and :func:`~shipid.methods.mmg.pipeline.identify` keywords of a ``selection``."""
-    if selection in ("auto", "horizons"):
+    if selection == "horizons":
         return st, {}
+    if selection == "manoeuvres":
+        if pm.structure != "yasukawa2015":
+            raise InputError(f"selection manoeuvres: for the structure 'yasukawa2015' only (not '{pm.structure}')")
+        cands = RA.manoeuvre_candidates(equation_given)
+        if st is not None:          # a named structure: no selection, but it may be one of these rows
+            if st not in cands:
+                raise InputError(f"unknown structure '{st}' (choose from {', '.join(cands)})")
+            return st, {"candidates": cands, "resolve": RA.resolve}
+        return st, {"candidates": cands, "selector": RA.select_manoeuvres, "resolve": RA.resolve}
     if selection == "rudder-angle":
         if pm.structure != "yasukawa2015":
             raise InputError(f"selection rudder-angle: for the structure 'yasukawa2015' only (not '{pm.structure}')")
@@ -84,8 +99,11 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
         criterion, the tables and why are in ``diagnostics["structure_selection"]``.
     folds : int, optional
         CV folds (default: leave one run out; the output-error stages of the staged selection: 4).
-    selection : {"auto", "horizons", "turning", "turning-auto", "rudder-angle"}
+    selection : {"auto", "horizons", "manoeuvres", "turning", "turning-auto", "rudder-angle"}
         Criterion and candidate list of the structure selection (``shipid identify mmg --help``).
+        ``"auto"``: :func:`default_selection` (``"manoeuvres"``, the forward CV by rudder angle of
+        :func:`shipid.methods.mmg.rudder_angle.select_manoeuvres`, for the Yasukawa-2015 structure;
+        ``"horizons"`` for any other).
     refine : {"auto", "none", "output-error"}
         See :func:`shipid.methods.mmg.pipeline.identify`.
     simex : {"auto", "on", "off"}
@@ -142,8 +160,8 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
     pm, prior_info = PF.choose_prior(prior if prior is not None else vessel, profiles, notes)
     st = None if structure in (None, "auto") else structure
     if selection == "auto":
-        selection = "horizons"
-    st, sel_kw = _selection_kw(selection, pm, st)
+        selection = default_selection(pm)
+    st, sel_kw = _selection_kw(selection, pm, st, equation != "auto")
     cfg = options or FitConfig()
     if equation != "auto":
         cfg = replace(cfg, equation=equation)
@@ -165,4 +183,4 @@ def identify(trials, *, vessel: str | None = None, options: FitConfig | None = N
     return res
 
 
-__all__ = ["identify", "validate", "validate_with_run", "SELECTIONS", "SIMEX"]
+__all__ = ["identify", "validate", "validate_with_run", "default_selection", "SELECTIONS", "SIMEX"]

@@ -324,9 +324,9 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
         :func:`select_structure`. ``diagnostics["structure_selection"]`` records the criterion, the
         tables and why.
     selector : callable, optional
-        ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method)``;
+        ``selector(trials, runs, prior, candidates, config, folds) -> (name, table, method[, record])``;
         default :func:`select_structure` (60-s horizon errors). It receives the training
-        runs only.
+        runs only; ``record`` (a dict) updates ``diagnostics["structure_selection"]``.
     candidates : mapping, optional
         The candidate structures to choose among (default :data:`CANDIDATES` of the prior's structure).
     resolve : callable, optional
@@ -371,11 +371,12 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
             staged_note = (f"staged selection not run: {count} (it needs {MIN_HORIZONS_PER_COEFFICIENT} per "
                            "coefficient, as refine='auto'); regression CV only")
     if structure is None and select and len(trials) >= 2:
+        more: list = []
         if selector is None:
             structure, table = select_structure(trials, runs, prior, cands, config=fit_config, folds=folds)
             method = horizon_method(folds)
         else:
-            structure, table, method = selector(trials, runs, prior, cands, fit_config, folds)
+            structure, table, method, *more = selector(trials, runs, prior, cands, fit_config, folds)
         scores = sorted((row.get("score", np.inf), c) for c, row in table.items() if c != structure)
         why = (f"lowest CV score of the {len(table)} candidates: "
                f"{table.get(structure, {}).get('score', np.nan):.4f} ({structure})")
@@ -383,6 +384,8 @@ def identify(trials: Sequence[Trial], prior: mmg.MmgModel, *, structure: str | N
             why += f"; next {scores[0][0]:.4f} ({scores[0][1]})"
         selection = {"method": method, "criterion": "regression CV" if selector is None else "selector",
                      "table": table, "chosen": structure, "why": why, "training_runs": [r.source for r in runs]}
+        if more:        # a selector's own record (criterion, why, further tables) over the generic one
+            selection.update(more[0])
         if staged_note:
             selection["note"] = staged_note
     elif structure is None:
