@@ -24,10 +24,12 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import fields
+from dataclasses import fields, replace
 
 import numpy as np
 
+from shipid.campaign.engine import CampaignOptions
+from shipid.methods.monitor.estimator import MonitorOptions, run_monitor
 from shipid.models.roll_reduced import KnownParams
 from shipid.models.roll_sim import NoiseSpec
 from shipid.simulate.masscm_stream import StreamSpec, simulate_stream, truth_at
@@ -48,8 +50,6 @@ def scaled_noise(scale: float) -> NoiseSpec:
 def run_stream(i: int, seed=0, *, change: bool = True, noise_scale: float = 1.0, duration: float = 1800.0,
                settle: float = 300.0, covariance: str = "sandwich", vessel: str = "fishing-vessel") -> dict:
     """One fresh stream through :func:`shipid.methods.monitor.estimator.run_monitor`; see the module docstring."""
-    from shipid.methods.monitor.estimator import MonitorOptions, run_monitor
-
     ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence([int(seed), int(i)])
     change_at = 0.5 * duration if change else None
     spec = StreamSpec(duration=duration, change_at=change_at, noise=scaled_noise(noise_scale))
@@ -125,10 +125,6 @@ def run_cases(streams: int, noise_scales=(1.0, 0.1), *, duration: float = 1800.0
     failure lines (``failures``) and ``warnings`` (a case whose target is missed is not a warning: it is
     the result).
     """
-    from dataclasses import replace
-
-    from shipid.campaign.engine import CampaignOptions
-
     campaign = campaign or CampaignOptions(workers=1, progress=False)
     t0 = time.perf_counter()
     cases, failures = [], []
