@@ -19,9 +19,12 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    rebuild after a change): the memory is bounded by the window, not by the stream length.
 3. **Refined IV update.** Every block: the window's moments are summed and compressed
    (:func:`shipid.estimate.iv.iv_compress_products`), the criterion (40) over the three datasets is
-   minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known), and
-   the covariance ``(J^T J)^-1`` (weighted residuals, as in Algorithm 1) gives the standard errors of
-   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the noise model
+   minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known). The
+   standard errors of ``m``, ``zm_bar`` and ``rho`` (delta method) come from the block Newey-West sandwich of
+   :mod:`shipid.methods.monitor.covariance`: the gradient of (40) cut into ``every``-second blocks of the
+   nominal and calibration datasets (kept from the start-up; their error is shared by every update) and of
+   the window, so that a coloured equation error and a slow misfit, which the white-noise covariance
+   ``(J^T J)^-1`` of Algorithm 1 does not see, widen the bands (never below ``(J^T J)^-1``). Then step B(b)-(c) for the *next* blocks: the noise model
    (AR part; (c, k) held) is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
    least squares) and the instrument model is the new estimate. Blocks already in the window keep the
    prefilter and instruments they were built with: each block's instruments are a function of the rudder
