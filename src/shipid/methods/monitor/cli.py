@@ -353,16 +353,20 @@ def monitor_coverage(streams, noise_scales, duration, settle, covariance, as_jso
 
 
 def _coverage_text(res: dict) -> None:
+    """The table: per case the fraction of streams with >= 90 % of their updates covered, pooled and worst
+    coverage, the std factor the target would need (std x), alarm delays, false alarms, real-time factor."""
     click.echo(f"monitor coverage: {res['streams']} streams per case, {res['duration']:g} s at 50 Hz, covered "
                f"from {res['settle']:g} s after the change, covariance {res['covariance']}, seed {res['seed']}, "
                f"{res['wall_s']:.0f} s")
     click.echo(f"  {'noise':>5s} {'change':>6s} {'>=90% m':>8s} {'zm_bar':>7s} {'both':>6s} {'pooled m':>9s} "
-               f"{'zm_bar':>7s} {'worst m':>8s} {'zm_bar':>7s} {'alarm delay':>14s} {'false':>6s} {'x real':>7s}")
+               f"{'zm_bar':>7s} {'worst m':>8s} {'zm_bar':>7s} {'std x':>6s} {'alarm delay':>14s} {'false':>6s} "
+               f"{'x real':>7s}")
     for c in res["cases"]:
         s = c["summary"]
         d = (f"{s['detected']}/{s['streams']} {s['delay_mean']:.0f}-{s['delay_max']:.0f}s" if c["change"] and
              s.get("detected") else ("-" if not c["change"] else f"0/{s['streams']}"))
         click.echo(f"  {c['noise_scale']:5g} {'yes' if c['change'] else 'no':>6s} {s['streams_ge90_m']:8.2f} "
                    f"{s['streams_ge90_zm_bar']:7.2f} {s['streams_ge90_both']:6.2f} {s['pooled_m']:9.3f} "
-                   f"{s['pooled_zm_bar']:7.3f} {s['worst_m']:8.2f} {s['worst_zm_bar']:7.2f} {d:>14s} "
+                   f"{s['pooled_zm_bar']:7.3f} {s['worst_m']:8.2f} {s['worst_zm_bar']:7.2f} {s['std_factor_needed']:6.2f} "
+                   f"{d:>14s} "
                    f"{s['false_alarms']:6d} {s['realtime_min']:7.0f}")
