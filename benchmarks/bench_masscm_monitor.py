@@ -13,6 +13,10 @@ every update, timed on 5 updates and scaled to the 168 updates of the stream; re
 ``memory``: tracemalloc peak while monitoring 600-, 1800- and 3600-s streams (flat = independent of length).
 ``tradeoff``: window 150 / 300 / 600 s on the same streams (std of the updates, coverage, delay).
 
+The per-stream coverage study with the monitor's standard errors at both noise levels is a product command,
+``shipid study monitor-coverage`` (:mod:`shipid.methods.monitor.coverage`); its figures are in
+``docs/validation/monitor.md``.
+
 Usage:  python benchmarks/bench_masscm_monitor.py study RUNS [SEED [combined|waves-only [ar|auto [RESELECT]]]]
         python benchmarks/bench_masscm_monitor.py speed | memory | tradeoff [RUNS]
         python benchmarks/bench_masscm_monitor.py --smoke     (speed on a 700-s stream, one peer update)

@@ -115,9 +115,7 @@ def _kinds_by_name() -> dict[str, dict[str, list[str]]]:
 
 #: one name on two concepts, left for the owners of those commands (each fails the test below once fixed:
 #: then take it off this list)
-TWO_KINDS = {
-    "--init": "monitor mass-cm: start-up seconds; study mass-cm-sensitivity: where Algorithm 1 starts",
-}
+TWO_KINDS: dict[str, str] = {}
 
 
 @pytest.mark.parametrize("name", sorted({o for _, p in OPTIONS for o in p.opts if o.startswith("--")}))

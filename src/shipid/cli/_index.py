@@ -5,7 +5,7 @@ do not edit by hand. ``tests/cli/test_lazy.py`` checks it is current.
 """
 
 #: :func:`shipid.cli.sources_key` of the command modules this index was built from
-SOURCES = '751c59554075996e'
+SOURCES = 'a04eae0e1d2efd6a'
 
 #: command path -> (module whose import registers the command, summary its group shows, hidden)
 INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
@@ -73,6 +73,8 @@ INDEX: dict[tuple[str, ...], tuple[str, str, bool]] = {
         ('shipid.methods.masscm.cli', 'Table 3: sensitivity of Algorithm 1 to the initial values (noise-free 60 s datasets).', False),
     ('study', 'mmg-coverage'):
         ('shipid.methods.mmg.cli_coverage', 'Coverage of the MMG std on perturbed ships (shipid.methods.mmg.coverage).', False),
+    ('study', 'monitor-coverage'):
+        ('shipid.methods.monitor.cli', 'Per-stream coverage of the mass / CM monitor: in each fresh simulated stream, the fraction of updates whose ±2-std band holds the true m and zm_bar; the streams with >= 90 % covered, alarm delay, false alarms.', False),
     ('study', 'store-info'):
         ('shipid.cli.campaign_cmds', 'List the campaigns in a store with their definition and progress.', False),
     ('study', 'toy'):

@@ -51,8 +51,10 @@ def test_udp_replay_at_25x_equals_the_file(stream300, tmp_path):
 def test_tcp_replay_of_standard_sentences(stream300, tmp_path):
     """ROT (deg/min) and RSA (deg) carry r and delta in degrees: the values differ from the file's in the last
     bit (the unit conversions). The start-up's iterations stop at a tolerance, so last-bit input differences move
-    the estimates within it (measured 8e-9 relative): they agree to 1e-6 relative, not to the bit; the updates'
-    times, alarm and change time are the same. Sent as fast as possible: TCP's flow control paces it."""
+    the estimates within it (measured 8e-9 relative): they agree to 1e-6 relative, not to the bit. The standard
+    errors are sums of squared block residuals (the sandwich of methods/monitor/covariance.py), and a residual
+    is small next to the signals it is the difference of, so they move more (measured 2.3e-6 relative): 1e-4.
+    The updates' times, alarm and change time are the same. Sent as fast as possible: TCP's flow control paces it."""
     d = stream300
     out = tmp_path / "tcp.jsonl"
     proc, url, _ = _start(d, "tcp://127.0.0.1:0", out)
@@ -65,8 +67,8 @@ def test_tcp_replay_of_standard_sentences(stream300, tmp_path):
     for g, f in zip(got, ref):
         assert (g["t"], g["alarm"], g["converged"], g["change_at"]) == (f["t"], f["alarm"], f["converged"],
                                                                        f["change_at"])
-        for k in ("m", "m_std", "zm_bar", "zm_bar_std"):
-            assert (g[k] is None) == (f[k] is None) and (g[k] is None or g[k] == pytest.approx(f[k], rel=1e-6))
+        for k, rel in (("m", 1e-6), ("zm_bar", 1e-6), ("m_std", 1e-4), ("zm_bar_std", 1e-4)):
+            assert (g[k] is None) == (f[k] is None) and (g[k] is None or g[k] == pytest.approx(f[k], rel=rel))
 
 
 def _fuzz(d, tmp_path, n_bad, seed, speed=25.0):

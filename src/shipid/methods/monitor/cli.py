@@ -18,8 +18,9 @@ from pathlib import Path
 
 import click
 
-from shipid.cli import CONTEXT, cli
-from shipid.cli._common import channels_option, refuse_existing, warn
+from shipid.cli import CONTEXT, cli, study
+from shipid.cli._common import channels_option, emit, loud_lines, out_options, refuse_existing, warn
+from shipid.cli.campaign_cmds import campaign_options
 from shipid.errors import InputError
 
 _CHANNELS = ["t", "p", "a_s", "r", "delta"]
@@ -142,7 +143,7 @@ def live_panel(u, nominal_label: str):
               help="Sliding window of the loaded-stream moments (s).")
 @click.option("--every", type=click.FloatRange(min=1), default=10.0, show_default=True,
               help="Update period in stream time (s); also the block length.")
-@click.option("--init", "init_s", type=click.FloatRange(min=30), default=120.0, show_default=True,
+@click.option("--startup", "init_s", type=click.FloatRange(min=30), default=120.0, show_default=True,
               help="Stream seconds used by the start-up run of Algorithm 1 before the first estimate.")
 @click.option("--threshold", type=click.FloatRange(min=0), default=None,
               help="Alarm threshold of the detector's Wald statistic [default: MonitorOptions.threshold].")
@@ -321,3 +322,50 @@ def _listen(url: str, push, idle_timeout, every: float) -> None:
             warn(text)
         else:
             click.echo(f"shipid: {text}", err=True)
+
+
+@study.command("monitor-coverage")
+@click.option("--streams", "--runs", "streams", type=click.IntRange(min=1), default=40, show_default=True,
+              help="Fresh streams per case (with a load change, without one).")
+@click.option("--noise-scale", "noise_scales", type=click.FloatRange(min=0, min_open=True), multiple=True,
+              help="Multiple of the default stream noise (gyro / accelerometer noise and biases, wave roll); "
+                   "repeat for several  [default: 1 and 0.1].")
+@click.option("--duration", type=click.FloatRange(min=600.0), default=1800.0, show_default=True,
+              help="Stream length (s); the change, if any, at half of it.")
+@click.option("--settle", type=click.FloatRange(min=0.0), default=300.0, show_default=True,
+              help="Coverage counted from this many seconds after the change (after the start without one).")
+@click.option("--covariance", type=click.Choice(["sandwich", "white"]), default="sandwich", show_default=True,
+              help="The monitor's standard errors: the block sandwich (default) or Algorithm 1's (J^T J)^-1.")
+@out_options(json_help="Print the per-case summaries and per-stream coverages as JSON on stdout.")
+@campaign_options
+def monitor_coverage(streams, noise_scales, duration, settle, covariance, as_json, out, force, campaign):
+    """Per-stream coverage of the mass / CM monitor: in each fresh simulated stream, the fraction of updates
+    whose ±2-std band holds the true m and zm_bar; the streams with >= 90 % covered, alarm delay, false alarms."""
+    from dataclasses import replace
+
+    from shipid.methods.monitor.coverage import run_cases
+
+    res = run_cases(streams, noise_scales or (1.0, 0.1), duration=duration, settle=settle, covariance=covariance,
+                    campaign=replace(campaign, progress=not as_json))
+    res["warnings"] = loud_lines(res.pop("failures") + res["warnings"])
+    emit(res, as_json=as_json, out=out, force=force, text=lambda: _coverage_text(res))
+
+
+def _coverage_text(res: dict) -> None:
+    """The table: per case the fraction of streams with >= 90 % of their updates covered, pooled and worst
+    coverage, the std factor the target would need (std x), alarm delays, false alarms, real-time factor."""
+    click.echo(f"monitor coverage: {res['streams']} streams per case, {res['duration']:g} s at 50 Hz, covered "
+               f"from {res['settle']:g} s after the change, covariance {res['covariance']}, seed {res['seed']}, "
+               f"{res['wall_s']:.0f} s")
+    click.echo(f"  {'noise':>5s} {'change':>6s} {'>=90% m':>8s} {'zm_bar':>7s} {'both':>6s} {'pooled m':>9s} "
+               f"{'zm_bar':>7s} {'worst m':>8s} {'zm_bar':>7s} {'std x':>6s} {'alarm delay':>14s} {'false':>6s} "
+               f"{'x real':>7s}")
+    for c in res["cases"]:
+        s = c["summary"]
+        d = (f"{s['detected']}/{s['streams']} {s['delay_mean']:.0f}-{s['delay_max']:.0f}s" if c["change"] and
+             s.get("detected") else ("-" if not c["change"] else f"0/{s['streams']}"))
+        click.echo(f"  {c['noise_scale']:5g} {'yes' if c['change'] else 'no':>6s} {s['streams_ge90_m']:8.2f} "
+                   f"{s['streams_ge90_zm_bar']:7.2f} {s['streams_ge90_both']:6.2f} {s['pooled_m']:9.3f} "
+                   f"{s['pooled_zm_bar']:7.3f} {s['worst_m']:8.2f} {s['worst_zm_bar']:7.2f} {s['std_factor_needed']:6.2f} "
+                   f"{d:>14s} "
+                   f"{s['false_alarms']:6d} {s['realtime_min']:7.0f}")

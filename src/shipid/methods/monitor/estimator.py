@@ -19,9 +19,12 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    rebuild after a change): the memory is bounded by the window, not by the stream length.
 3. **Refined IV update.** Every block: the window's moments are summed and compressed
    (:func:`shipid.estimate.iv.iv_compress_products`), the criterion (40) over the three datasets is
-   minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known), and
-   the covariance ``(J^T J)^-1`` (weighted residuals, as in Algorithm 1) gives the standard errors of
-   ``m``, ``zm_bar`` and ``rho`` (delta method). Then step B(b)-(c) for the *next* blocks: the noise model
+   minimised from the previous estimate (damped Gauss-Newton, exact complex-step Jacobian, z_f known). The
+   standard errors of ``m``, ``zm_bar`` and ``rho`` (delta method) come from the block Newey-West sandwich of
+   :mod:`shipid.methods.monitor.covariance`: the gradient of (40) cut into ``every``-second blocks of the
+   nominal and calibration datasets (kept from the start-up; their error is shared by every update) and of
+   the window, so that a coloured equation error and a slow misfit, which the white-noise covariance
+   ``(J^T J)^-1`` of Algorithm 1 does not see, widen the bands (never below ``(J^T J)^-1``). Then step B(b)-(c) for the *next* blocks: the noise model
    (AR part; (c, k) held) is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
    least squares) and the instrument model is the new estimate. Blocks already in the window keep the
    prefilter and instruments they were built with: each block's instruments are a function of the rudder
@@ -61,6 +64,7 @@ from shipid.estimate.arma import hannan_rissanen
 from shipid.estimate.iv import arx_fit, iv_compress_products
 from shipid.methods.masscm.estimator import DEFAULT_THETA0, MassCMOptions, iterate, prepare
 from shipid.methods.monitor.bj_prefilter import bj_mode, degenerate, fit_bj, inverse_c, lfilter, transient_samples
+from shipid.methods.monitor.covariance import block_projections, coeff_jacobian, reference_projections, sandwich
 from shipid.methods.monitor.fit import fit_load, search
 from shipid.models.roll_reduced import (CALIBRATION, LOADED, NOMINAL, KnownParams, bilinear_tf, discrete_coeffs,
                                         roll_terms)
@@ -94,6 +98,10 @@ class MonitorOptions:
         measured false-alarm rate and detection delays are in ``docs/validation/monitor.md``.
     ar_fit : float
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
+    covariance : {"sandwich", "white"}
+        Standard errors of the updates: "sandwich" the block Newey-West sandwich over the reference datasets and
+        the window (:mod:`shipid.methods.monitor.covariance`); "white" ``(J^T J)^-1`` of Algorithm 1, which holds
+        only when the prefiltered equation error is white.
     bj_reselect : int
         Box-Jenkins noise model (``masscm.noise_model`` "auto"/"bj"): every ``bj_reselect`` updates ``(c, k)``
         is chosen again on the last ``ar_fit`` s (window rebuilt if it changes); 0: the start-up's is held.
@@ -112,6 +120,7 @@ class MonitorOptions:
     threshold: float = 40.0
     ar_fit: float = 120.0
     bj_reselect: int = 0
+    covariance: str = "sandwich"
     masscm: MassCMOptions = MassCMOptions()      # noise_model "auto": the Box-Jenkins prefilter (bj_prefilter)
 
 
@@ -306,6 +315,8 @@ class MassCMMonitor:
                               f"{self.opt.init:g} s of the stream gave a non-finite estimate; cannot monitor")
         self.ref_moments = [st.moments[0], st.moments[1]]
         self.ref_lam = np.array(st.lam[:2], dtype=float)
+        self.ref_proj = reference_projections(prep, st.L, np.asarray(core["theta_q"], dtype=float), self.known,
+                                              [NOMINAL, CALIBRATION], opts, self.nb)
         self.Ts = np.array([ds.T for ds in prep])
         self.theta_q = np.asarray(core["theta_q"], dtype=float).copy()
         self.start_warnings = tuple(core["warnings"]) + (() if core["converged"] else (
@@ -469,7 +480,8 @@ class MassCMMonitor:
                        [NOMINAL, CALIBRATION, LOADED], self.T, th, free, self.opt.masscm.zm_bound, max_iter=0)[2]
         self.theta_q = th
         try:
-            cov = np.linalg.inv(J.T @ J)
+            cov = self._covariance(th, J, free, ZtZ, ZtP, blocks) if self.opt.covariance == "sandwich" else \
+                np.linalg.inv(J.T @ J)
             cov = 0.5 * (cov + cov.T)
         except np.linalg.LinAlgError:
             cov = np.full((8, 8), np.inf)
@@ -498,6 +510,15 @@ class MassCMMonitor:
         return MonitorUpdate(t1, summ["m"], summ["m_std"], summ["zm_bar"], summ["zm_bar_std"], summ["rho"],
                              summ["rho_std"], converged, bool(alarm), self.change_at,
                              window_s=t1 - blocks[0].t0, statistic=stat, warnings=tuple(warn))
+
+    def _covariance(self, th, J, free, ZtZ, ZtP, blocks) -> np.ndarray:
+        """Covariance of the free parameters: the block sandwich of :mod:`shipid.methods.monitor.covariance`
+        over the reference datasets' blocks (kept from the start-up) and the window's blocks."""
+        conds = [NOMINAL, CALIBRATION, LOADED]
+        G = discrete_coeffs(th, self.known, conds, np.full(3, self.T), moment=True)
+        dg = coeff_jacobian(th, self.known, conds, self.T, free)
+        proj = list(getattr(self, "ref_proj", (None, None))) + [block_projections(ZtZ, ZtP, [b.ZtP for b in blocks])]
+        return sandwich(J, dg, G, [*self.ref_lam, self.lam_loaded], proj)
 
     def _fit_load(self, blocks, theta_q: np.ndarray):
         """:func:`shipid.methods.monitor.fit.fit_load` on the summed moments of ``blocks``."""
