@@ -71,7 +71,6 @@ MOVED_OPTIONS = {
     "--output": "write -o/--out FILE",
     "--jsonl": "write --json",
     "--seconds": "write --duration S",
-    "--init": "monitor mass-cm's start-up seconds are --startup S",
 }
 
 
