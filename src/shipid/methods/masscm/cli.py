@@ -56,8 +56,7 @@ def _fmt(v: float) -> str:
                    "methods/masscm/refine.py); pem: always the maximum-likelihood refinement of Algorithm 1's "
                    "estimate on the state-space model of the bound (needs z_f known and sensor noise in the data); "
                    "whittle: the same in the frequency domain (the engine auto uses; cost per iteration independent "
-                   "of the record length); pem-floor: pem for noise-free sensors, the sensor variances held at "
-                   "the bound's floor (slow, opt-in; methods/masscm/pem.py); none: Algorithm 1 alone. A refinement "
+                   "of the record length); none: Algorithm 1 alone. A refinement "
                    "that fails keeps Algorithm 1's estimate, with a warning; the decision is in diagnostics.refine. The report series stay Algorithm 1's.")
 @click.option("--cost-map", is_flag=True, help="Also store the Fig. 4 cost map over (m, zm_bar) for `shipid report`.")
 @out_options(json_help="Print the result as one JSON object.")

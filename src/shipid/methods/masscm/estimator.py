@@ -99,7 +99,7 @@ from shipid.methods.masscm.assemble import estimate_mass_cm as algorithm1
 from shipid.methods.masscm.criterion import IVState, linear_initial
 from shipid.methods.masscm.data import Dataset, prepare
 from shipid.methods.masscm.iteration import initial_state, iterate
-from shipid.methods.masscm.noise import AUTO_C, AUTO_HOLD
+from shipid.methods.masscm.noise import AUTO_HOLD
 from shipid.methods.masscm.options import DEFAULT_THETA0, I_M, I_ZF, I_ZM, REQUIRED, MassCMOptions
 from shipid.methods.masscm.pem_result import refine_result
 from shipid.methods.masscm.refine import REFINE_MODES
@@ -132,4 +132,4 @@ def estimate_mass_cm(datasets, known, *, theta0=None, z_f=None, z_f_prior=None, 
 __all__ = ["COVERAGE", "MassCMOptions", "MassCMFit", "Dataset", "IVState", "prepare", "initial_state", "iterate",
            "linear_initial", "estimate_mass_cm", "fit_mass_cm", "covariance", "to_result", "implausible_reasons",
            "implausible_identifiable", "rho_of", "dm_dzf", "DEFAULT_THETA0", "REQUIRED", "I_ZF", "I_M", "I_ZM",
-           "AUTO_C", "AUTO_HOLD", "NOISE_CHECK_Z"]
+           "AUTO_HOLD", "NOISE_CHECK_Z"]

@@ -5,8 +5,7 @@ The residuals (42) get a noise model whose inverse is the prefilter ``L`` (43) o
 ``L = A(q)/(1 - c q^-2)``; ``"arma"`` a structured ARMA by Hannan–Rissanen; ``"auto"`` (default) and ``"bj"``
 the Box–Jenkins model ``(1 - c q^-2)^k / D(q)`` of :mod:`shipid.methods.masscm.noise_bj`, ``(c, k)`` with the
 smallest innovation variance among :data:`~shipid.methods.masscm.noise_bj.BJ_CANDIDATES` (the refined-IV noise
-model of Young, Automatica 52, 2015). :func:`noise_model_auto` is the former ``"auto"``, the ``k <= 1``
-subset :data:`AUTO_C`, kept callable for comparison. The first iteration uses ``L = 1/(1 - c q^-2)``
+model of Young, Automatica 52, 2015). The first iteration uses ``L = 1/(1 - c q^-2)``
 (:func:`initial_prefilter`; the paper: ``L = 1``).
 """
 
@@ -66,54 +65,9 @@ def fit_noise_model(eps: np.ndarray, options: MassCMOptions):
     return ARMA(m.a, np.convolve(m.c, den), m.lam)
 
 
-#: Candidate MA factors ``1 - c q^-2`` of the ``"auto"`` noise model (c = 0: the plain AR model).
-AUTO_C = (0.0, 0.5, 0.9, 0.97, 0.99)
-
-
-#: From this iteration on the ``"auto"`` noise model keeps each dataset's c of the previous iteration (the
+#: From this iteration on the ``"auto"`` noise model keeps each dataset's ``(c, k)`` of the previous iteration (the
 #: choice between candidates, a discrete step, otherwise can keep an iteration from settling).
 AUTO_HOLD = 3
 
 
-def ma_c(L) -> float:
-    """The ``c`` of a prefilter ``A(q) / (1 - c q^-2)`` (0 for a FIR prefilter or none)."""
-    if L is None or L.c.size < 3:
-        return 0.0
-    return float(-L.c[2])
-
-
-def noise_model_auto(eps: np.ndarray, options: MassCMOptions, candidates: tuple = ()):
-    """Noise model ``eps = (1 - c q^-2) / A(q) e`` with ``c`` chosen by the data (``noise_model="auto"``).
-
-    A Box–Jenkins-type noise model estimated inside the refined-IV iteration (the RIV family of Young &
-    Jakeman; Young, "Refined instrumental variable estimation: maximum likelihood optimization of a unified
-    Box–Jenkins model", Automatica 52, 2015: the prefilter is the inverse of the current noise model, whose
-    parameters are re-estimated from the residuals at every iteration): AR(``ar_order``) ``A`` by least squares on
-    ``eps / (1 - c q^-2)`` for each ``c`` of :data:`AUTO_C`, and the ``c`` whose innovations
-    ``A(q) eps / (1 - c q^-2)`` have the smallest variance over a common window (the samples after the
-    start-up transient of the slowest candidate, at most ``transient_max`` of the record) wins: with the
-    same ``eps`` and monic, minimum-phase filters this is the Gaussian innovation likelihood, and every
-    candidate has the same number of estimated coefficients. ``c`` near 1 is the unit-circle MA factor of
-    the wave moment in (35) (the ``"ar-structured"`` model), ``c = 0`` the plain AR model of white sensor
-    noise (``"ar"``). Returns an :class:`~shipid.estimate.arma.ARMA` with ``c`` recorded in ``L.c``.
-    ``candidates``: the c values to try (default :data:`AUTO_C`); :func:`iterate` passes the previous one
-    alone from iteration :data:`AUTO_HOLD` on.
-    """
-    eps = np.asarray(eps, dtype=float)
-    n = eps.size
-    r = np.sqrt(max(AUTO_C))
-    k = int(min(np.ceil(np.log(options.transient_tol) / np.log(r)), options.transient_max * n)) if r > 0 else 0
-    best = None
-    for c in (candidates or AUTO_C):
-        den = np.array([1.0, 0.0, -c]) if c else np.ones(1)
-        e2 = lfilter([1.0], den, eps) if c else eps
-        m = (fit_ar(e2, options.ar_order) if options.compute == "fast"
-             else hannan_rissanen(e2, options.ar_order, 0, n_long=options.ar_order))
-        inn = lfilter(m.a, [1.0], e2 - e2.mean())[k:]
-        lam = float(np.mean((inn - inn.mean()) ** 2))
-        if best is None or lam < best[0]:          # lam (after the start-up) is also the model's innovation variance
-            best = (lam, ARMA(m.a, den, lam))
-    return best[1]
-
-
-__all__ = ["initial_prefilter", "fit_noise_model", "AUTO_C", "AUTO_HOLD", "ma_c", "noise_model_auto"]
+__all__ = ["initial_prefilter", "fit_noise_model", "AUTO_HOLD"]

@@ -13,7 +13,7 @@ Why ``k = 2``: the wave roll moment ``tau`` enters (23) as a moment, so the bili
 another ``(1 - q^-2)`` into ``tau`` itself. The wave part of the equation error is therefore
 ``K (1 - q^-2)^2 / a_w(q) e``: its spectrum falls as ``w^4`` towards 0 and Nyquist (measured on simulated
 noise-only records: 1e-12 at 0.025 Hz against 1e-5 at the 1-Hz wave peak). A model with one factor
-(``k = 1``, the former ``"auto"``) overstates the noise at the low frequencies where the rudder response lives
+(``k = 1``) overstates the noise at the low frequencies where the rudder response lives
 by orders of magnitude, so its prefilter discards most of the rudder information. White sensor noise, which
 reaches (35) through ``A(q)`` and ``(1 - q^-2)``, fills the notch (``k = 1`` or ``k = 0``, ``c`` smaller).
 
@@ -34,7 +34,7 @@ from shipid.numerics.iir_kernels import lfilter
 from shipid.methods.masscm.options import MassCMOptions
 
 #: The candidate MA structures ``(c, k)``: ``C(q) = (1 - c q^-2)^k``. ``(0, 0)`` is the plain AR model; the
-#: ``k = 1`` ones are the former ``"auto"`` candidates; ``k = 2`` the wave-roll structure (module docstring).
+#: ``k = 1`` ones the unit-circle factor once; ``k = 2`` the wave-roll structure (module docstring).
 BJ_CANDIDATES = ((0.0, 0), (0.5, 1), (0.9, 1), (0.97, 1), (0.99, 1), (0.9, 2), (0.97, 2), (0.99, 2))
 
 

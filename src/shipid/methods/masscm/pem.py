@@ -27,18 +27,6 @@ waves; the wave filter and sensor variances with the rest held. The wave structu
 jointly with it, when it raises the log-likelihood by more than :data:`WAVE_LR` per dataset (a likelihood-ratio
 test, 3 parameters per dataset).
 
-Noise-free sensors (``PEMOptions.sensor_floor = f``, ``MassCMOptions`` ``refine="pem-floor"`` through
-:func:`shipid.methods.masscm.pem_result.refine_result_floor`): the model with waves is singular without sensor
-noise, so the three sensor variances of each dataset are held at ``f^2`` times the variance of that output's
-residual about the no-wave fit's rudder response (its wave-driven variance), the white floor that the bound of
-:func:`~shipid.methods.masscm.crlb_kf.crlb_kf` assumes in that regime; the wave structure is kept and everything else
-(``theta``, rows, wave filter, biases) is fitted, at floors ``0.1, 0.01, ..., f`` in turn (:func:`floor_schedule`),
-each from the previous optimum. The predictor's initial noise state is concentrated out
-(:mod:`shipid.methods.masscm.pem_initial`), and the search stops when the log-likelihood rises by less than
-:data:`FLOOR_GAIN` over :data:`GAIN_ITERS` iterations (the data carry less noise than the model, so the expected
-information overstates the curvature and the Newton decrement the gain left). The information, and so the standard
-errors, are those of that model: the variances are not parameters, as in the bound.
-
 Standard errors: the inverse of the same information at the optimum (nuisance parameters included, so their
 uncertainty propagates); ``rho`` by the delta method. Loud failure: a search that does not converge, an optimum
 outside the physical region (``k, A_x, d, m <= 0``, unstable ship), or a model without waves whose innovations are
@@ -62,7 +50,6 @@ from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
 from shipid.numerics.linalg import one_blas_thread
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
-from shipid.methods.masscm.pem_initial import without_initial_state
 from shipid.methods.masscm.options import I_ZF
 from shipid.methods.masscm.refine_start import initial_local
 from shipid.methods.masscm.scoring import fisher_scoring, perturbed
@@ -76,10 +63,6 @@ I_M, I_ZM = FREE.index("m"), FREE.index("zm_bar")
 MEAN_LOCAL = list(range(12)) + [18, 19, 20]
 WHITE_LAGS, WHITE_P = 20, 1e-4     # whiteness test of the model without waves (Ljung-Box, per channel)
 NOISE_LOCAL = list(range(12, 18))
-FLOOR_START = 0.1                  # continuation start of the sensor floor (PEMOptions.sensor_floor)
-FLOOR_MORE = 2                       # sensor floor: further max_iter rounds at the last floor if not converged
-FLOOR_GAIN, GAIN_ITERS = 0.1, 5      # sensor floor: converged when the log-likelihood rose < 0.1 over 5 iterations
-FLOOR_FREE = [i for i in range(N_LOC) if i not in (15, 16, 17)]    # sensor variances held at the floor
 
 
 @dataclass(frozen=True)
@@ -92,12 +75,6 @@ class PEMOptions:
     rel_step: float = 1e-6     # forward-difference step relative to max(|p|, 0.1)
     start_iter: int = 6        # scoring iterations of the theta-fixed start fits
     nowave_iter: int = 15      # ... and of the joint fit without waves (a start; its convergence is not needed)
-    #: None: the sensor variances are estimated (sensor noise). A number ``f``: noise-free sensors; the wave
-    #: structure is kept and the three sensor variances of each dataset are held at ``f^2`` times the variance of
-    #: that output's residual about the rudder response (the no-wave fit: the wave-driven variance), the white
-    #: floor that :func:`~shipid.methods.masscm.crlb_kf.crlb_kf` assumes (``floor``) in that regime; the rest is
-    #: fitted by maximum likelihood, with the floor lowered geometrically from :data:`FLOOR_START` to ``f``
-    sensor_floor: float | None = None
 
 
 @dataclass
@@ -184,7 +161,6 @@ class _Set:
         self.delta = np.ascontiguousarray(trial["delta"], dtype=float)
         self.T = float(trial.dt)
         self.n = self.y.shape[0]
-        self.fit_initial = False       # True: the initial noise state is concentrated out (sensor floor)
 
     def innov(self, theta, loc, waves):
         """``(eps (N, 3), Lam)`` or ``None`` where the model is not admissible (unstable, Riccati fails)."""
@@ -204,8 +180,6 @@ class _Set:
                      np.ascontiguousarray(K), H, out)
         if not np.all(np.isfinite(out)):
             return None
-        if self.fit_initial and F.shape[0]:
-            out = without_initial_state(out, F, np.ascontiguousarray(K), H, Lam)
         return out, Lam
 
 
@@ -266,20 +240,16 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
     return g, 0.5 * (info + info.T)
 
 
-def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None, gain_stop=None):
+def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None):
     """:func:`~shipid.methods.masscm.scoring.fisher_scoring` of the joint likelihood; returns theta, locs, info,
     loglik, its, converged.
 
-    ``fix_theta`` holds ``theta``; ``only`` (local indices) frees just those local parameters. ``gain_stop`` (the
-    sensor floor, where the data carry less noise than the model, so the expected information is not the
-    curvature): each accepted step is rescaled by the minimum of the parabola through the likelihood at 0, 1/2 and
-    1 step, and the search has converged when the log-likelihood rose by less than ``gain_stop`` over the last
-    :data:`GAIN_ITERS` iterations (besides the Newton-decrement rule).
+    ``fix_theta`` holds ``theta``; ``only`` (local indices) frees just those local parameters.
     """
     return fisher_scoring(lambda t, l: _objective(sets, t, l, waves),
                           lambda t, l, ti, fl: score_information(sets, t, l, waves, ti, fl, opts.rel_step),
                           theta, locs, _free_local(waves), N_TH, opts.max_iter, opts.tol, fix_theta=fix_theta,
-                          only=only, gain_stop=gain_stop, gain_iters=GAIN_ITERS)
+                          only=only)
 
 
 def _closed_form_variances(s, theta, loc):
@@ -317,40 +287,6 @@ def wave_log_sigma(s, theta, loc, known: KnownParams, var: float) -> float:
     var_unit = float(H[0] @ solve_discrete_lyapunov(F, np.outer(G, G)) @ H[0] + J[0] ** 2)
     excess = max(var - np.exp(loc[15]), 0.1 * var)
     return 0.5 * np.log(excess / var_unit)
-
-
-def floor_schedule(floor: float) -> list:
-    """Sensor floors of the continuation of :func:`_floor_fit`: ``FLOOR_START``, a tenth of it, ..., ``floor``."""
-    out, f = [], FLOOR_START
-    while f > floor * (1 + 1e-9):
-        out.append(f)
-        f /= 10
-    return out + [floor]
-
-
-def _floor_fit(sets, theta, locs, known: KnownParams, options: PEMOptions):
-    """Stage (4f) of :func:`refine` for noise-free sensors (``options.sensor_floor``): the wave structure with the
-    sensor variances held at ``floor^2`` x the variance of each output's residual about the rudder response of the
-    no-wave fit ``locs`` (the wave-driven variance), the wave filter first fitted alone, then everything else jointly,
-    at each floor of :func:`floor_schedule` from the previous optimum (the likelihood sharpens as the floor falls).
-    Returns the tuple of :func:`_scoring` with the iterations summed and ``waves=True``."""
-    wave_var = [np.var(s.innov(theta, l, False)[0], axis=0) for s, l in zip(sets, locs)]
-    lw = [_wave_start(s, theta, l, known) for s, l in zip(sets, locs)]
-    quick = PEMOptions(max_iter=options.start_iter, tol=options.tol, rel_step=options.rel_step)
-    its = 0
-    for j, f in enumerate(floor_schedule(options.sensor_floor)):
-        for l, v in zip(lw, wave_var):
-            l[15:18] = np.log(f * f * v)
-        if j == 0:
-            lw = _scoring(sets, theta, lw, True, quick, fix_theta=True, only=[12, 13, 14])[1]
-        r = _scoring(sets, theta, lw, True, options, only=FLOOR_FREE, gain_stop=FLOOR_GAIN)
-        theta, lw, its = r[0], r[1], its + r[4]
-    for _ in range(FLOOR_MORE):       # the last floor not converged in max_iter: on from where it stopped
-        if r[5] or r[2] is None:
-            break
-        r = _scoring(sets, theta, lw, True, options, only=FLOOR_FREE, gain_stop=FLOOR_GAIN)
-        theta, lw, its = r[0], r[1], its + r[4]
-    return r[:4] + (its, r[5], True)
 
 
 def whiteness_reason(sets, theta, locs, lags: int = WHITE_LAGS, p: float = WHITE_P) -> str:
@@ -419,8 +355,6 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
     ``ok=False`` (with ``reason``) when the search did not converge or ended outside the physical region.
     """
     sets = [_Set(c, tr, known, z_f) for c, tr in datasets]
-    for s in sets:
-        s.fit_initial = options.sensor_floor is not None
     theta = np.asarray(theta_free, dtype=float).copy()
     with np.errstate(all="ignore"), one_blas_thread():
         locs = [initial_local(s, theta, known, lambda l, s=s: s.innov(theta, l, False) is not None)
@@ -434,9 +368,7 @@ def refine(datasets, known: KnownParams, z_f: float, theta_free, options: PEMOpt
                                                               rel_step=options.rel_step)
         fit = _scoring(sets, theta, lo0, False, nw) + (False,)
         th0, lo0, ll0 = fit[0], fit[1], fit[3]
-        if options.sensor_floor is not None and fit[2] is not None:    # (4f) noise-free sensors: the floor
-            fit = _floor_fit(sets, th0, lo0, known, options)
-        elif options.waves != "no" and fit[2] is not None:
+        if options.waves != "no" and fit[2] is not None:
             # (4) wave filter and sensor variances with the rest held, then everything jointly with waves
             lw = [_wave_start(s, th0, l, known) for s, l in zip(sets, lo0)]
             _, lw, infw, ll1, _, _ = _scoring(sets, th0, lw, True, quick, fix_theta=True, only=NOISE_LOCAL)

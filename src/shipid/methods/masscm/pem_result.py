@@ -55,17 +55,4 @@ def apply_fit(result: Result, datasets, known: KnownParams, z_f: float | None, m
     return replace(result, estimates=est, covariance=np.array(f.cov), covariance_names=list(FREE))
 
 
-def refine_result_floor(result: Result, datasets, known: KnownParams, z_f: float | None,
-                        floor: float = 1e-3) -> Result:
-    """``refine="pem-floor"``: :func:`refine_result` for noise-free sensors, the likelihood of the model with the
-    sensor floor ``floor`` of :func:`~shipid.methods.masscm.crlb_kf.crlb_kf` (``PEMOptions(sensor_floor=floor)``:
-    the three sensor variances held at ``floor^2`` x each output's wave-driven variance, the wave structure kept);
-    ``diagnostics["refine"]`` says ``method: "pem-floor"`` and the floor."""
-    opts = PEMOptions(sensor_floor=float(floor))
-    r = apply_fit(result, datasets, known, z_f, "pem-floor", "PEM (sensor floor)",
-                  lambda d, s: refine(d, known, z_f, s, opts))
-    r.diagnostics["refine"]["sensor_floor"] = float(floor)
-    return r
-
-
-__all__ = ["refine_result", "apply_fit", "refine_result_floor"]
+__all__ = ["refine_result", "apply_fit"]

@@ -53,7 +53,6 @@ from __future__ import annotations
 import numpy as np
 
 from shipid.methods.masscm.pem_result import refine_result as _pem
-from shipid.methods.masscm.pem_result import refine_result_floor as _pem_floor
 from shipid.methods.masscm.whittle_result import refine_result as _whittle
 from shipid.methods.masscm.plausibility import Judgement, judge
 from shipid.methods.masscm.refine_modes import REFINE_MODES
@@ -62,7 +61,7 @@ from shipid.models.roll_reduced import THETA_NAMES
 
 #: Refinement engines: ``name -> f(result, datasets, known, z_f) -> result`` (the result's ``diagnostics["refine"]``
 #: with ``applied`` and ``reason``; a failure keeps Algorithm 1's estimate with one warning line).
-ENGINES = {"pem": _pem, "whittle": _whittle, "pem-floor": _pem_floor}
+ENGINES = {"pem": _pem, "whittle": _whittle}
 
 #: Engines ``refine="auto"`` dispatches to when the rule says refine (keys of :data:`ENGINES`): the exact
 #: likelihood up to :data:`EXACT_MAX_SAMPLES` samples per dataset, the Whittle likelihood beyond (:func:`auto_engine`).

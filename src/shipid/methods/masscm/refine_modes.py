@@ -7,6 +7,6 @@ from __future__ import annotations
 
 #: The values of ``MassCMOptions.refine``: ``"auto"`` the rule of :mod:`shipid.methods.masscm.refine`, ``"none"``
 #: Algorithm 1 alone, or an engine of :data:`shipid.methods.masscm.refine.ENGINES` run unconditionally.
-REFINE_MODES = ("auto", "none", "pem", "whittle", "pem-floor")
+REFINE_MODES = ("auto", "none", "pem", "whittle")
 
 __all__ = ["REFINE_MODES"]

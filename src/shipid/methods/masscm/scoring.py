@@ -12,12 +12,6 @@ decrement ``gn^T In^+ gn / 2`` (the log-likelihood gain a full step predicts) be
 otherwise the step ``(In + mu I)^-1 gn / d`` is accepted when the negative log-likelihood does not increase
 (``mu`` divided by 3, floored at 1e-6), else ``mu`` grows tenfold, up to 12 tries. With no ascent step the search
 stops, converged only if the decrement is below ``100 tol``.
-
-``gain_stop`` (used by :mod:`~shipid.methods.masscm.pem` with a sensor floor, where the data carry less noise than
-the model, so the expected information is not the curvature): each accepted step is replaced by the best of it,
-the half step and the minimum of the parabola through the likelihood at 0, 1/2 and 1 step
-(:func:`parabola_step`), and the search has also converged when the log-likelihood rose by less than ``gain_stop``
-over the last ``gain_iters`` iterations.
 """
 
 from __future__ import annotations
@@ -53,29 +47,8 @@ def apply_step(theta, locs, step, th_idx, fl, nloc):
     return t2, l2
 
 
-def parabola_step(objective, theta, locs, step, th_idx, fl, f0, t1, l1, f1):
-    """The best of the full step ``(t1, l1, f1)``, the half step and the minimum of the parabola through the
-    negative log-likelihood ``objective(theta, locs)`` at 0, 1/2 and 1 step (``alpha`` in [0.1, 3])."""
-    nloc = len(fl)
-    best = (t1, l1, f1)
-    th, lh = apply_step(theta, locs, 0.5 * step, th_idx, fl, nloc)
-    fh = objective(th, lh)
-    if not np.isfinite(fh):
-        return best
-    if fh < f1:
-        best = (th, lh, fh)
-    c = 2.0 * ((f1 - f0) - 2.0 * (fh - f0))
-    if c > 0:
-        a = float(np.clip(-((f1 - f0) - c) / (2 * c), 0.1, 3.0))
-        ta, la = apply_step(theta, locs, a * step, th_idx, fl, nloc)
-        fa = objective(ta, la)
-        if np.isfinite(fa) and fa < best[2]:
-            best = (ta, la, fa)
-    return best
-
-
 def fisher_scoring(objective, score_information, theta, locs, free_local, n_theta: int, max_iter: int, tol: float,
-                   *, fix_theta: bool = False, only=None, gain_stop: float | None = None, gain_iters: int = 5):
+                   *, fix_theta: bool = False, only=None):
     """Levenberg-damped Fisher scoring (module docstring) from ``theta`` and the local vectors ``locs``.
 
     Parameters
@@ -91,8 +64,6 @@ def fisher_scoring(objective, score_information, theta, locs, free_local, n_thet
         Length of ``theta``; ``fix_theta`` holds it.
     max_iter, tol : int, float
         Iteration limit and the Newton-decrement convergence threshold.
-    gain_stop, gain_iters : float or None, int
-        The parabola step and the gain rule of the module docstring (``None``: neither).
 
     Returns
     -------
@@ -108,11 +79,8 @@ def fisher_scoring(objective, score_information, theta, locs, free_local, n_thet
     if not np.isfinite(f):
         return theta, locs, None, -np.inf, 0, False
     mu, conv, it = 1e-3, False, 0
-    info, hist = None, [f]
+    info = None
     for it in range(1, max_iter + 1):
-        if gain_stop is not None and len(hist) > gain_iters and hist[-1 - gain_iters] - f < gain_stop:
-            conv = True
-            break
         g, info = score_information(theta, locs, th_idx, fl)
         info = 0.5 * (info + info.T)
         dg = np.sqrt(np.maximum(np.diag(info), 1e-300))
@@ -132,10 +100,7 @@ def fisher_scoring(objective, score_information, theta, locs, free_local, n_thet
             t2, l2 = apply_step(theta, locs, step, th_idx, fl, nloc)
             f2 = objective(t2, l2)
             if np.isfinite(f2) and f2 <= f:
-                if gain_stop is not None:
-                    t2, l2, f2 = parabola_step(objective, theta, locs, step, th_idx, fl, f, t2, l2, f2)
                 theta, locs, f = t2, l2, f2
-                hist.append(f)
                 mu = max(mu / 3, 1e-6)
                 accepted = True
                 break
@@ -146,4 +111,4 @@ def fisher_scoring(objective, score_information, theta, locs, free_local, n_thet
     return theta, locs, info, -f, it, conv
 
 
-__all__ = ["fisher_scoring", "apply_step", "parabola_step", "perturbed"]
+__all__ = ["fisher_scoring", "apply_step", "perturbed"]

@@ -346,8 +346,8 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
 
 
 def _scoring(sets, theta, locs, waves, opts: PEMOptions, fix_theta=False, only=None):
-    """:func:`~shipid.methods.masscm.scoring.fisher_scoring` of the Whittle likelihood (as pem's, without the
-    sensor floor's gain rule); theta, locs, info, loglik, its, conv."""
+    """:func:`~shipid.methods.masscm.scoring.fisher_scoring` of the Whittle likelihood (as pem's); theta, locs,
+    info, loglik, its, conv."""
     return fisher_scoring(lambda t, l: _objective(sets, t, l, waves),
                           lambda t, l, ti, fl: score_information(sets, t, l, waves, ti, fl, opts.rel_step),
                           theta, locs, _free_local(waves), N_TH, opts.max_iter, opts.tol, fix_theta=fix_theta,
