@@ -85,7 +85,7 @@ def test_coverage_study_runs_and_cli_json(tmp_path):
     from shipid.cli import main
 
     out = tmp_path / "cov.json"
-    assert main(["study", "monitor-coverage", "--streams", "2", "--duration", "600", "--settle", "100",
+    assert main(["study", "monitor-coverage", "--runs", "2", "--duration", "600", "--settle", "100",
                  "--noise-scale", "1", "--workers", "1", "--seed", "7", "--json", "-o", str(out)]) == 0
     res = json.loads(out.read_text())
     assert [(c["noise_scale"], c["change"]) for c in res["cases"]] == [(1.0, True), (1.0, False)]

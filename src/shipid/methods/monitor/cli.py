@@ -325,7 +325,7 @@ def _listen(url: str, push, idle_timeout, every: float) -> None:
 
 
 @study.command("monitor-coverage")
-@click.option("--streams", "--runs", "streams", type=click.IntRange(min=1), default=40, show_default=True,
+@click.option("--runs", "streams", type=click.IntRange(min=1), default=40, show_default=True,
               help="Fresh streams per case (with a load change, without one).")
 @click.option("--noise-scale", "noise_scales", type=click.FloatRange(min=0, min_open=True), multiple=True,
               help="Multiple of the default stream noise (gyro / accelerometer noise and biases, wave roll); "
