@@ -33,21 +33,10 @@ KVLCC2 = ["HSVA_CPMC_KVLCC2_Z_05_01.dat", "HSVA_CPMC_KVLCC2_Z_10_01.dat", "HSVA_
           "HSVA_CPMC_KVLCC2_Z_10_10_P.dat", "HSVA_CPMC_KVLCC2_Z_10_10_S.dat", "HSVA_CPMC_KVLCC2_Z_15_01.dat",
           "HSVA_CPMC_KVLCC2_Z_15_05.dat", "HSVA_CPMC_KVLCC2_Z_20_05.dat", "HSVA_CPMC_KVLCC2_Z_25_05.dat",
           "HSVA_CPMC_KVLCC2_Z_30_05.dat"]
-_RND = "random/random_{}.csv"
-WAKITA_TRAIN = ([_RND.format(s) for s in ("03-Aug-2020_11_04_37", "06-Aug-2020_16_24_25_1", "06-Aug-2020_16_24_25_4",
-                                          "06-Aug-2020_16_24_25_5", "06-Aug-2020_16_24_25_6", "31-Jul-2020_12_29_58",
-                                          "31-Jul-2020_12_48_39", "31-Jul-2020_14_52_18")]
-                + [f"turning/turn_{s}.csv" for s in ("14-Oct-2020_14_08_51", "14-Oct-2020_14_17_39",
-                                                    "14-Oct-2020_14_29_49", "14-Oct-2020_14_39_54",
-                                                    "14-Oct-2020_14_56_07", "14-Oct-2020_15_21_57",
-                                                    "14-Sep-2020_13_39_32", "14-Sep-2020_13_51_45",
-                                                    "14-Sep-2020_14_16_04", "14-Sep-2020_14_50_41",
-                                                    "14-Sep-2020_15_47_33", "14-Sep-2020_15_58_08",
-                                                    "cut_14-Sep-2020_15_58_08", "cut_14-Sep-2020_16_09_02")]
-                + [f"zigzag/zigzag_31-Jul-2020_{s}.csv" for s in ("13_04_24", "13_14_21", "13_22_52", "13_29_19",
-                                                                  "13_50_28", "13_57_45", "14_03_39", "14_10_05")]
-                + [f"berthing/berthing_12-Nov-2020_{s}.csv" for s in ("11_07_23", "11_14_47", "11_21_46",
-                                                                     "13_09_11", "13_37_05")])
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from esso_runs import SPLITS  # noqa: E402  (the studies' shared run lists)
+
+WAKITA_TRAIN = SPLITS["wakita2022"]["train"]
 CASES = {"kvlcc2": ("kvlcc2_hsva", "kvlcc2_hsva", "full/symmetric-gamma_R", KVLCC2),
          "esso": ("esso_osaka_3m/data", "esso_osaka_3m", "hull+rudder+thrust/nondimensional", WAKITA_TRAIN)}
 
