@@ -34,6 +34,17 @@ def test_nomoto_prints_values_and_std(capsys):
     assert d["units"]["T"] == "s" and d["values"]["T2"] > 0
 
 
+def test_nomoto_from_a_zigzag(capsys):
+    """--from zigzag-10 gives the first-order K, T of the zig-zag: a tenth of the straight-run T for this
+    nearly course-unstable tanker (the numbers are tested in test_nomoto.py)."""
+    assert main(["export", "nomoto", "esso-osaka", "--from", "zigzag-10", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["about"] == "zigzag-10" and 0 < d["values"]["T"] < 2000 and d["fit"]["K_std"] > 0
+    assert main(["export", "nomoto", "esso-osaka", "--from", "turning-35"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("shipid: error:") and "zigzag-10" in err and len(err.strip().splitlines()) == 1
+
+
 def test_params_to_stdout(capsys):
     assert main(["export", "params", "supply"]) == 0
     out = capsys.readouterr().out

@@ -56,6 +56,9 @@ state_space_cmd.help += MODEL_HELP
 @export.command("nomoto", context_settings=CONTEXT)
 @click.argument("model")
 @click.option("--speed", type=float, default=None, help="Approach speed, m/s [default: the model's approach].")
+@click.option("--from", "about", default="straight-run", show_default=True,
+              help="straight-run: K, T, T1, T2, T3 of the linearisation; or a zig-zag (zigzag-10, zigzag-20): "
+                   "first-order K, T fitted to the model's simulated zig-zag (Nomoto 1957; ITTC 7.5-04-02-01).")
 @click.option("--samples", type=int, default=0, show_default=True,
               help="Monte Carlo draws from the coefficients' covariance for the std (0: delta method).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Monte Carlo draws.")
@@ -63,12 +66,14 @@ state_space_cmd.help += MODEL_HELP
               help="MMG models of step 2's differential form: the estimation covariance alone, without the "
                    "model-form term (as shipid imo --no-form-term).")
 @out_options(json_help="Print K, T, T1, T2, T3 with their std as JSON on stdout.")
-def nomoto_cmd(model, speed, samples, seed, no_form_term, as_json, out, force):
+def nomoto_cmd(model, speed, about, samples, seed, no_form_term, as_json, out, force):
     """Nomoto K, T (first order) and K, T1, T2, T3 (second order) of a manoeuvring MODEL, with std.
 
     From the sway-yaw rows of the linearisation about the straight run (Nomoto 1957;
-    Fossen 1994 eqs. 6.37-6.38); std by the delta method or Monte Carlo over the
-    coefficients' covariance.
+    Fossen 1994 eqs. 6.37-6.38), or with --from zigzag-10 the first-order K, T of the
+    model's simulated 10/10 zig-zag (what an autopilot sees; for a nearly course-unstable
+    ship the straight-run K and T are far longer). Std by the delta method or Monte Carlo
+    over the coefficients' covariance; a K or T whose std exceeds it is "not determined".
 
     """
     from shipid.export import load, nomoto
@@ -76,9 +81,12 @@ def nomoto_cmd(model, speed, samples, seed, no_form_term, as_json, out, force):
     if samples < 0 or seed < 0:
         raise InputError("--samples and --seed must be >= 0")
     src = load(model, form_term=not no_form_term)
-    res = nomoto(src, speed=speed, samples=samples, seed=seed if samples else None)
+    res = nomoto(src, speed=speed, samples=samples, seed=seed if samples else None, about=about)
     if res.method == "none" and src.method:
         warn(f"Nomoto of {src.name}: no standard errors ({src.cov_note})")
+    nd = [k for k, st in res.status.items() if st == "not determined" and k in ("K", "T")]
+    if nd:
+        warn(f"Nomoto of {src.name} ({about}): {' and '.join(nd)} not determined (std above the value)")
     emit(res.to_dict(), as_json=as_json, out=out, force=force, text=lambda: click.echo(res.summary()))
 
 

@@ -18,12 +18,27 @@ describes responses slower than ``T2``, and a first-order fit to a zig-zag (whos
 shorter) gives a smaller K and T with about the same ``K/T``. Where ``T1, T2`` are complex (an
 oscillatory sway–yaw mode) they are NaN and T is ``−tr a/det a − T3``.
 
+Zig-zag K and T (``about="zigzag-10"``, or another ``zigzag-D[-P]``): the first-order model that describes
+the ship in the manoeuvre an autopilot sees (Nomoto et al. 1957; ITTC Recommended Procedure 7.5-04-02-01,
+Z-manoeuvre: K' and T' from the 10/10 zig-zag). The model's zig-zag is simulated at ``speed`` for
+:data:`ZIGZAG_DURATION` ship lengths (L/U) with samples every :data:`ZIGZAG_DT` ship lengths, and
+``T ṙ + r = K δ + c`` is fitted to its yaw rate by least squares (:func:`zigzag_fit`; ``c`` absorbs a
+neutral rudder angle ``δ_n = −c/K``). T1, T2, T3 are not defined there (NaN). The fit's own standard
+errors (from its Jacobian and residuals, which are the response the first-order model leaves out and are
+correlated in time: the white-noise std is scaled by ``sqrt(n / n_eff)``, :func:`effective_samples`) and the
+residual rms are in ``extra["fit"]``. :attr:`Nomoto.std` of a zig-zag K, T is the std from the
+coefficients' covariance (as for the straight run) and the fit's own std in quadrature: the fit's alone
+when the model has no covariance.
+
 Standard errors: by the delta method (``J Σ Jᵀ`` with ``J`` the central-difference derivative of
 ``(K, T, T1, T2, T3, K/T)`` with respect to the coefficients, ``Σ`` their covariance,
 :attr:`shipid.export.source.Source.cov`), or by Monte Carlo: ``samples`` draws of the coefficients
 from ``N(θ̂, Σ)`` with an explicit ``seed``, the sample standard deviation of each quantity (draws
-whose linearisation has no straight run are counted and left out). Without a covariance every std
-is NaN and :attr:`Nomoto.note` says so.
+whose linearisation has no straight run are counted and left out) and its 16, 50 and 84 % percentiles
+(``extra["percentiles_16_50_84"]``: where some draws are course-unstable K and T are heavy-tailed). Without a covariance every std
+is NaN and :attr:`Nomoto.note` says so. A quantity whose std exceeds its magnitude
+(:data:`shipid.summary.REL_SE_UNDETERMINED`) has status ``not determined`` (:attr:`Nomoto.status`) and is
+printed as such, not as an estimate.
 """
 
 from __future__ import annotations
@@ -33,11 +48,15 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares
+from scipy.signal import lfilter
 
 from shipid.errors import InputError, ShipidError
-from shipid.export.params import load
+from shipid.export.params import load, simulate_source
 from shipid.export.source import Source
-from shipid.export.statespace import jacobians, trim
+from shipid.export.statespace import default_speed, jacobians, trim
+from shipid.simulate.manoeuvres import parse_manoeuvre
+from shipid.summary import NOT_DETERMINED, REL_SE_UNDETERMINED
 
 #: Quantities with a standard error, in the order of :attr:`Nomoto.values`.
 QUANTITIES = ("K", "T", "T1", "T2", "T3", "K_over_T", "K_nd", "T_nd")
@@ -46,6 +65,60 @@ MEANING = {"K": "rudder gain K (first and second order)", "T": "first-order time
            "T1": "second-order time constant T1", "T2": "second-order time constant T2",
            "T3": "second-order zero T3", "K_over_T": "yaw acceleration per rudder angle K/T",
            "K_nd": "K' = K L / U", "T_nd": "T' = T U / L"}
+#: Meanings that differ for K and T fitted to a zig-zag.
+MEANING_ZIGZAG = {"K": "first-order rudder gain K fitted to the zig-zag",
+                  "T": "first-order time constant T fitted to the zig-zag"}
+#: The straight-run linearisation (``about`` default).
+STRAIGHT = "straight-run"
+#: Simulated zig-zag length and sample interval, in ship lengths (times L/U).
+ZIGZAG_DURATION, ZIGZAG_DT = 24.0, 0.02
+
+
+def zigzag_fit(t: np.ndarray, r: np.ndarray, delta: np.ndarray) -> dict[str, Any]:
+    """First-order ``T ṙ + r = K δ + c`` fitted to the yaw rate of a record with uniform steps (module
+    docstring): the exact response with the rudder held over each step, by least squares from the
+    equation-error (ARX) start; standard errors ``s² (JᵀJ)⁻¹`` from the residuals, the residual rms of
+    ``r`` (rad/s) and the neutral rudder angle ``−c/K`` (rad)."""
+    t, r, delta = (np.asarray(a, float) for a in (t, r, delta))
+    h = float(t[1] - t[0])
+    X = np.column_stack([r[:-1], delta[:-1], np.ones(r.size - 1)])
+    a0, b0, e0 = np.linalg.lstsq(X, r[1:], rcond=None)[0]
+    a0 = min(max(a0, 1e-6), 1 - 1e-9)
+    q0 = np.array([b0 / (1 - a0), -h / np.log(a0), e0 / (1 - a0)])
+
+    def response(q):
+        K, T, c = q
+        a = np.exp(-h / T)
+        u = (1 - a) * (K * delta[:-1] + c)
+        out, _ = lfilter([1.0], [1.0, -a], u, zi=[a * r[0]])
+        return np.concatenate([[r[0]], out])
+
+    scale = np.abs(q0) + np.array([1e-9, 1e-9, 1e-12])
+    sol = least_squares(lambda q: response(q) - r, q0, x_scale=scale)
+    dof = max(r.size - 3, 1)
+    cov = float(sol.fun @ sol.fun) / dof * np.linalg.pinv(sol.jac.T @ sol.jac)
+    inflation = r.size / effective_samples(sol.fun)
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None) * inflation)
+    K, T, c = (float(v) for v in sol.x)
+    return {"K": K, "T": T, "c": c, "K_std": float(sd[0]), "T_std": float(sd[1]), "inflation": float(inflation),
+            "cov_KT": (cov[:2, :2] * inflation).tolist(),
+            "rms_r": float(np.sqrt(np.mean(sol.fun ** 2))), "delta_n": -c / K if K else float("nan")}
+
+
+def effective_samples(e: np.ndarray) -> float:
+    """``n / (1 + 2 Σ ρ_k)`` of residuals ``e``, the sum of their autocorrelation up to its first
+    non-positive lag (Bartlett 1946; Box, Jenkins & Reinsel 2008 eq. 2.1.13): the residuals of a
+    first-order fit to a zig-zag are the response it leaves out, correlated over a yaw period."""
+    e = np.asarray(e, float) - np.mean(e)
+    n = e.size
+    f = np.fft.rfft(e, 2 * n)
+    acf = np.fft.irfft(f * np.conj(f))[:n]
+    if not acf[0] > 0:
+        return float(n)
+    rho = acf / acf[0]
+    stop = np.flatnonzero(rho[1:] <= 0)
+    m = int(stop[0]) + 1 if stop.size else n
+    return float(n / max(1.0, 1.0 + 2.0 * np.sum(rho[1:m])))
 
 
 def nomoto_from_matrices(a: np.ndarray, b: np.ndarray, L: float, U: float) -> np.ndarray:
@@ -84,7 +157,7 @@ class Nomoto:
         The straight run (m/s, 1/s) and the ship length (m).
     model : str
     method : str
-        ``"delta"``, ``"monte-carlo"`` or ``"none"``.
+        ``"delta"``, ``"monte-carlo"``, ``"none"``, or ``"zigzag-fit"`` (a zig-zag fit's own std alone).
     note : str
         Where the std came from (the covariance used, draws left out).
     """
@@ -100,6 +173,21 @@ class Nomoto:
     samples: int = 0
     seed: int | None = None
     extra: dict = field(default_factory=dict)
+    about: str = STRAIGHT
+
+    @property
+    def status(self) -> dict:
+        """Per quantity: ``estimated``, ``not determined`` (std above its magnitude) or ``no std``."""
+        out = {}
+        for k in QUANTITIES:
+            v, sd = self.values[k], self.std[k]
+            if not (np.isfinite(v) and np.isfinite(sd)):
+                out[k] = "no std"
+            elif sd > REL_SE_UNDETERMINED * abs(v):
+                out[k] = NOT_DETERMINED
+            else:
+                out[k] = "estimated"
+        return out
 
     @property
     def K(self) -> float:
@@ -110,35 +198,65 @@ class Nomoto:
         return self.values["T"]
 
     def __repr__(self) -> str:
+        st = self.status
+
         def pm(k):
             s = self.std[k]
+            if st[k] == NOT_DETERMINED:
+                return f"not determined (std {s:.2g})"
             return f"{self.values[k]:.4g}" + ("" if not np.isfinite(s) else f" ± {s:.2g}")
-        return (f"Nomoto({self.model!r} at {self.speed:.4g} m/s: K = {pm('K')} 1/s, T = {pm('T')} s; "
+        about = "" if self.about == STRAIGHT else f" from {self.about}"
+        return (f"Nomoto({self.model!r}{about} at {self.speed:.4g} m/s: K = {pm('K')} 1/s, T = {pm('T')} s; "
                 f"T1 = {pm('T1')}, T2 = {pm('T2')}, T3 = {pm('T3')} s)")
 
+    def meaning(self, k: str) -> str:
+        """What quantity ``k`` is (:data:`MEANING`, or :data:`MEANING_ZIGZAG` for a zig-zag fit)."""
+        return MEANING_ZIGZAG.get(k, MEANING[k]) if self.about != STRAIGHT else MEANING[k]
+
     def to_frame(self) -> pd.DataFrame:
-        """One row per quantity: value, std, unit, meaning."""
+        """One row per quantity: value, std, status, unit, meaning."""
+        st = self.status
         return pd.DataFrame({"value": [self.values[k] for k in QUANTITIES],
                              "std": [self.std[k] for k in QUANTITIES],
+                             "status": [st[k] for k in QUANTITIES],
                              "unit": [UNITS[k] for k in QUANTITIES],
-                             "meaning": [MEANING[k] for k in QUANTITIES]}, index=list(QUANTITIES))
+                             "meaning": [self.meaning(k) for k in QUANTITIES]}, index=list(QUANTITIES))
 
     def summary(self) -> str:
         """A table of the quantities with std, unit and meaning (what ``shipid export nomoto`` prints)."""
+        about = ("linearised about the straight run" if self.about == STRAIGHT
+                 else f"first order fitted to its {self.about} yaw rate")
         lines = [f"{self.model}: Nomoto models at {self.speed:.4g} m/s, propeller {self.rps:.4g} rev/s, "
-                 f"L {self.length:.4g} m",
-                 f"{'':10s} {'value':>12s} {'std':>10s}  {'unit':6s} meaning"]
+                 f"L {self.length:.4g} m, {about}",
+                 f"{'':10s} {'value':>14s} {'std':>10s}  {'unit':6s} meaning"]
+        st = self.status
         for k in QUANTITIES:
-            sd = self.std[k]
-            lines.append(f"{k:10s} {self.values[k]:12.5g} {('-' if not np.isfinite(sd) else f'{sd:.3g}'):>10s}  "
-                         f"{UNITS[k]:6s} {MEANING[k]}")
+            sd, v = self.std[k], self.values[k]
+            if self.about != STRAIGHT and k in ("T1", "T2", "T3"):
+                continue
+            val = "not determined" if st[k] == NOT_DETERMINED else f"{v:.5g}"
+            lines.append(f"{k:10s} {val:>14s} {('-' if not np.isfinite(sd) else f'{sd:.3g}'):>10s}  "
+                         f"{UNITS[k]:6s} {self.meaning(k)}")
         lines.append(f"std: {self.note}")
+        nd = [k for k in QUANTITIES if st[k] == NOT_DETERMINED]
+        if nd:
+            lines.append(f"not determined (std above the magnitude): {', '.join(nd)}")
+        band = self.extra.get("percentiles_16_50_84", {})
+        if band:
+            lines.append("Monte Carlo 16/50/84 %: " + "; ".join(
+                f"{k} {band[k][0]:.3g} / {band[k][1]:.3g} / {band[k][2]:.3g}" for k in ("K", "T", "K_over_T") if k in band))
+        fit = self.extra.get("fit")
+        if fit:
+            lines.append(f"zig-zag fit: {fit['duration']:.4g} s at {fit['dt']:.3g} s, r residual rms "
+                         f"{np.rad2deg(fit['rms_r']):.2g} deg/s, fit std K {fit['K_std']:.2g} 1/s, T {fit['T_std']:.2g} s "
+                         f"(correlated residuals: x{np.sqrt(fit['inflation']):.2g}), neutral rudder {np.rad2deg(fit['delta_n']):.3g} deg")
         lines += [f"note: {n}" for n in self.extra.get("notes", [])]
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"model": self.model, "speed": self.speed, "rps": self.rps, "length": self.length,
-                "values": dict(self.values), "std": dict(self.std), "units": dict(UNITS), "method": self.method,
+        return {"model": self.model, "about": self.about, "speed": self.speed, "rps": self.rps,
+                "length": self.length, "values": dict(self.values), "std": dict(self.std), "status": self.status,
+                "units": dict(UNITS), "method": self.method,
                 "note": self.note, "samples": self.samples, "seed": self.seed, **self.extra}
 
 
@@ -148,19 +266,43 @@ def _notes(vals: np.ndarray) -> list[str]:
     if np.isfinite(v["T2"]) and v["T2"] < 0:
         out.append("course-unstable at this speed (T2 < 0): K and T describe an unstable yaw mode")
     elif np.isfinite(v["T2"]) and v["T2"] > 20 * max(abs(v["T1"]), abs(v["T3"])):
-        out.append("T2 is much longer than T1 and T3 (nearly course-unstable): the first-order T holds for "
-                   "responses slower than T2; a first-order fit to a zig-zag gives a smaller K and T with about "
-                   "the same K/T")
+        out.append("T2 >> T1, T3 (nearly course-unstable): this T holds for responses slower than T2; the K, T of a "
+                   "zig-zag (about='zigzag-10') are smaller, with about the same K/T")
     return out
 
 
-def _evaluate(src: Source, speed: float) -> tuple[np.ndarray, Any]:
-    tr = trim(src, speed)
-    A, B = jacobians(src, tr)
-    return nomoto_from_matrices(A[1:, 1:], B[1:, 0], src.length, tr.speed), tr
+def _evaluate(src: Source, speed: float | None, about: str = STRAIGHT) -> tuple[np.ndarray, float, float, dict]:
+    """``(values, U, rps, fit)`` of the straight-run linearisation or of the zig-zag fit (module docstring)."""
+    if about == STRAIGHT:
+        tr = trim(src, speed)
+        A, B = jacobians(src, tr)
+        return nomoto_from_matrices(A[1:, 1:], B[1:, 0], src.length, tr.speed), tr.speed, tr.rps, {}
+    U = default_speed(src) if speed is None else float(speed)
+    L = src.length
+    dur, dt = ZIGZAG_DURATION * L / U, ZIGZAG_DT * L / U
+    trial = simulate_source(src, about, duration=dur, dt=dt, speed=U)[0]
+    fit = zigzag_fit(trial.t, trial["r"], trial["delta"])
+    K, T = fit["K"], fit["T"]
+    nan = float("nan")
+    vals = np.array([K, T, nan, nan, nan, K / T, K * L / U, T * U / L])
+    rps = float(trial.meta.get("rps", trial["n"][0] if "n" in trial.channels else nan))
+    return vals, U, rps, {**fit, "duration": dur, "dt": dt}
 
 
-def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int | None = None) -> Nomoto:
+def _check_about(about: str) -> str:
+    about = str(about)
+    if about != STRAIGHT:
+        try:
+            kind = parse_manoeuvre(about).kind
+        except ShipidError as err:
+            raise InputError(f"Nomoto models come from {STRAIGHT!r} or a zig-zag such as 'zigzag-10': {err}") from None
+        if kind != "zigzag":
+            raise InputError(f"Nomoto models come from {STRAIGHT!r} or a zig-zag such as 'zigzag-10', not {about!r}")
+    return about
+
+
+def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int | None = None,
+           about: str = STRAIGHT) -> Nomoto:
     """Nomoto K, T, T1, T2, T3 of an MMG or Abkowitz model at ``speed`` (module docstring).
 
     Parameters
@@ -173,51 +315,91 @@ def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int 
         0: std by the delta method; > 0: Monte Carlo with that many draws (``seed`` required).
     seed : int, optional
         Seed of the Monte Carlo draws.
+    about : str
+        ``"straight-run"``: K, T, T1, T2, T3 of the linearisation about the straight run (Fossen 1994
+        eqs. 6.37-6.38); a zig-zag name such as ``"zigzag-10"``: first-order K, T fitted to the model's
+        simulated zig-zag by Nomoto's analysis (Nomoto et al. 1957).
     """
     src = load(src)
+    about = _check_about(about)
     if src.family not in ("mmg", "abkowitz"):
         raise InputError(f"Nomoto models are for manoeuvring models (MMG, EBM); {src.name!r} is a model of the {src.family} family")
-    vals, tr = _evaluate(src, speed)
-    U = tr.speed
-    nan = {k: float("nan") for k in QUANTITIES}
+    vals, U, rps, fit = _evaluate(src, speed, about)
+    notes = _notes(vals)
+    if fit and not 0 < fit["T"] < fit["duration"]:
+        notes.append(f"the zig-zag fit's T ({fit['T']:.3g} s) is not within the record ({fit['duration']:.4g} s): "
+                     "the yaw rate grows as if course-unstable, and only K/T is determined by this zig-zag")
+    extra = {"notes": notes} | ({"fit": fit} if fit else {})
+    common = dict(speed=U, rps=rps, length=src.length, model=src.name, about=about)
+    values = dict(zip(QUANTITIES, map(float, vals)))
     if src.cov is None or not src.cov_names:
-        return Nomoto(dict(zip(QUANTITIES, map(float, vals))), nan, U, tr.rps, src.length, src.name, "none",
-                      f"none ({src.cov_note})", extra={"notes": _notes(vals)})
+        sd, method, note, mc = np.full(len(QUANTITIES), np.nan), "none", f"none ({src.cov_note})", {}
+    elif samples > 0:
+        if seed is None:
+            raise InputError("Monte Carlo standard errors need an explicit seed")
+        sd, note, mc = _monte_carlo(src, U, about, int(samples), int(seed))
+        method = "monte-carlo"
+    else:
+        sd, method, note, mc = _delta(src, U, about), "delta", f"delta method; Sigma: {src.cov_note}", {}
+    if fit and method == "none":
+        sd, method = np.sqrt(_fit_variance(fit, src.length, U)), "zigzag-fit"
+        note = f"the zig-zag fit's own std alone (the coefficients have {note[6:-1]})"
+    elif fit:
+        sd = np.sqrt(np.where(np.isfinite(sd), sd, 0.0) ** 2 + _fit_variance(fit, src.length, U))
+        note += "; the zig-zag fit's own std added in quadrature"
+    return Nomoto(values, dict(zip(QUANTITIES, map(float, sd))), method=method, note=note,
+                  samples=int(samples) if mc else 0, seed=int(seed) if mc else None, extra={**mc, **extra}, **common)
+
+
+def _fit_variance(fit: dict, L: float, U: float) -> np.ndarray:
+    """Variance of :data:`QUANTITIES` from the zig-zag fit's covariance of ``(K, T)`` (NaN for T1, T2, T3)."""
+    C = np.asarray(fit["cov_KT"], float)
+    K, T = fit["K"], fit["T"]
+    g = np.array([1.0 / T, -K / T ** 2])
+    nan = float("nan")
+    return np.array([C[0, 0], C[1, 1], nan, nan, nan, g @ C @ g, C[0, 0] * (L / U) ** 2, C[1, 1] * (U / L) ** 2])
+
+
+def _monte_carlo(src: Source, U: float, about: str, samples: int, seed: int) -> tuple[np.ndarray, str, dict]:
+    """Sample std of :data:`QUANTITIES` over ``samples`` draws from ``N(θ̂, Σ)`` (module docstring)."""
     names = list(src.cov_names)
     theta = np.array([src.coef[k] for k in names])
     C = 0.5 * (src.cov + src.cov.T)
-    if samples > 0:
-        if seed is None:
-            raise InputError("Monte Carlo standard errors need an explicit seed")
-        rng = np.random.default_rng(seed)
-        draws = rng.multivariate_normal(theta, C, size=int(samples), method="svd")
-        out, failed = [], 0
-        for d in draws:
-            try:
-                out.append(_evaluate(src.with_coefficients(dict(zip(names, d))), U)[0])
-            except ShipidError:
-                failed += 1
-        if len(out) < 2:
-            raise ShipidError(f"Monte Carlo: {failed} of {samples} draws have no straight run")
-        sd = np.nanstd(np.array(out), axis=0, ddof=1)
-        note = (f"Monte Carlo, {samples} draws from N(theta, Sigma), seed {seed}; Sigma: {src.cov_note}"
-                + (f"; {failed} draws without a straight run left out" if failed else ""))
-        return Nomoto(dict(zip(QUANTITIES, map(float, vals))), dict(zip(QUANTITIES, map(float, sd))), U, tr.rps,
-                      src.length, src.name, "monte-carlo", note, int(samples), int(seed),
-                      {"draws_left_out": failed, "notes": _notes(vals)})
-    sd_theta = np.sqrt(np.clip(np.diag(C), 0, None))
+    rng = np.random.default_rng(seed)
+    draws = rng.multivariate_normal(theta, C, size=samples, method="svd")
+    out, failed = [], 0
+    for d in draws:
+        try:
+            out.append(_evaluate(src.with_coefficients(dict(zip(names, d))), U, about)[0])
+        except ShipidError:
+            failed += 1
+    if len(out) < 2:
+        raise ShipidError(f"Monte Carlo: {failed} of {samples} draws have no straight run")
+    arr = np.array(out)
+    ok = np.isfinite(arr).sum(axis=0) >= 2
+    sd = np.full(arr.shape[1], np.nan)
+    sd[ok] = np.nanstd(arr[:, ok], axis=0, ddof=1)
+    band = {k: [float(x) for x in np.nanpercentile(arr[:, j], [16, 50, 84])]
+            for j, k in enumerate(QUANTITIES) if ok[j]}
+    note = (f"Monte Carlo, {samples} draws from N(theta, Sigma), seed {seed}; Sigma: {src.cov_note}"
+            + (f"; {failed} draws without a straight run left out" if failed else ""))
+    return sd, note, {"draws_left_out": failed, "percentiles_16_50_84": band}
+
+
+def _delta(src: Source, U: float, about: str) -> np.ndarray:
+    """Delta-method std of :data:`QUANTITIES`: ``J Σ Jᵀ`` with central differences (module docstring)."""
+    names = list(src.cov_names)
+    theta = np.array([src.coef[k] for k in names])
+    C = 0.5 * (src.cov + src.cov.T)
+    var = np.clip(np.diag(C), 0, None)
     J = np.zeros((len(QUANTITIES), len(names)))
     for j, nm in enumerate(names):
-        h = 1e-3 * sd_theta[j] if sd_theta[j] > 0 else 1e-6 * max(abs(theta[j]), 1e-12)
-        if not h > 0:
+        if var[j] == 0:                   # no uncertainty: no column of J needed
             continue
-        up = _evaluate(src.with_coefficients({nm: theta[j] + h}), U)[0]
-        dn = _evaluate(src.with_coefficients({nm: theta[j] - h}), U)[0]
+        h = 1e-3 * np.sqrt(var[j])
+        up = _evaluate(src.with_coefficients({nm: theta[j] + h}), U, about)[0]
+        dn = _evaluate(src.with_coefficients({nm: theta[j] - h}), U, about)[0]
         J[:, j] = (up - dn) / (2 * h)
-    V = J @ C @ J.T
-    sd = np.sqrt(np.clip(np.diag(V), 0, None))
-    return Nomoto(dict(zip(QUANTITIES, map(float, vals))), dict(zip(QUANTITIES, map(float, sd))), U, tr.rps,
-                  src.length, src.name, "delta", f"delta method; Sigma: {src.cov_note}", extra={"notes": _notes(vals)})
+    return np.sqrt(np.clip(np.diag(J @ C @ J.T), 0, None))
 
-
-__all__ = ["Nomoto", "nomoto", "nomoto_from_matrices", "QUANTITIES", "UNITS", "MEANING"]
+__all__ = ["Nomoto", "nomoto", "nomoto_from_matrices", "zigzag_fit", "STRAIGHT", "QUANTITIES", "UNITS", "MEANING"]

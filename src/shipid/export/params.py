@@ -301,6 +301,15 @@ def simulate_params(path: str | Path, manoeuvre: str, *, duration: float | None 
         The record, lines saying which conditions were used, and warnings (one line each).
     """
     src = read_params(path)
+    return simulate_source(src, manoeuvre, duration=duration, dt=dt, seed=seed, speed=speed, rps=rps,
+                           rudder_rate=rudder_rate, water_depth=water_depth)
+
+
+def simulate_source(src: Source, manoeuvre: str, *, duration: float | None = None, dt: float = 0.1,
+                    seed: int = 0, speed: float | None = None, rps: float | None = None,
+                    rudder_rate: float | None = None, water_depth: float | None = None
+                    ) -> tuple[Trial, list[str], list[str]]:
+    """Simulate the model of a :class:`Source` through ``manoeuvre`` as :func:`simulate_params` does."""
     parse_manoeuvre(manoeuvre)                   # an unknown manoeuvre is refused first
     if src.family != "mmg" and (rps is not None or rudder_rate is not None or water_depth is not None):
         raise InputError("--rps, --rudder-rate and --water-depth apply to MMG models only")
@@ -320,6 +329,5 @@ def simulate_params(path: str | Path, manoeuvre: str, *, duration: float | None 
     trial = run_manoeuvre(sm, manoeuvre, duration=duration, dt=dt, seed=seed, speed=speed)
     return trial, notes, []
 
-
 __all__ = ["SUFFIXES", "is_params_file", "document", "to_toml", "write_params", "read_params", "load",
-           "simulate_params", "abkowitz_ship_model"]
+           "simulate_params", "simulate_source", "abkowitz_ship_model"]
