@@ -175,20 +175,42 @@ def test_frame_and_summary():
 
 
 @pytest.mark.slow
-def test_ebm_identified_esso_osaka_nomoto_covers_the_zigzag_fit():
+def test_ebm_identified_esso_osaka_straight_run_k_and_t_are_not_determined():
     """An EBM model identified from a simulated 20/20 zig-zag and 35 deg turn of the Esso Osaka (Yoon & Rhee
-    2003 §5.1, noise of eq. 19) carries standard errors; its Nomoto K and T agree with the 10/10 zig-zag fit of
-    the packaged model within 2 std. They do because the std of K and T is large: T2 depends on the small
-    determinant of the sway-yaw matrix, whose coefficients EBM determines to a few per cent (the delta-method
-    std of T is several times T itself)."""
+    2003 §5.1, noise of eq. 19) carries standard errors. Its straight-run K and T have a delta-method std above
+    their magnitude (T2 depends on the small determinant of the sway-yaw matrix, which EBM determines to a few
+    per cent), so they are labelled not determined; K/T, which does not go through that determinant, is
+    estimated and agrees with the 10/10 zig-zag fit of the packaged model within 2 std."""
     from shipid.methods.ebm import estimator as ebm
     from shipid.methods.ebm import trials as ebm_trials
 
     trials = [ebm_trials.simulate_trial("zigzag-20", 600.0, seed=1), ebm_trials.simulate_trial("turning-35", 600.0, seed=2)]
-    res = ebm.identify(trials)
-    nm = nomoto(res)
+    nm = nomoto(ebm.identify(trials))
     assert nm.method == "delta"
+    assert nm.status["K"] == nm.status["T"] == "not determined" and "not determined" in nm.summary()
+    assert nm.status["K_over_T"] == "estimated"
     trial = run_manoeuvre(get_ship_model("esso-osaka"), "zigzag-10", duration=1500.0, dt=1.0)
-    K_fit, T_fit = _zigzag_fit(trial, nm.K, nm.T)
-    assert abs(K_fit - nm.K) < 2 * nm.std["K"]
-    assert abs(T_fit - nm.T) < 2 * nm.std["T"]
+    K_fit, T_fit = _zigzag_fit(trial, -0.1, 1000.0)
+    assert abs(K_fit / T_fit - nm.values["K_over_T"]) < 2 * nm.std["K_over_T"]
+
+
+@pytest.mark.slow
+def test_ebm_identified_esso_osaka_zigzag_nomoto_against_the_ship():
+    """The EBM model identified from one simulated PRBS run of the Esso Osaka (the README example), exported
+    as the K, T of its 10/10 zig-zag with Monte Carlo std over its covariance (40 seeded draws), against the
+    same export of the packaged model it was identified from (the ship). K/T is determined and covers the
+    ship's within 2 std (measured 0.6 std with 100 draws). K and T are not: some draws are course-unstable, their zig-zag
+    yaw rate grows and the fitted T runs off, so the std of K and T exceeds their magnitude and they are
+    labelled not determined rather than printed as estimates."""
+    import shipid
+
+    run = shipid.simulate("esso-osaka", "prbs-35-105", duration=600, noise=True, seed=2)
+    res = shipid.identify("ebm", [run], vessel="esso-osaka")
+    nm = nomoto(res, about="zigzag-10", samples=40, seed=1)
+    ship = nomoto("esso-osaka", about="zigzag-10")
+    assert nm.method == "monte-carlo" and "percentiles_16_50_84" in nm.extra
+    assert nm.status["K_over_T"] == "estimated"
+    comb = np.hypot(nm.std["K_over_T"], ship.std["K_over_T"])
+    assert abs(nm.values["K_over_T"] - ship.values["K_over_T"]) < 2 * comb
+    assert nm.status["K"] == nm.status["T"] == "not determined"
+    assert "not determined" in nm.summary() and f"{nm.K:.5g}" not in nm.summary()

@@ -34,7 +34,7 @@ Standard errors: by the delta method (``J Σ Jᵀ`` with ``J`` the central-diffe
 ``(K, T, T1, T2, T3, K/T)`` with respect to the coefficients, ``Σ`` their covariance,
 :attr:`shipid.export.source.Source.cov`), or by Monte Carlo: ``samples`` draws of the coefficients
 from ``N(θ̂, Σ)`` with an explicit ``seed``, the sample standard deviation of each quantity (draws
-whose linearisation has no straight run are counted and left out) and its 16, 50 and 84 % percentiles
+with no straight run, or whose zig-zag diverges, are counted and left out) and its 16, 50 and 84 % percentiles
 (``extra["percentiles_16_50_84"]``: where some draws are course-unstable K and T are heavy-tailed). Without a covariance every std
 is NaN and :attr:`Nomoto.note` says so. A quantity whose std exceeds its magnitude
 (:data:`shipid.summary.REL_SE_UNDETERMINED`) has status ``not determined`` (:attr:`Nomoto.status`) and is
@@ -94,7 +94,10 @@ def zigzag_fit(t: np.ndarray, r: np.ndarray, delta: np.ndarray) -> dict[str, Any
         return np.concatenate([[r[0]], out])
 
     scale = np.abs(q0) + np.array([1e-9, 1e-9, 1e-12])
-    sol = least_squares(lambda q: response(q) - r, q0, x_scale=scale)
+    try:
+        sol = least_squares(lambda q: response(q) - r, q0, x_scale=scale)
+    except ValueError as err:                   # a non-finite start: no first-order model to fit
+        raise ShipidError(f"no first-order fit to the zig-zag: {err}") from None
     dof = max(r.size - 3, 1)
     cov = float(sol.fun @ sol.fun) / dof * np.linalg.pinv(sol.jac.T @ sol.jac)
     inflation = r.size / effective_samples(sol.fun)
@@ -280,8 +283,11 @@ def _evaluate(src: Source, speed: float | None, about: str = STRAIGHT) -> tuple[
     U = default_speed(src) if speed is None else float(speed)
     L = src.length
     dur, dt = ZIGZAG_DURATION * L / U, ZIGZAG_DT * L / U
-    trial = simulate_source(src, about, duration=dur, dt=dt, speed=U)[0]
-    fit = zigzag_fit(trial.t, trial["r"], trial["delta"])
+    with np.errstate(all="ignore"):              # a draw that diverges is refused below, not warned about
+        trial = simulate_source(src, about, duration=dur, dt=dt, speed=U)[0]
+        if not np.all(np.isfinite(trial["r"])):
+            raise ShipidError(f"model {src.name!r}: the simulated {about} diverges")
+        fit = zigzag_fit(trial.t, trial["r"], trial["delta"])
     K, T = fit["K"], fit["T"]
     nan = float("nan")
     vals = np.array([K, T, nan, nan, nan, K / T, K * L / U, T * U / L])
@@ -352,11 +358,14 @@ def nomoto(src: Any, *, speed: float | None = None, samples: int = 0, seed: int 
 
 
 def _fit_variance(fit: dict, L: float, U: float) -> np.ndarray:
-    """Variance of :data:`QUANTITIES` from the zig-zag fit's covariance of ``(K, T)`` (NaN for T1, T2, T3)."""
+    """Variance of :data:`QUANTITIES` from the zig-zag fit's covariance of ``(K, T)`` (NaN for T1, T2, T3;
+    infinite for K and T where the fitted T is not within the record)."""
     C = np.asarray(fit["cov_KT"], float)
     K, T = fit["K"], fit["T"]
     g = np.array([1.0 / T, -K / T ** 2])
     nan = float("nan")
+    if not 0 < T < fit["duration"]:             # T runs off: the record determines K/T alone
+        return np.array([np.inf, np.inf, nan, nan, nan, g @ C @ g, np.inf, np.inf])
     return np.array([C[0, 0], C[1, 1], nan, nan, nan, g @ C @ g, C[0, 0] * (L / U) ** 2, C[1, 1] * (U / L) ** 2])
 
 
@@ -374,7 +383,7 @@ def _monte_carlo(src: Source, U: float, about: str, samples: int, seed: int) -> 
         except ShipidError:
             failed += 1
     if len(out) < 2:
-        raise ShipidError(f"Monte Carlo: {failed} of {samples} draws have no straight run")
+        raise ShipidError(f"Monte Carlo: {failed} of {samples} draws have no straight run or a diverging zig-zag")
     arr = np.array(out)
     ok = np.isfinite(arr).sum(axis=0) >= 2
     sd = np.full(arr.shape[1], np.nan)
@@ -382,7 +391,8 @@ def _monte_carlo(src: Source, U: float, about: str, samples: int, seed: int) -> 
     band = {k: [float(x) for x in np.nanpercentile(arr[:, j], [16, 50, 84])]
             for j, k in enumerate(QUANTITIES) if ok[j]}
     note = (f"Monte Carlo, {samples} draws from N(theta, Sigma), seed {seed}; Sigma: {src.cov_note}"
-            + (f"; {failed} draws without a straight run left out" if failed else ""))
+            + (f"; {failed} draws left out ({'no straight run' if about == STRAIGHT else 'no straight run or a diverging zig-zag'})"
+               if failed else ""))
     return sd, note, {"draws_left_out": failed, "percentiles_16_50_84": band}
 
 
