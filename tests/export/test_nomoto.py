@@ -129,6 +129,19 @@ def test_zigzag_fit_std_is_the_size_of_the_spread_over_record_lengths():
         assert white < spread < scaled, k
 
 
+def test_a_zigzag_fit_whose_t_runs_off_leaves_k_and_t_not_determined():
+    """A model whose 10/10 zig-zag yaw rate grows (N_r times 0.9: course-unstable, T2 = -1217 s) has no
+    first-order T within the record: K and T are labelled not determined with an infinite std and a note, K/T
+    is kept."""
+    src = load("esso-osaka")
+    src = src.with_coefficients({"N_r": 0.9 * src.coef["N_r"]})
+    nm = nomoto(src, about="zigzag-10")
+    st = nm.status
+    assert st["K"] == st["T"] == "not determined" and nm.std["K"] == np.inf
+    assert any("only K/T" in n for n in nm.extra["notes"]) and f"{nm.K:.5g}" not in nm.summary()
+    assert st["K_over_T"] == "estimated"
+
+
 def _with_cov(rel: float):
     """The packaged Esso Osaka model with independent coefficient errors of ``rel`` times each value."""
     src = load("esso-osaka")

@@ -184,7 +184,9 @@ class Nomoto:
         out = {}
         for k in QUANTITIES:
             v, sd = self.values[k], self.std[k]
-            if not (np.isfinite(v) and np.isfinite(sd)):
+            if np.isfinite(v) and sd == np.inf:
+                out[k] = NOT_DETERMINED
+            elif not (np.isfinite(v) and np.isfinite(sd)):
                 out[k] = "no std"
             elif sd > REL_SE_UNDETERMINED * abs(v):
                 out[k] = NOT_DETERMINED
@@ -238,7 +240,7 @@ class Nomoto:
             if self.about != STRAIGHT and k in ("T1", "T2", "T3"):
                 continue
             val = "not determined" if st[k] == NOT_DETERMINED else f"{v:.5g}"
-            lines.append(f"{k:10s} {val:>14s} {('-' if not np.isfinite(sd) else f'{sd:.3g}'):>10s}  "
+            lines.append(f"{k:10s} {val:>14s} {('-' if np.isnan(sd) else f'{sd:.3g}'):>10s}  "
                          f"{UNITS[k]:6s} {self.meaning(k)}")
         lines.append(f"std: {self.note}")
         nd = [k for k in QUANTITIES if st[k] == NOT_DETERMINED]
