@@ -28,15 +28,16 @@ errors (from its Jacobian and residuals, which are the response the first-order 
 correlated in time: the white-noise std is scaled by ``sqrt(n / n_eff)``, :func:`effective_samples`) and the
 residual rms are in ``extra["fit"]``. :attr:`Nomoto.std` of a zig-zag K, T is the std from the
 coefficients' covariance (as for the straight run) and the fit's own std in quadrature: the fit's alone
-when the model has no covariance.
+when the model has no covariance. Where the fitted T is not within the record (the zig-zag's yaw rate
+grows, as for a course-unstable ship), K and T have an infinite std: only K/T is determined.
 
 Standard errors: by the delta method (``J Σ Jᵀ`` with ``J`` the central-difference derivative of
 ``(K, T, T1, T2, T3, K/T)`` with respect to the coefficients, ``Σ`` their covariance,
 :attr:`shipid.export.source.Source.cov`), or by Monte Carlo: ``samples`` draws of the coefficients
 from ``N(θ̂, Σ)`` with an explicit ``seed``, the sample standard deviation of each quantity (draws
 with no straight run, or whose zig-zag diverges, are counted and left out) and its 16, 50 and 84 % percentiles
-(``extra["percentiles_16_50_84"]``: where some draws are course-unstable K and T are heavy-tailed). Without a covariance every std
-is NaN and :attr:`Nomoto.note` says so. A quantity whose std exceeds its magnitude
+(``extra["percentiles_16_50_84"]``: where some draws are course-unstable K and T are heavy-tailed).
+Without a covariance every straight-run std is NaN and :attr:`Nomoto.note` says so. A quantity whose std exceeds its magnitude
 (:data:`shipid.summary.REL_SE_UNDETERMINED`) has status ``not determined`` (:attr:`Nomoto.status`) and is
 printed as such, not as an estimate.
 """
