@@ -162,3 +162,15 @@ def test_demo_step_registry_order():
     steps = demo_steps()
     assert steps[0].name == "simulate"
     assert [s.order for s in steps] == sorted(s.order for s in steps)
+
+
+def test_a_csv_trial_names_the_sensor_positions_it_cannot_keep(tmp_path, capsys):
+    """An EBM trial written to CSV loses its DGPS antenna and speed-log positions (Yoon & Rhee 2003 eq. 8): the
+    command says which options give them back; Parquet keeps them in its metadata and says nothing."""
+    csv, pq = tmp_path / "p.csv", tmp_path / "p.parquet"
+    assert main(["simulate", "esso-osaka", "prbs-35-105", "--duration", "30", "--noise", "--out", str(csv)]) == 0
+    assert "--antenna -120,5 --log-offset 2" in capsys.readouterr().out
+    assert "x_D" not in read_trial(csv).meta
+    assert main(["simulate", "esso-osaka", "prbs-35-105", "--duration", "30", "--noise", "--out", str(pq)]) == 0
+    assert "note:" not in capsys.readouterr().out
+    assert {k: read_trial(pq).meta[k] for k in ("x_D", "y_D", "y_S")} == {"x_D": -120.0, "y_D": 5.0, "y_S": 2.0}

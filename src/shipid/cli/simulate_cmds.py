@@ -90,7 +90,7 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     if seed < 0:
         raise ShipidError(f"--seed must be >= 0, got {seed}")
     model = get_ship_model(vessel)
-    from shipid.io.files import write_trial
+    from shipid.io.files import sensor_meta_lost, write_trial
     from shipid.progress import progress_bar
 
     dt = default_dt(vessel) if dt is None else dt
@@ -110,6 +110,11 @@ def simulate_cmd(vessel: str, manoeuvre: str, out: str, duration: float | None, 
     write_trial(trial, path, force=force)
     click.echo(f"wrote {out}: {model.name} {spec.name}, {len(trial)} samples, "
                f"{trial.duration:g} s at dt {dt:g} s, seed {seed}{', with sensor noise' if noise else ''}")
+    lost = sensor_meta_lost(trial, path)
+    if lost:
+        click.echo(f"note: a CSV file cannot state the trial's sensor positions; give them to identify and validate "
+                   f"as --antenna {lost.get('x_D', 0):g},{lost.get('y_D', 0):g} --log-offset {lost.get('y_S', 0):g} "
+                   f"(or write .parquet, which keeps them)")
 
 
 @cli.command("vessels", context_settings=CONTEXT)

@@ -396,6 +396,19 @@ def write_trial(trial: Trial, path: str | os.PathLike, *, units: Mapping[str, st
     return atomic_write(p, lambda tmp: _write_parquet(tmp, cols, col_units, trial.meta), force=force)
 
 
+#: Trial metadata a method reads from a file (Parquet keeps it; CSV cannot): the DGPS antenna ``x_D, y_D`` and
+#: speed-log ``y_S`` positions of Yoon & Rhee (2003) eq. 8, in body axes, m.
+SENSOR_META = ("x_D", "y_D", "y_S")
+
+
+def sensor_meta_lost(trial: Trial, path) -> dict[str, float]:
+    """The sensor positions (:data:`SENSOR_META`) of ``trial`` that writing it to ``path`` loses: all of those the
+    trial states when ``path`` is a CSV file (CSV has no place for metadata), none for Parquet."""
+    if Path(path).suffix.lower() != ".csv":
+        return {}
+    return {k: float(trial.meta[k]) for k in SENSOR_META if k in trial.meta}
+
+
 def _write_csv(tmp: Path, cols: dict[str, np.ndarray], col_units: dict[str, str]) -> None:
     buf = _io.StringIO()
     buf.write(",".join(f"{k} [{col_units[k]}]" for k in cols) + "\n")
