@@ -101,7 +101,8 @@ class MonitorOptions:
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
     covariance : {"sandwich", "white"}
         Standard errors of the updates: "sandwich" the block Newey-West sandwich over the reference datasets and
-        the window (:mod:`shipid.methods.monitor.covariance`); "white" ``(J^T J)^-1`` of Algorithm 1, which holds
+        the window, with the error a gyro bias leaves through the reference datasets' prefilter
+        (:mod:`shipid.methods.monitor.covariance`); "white" ``(J^T J)^-1`` of Algorithm 1, which holds
         only when the prefiltered equation error is white.
     bj_reselect : int
         Box-Jenkins noise model (``masscm.noise_model`` "auto"/"bj"): every ``bj_reselect`` updates ``(c, k)``
