@@ -31,6 +31,16 @@ never taken below its white-noise part ``J_i^T J_i``: only the positive part of 
 added (a block estimate of a few tens of blocks falls below the model's covariance by sampling error, and
 the white-noise covariance is already the least the data support). The blocks are uncentred: the score of a
 block includes the dataset's misfit, which no average over the window removes.
+
+A sensor bias is the one part of the reference datasets' error that no block average sees. A gyro bias
+``b_1`` leaves the constant ``e0 = (1 + a_1 + a_2) b_1`` in the equation error (Linder et al. 2015, (9), (37));
+the instruments (45) should be uncorrelated with it (section 4), and in the window they are (mean-removed per
+block after the prefilter), but the reference datasets' instruments are mean-removed before the prefilter
+(43), whose gain at zero frequency is ``D(1) / (1 - c)^k`` for the Box-Jenkins model, and the transient it
+leaves is cut at a finite length: ``Z^T L(q) 1`` is not zero, and the constant moves the estimate by
+``H^-1 b`` (:func:`sandwich`), the same error in every update of the stream. ``e0`` is estimated per reference
+dataset by least squares on the prefiltered residual, and ``b b^T`` enters the gradient covariance whole
+(the mean squared error of the unknown-bias part), the constant's part taken out of the block scores.
 """
 
 from __future__ import annotations
@@ -56,8 +66,9 @@ def _pinv_psd(A: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
 
 
 def block_projections(ZtZ: np.ndarray, ZtP: np.ndarray, blocks_ZtP) -> np.ndarray:
-    """``Phi^T Z (Z^T Z)^-1 Z_b^T [Phi_b, y_b]`` per block: ``(B, 5, 6)``; ``u_b = U_b[:, 5] - U_b[:, :5] g``."""
-    A = ZtP[:, :-1].T @ _pinv_psd(ZtZ)
+    """``Phi^T Z (Z^T Z)^-1 Z_b^T [Phi_b, y_b(, 1f_b)]`` per block: ``(B, 5, 6)`` (``(B, 5, 7)`` with the
+    prefiltered constant ``1f`` as a seventh column); ``u_b = U_b[:, 5] - U_b[:, :5] g``."""
+    A = ZtP[:, :5].T @ _pinv_psd(ZtZ)
     return np.einsum("ij,bjk->bik", A, np.asarray(blocks_ZtP))
 
 
@@ -67,7 +78,9 @@ def reference_projections(prep, L, theta_q: np.ndarray, known, conds, options, n
     The instruments (45) of :func:`shipid.methods.masscm.moments.instruments` from the closed-loop simulation
     (46)-(47) at ``theta_q``, the prefilter ``L[i]`` (43) of the converged start-up run, its transient dropped
     (:func:`~shipid.methods.masscm.moments.transient_length`); blocks of ``nb`` samples (a shorter last one is
-    merged into the one before). None for a dataset whose model at ``theta_q`` is unstable.
+    merged into the one before). Per dataset ``(U, c)``: ``U`` the ``(B, 5, 7)`` projections of
+    ``[Phi, y, 1f]`` with ``1f`` a constant through the same prefilter (the path of a sensor bias, see
+    :func:`sandwich`), ``c = 1f^T [Phi_f, y_f, 1f]``; None for a dataset whose model at ``theta_q`` is unstable.
     """
     terms = roll_terms(theta_q, known, conds, moment=True)
     s = first_row(options)
@@ -79,14 +92,16 @@ def reference_projections(prep, L, theta_q: np.ndarray, known, conds, options, n
             out.append(None)
             continue
         Z = instruments(ds, sim[0], sim[1], ds.r_hat0, Li, options)
+        one = np.ones_like(ds.y)
         yf = (Li.prefilter(ds.y) if Li is not None else ds.y)[s:]
         Pf = (Li.prefilter(ds.Phi) if Li is not None else ds.Phi)[s:]
+        of = (Li.prefilter(one) if Li is not None else one)[s:]
         k = transient_length(Li, yf.size, options)
-        Z, P = Z[k:], np.column_stack([Pf[k:], yf[k:]])
+        Z, P = Z[k:], np.column_stack([Pf[k:], yf[k:], of[k:]])
         nbk = max(1, Z.shape[0] // nb)
         edges = [j * nb for j in range(nbk)] + [Z.shape[0]]
         bl = [Z[a:b].T @ P[a:b] for a, b in zip(edges[:-1], edges[1:])]
-        out.append(block_projections(Z.T @ Z, Z.T @ P, bl))
+        out.append((block_projections(Z.T @ Z, Z.T @ P, bl), P[:, 6] @ P))
     return out
 
 
@@ -114,26 +129,38 @@ def _newey_west(S: np.ndarray) -> np.ndarray:
 
 
 def sandwich(J: np.ndarray, dg: np.ndarray, G: np.ndarray, lams, projections) -> np.ndarray:
-    """Covariance ``H^-1 M H^-1`` of the free parameters (see the module docstring).
+    """Covariance ``H^-1 (M + b b^T) H^-1`` of the free parameters (see the module docstring).
 
     ``J``: the Jacobian of the stacked weighted residuals of (40), five rows per dataset; ``dg`` from
     :func:`coeff_jacobian`; ``G`` the coefficients (33) at the estimate, ``(n_datasets, 5)``; ``lams`` the
-    weights; ``projections[i]``: :func:`block_projections` of dataset ``i`` (None: its white-noise part only).
+    weights; ``projections[i]``: :func:`block_projections` of dataset ``i`` (None: its white-noise part only),
+    or the pair ``(U, c)`` of :func:`reference_projections`, whose seventh column carries the prefiltered
+    constant: the dataset's constant equation error ``e0`` (a gyro bias ``b_1`` leaves ``b_1 (1 + a_1 + a_2)``)
+    is estimated by least squares on the prefiltered residual, ``e0 = (c_y - c_Phi g) / c_1``, its part is
+    taken out of the block scores (it is no sampling error that the blocks average) and its gradient
+    ``b_i = e0 dg_i^T Phi^T Z (Z^T Z)^-1 Z^T 1f / lam_i``, summed over the datasets into ``b``, enters whole:
+    the error it causes, ``H^-1 b``, is shared by every block and every update.
     """
     H = J.T @ J
     M = np.zeros_like(H)
-    for i, U in enumerate(projections):
+    bias = np.zeros(H.shape[0])
+    for i, P in enumerate(projections):
         Ji = J[5 * i:5 * i + 5]
         white = Ji.T @ Ji
         M += white
+        U, c = P if isinstance(P, tuple) else (P, None)
         if U is None or U.shape[0] < 2:
             continue
         u = U[:, :, 5] - U[:, :, :5] @ G[i]                # (B, 5): Phi^T Z (Z^T Z)^-1 Z_b^T e_b
+        if c is not None and c[6] > 0:
+            uc = U[:, :, 6] * ((c[5] - c[:5] @ G[i]) / c[6])   # the constant's part of every block
+            u = u - uc
+            bias += uc.sum(axis=0) @ dg[i] / lams[i]
         S = u @ dg[i] / lams[i]                            # (B, n_free): the blocks' scores
         ev, V = np.linalg.eigh(_newey_west(S) - white)
         M += (V * np.maximum(ev, 0.0)) @ V.T
     Hi = np.linalg.inv(H)
-    C = Hi @ M @ Hi
+    C = Hi @ (M + np.outer(bias, bias)) @ Hi
     return 0.5 * (C + C.T)
 
 

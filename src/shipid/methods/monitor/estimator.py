@@ -24,7 +24,8 @@ chunks of the loaded-condition IMU + rudder stream and returns one :class:`Monit
    :mod:`shipid.methods.monitor.covariance`: the gradient of (40) cut into ``every``-second blocks of the
    nominal and calibration datasets (kept from the start-up; their error is shared by every update) and of
    the window, so that a coloured equation error and a slow misfit, which the white-noise covariance
-   ``(J^T J)^-1`` of Algorithm 1 does not see, widen the bands (never below ``(J^T J)^-1``). Then step B(b)-(c) for the *next* blocks: the noise model
+   ``(J^T J)^-1`` of Algorithm 1 does not see, widen the bands (never below ``(J^T J)^-1``), and so does the
+   error a gyro bias leaves through the reference datasets' prefilter. Then step B(b)-(c) for the *next* blocks: the noise model
    (AR part; (c, k) held) is refitted to the equation error of the last ``ar_fit`` seconds (Hannan–Rissanen, i.e.
    least squares) and the instrument model is the new estimate. Blocks already in the window keep the
    prefilter and instruments they were built with: each block's instruments are a function of the rudder
@@ -100,7 +101,8 @@ class MonitorOptions:
         Seconds of recent equation error to which the AR prefilter is refitted after every update.
     covariance : {"sandwich", "white"}
         Standard errors of the updates: "sandwich" the block Newey-West sandwich over the reference datasets and
-        the window (:mod:`shipid.methods.monitor.covariance`); "white" ``(J^T J)^-1`` of Algorithm 1, which holds
+        the window, with the error a gyro bias leaves through the reference datasets' prefilter
+        (:mod:`shipid.methods.monitor.covariance`); "white" ``(J^T J)^-1`` of Algorithm 1, which holds
         only when the prefiltered equation error is white.
     bj_reselect : int
         Box-Jenkins noise model (``masscm.noise_model`` "auto"/"bj"): every ``bj_reselect`` updates ``(c, k)``
