@@ -177,25 +177,23 @@ def select_staged(trials: Sequence[Trial], runs: Sequence[R.SmoothedRun], prior:
         ok = [k for k in keys if np.isfinite(ref[k]["score"])]
         return min(ok, key=lambda k: ref[k]["score"]) if ok else None
 
+    def stage(b, variants, name, what, why):
+        """Output-error CV of ``variants`` of the structure of row ``b``, recorded as stage ``name``."""
+        base = b.rsplit("/", 1)[0]
+        extra = variants(base, pool[base])
+        pool.update(extra)
+        say(f"output-error CV of the {what} variants of '{base}'")
+        ref.update(cv_refinement(trials, runs, prior, list(extra), **kw))
+        stages.append({"stage": name, "base": base, "candidates": list(extra), "why": why})
+
     low = [k for k in ref if pool[k.rsplit("/", 1)[0]].get("structure", prior.structure) in ASYM_BASES]
     b = best_row(low)
     if b is not None:
-        base = b.rsplit("/", 1)[0]
-        extra = asym_variants(base, pool[base])
-        pool.update(extra)
-        say(f"output-error CV of the port/starboard variants of '{base}'")
-        ref.update(cv_refinement(trials, runs, prior, list(extra), **kw))
-        stages.append({"stage": "port/starboard", "base": base, "candidates": list(extra),
-                       "why": f"'{b}' is the best row on the low-speed hull so far"})
+        stage(b, asym_variants, "port/starboard", "port/starboard",
+              f"'{b}' is the best row on the low-speed hull so far")
     b = best_row(ref)
     if b is not None and pool[b.rsplit("/", 1)[0]].get("structure", prior.structure) in SURGE_BASES:
-        base = b.rsplit("/", 1)[0]
-        extra = surge_variants(base, pool[base])
-        pool.update(extra)
-        say(f"output-error CV of the surge / slipstream-rudder / wind-gain variants of '{base}'")
-        ref.update(cv_refinement(trials, runs, prior, list(extra), **kw))
-        stages.append({"stage": "surge", "base": base, "candidates": list(extra),
-                       "why": f"'{b}' is the best row so far"})
+        stage(b, surge_variants, "surge", "surge / slipstream-rudder / wind-gain", f"'{b}' is the best row so far")
     rows = [k for k in ref if k.rsplit("/", 1)[1] in criteria]
     choice = best_row(rows)
     if choice is None:
