@@ -1,5 +1,6 @@
 """Days of running: the session's memory does not grow with the stream's length (slow: hours of stream)."""
 
+import gc
 import tracemalloc
 
 import numpy as np
@@ -17,7 +18,7 @@ Z_F = true_value("z_f")
 
 def _soak(duration: float, repeats: int, trace: bool = True):
     """The same simulated stream fed ``repeats`` times, its time shifted each time (continuous time);
-    traced memory after each pass."""
+    traced memory (after a full garbage collection) after each pass."""
     sim = simulate_stream(StreamSpec(duration=duration, change_at=None), seed=77)
     st = sim["stream"]
     t0 = np.asarray(st.t, dtype=float)
@@ -34,6 +35,7 @@ def _soak(duration: float, repeats: int, trace: bool = True):
             for a in range(0, t.size, 500):
                 sl = slice(a, a + 500)
                 s.push(t[sl], X[0][sl], X[1][sl], X[2][sl], X[3][sl])
+            gc.collect()                                   # live memory, not cyclic garbage awaiting collection
             mem.append(tracemalloc.get_traced_memory()[0] if trace else 0)
             c = s.cond
             sizes.append((len(s.mon.blocks), len(c.q), len(c.buf), len(c.seen), len(s._gap_starts)))
@@ -53,7 +55,15 @@ def test_buffers_bounded_by_the_window():
 
 @pytest.mark.slow
 def test_soak_three_hours_memory_flat():
-    """3 h of stream (one hour fed three times): traced memory after hours 2 and 3 within 10 % of hour 1."""
-    s, mem, sizes = _soak(3600.0, 3)
-    assert max(mem[1:]) <= 1.10 * mem[0], mem
-    assert sizes[1] == sizes[2]
+    """3 h of stream after a warm-up hour (one hour fed four times): traced memory after hours 3 and 4 within
+    10 % of hour 2.
+
+    The first hour is a warm-up, not part of the claim: run alone, hours 2 and 3 stay within 10 % of hour 1, but run
+    after the rest of the slow suite in one process, hour 2 traced 256 KB (9 %) more than hour 1 and hour 3
+    30 KB more than hour 2, a one-time settling whose size depends on what the process did before. The claim
+    under test is that memory does not grow with the stream's length once running, which hours 2 to 4 measure;
+    the 24-h soak in docs/validation/monitor.md measures the resident set.
+    """
+    s, mem, sizes = _soak(3600.0, 4)
+    assert max(mem[2:]) <= 1.10 * mem[1], mem
+    assert sizes[1] == sizes[2] == sizes[3]
