@@ -44,7 +44,13 @@ NINTH_HELDOUT = "random/random_31-Jul-2020_14_52_18.csv"
 
 
 def _runs(limit: int | None):
-    from shipid.io.basins import SPLITS, esso_dir
+    import sys
+    from pathlib import Path
+
+    from shipid.io.basins import esso_dir
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+    from esso_runs import SPLITS  # the papers' splits, as the study scripts list them
 
     d = esso_dir(None)
     test = set(SPLITS["miyauchi2022"]["test"]) | set(SPLITS["wakita2022"]["test"]) | {NINTH_HELDOUT}

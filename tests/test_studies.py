@@ -66,3 +66,28 @@ def test_each_study_imports_only_public_names(script):
 
 def test_there_are_studies():
     assert SCRIPTS, "no studies/*/run.py found"
+
+
+def _splits():
+    """The papers' Esso Osaka splits as the study scripts read them (``studies/esso_runs.py``)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("esso_runs", ROOT / "studies" / "esso_runs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.SPLITS
+
+
+def test_esso_splits_are_disjoint_and_match_the_readme_counts():
+    # esso_osaka_3m/README_upstream.md: Miyauchi Train-TRZ has 6 runs and 5 test runs; Wakita Train-TZRB+ 35, test 6
+    splits = _splits()
+    for name, n_train, n_test in (("miyauchi2022", 6, 5), ("wakita2022", 35, 6)):
+        sp = splits[name]
+        assert len(sp["train"]) == n_train and len(sp["test"]) == n_test
+        assert not set(sp["train"]) & set(sp["test"])
+
+
+def test_esso_split_files_exist(data_root):
+    for sp in _splits().values():
+        for f in sp["train"] + sp["test"]:
+            assert (data_root / "esso_osaka_3m" / "data" / f).is_file(), f
