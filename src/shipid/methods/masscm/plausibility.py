@@ -109,13 +109,15 @@ def identified_mode_physical(theta: np.ndarray, known: KnownParams, conds=(NOMIN
     without the arrays, dictionaries and reason strings (tests compare the two). For the iteration's test of
     the physical region (:func:`shipid.methods.masscm.iteration.left_physical_region`), called at every iterate.
     """
-    if not np.all(np.isfinite(theta)):
+    th = [float(v) for v in theta]         # Python floats: the same IEEE operations, without numpy's scalars
+    if not all(math.isfinite(v) for v in th):
         return False
-    k, A_x, d, K_r, K_v, K_d, z_f, m, zm = theta
+    k, A_x, d, K_r, K_v, K_d, z_f, m, zm = th
     if m <= 1e-6 * known.M or abs(zm) > 10.0:
         return False
     zg = known.zg_bar + z_f
     zs = known.zs_bar + z_f
+    zg2 = float(np.float64(zg) ** 2)        # numpy's power, as roll_terms' ``zg**2`` (not always zg * zg)
     for c in conds:
         if c == NOMINAL:
             q, zb = 0.0 * z_f, 0.0 * z_f
@@ -126,13 +128,12 @@ def identified_mode_physical(theta: np.ndarray, known: KnownParams, conds=(NOMIN
         else:
             raise ValueError(f"unknown loading condition {c!r}")
         A2 = A_x + known.M * zg * (known.zg_bar - known.zs_bar) + q * (zb - known.zs_bar) - K_v * zs
-        A1 = A_x + known.M * zg**2 + q * (zb + z_f)
+        A1 = A_x + known.M * zg2 + q * (zb + z_f)
         k1 = k + known.M * known.g * zg + q * known.g
-        a2 = float(A2)
-        if a2 == 0.0:                       # any ratio is then infinite or undefined
+        if A2 == 0.0:                       # any ratio is then infinite or undefined
             return False
         for v in (A1, d, k1):
-            r = float(v) / a2               # Python floats: IEEE division, inf on overflow, no warning
+            r = v / A2                      # IEEE division: inf on overflow, no warning
             if not (math.isfinite(r) and r > 0):
                 return False
     return True
