@@ -14,8 +14,8 @@ at all, the bound of any change that keeps the kernels' arithmetic (and so the a
 
 Then the eigen-decompositions alone, on the Gram matrices ``Z^T Z`` of the first runs (captured from the
 wrapped ``eigh``): µs per matrix by numpy's ``eigh`` one at a time (the package), by one stacked
-``np.linalg.eigh`` call, by scipy's ``dsyevd`` and ``dsyevr``, and whether each gives numpy's numbers
-bit for bit.
+``np.linalg.eigh`` call, by scipy's ``dsyevd`` and ``dsyevr``, whether each gives numpy's numbers bit for bit,
+and the smallest eigenvalues relative to the largest (where the rank rule's threshold 1e-12 falls).
 
 Usage:  python benchmarks/diag_masscm_table3_split.py [RUNS=300]
         python benchmarks/diag_masscm_table3_split.py --smoke     (3 runs)
@@ -135,6 +135,11 @@ def main():
           f"{same(list(zip(stacked[0], stacked[1])))}")
     print(f"  scipy dsyevd {per_matrix(lambda: [lapack.dsyevd(a, lower=1) for a in A]):7.1f}  {same(evd)}")
     print(f"  scipy dsyevr {per_matrix(lambda: [lapack.dsyevr(a, lower=1) for a in A]):7.1f}  {same(evr)}")
+    rel = np.array([w / w[-1] for w, _ in ref])[:, :16]
+    print("  the 16 smallest eigenvalues over the largest (median, min, max over the matrices; the rank rule drops "
+          "those below 1e-12):")
+    for q, name in ((np.median, "median"), (np.min, "min"), (np.max, "max")):
+        print(f"    {name:6s} " + " ".join(f"{x:8.1e}" for x in q(rel, axis=0)))
 
 
 if __name__ == "__main__":
