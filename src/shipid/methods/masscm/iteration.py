@@ -48,7 +48,7 @@ def step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.nd
     s = first_row(options)
     status, stable, a, lam, yh, ah, ZtZ, ZtP = dataset_step(
         ds.y, c["PhiT_c"], np.ascontiguousarray(g_mid, dtype=float), s, int(options.ar_order), X, nls,
-        ds.r_hat0, ds.delta, sim, y_hat, a_hat, center=options.instrument_mean == "after")
+        ds.r_hat0, ds.delta, sim, y_hat, a_hat)
     if status != 0:                                   # reference path for this dataset
         eps = ds.y - ds.Phi @ g_mid
         L = fit_noise_model(eps[s:], options)

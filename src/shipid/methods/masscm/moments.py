@@ -34,25 +34,6 @@ def instruments(ds: Dataset, y_hat, a_hat, r_hat, L, options: MassCMOptions) -> 
                             lag_matrix(base[:, 2], options.n_r, s), lag_matrix(base[:, 3], options.n_delta, s)])
 
 
-def center_lag_products(ZtZ: np.ndarray, ZtP: np.ndarray, F: np.ndarray, nls, yf: np.ndarray, Pm: np.ndarray,
-                        s: int) -> tuple[np.ndarray, np.ndarray]:
-    """``Z^T Z`` and ``Z^T [Phi, y]`` of the lag instruments (45) with each column mean-removed over rows ``s..n-1``.
-
-    Linder et al. (2015), section 4: the instruments must be uncorrelated with the equation error, which a sensor
-    bias gives a constant part (``(1 + a_1 + a_2) b_1`` for a gyro bias, (9), (37)). Removing the instrument
-    signals' means before the prefilter (43) does not make the prefiltered instruments orthogonal to a constant;
-    removing each column's mean over the rows used does: ``Z_c = Z - 1 zbar^T`` gives
-    ``Z_c^T Z_c = Z^T Z - m zbar zbar^T`` and ``Z_c^T P = Z^T P - m zbar pbar^T`` (``m = n - s`` rows). ``F``: the
-    four prefiltered instrument signals (column ``(k, i)`` of ``Z`` is ``F[k, t - i]``); ``yf`` the prefiltered
-    output, ``Pm`` the prefiltered regressors 3..5 of (37) (columns 1, 2 are ``-yf`` delayed by 1, 2).
-    """
-    n = yf.size
-    m = n - s
-    zs = np.array([F[k, s - i:n - i].sum() for k, nl in enumerate(nls) for i in range(int(nl))])
-    ps = np.array([-yf[s - 1:n - 1].sum(), -yf[s - 2:n - 2].sum(), *Pm[:, s:].sum(axis=1), yf[s:].sum()])
-    return ZtZ - np.outer(zs, zs) / m, ZtP - np.outer(zs, ps) / m
-
-
 def closed_loop_sim(ds: Dataset, terms: dict, i: int, known: KnownParams) -> tuple[np.ndarray, np.ndarray] | None:
     """Noise-free instrument signals (46)–(47) for dataset i, or None if the model is unstable.
 
@@ -103,8 +84,6 @@ def fir_moments_compiled(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: Mass
     T[1, :2], T[1, 2:] = 0.0, -Fl[7, :-2]
     T[2:] = Fl[4:]
     ZtZ, ZtP = lag_moments(Fl[:4], nls, T, s)
-    if options.instrument_mean == "after":
-        ZtZ, ZtP = center_lag_products(ZtZ, ZtP, Fl[:4], nls, Fl[7], Fl[4:7], s)
     return iv_compress_products(ZtZ, ZtP, n - s)
 
 
@@ -157,8 +136,6 @@ def fir_moments_numpy(ds: Dataset, a: np.ndarray, y_hat, a_hat, options: MassCMO
     filt[5, :2], filt[5, 2:] = 0.0, -filt[9, :-2]
     nls = (options.n_y, options.n_as, options.n_r, options.n_delta)
     ZtZ, ZtP = lag_products(filt, nls, filt[4:, s:], s)      # P: Phi columns then y, prefiltered
-    if options.instrument_mean == "after":
-        ZtZ, ZtP = center_lag_products(ZtZ, ZtP, filt[:4], nls, filt[9], filt[6:9], s)
     return iv_compress_products(ZtZ, ZtP, n - s)
 
 
@@ -230,8 +207,6 @@ def filtered_lag_moments(ds: Dataset, L, y_hat, a_hat, options: MassCMOptions):
     s2 = s + transient_length(L, n - s, options)
     nls = np.array((options.n_y, options.n_as, options.n_r, options.n_delta), dtype=np.int64)
     ZtZ, ZtP = lag_moments(F, nls, T, s2)
-    if options.instrument_mean == "after":
-        ZtZ, ZtP = center_lag_products(ZtZ, ZtP, F, nls, T[5], T[2:5], s2)
     return iv_compress_products(ZtZ, ZtP, n - s2)
 
 
@@ -252,10 +227,7 @@ def build_moments(prep: list[Dataset], L: list, y_hats, a_hats, options: MassCMO
         else:
             yf, Pf = ds.y[s:], ds.Phi[s:]
         k = transient_length(Li, yf.size, options)
-        Zk = Z[k:]
-        if options.instrument_mean == "after":
-            Zk = Zk - Zk.mean(axis=0)
-        mom.append(iv_compress(Zk, yf[k:], Pf[k:]))
+        mom.append(iv_compress(Z[k:], yf[k:], Pf[k:]))
     return mom
 
 
@@ -277,5 +249,5 @@ def transient_length(L, n: int, options: MassCMOptions) -> int:
     return int(min(k, options.transient_max * n))
 
 
-__all__ = ["instruments", "center_lag_products", "closed_loop_sim", "fir_moments", "fir_moments_compiled", "fir_moments_numpy",
+__all__ = ["instruments", "closed_loop_sim", "fir_moments", "fir_moments_compiled", "fir_moments_numpy",
            "input_differences", "LAG_BLOCK", "lag_products", "work_arrays", "filtered_lag_moments", "build_moments", "transient_length"]

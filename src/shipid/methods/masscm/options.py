@@ -49,9 +49,6 @@ class MassCMOptions:
     initial_c: float = 0.99         # first-iteration prefilter 1/(1 - c q^-2); 0 = the paper's L = 1
     cycle_after: int = 10           # (*) from this iteration on, not yet converged: steps (b)-(c) at the mean of
     #                                 the last four iterates instead of two (damps period-4 cycles); 0 = never
-    instrument_mean: str = "before"  # "after": each instrument column (45) mean-removed over the rows used, after the
-    #                                 prefilter (43), so a constant (a gyro bias's (9)) is orthogonal to it (section 4);
-    #                                 "before": the instrument signals mean-removed before the prefilter only
     explicit_moments: bool = False  # how (not what): True forms the instrument matrix Z of an IIR prefilter
     #                                 explicitly (the reference of filtered_lag_moments; O(n n_z^2), n x n_z memory)
     compute: str = "reference"      # how (not what): "reference" the numpy/scipy path; "fast" numba kernels (estimator)

@@ -26,7 +26,6 @@ import numpy as np
 from numba import njit
 
 from shipid.estimate.fir_kernels import ar_fit, fir_filter, lag_moments
-from shipid.methods.masscm.moments import center_lag_products
 
 
 @njit(cache=True)
@@ -181,7 +180,7 @@ def instrument_products(Fl, nls, ZtT, s):
     return ZtP
 
 
-def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat, center=False):
+def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat):
     """Steps B(b)–(c) for one dataset; see the module docstring.
 
     Parameters
@@ -194,8 +193,6 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat,
     r_hat0, delta : black-box yaw rate (44) and the (mean-removed) rudder.
     sim : ``[A1, d, k1, Kyaw, K_delta, z_s, g, U, T]`` of dataset i (``roll_terms`` at theta_mid).
     y_hat, a_hat : the previous instrument signals (kept when the model is unstable).
-    center : each instrument column mean-removed over the rows used, after the prefilter
-        (:func:`shipid.methods.masscm.moments.center_lag_products`; ``MassCMOptions.instrument_mean`` "after").
 
     Returns
     -------
@@ -215,10 +212,7 @@ def dataset_step(y, PhiT, g_mid, s, p, X, nls, r_hat0, delta, sim, y_hat, a_hat,
     stable, y_hat, a_hat = instrument_signals(sim, r_hat0, delta, y_hat, a_hat, X)
     Fl = fir_filter(a, X)
     ZtZ, ZtT = lag_moments(Fl[:4], nls, Fl[4:8], s)
-    ZtP = instrument_products(Fl, nls, ZtT, s)
-    if center:
-        ZtZ, ZtP = center_lag_products(ZtZ, ZtP, Fl[:4], nls, Fl[7], Fl[4:7], s)
-    return 0, stable, a, lam, y_hat, a_hat, ZtZ, ZtP
+    return 0, stable, a, lam, y_hat, a_hat, ZtZ, instrument_products(Fl, nls, ZtT, s)
 
 
 __all__ = ["dataset_step", "equation_error", "instrument_signals", "instrument_products", "delayed_y_columns"]

@@ -98,8 +98,6 @@ def reference_projections(prep, L, theta_q: np.ndarray, known, conds, options, n
         of = (Li.prefilter(one) if Li is not None else one)[s:]
         k = transient_length(Li, yf.size, options)
         Z, P = Z[k:], np.column_stack([Pf[k:], yf[k:], of[k:]])
-        if options.instrument_mean == "after":
-            Z = Z - Z.mean(axis=0)               # as the moments of the start-up run (masscm.moments)
         nbk = max(1, Z.shape[0] // nb)
         edges = [j * nb for j in range(nbk)] + [Z.shape[0]]
         bl = [Z[a:b].T @ P[a:b] for a, b in zip(edges[:-1], edges[1:])]
