@@ -51,6 +51,7 @@ Measured figures, with the commands that regenerate them: ``docs/validation/mass
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from shipid.methods.masscm.pem_result import refine_result as _pem
 from shipid.methods.masscm.whittle_result import refine_result as _whittle
@@ -102,16 +103,24 @@ _TESTED = ("p", "r")
 
 def _lagged(x: dict, chans, lags: int) -> np.ndarray:
     """Regressors of a one-step prediction: a constant and lags ``1..lags`` of each channel of ``chans``
-    (``x[k]`` equal-length arrays), rows ``k = lags .. N-1``."""
+    (``x[k]`` equal-length arrays), rows ``k = lags .. N-1`` (filled row by row by :func:`_fill_lagged`)."""
     N = x[chans[0]].size
     X = np.empty((N - lags, len(chans) * lags + 1))
-    X[:, 0] = 1.0
-    c = 1
-    for k in chans:
-        for j in range(1, lags + 1):
-            X[:, c] = x[k][lags - j:N - j]
-            c += 1
+    _fill_lagged(np.stack([np.asarray(x[k], dtype=float) for k in chans]), lags, X)
     return X
+
+
+@njit(cache=True)
+def _fill_lagged(xs, lags, X):
+    """``X[r] = [1, xs[0, r + lags - 1], .., xs[0, r], xs[1, r + lags - 1], ..]``: row ``r`` holds the constant and
+    lags ``1..lags`` of each row of ``xs`` at sample ``r + lags`` (copies only, in the memory order of ``X``)."""
+    for r in range(X.shape[0]):
+        X[r, 0] = 1.0
+        c = 1
+        for k in range(xs.shape[0]):
+            for j in range(1, lags + 1):
+                X[r, c] = xs[k, r + lags - j]
+                c += 1
 
 
 def _ls_residual(X: np.ndarray, Gs: np.ndarray, d: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -101,21 +101,23 @@ class WhittleOptions(PEMOptions):
 
 @njit(cache=True)
 def _final_state(delta, Ad, b0, b1, k0):
-    """State after the last sample of ``x+ = Ad x + b0 d_k + b1 d_{k+1}`` from rest at ``k0`` (``d_N = d_{N-1}``)."""
+    """State after the last sample of ``x+ = Ad x + b0 d_k + b1 d_{k+1}`` from rest at ``k0`` (``d_N = d_{N-1}``);
+    each entry ``b0_i d_k + b1_i d_{k+1} + sum_j Ad_ij x_j``, summed in that order."""
     n = delta.shape[0]
-    x = np.zeros(4)
-    xn = np.zeros(4)
+    x0 = x1 = x2 = x3 = 0.0
+    a00, a01, a02, a03 = Ad[0, 0], Ad[0, 1], Ad[0, 2], Ad[0, 3]
+    a10, a11, a12, a13 = Ad[1, 0], Ad[1, 1], Ad[1, 2], Ad[1, 3]
+    a20, a21, a22, a23 = Ad[2, 0], Ad[2, 1], Ad[2, 2], Ad[2, 3]
+    a30, a31, a32, a33 = Ad[3, 0], Ad[3, 1], Ad[3, 2], Ad[3, 3]
     for k in range(k0, n):
         dk = delta[k]
         dnext = delta[k + 1] if k + 1 < n else dk
-        for i in range(4):
-            acc = b0[i] * dk + b1[i] * dnext
-            for j in range(4):
-                acc += Ad[i, j] * x[j]
-            xn[i] = acc
-        for i in range(4):
-            x[i] = xn[i]
-    return x
+        y0 = (((b0[0] * dk + b1[0] * dnext) + a00 * x0) + a01 * x1) + a02 * x2 + a03 * x3
+        y1 = (((b0[1] * dk + b1[1] * dnext) + a10 * x0) + a11 * x1) + a12 * x2 + a13 * x3
+        y2 = (((b0[2] * dk + b1[2] * dnext) + a20 * x0) + a21 * x1) + a22 * x2 + a23 * x3
+        y3 = (((b0[3] * dk + b1[3] * dnext) + a30 * x0) + a31 * x1) + a32 * x2 + a33 * x3
+        x0, x1, x2, x3 = y0, y1, y2, y3
+    return np.array([x0, x1, x2, x3])
 
 
 def band_index(f_bins, f_grid, curves, tol, rel):
