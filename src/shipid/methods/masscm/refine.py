@@ -58,6 +58,7 @@ from shipid.methods.masscm.whittle_result import refine_result as _whittle
 from shipid.methods.masscm.plausibility import Judgement, judge
 from shipid.methods.masscm.refine_modes import REFINE_MODES
 from shipid.models.roll_reduced import THETA_NAMES
+from shipid.numerics.linalg import one_blas_thread
 
 
 #: Refinement engines: ``name -> f(result, datasets, known, z_f) -> result`` (the result's ``diagnostics["refine"]``
@@ -221,8 +222,9 @@ def choose(datasets, result, z_f) -> tuple[str, dict]:
     """The rule of the module docstring: ``(engine, record)``, engine ``"none"`` or :func:`auto_engine`'s; the
     record (for ``diagnostics["refine"]``) holds the decision, its reason and both tests. ``result`` is Algorithm
     1's result (the present tests read the data only; an engine's rule may read it)."""
-    sens = sensor_noise_level(datasets)
-    wav = wave_colour(datasets)
+    with one_blas_thread():           # the statistics the same bits on any core count (long X^T X, dot products)
+        sens = sensor_noise_level(datasets)
+        wav = wave_colour(datasets)
     if z_f is None:
         engine, why = "none", "z_f not known"
     elif not sens["detected"]:
