@@ -147,10 +147,11 @@ class _FSet:
     def transform(self):
         """The DFTs ``Z_j`` (K, 5); the time-domain outputs are not needed after this (and are released)."""
         K, sq = self.w.size, np.sqrt(self.n)
-        Yf = np.fft.rfft(self.y, axis=0)[1:K + 1] / sq
-        Df = np.fft.rfft(self.delta)[1:K + 1] / sq
-        self.Z = np.column_stack([Yf, Df, np.full(K, 1.0 / sq)])
+        self.Z = Z = np.empty((K, 5), dtype=complex)          # filled in place: no stacked copies
+        np.divide(np.fft.rfft(self.y, axis=0)[1:K + 1], sq, out=Z[:, :3])
         self.y = None
+        np.divide(np.fft.rfft(self.delta)[1:K + 1], sq, out=Z[:, 3])
+        Z[:, 4] = 1.0 / sq
 
     def set_bands(self, idx):
         """Band sums for the band number ``idx`` of each bin."""
@@ -158,12 +159,13 @@ class _FSet:
         self.nb = np.diff(np.r_[starts, idx.size]).astype(float)
         self.wb = np.add.reduceat(self.w, starts) / self.nb
         dw = self.w - self.wb[idx]
+        dwk = [dw ** k for k in range(3)]
         P = np.empty((3, starts.size, 5, 5), dtype=complex)   # P_k = sum_j (w_j - w_b)^k Z_j Z_j^H
         for a in range(5):                                      # pair by pair: no (K, 5, 5) transient
             for b in range(a, 5):
                 zz = self.Z[:, a] * np.conj(self.Z[:, b])
                 for k in range(3):
-                    P[k, :, a, b] = np.add.reduceat(zz * dw ** k, starts)
+                    P[k, :, a, b] = np.add.reduceat(zz * dwk[k], starts)
                     P[k, :, b, a] = np.conj(P[k, :, a, b])
         M = np.block([[P[0], P[1]], [P[1], P[2]]])             # moments of Zt = [Z, (w - w_b) Z]
         self.M = M
@@ -325,11 +327,12 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         dA = np.zeros((nc, A.shape[0], 3, len(MODEL_COLS)), dtype=complex)     # the other columns of At are fixed
         dS = np.zeros((nc,) + S.shape, dtype=complex)
         order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
+        A_model = A[:, :, MODEL_COLS]
         for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
             r, h = perturbed(lambda t, l: s.matrices(t, l, waves), theta, loc, *cols[c], rel_step)
             if r is None:
                 continue
-            dA[c] = (r[0][:, :, MODEL_COLS] - A[:, :, MODEL_COLS]) / h
+            dA[c] = (r[0][:, :, MODEL_COLS] - A_model) / h
             dS[c] = (r[1] - S) / h
         RM = s.residual_periodogram(A)
         nb = dA.shape[1]
