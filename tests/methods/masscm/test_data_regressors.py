@@ -15,3 +15,4 @@ def test_regressors_in_place_equal_the_stacked_form():
     got = regressors(y, a, r, d)
     assert got.flags.c_contiguous
     assert np.array_equal(got, stacked) and np.array_equal(np.signbit(got), np.signbit(stacked))
+
