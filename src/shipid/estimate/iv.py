@@ -35,6 +35,20 @@ def lag_matrix(x: np.ndarray, n_lags: int, start: int) -> np.ndarray:
     return w[:, ::-1]
 
 
+def arx_regressors(y: np.ndarray, u: np.ndarray, na: int, nb: int, s: int) -> np.ndarray:
+    """``[-y_{t-1} .. -y_{t-na}, u_t .. u_{t-nb+1}, y_t]`` for rows ``t = s .. n-1``, in Fortran order (each column
+    contiguous: LAPACK's layout, which ``numpy.linalg.qr`` copies into about a third faster than a C-order array;
+    the factor is the same either way)."""
+    n = y.size
+    R = np.empty((n - s, na + nb + 1), order="F")
+    for j in range(1, na + 1):
+        np.negative(y[s - j:n - j], out=R[:, j - 1])
+    for j in range(nb):
+        R[:, na + j] = u[s - j:n - j]
+    R[:, na + nb] = y[s:]
+    return R
+
+
 def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares ARX model ``A(q) y = B(q) u`` with ``B = b_0 + ... + b_{nb-1} q^{-nb+1}``.
 
@@ -45,7 +59,7 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     s = max(na, nb - 1)
-    R = np.column_stack([-lag_matrix(y, na + 1, s)[:, 1:], lag_matrix(u, nb, s), y[s:]])
+    R = arx_regressors(y, u, na, nb, s)
     # least squares by a thin QR of [R, y] (O(n k^2), no SVD of the long matrix); lstsq when rank deficient
     Rf = np.linalg.qr(R, mode="r")
     k = na + nb
@@ -188,5 +202,5 @@ def iv_compress_products_compiled(ZtZ: np.ndarray, ZtP: np.ndarray, n: int, rtol
     return IVMoments(R=Rf[:ng, :ng].copy(), r=Rf[:ng, ng].copy(), rss0=rss0, n=n, rank_ok=bool(kept >= ng))
 
 
-__all__ = ["iv_compress_products_compiled", "lag_matrix", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram",
+__all__ = ["iv_compress_products_compiled", "lag_matrix", "arx_regressors", "arx_fit", "arx_simulate", "IVMoments", "iv_compress", "iv_compress_products", "lag_gram",
            "lag_gram_from"]

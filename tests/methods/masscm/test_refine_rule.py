@@ -149,3 +149,27 @@ def test_auto_engine_is_the_exact_likelihood_on_short_records_and_whittle_on_lon
     short = [("nominal", {"p": np.zeros(refine.EXACT_MAX_SAMPLES)})]
     long_ = [("nominal", {"p": np.zeros(refine.EXACT_MAX_SAMPLES + 1)})]
     assert refine.auto_engine(short) == "pem" and refine.auto_engine(long_) == "whittle"
+
+
+def test_rule_statistics_do_not_depend_on_the_blas_thread_count():
+    """The two tests' statistics (long ``X^T X`` and dot products) are the same bits with one or two BLAS threads
+    (on a machine where OpenBLAS splits them, two threads changed the wave statistic by ~1e-12 before they ran
+    under one thread)."""
+    from threadpoolctl import threadpool_limits
+
+    class _Trial(dict):
+        pass
+
+    rng = np.random.default_rng(5)
+    data = []
+    for cond in ("nominal", "calibration", "loaded"):
+        tr = _Trial({k: np.cumsum(rng.standard_normal(30_000)) * 1e-2 + rng.standard_normal(30_000)
+                     for k in ("p", "a_s", "r", "delta")})
+        tr.t = np.arange(30_000) * 0.02
+        data.append((cond, tr))
+    recs = []
+    for threads in (1, 2):
+        with threadpool_limits(threads):
+            recs.append(refine.choose(data, None, ZF)[1])
+    for test in ("sensor_test", "wave_test"):
+        assert recs[0][test]["level"] == recs[1][test]["level"]

@@ -135,7 +135,8 @@ def fit_mass_cm(datasets: Sequence[tuple[str, Trial]], known: KnownParams, *,
         warnings.simplefilter("ignore", RuntimeWarning)
         init = init or ("linear" if theta0 is None else "given")
         core = iterate(prep, known, th0, z_f=z_f, z_f_prior=z_f_prior, options=options, init=init)
-    res = to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
+    with one_blas_thread():                                # its residual diagnostics too (long dot products)
+        res = to_result(core, prep, known, z_f, z_f_prior, options, time.perf_counter() - t0)
     if options.prefilter and core["state"] is not None:
         res.diagnostics["noise_model_selected"] = {
             "noise_model": options.noise_model,

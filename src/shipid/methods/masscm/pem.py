@@ -48,6 +48,7 @@ from numba import njit
 from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
 
 from shipid.numerics.linalg import one_blas_thread
+from shipid.numerics.spectral import welch
 from shipid.methods.masscm.crlb_kf import FREE, continuous_model, noise_matrices
 from shipid.methods.masscm import plausibility
 from shipid.methods.masscm.options import I_ZF
@@ -269,9 +270,7 @@ def _wave_start(s: _Set, theta, loc, known: KnownParams) -> np.ndarray:
         return loc
     loc[15:18] = np.log(np.maximum(np.var(np.diff(r[0], n=2, axis=0), axis=0) / 6, 1e-12))
     eps = r[0][:, 0]
-    from scipy.signal import welch  # scipy.signal (with scipy.stats) only where it is called
-
-    f, P = welch(eps, fs=1.0 / s.T, nperseg=min(2048, s.n))
+    f, P = welch(eps, fs=1.0 / s.T, nperseg=min(2048, s.n))     # scipy.signal.welch's numbers, in numpy
     w = 2 * np.pi * f[1 + int(np.argmax(P[1:]))]
     loc[12:15] = np.log([w, 0.1, 1.0])
     loc[14] = wave_log_sigma(s, theta, loc, known, np.var(eps))

@@ -51,12 +51,14 @@ Measured figures, with the commands that regenerate them: ``docs/validation/mass
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from shipid.methods.masscm.pem_result import refine_result as _pem
 from shipid.methods.masscm.whittle_result import refine_result as _whittle
 from shipid.methods.masscm.plausibility import Judgement, judge
 from shipid.methods.masscm.refine_modes import REFINE_MODES
 from shipid.models.roll_reduced import THETA_NAMES
+from shipid.numerics.linalg import one_blas_thread
 
 
 #: Refinement engines: ``name -> f(result, datasets, known, z_f) -> result`` (the result's ``diagnostics["refine"]``
@@ -102,16 +104,24 @@ _TESTED = ("p", "r")
 
 def _lagged(x: dict, chans, lags: int) -> np.ndarray:
     """Regressors of a one-step prediction: a constant and lags ``1..lags`` of each channel of ``chans``
-    (``x[k]`` equal-length arrays), rows ``k = lags .. N-1``."""
+    (``x[k]`` equal-length arrays), rows ``k = lags .. N-1`` (filled row by row by :func:`_fill_lagged`)."""
     N = x[chans[0]].size
     X = np.empty((N - lags, len(chans) * lags + 1))
-    X[:, 0] = 1.0
-    c = 1
-    for k in chans:
-        for j in range(1, lags + 1):
-            X[:, c] = x[k][lags - j:N - j]
-            c += 1
+    _fill_lagged(np.stack([np.asarray(x[k], dtype=float) for k in chans]), lags, X)
     return X
+
+
+@njit(cache=True)
+def _fill_lagged(xs, lags, X):
+    """``X[r] = [1, xs[0, r + lags - 1], .., xs[0, r], xs[1, r + lags - 1], ..]``: row ``r`` holds the constant and
+    lags ``1..lags`` of each row of ``xs`` at sample ``r + lags`` (copies only, in the memory order of ``X``)."""
+    for r in range(X.shape[0]):
+        X[r, 0] = 1.0
+        c = 1
+        for k in range(xs.shape[0]):
+            for j in range(1, lags + 1):
+                X[r, c] = xs[k, r + lags - j]
+                c += 1
 
 
 def _ls_residual(X: np.ndarray, Gs: np.ndarray, d: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -212,8 +222,9 @@ def choose(datasets, result, z_f) -> tuple[str, dict]:
     """The rule of the module docstring: ``(engine, record)``, engine ``"none"`` or :func:`auto_engine`'s; the
     record (for ``diagnostics["refine"]``) holds the decision, its reason and both tests. ``result`` is Algorithm
     1's result (the present tests read the data only; an engine's rule may read it)."""
-    sens = sensor_noise_level(datasets)
-    wav = wave_colour(datasets)
+    with one_blas_thread():           # the statistics the same bits on any core count (long X^T X, dot products)
+        sens = sensor_noise_level(datasets)
+        wav = wave_colour(datasets)
     if z_f is None:
         engine, why = "none", "z_f not known"
     elif not sens["detected"]:

@@ -101,21 +101,23 @@ class WhittleOptions(PEMOptions):
 
 @njit(cache=True)
 def _final_state(delta, Ad, b0, b1, k0):
-    """State after the last sample of ``x+ = Ad x + b0 d_k + b1 d_{k+1}`` from rest at ``k0`` (``d_N = d_{N-1}``)."""
+    """State after the last sample of ``x+ = Ad x + b0 d_k + b1 d_{k+1}`` from rest at ``k0`` (``d_N = d_{N-1}``);
+    each entry ``b0_i d_k + b1_i d_{k+1} + sum_j Ad_ij x_j``, summed in that order."""
     n = delta.shape[0]
-    x = np.zeros(4)
-    xn = np.zeros(4)
+    x0 = x1 = x2 = x3 = 0.0
+    a00, a01, a02, a03 = Ad[0, 0], Ad[0, 1], Ad[0, 2], Ad[0, 3]
+    a10, a11, a12, a13 = Ad[1, 0], Ad[1, 1], Ad[1, 2], Ad[1, 3]
+    a20, a21, a22, a23 = Ad[2, 0], Ad[2, 1], Ad[2, 2], Ad[2, 3]
+    a30, a31, a32, a33 = Ad[3, 0], Ad[3, 1], Ad[3, 2], Ad[3, 3]
     for k in range(k0, n):
         dk = delta[k]
         dnext = delta[k + 1] if k + 1 < n else dk
-        for i in range(4):
-            acc = b0[i] * dk + b1[i] * dnext
-            for j in range(4):
-                acc += Ad[i, j] * x[j]
-            xn[i] = acc
-        for i in range(4):
-            x[i] = xn[i]
-    return x
+        y0 = (((b0[0] * dk + b1[0] * dnext) + a00 * x0) + a01 * x1) + a02 * x2 + a03 * x3
+        y1 = (((b0[1] * dk + b1[1] * dnext) + a10 * x0) + a11 * x1) + a12 * x2 + a13 * x3
+        y2 = (((b0[2] * dk + b1[2] * dnext) + a20 * x0) + a21 * x1) + a22 * x2 + a23 * x3
+        y3 = (((b0[3] * dk + b1[3] * dnext) + a30 * x0) + a31 * x1) + a32 * x2 + a33 * x3
+        x0, x1, x2, x3 = y0, y1, y2, y3
+    return np.array([x0, x1, x2, x3])
 
 
 def band_index(f_bins, f_grid, curves, tol, rel):
@@ -145,10 +147,11 @@ class _FSet:
     def transform(self):
         """The DFTs ``Z_j`` (K, 5); the time-domain outputs are not needed after this (and are released)."""
         K, sq = self.w.size, np.sqrt(self.n)
-        Yf = np.fft.rfft(self.y, axis=0)[1:K + 1] / sq
-        Df = np.fft.rfft(self.delta)[1:K + 1] / sq
-        self.Z = np.column_stack([Yf, Df, np.full(K, 1.0 / sq)])
+        self.Z = Z = np.empty((K, 5), dtype=complex)          # filled in place: no stacked copies
+        np.divide(np.fft.rfft(self.y, axis=0)[1:K + 1], sq, out=Z[:, :3])
         self.y = None
+        np.divide(np.fft.rfft(self.delta)[1:K + 1], sq, out=Z[:, 3])
+        Z[:, 4] = 1.0 / sq
 
     def set_bands(self, idx):
         """Band sums for the band number ``idx`` of each bin."""
@@ -156,12 +159,13 @@ class _FSet:
         self.nb = np.diff(np.r_[starts, idx.size]).astype(float)
         self.wb = np.add.reduceat(self.w, starts) / self.nb
         dw = self.w - self.wb[idx]
+        dwk = [dw ** k for k in range(3)]
         P = np.empty((3, starts.size, 5, 5), dtype=complex)   # P_k = sum_j (w_j - w_b)^k Z_j Z_j^H
         for a in range(5):                                      # pair by pair: no (K, 5, 5) transient
             for b in range(a, 5):
                 zz = self.Z[:, a] * np.conj(self.Z[:, b])
                 for k in range(3):
-                    P[k, :, a, b] = np.add.reduceat(zz * dw ** k, starts)
+                    P[k, :, a, b] = np.add.reduceat(zz * dwk[k], starts)
                     P[k, :, b, a] = np.conj(P[k, :, a, b])
         M = np.block([[P[0], P[1]], [P[1], P[2]]])             # moments of Zt = [Z, (w - w_b) Z]
         self.M = M
@@ -323,11 +327,12 @@ def score_information(sets, theta, locs, waves, th_idx, fl, rel_step=1e-6):
         dA = np.zeros((nc, A.shape[0], 3, len(MODEL_COLS)), dtype=complex)     # the other columns of At are fixed
         dS = np.zeros((nc,) + S.shape, dtype=complex)
         order = sorted(range(nc), key=lambda c: cols[c] not in [("l", i) for i in NOISE_LOCAL])
+        A_model = A[:, :, MODEL_COLS]
         for c in order:           # noise-only columns first: they reuse the base point's ship (_FSet._ship)
             r, h = perturbed(lambda t, l: s.matrices(t, l, waves), theta, loc, *cols[c], rel_step)
             if r is None:
                 continue
-            dA[c] = (r[0][:, :, MODEL_COLS] - A[:, :, MODEL_COLS]) / h
+            dA[c] = (r[0][:, :, MODEL_COLS] - A_model) / h
             dS[c] = (r[1] - S) / h
         RM = s.residual_periodogram(A)
         nb = dA.shape[1]

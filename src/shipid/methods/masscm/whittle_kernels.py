@@ -18,9 +18,9 @@ from numba import njit
 
 
 @njit(cache=True)
-def _inv4(M, out):
-    """Inverse of a complex 4 x 4 matrix by Gauss-Jordan elimination with partial pivoting (into ``out``)."""
-    a = M.copy()
+def _inv4(a, out):
+    """Inverse of a complex 4 x 4 matrix ``a`` by Gauss-Jordan elimination with partial pivoting (into ``out``;
+    ``a`` is overwritten)."""
     for i in range(4):
         for j in range(4):
             out[i, j] = 1.0 if i == j else 0.0
