@@ -20,6 +20,13 @@ the command waits for the interpreter and its imports too), the peak RSS against
 ``BENCH_BEFORE=SRC`` also times the command with another source tree (an older checkout's ``src``) in the same
 rounds, so that before/after ratios come from one run.
 
+Bytecode: every child runs as an installed package does, from compiled bytecode (``pip install`` writes it; an
+editable checkout writes ``__pycache__`` on first import): ``PYTHONDONTWRITEBYTECODE`` is dropped and the
+bytecode goes to a temporary ``PYTHONPYCACHEPREFIX`` (nothing is written into the source trees), filled by one
+untimed warm-up run of each child. Where the environment forbids bytecode (``PYTHONDONTWRITEBYTECODE=1``) the
+command would otherwise compile its own modules from source on every start (about 0.1 s of CPU) while pandas,
+installed, would not. ``BENCH_NO_BYTECODE=1`` times the children with the environment as it is (no warm-up).
+
 Usage:  python benchmarks/bench_read_masscm_cli.py [ROUNDS=3] [FOLDER or - for a new one] [DURATION_S=3600]
 """
 
@@ -27,6 +34,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -40,6 +48,8 @@ ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREAD
 TARGET_RATIO, TARGET_MB = 5.0, 300.0
 SRC = os.environ.get("BENCH_SRC") or str(Path(__file__).resolve().parents[1] / "src")  # BENCH_SRC: another tree
 BEFORE = os.environ.get("BENCH_BEFORE")     # a second tree timed in the same rounds
+AS_IS = os.environ.get("BENCH_NO_BYTECODE") == "1"
+PYCACHE = None if AS_IS else tempfile.mkdtemp(prefix="bench_pycache_")   # bytecode as an installed package has it
 
 PEER = """
 import sys, time, resource
@@ -85,6 +95,9 @@ print(json.dumps(out))
 
 def child(cmd: list[str], stdout=subprocess.PIPE, src: str = SRC) -> tuple[dict, str]:
     env = dict(os.environ, PYTHONPATH=src, **ONE_CORE)
+    if PYCACHE is not None:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = PYCACHE
     p = subprocess.Popen(cmd, env=env, stdout=stdout, stderr=subprocess.PIPE, text=True)
     out = p.stdout.read() if p.stdout else ""
     _, status, ru = os.wait4(p.pid, 0)
@@ -129,6 +142,12 @@ def main() -> None:
     cmd = [sys.executable, "-m", "shipid", "identify", "mass-cm", "--nominal", files[0], "--calibration", files[1],
            "--loaded", files[2], "--known", str(folder / "known.toml"), "-o", str(folder / "result.json"),
            "--force"]
+    if PYCACHE is not None:            # untimed: writes the bytecode of every child (and warms numba's cache)
+        child([sys.executable, "-c", PEER, *files])
+        for src in [SRC] + ([BEFORE] if BEFORE else []):
+            child(cmd, stdout=subprocess.DEVNULL, src=src)
+    print("bytecode: " + ("as the environment has it (BENCH_NO_BYTECODE=1)" if AS_IS else
+                          "compiled once, as installed (PYTHONPYCACHEPREFIX, one warm-up run each)"))
     peer, peer_proc, command, before = [], [], [], []
     for k in range(rounds):
         order = ["peer", "command"] + (["before"] if BEFORE else [])
@@ -161,4 +180,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    finally:
+        if PYCACHE is not None:
+            shutil.rmtree(PYCACHE, ignore_errors=True)

@@ -35,13 +35,16 @@ from __future__ import annotations
 import functools
 import json
 import math
+from typing import TYPE_CHECKING
 
 import click
 
 from shipid.cli import study
 from shipid.cli._common import emit, loud_lines, out_options
 from shipid.errors import ShipidError
-from shipid.campaign.engine import CampaignOptions, CampaignResult
+
+if TYPE_CHECKING:   # the engine (multiprocessing, rich) is imported when a campaign command runs
+    from shipid.campaign.engine import CampaignResult
 
 
 def campaign_options(f=None, *, seed_default: int = 0):
@@ -50,6 +53,8 @@ def campaign_options(f=None, *, seed_default: int = 0):
     def decorate(func):
         @functools.wraps(func)
         def wrapper(*args, seed, workers, dask_local, scheduler, store, resume, retry_failed, **kw):
+            from shipid.campaign.engine import CampaignOptions
+
             kw["campaign"] = CampaignOptions(seed=seed, workers=workers, dask_local=dask_local,
                                              scheduler=scheduler, store=store, resume=resume,
                                              retry_failed=retry_failed)
