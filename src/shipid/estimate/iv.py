@@ -59,16 +59,20 @@ def arx_fit(y: np.ndarray, u: np.ndarray, na: int = 4, nb: int = 5) -> tuple[np.
     y = np.asarray(y, dtype=float)
     u = np.asarray(u, dtype=float)
     s = max(na, nb - 1)
+    from scipy.linalg import lapack, solve_triangular  # scipy.linalg only where it is called
+
     R = arx_regressors(y, u, na, nb, s)
-    # least squares by a thin QR of [R, y] (O(n k^2), no SVD of the long matrix); lstsq when rank deficient
-    Rf = np.linalg.qr(R, mode="r")
+    # least squares by a thin QR of [R, y] (O(n k^2), no SVD of the long matrix); lstsq when rank deficient.
+    # The factor is LAPACK's dgeqrf in place on the Fortran-order R (numpy.linalg.qr calls the same routine on a
+    # copy: the same triangle, without copying the n x (k + 1) matrix twice)
     k = na + nb
+    qr, _, _, info = lapack.dgeqrf(R, overwrite_a=True)
+    Rf = np.triu(qr[:min(R.shape)])
     d = np.abs(np.diag(Rf[:k, :k]))
-    if d.size and d.min() > 1e-10 * max(d.max(), 1e-300):
-        from scipy.linalg import solve_triangular
+    if info == 0 and d.size == k and d.min() > 1e-10 * max(d.max(), 1e-300):
         th = solve_triangular(Rf[:k, :k], Rf[:k, k])
-    else:
-        th, *_ = np.linalg.lstsq(R[:, :k], y[s:], rcond=None)
+    else:                                   # R was overwritten by the factor: the regressors again
+        th, *_ = np.linalg.lstsq(arx_regressors(y, u, na, nb, s)[:, :k], y[s:], rcond=None)
     a = np.concatenate([[1.0], th[:na]])
     roots = np.roots(a)
     if np.any(np.abs(roots) >= 1.0):
