@@ -353,8 +353,13 @@ class Result:
         return cls.from_dict(json.loads(text))
 
 
+_PLAIN = frozenset((float, int, str, bool, type(None)))
+
+
 def _jsonable(x: Any) -> Any:
     """Convert numpy containers and scalars to plain JSON types (NaN kept as NaN)."""
+    if type(x) in _PLAIN:             # the bulk of a result (its series): returned before the abstract-class checks
+        return x
     if isinstance(x, Mapping):
         return {str(k): _jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
