@@ -52,6 +52,30 @@ def test_first_step_yaw_sign_of_mmg_and_flipped_runs():
     assert st["sign"] == -1 and st["t_step"] == pytest.approx(5.0, abs=0.2)
 
 
+def test_first_step_yaw_sign_is_0_for_a_step_not_made_going_ahead():
+    # the rudder's side force changes sign going astern or with the propeller reversed: no convention to read
+    need()
+    tr = _sim(flip=True)
+    astern = Trial(tr.t, {**tr.channels, "u": -np.abs(tr["u"])}, tr.units, tr.meta)
+    reversed_prop = Trial(tr.t, {**tr.channels, "n": -tr["n"]}, tr.units, tr.meta)
+    for run in (astern, reversed_prop):
+        st = V.first_step_yaw_sign(run)
+        assert st["sign"] == 0 and st["ahead"] is False and st["t_step"] == pytest.approx(5.0, abs=0.2)
+
+
+def test_no_esso_run_contradicts_the_convention():
+    # random_06-Aug-2020_16_24_25_6 makes its first rudder step going astern (u -0.04 m/s, propeller -9.6 rps)
+    need("esso_osaka_3m/data")
+    from shipid.methods.mmg.profile import read_run
+
+    signs = {}
+    for f in sorted((ROOT / "esso_osaka_3m" / "data").glob("*/*.csv")):
+        signs[f.name] = V.first_step_yaw_sign(read_run(f))["sign"]
+    # 29 of the 41 runs give a clear +1; the other 12 have no clear step or response (sign 0)
+    assert len(signs) == 41 and -1 not in signs.values() and sum(v == 1 for v in signs.values()) == 29
+    assert signs["random_06-Aug-2020_16_24_25_6.csv"] == 0
+
+
 def test_first_step_yaw_sign_is_0_without_a_step():
     tr = Trial(np.arange(0, 30, 0.1), {"delta": np.zeros(300), "r": np.zeros(300)}, {"delta": "rad", "r": "rad/s"}, {})
     assert V.first_step_yaw_sign(tr)["sign"] == 0

@@ -114,13 +114,16 @@ def first_step_yaw_sign(trial: Trial, *, max_window: float = 10.0) -> dict[str, 
     before the step to the last second of the step (at most ``max_window`` s, until the
     rudder returns). With the MMG convention (rudder positive turns the ship to
     starboard, yaw rate positive to starboard) the product of the step's sign and the
-    response's sign is +1; a log whose rudder is positive to port gives -1.
+    response's sign is +1; a log whose rudder is positive to port gives -1. The rule holds for a ship going
+    ahead with its propeller ahead: going astern, or with the propeller reversed, the rudder's inflow and so
+    its side force change sign, and the step says nothing about the convention (``sign`` 0, ``ahead`` False).
 
     Returns
     -------
     dict
-        ``sign`` (+1, -1, or 0 when the run has no clear step or no clear response),
-        ``t_step`` (s from the start), ``delta_step_deg``, ``dr_deg_s``.
+        ``sign`` (+1, -1, or 0 when the run has no clear step, no clear response, or the step is not made
+        going ahead), ``t_step`` (s from the start), ``delta_step_deg``, ``dr_deg_s``, ``ahead`` (mean surge
+        speed over the step > 0 and, where the run logs it, mean propeller rate >= 0).
     """
     t = np.asarray(trial.t, dtype=float)
     out: dict[str, Any] = {"sign": 0, "t_step": None, "delta_step_deg": None, "dr_deg_s": None}
@@ -148,8 +151,12 @@ def first_step_yaw_sign(trial: Trial, *, max_window: float = 10.0) -> dict[str, 
     after = float(np.nanmean(r[max(j - n1, k):j]))
     dr = after - before
     scale = float(np.nanmax(np.abs(r))) if np.isfinite(r).any() else 0.0
-    out.update(t_step=float(t[k] - t[0]), delta_step_deg=float(np.degrees(d[k] - d0)), dr_deg_s=float(np.degrees(dr)))
-    if scale > 0 and abs(dr) > 0.1 * scale:
+    ahead = bool(np.nanmean(trial["u"][k:j]) > 0.0) if "u" in trial else True
+    if "n" in trial:
+        ahead = ahead and bool(np.nanmean(trial["n"][k:j]) >= 0.0)
+    out.update(t_step=float(t[k] - t[0]), delta_step_deg=float(np.degrees(d[k] - d0)), dr_deg_s=float(np.degrees(dr)),
+               ahead=ahead)
+    if ahead and scale > 0 and abs(dr) > 0.1 * scale:
         out["sign"] = int(s * np.sign(dr))
     return out
 
