@@ -45,22 +45,6 @@ def diff2(x: np.ndarray) -> np.ndarray:
     return d
 
 
-def regressors(y: np.ndarray, a_s: np.ndarray, r: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """The regressors (37) ``[-y_{t-1}, -y_{t-2}, a_t - a_{t-2}, r_t - r_{t-2}, delta_t - delta_{t-2}]`` (n, 5),
-    samples before the record zero, written column by column into one array (no stacked temporaries; the
-    same numbers as stacking ``-[0, y[:-1]]``, ``-[0, 0, y[:-2]]`` and :func:`diff2` of the inputs)."""
-    n = y.size
-    Phi = np.empty((n, 5))
-    Phi[:1, 0] = -0.0
-    np.negative(y[:-1], out=Phi[1:, 0])
-    Phi[:2, 1] = -0.0
-    np.negative(y[:-2], out=Phi[2:, 1])
-    for j, x in ((2, a_s), (3, r), (4, delta)):
-        Phi[:2, j] = 0.0
-        np.subtract(x[2:], x[:-2], out=Phi[2:, j])
-    return Phi
-
-
 def prepare(datasets: Sequence[tuple[str, Trial]], options: MassCMOptions = MassCMOptions()) -> list[Dataset]:
     """Check and condition the datasets; build regressors (35) and the black-box instruments (A).
 
@@ -95,7 +79,9 @@ def prepare(datasets: Sequence[tuple[str, Trial]], options: MassCMOptions = Mass
         y = sig["p"]
         ds = Dataset(condition=cond, T=float(np.mean(dt)), y=y, a_s=sig["a_s"], r=sig["r"],
                      delta=sig["delta"] - sig["delta"].mean())
-        ds.Phi = regressors(y, ds.a_s, ds.r, ds.delta)                                      # (37)
+        ylag1 = np.concatenate([[0.0], y[:-1]])
+        ylag2 = np.concatenate([[0.0, 0.0], y[:-2]])
+        ds.Phi = np.column_stack([-ylag1, -ylag2, diff2(ds.a_s), diff2(ds.r), diff2(ds.delta)])   # (37)
         sims = {}
         for name, sgl in (("y", y - y.mean()), ("a_s", ds.a_s - ds.a_s.mean()), ("r", ds.r - ds.r.mean())):
             b, a = arx_fit(sgl, ds.delta, options.arx_na, options.arx_nb)
@@ -109,4 +95,4 @@ def first_row(options: MassCMOptions) -> int:
     return max(options.n_y, options.n_as, options.n_r, options.n_delta, 3) + 1
 
 
-__all__ = ["Dataset", "diff2", "regressors", "prepare", "first_row"]
+__all__ = ["Dataset", "diff2", "prepare", "first_row"]

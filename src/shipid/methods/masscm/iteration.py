@@ -20,7 +20,7 @@ from shipid.methods.masscm.moments import build_moments, closed_loop_sim, work_a
 from shipid.methods.masscm.noise import AUTO_HOLD, fit_noise_model, initial_prefilter
 from shipid.methods.masscm.noise_bj import FREEZE_AFTER, held_noise_model
 from shipid.methods.masscm.options import I_ZF, I_ZM, MassCMOptions
-from shipid.methods.masscm.plausibility import identified_mode_physical
+from shipid.methods.masscm.plausibility import implausible_identifiable
 from shipid.methods.masscm.search import sim_terms
 from shipid.methods.masscm.step import dataset_step
 from shipid.models.roll_reduced import KnownParams, from_moment, roll_terms, to_moment
@@ -62,12 +62,11 @@ def step_compiled(ds: Dataset, g_mid: np.ndarray, sim: np.ndarray, th_mid: np.nd
 
 def _physical(theta_q: np.ndarray, known: KnownParams, conds, memo: dict | None) -> bool:
     """Whether the identified roll mode of ``theta_q`` (moment parameterisation) is physical
-    (:func:`~shipid.methods.masscm.plausibility.implausible_identifiable` finds nothing, judged by
-    :func:`~shipid.methods.masscm.plausibility.identified_mode_physical`); ``memo`` keeps the judgements by the iterate's bytes."""
+    (:func:`implausible_identifiable` finds nothing); ``memo`` keeps the judgements by the iterate's bytes."""
     key = theta_q.tobytes()
     if memo is not None and key in memo:
         return memo[key]
-    ok = identified_mode_physical(from_moment(theta_q), known, conds)
+    ok = not implausible_identifiable(from_moment(theta_q), known, conds)
     if memo is not None:
         if len(memo) > 4:
             memo.clear()

@@ -10,7 +10,6 @@ exact-fit family ``m(z_f)`` (:mod:`shipid.methods.masscm.identifiability`).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -100,45 +99,6 @@ def implausible_identifiable(theta: np.ndarray, known: KnownParams, conds=(NOMIN
     return why
 
 
-def identified_mode_physical(theta: np.ndarray, known: KnownParams, conds=(NOMINAL, CALIBRATION, LOADED)) -> bool:
-    """``not implausible_identifiable(theta, known, conds)`` without standard errors, as one boolean.
-
-    The same judgement by the same arithmetic: the terms ``A2``, ``A1``, ``k1`` of :func:`roll_terms` are
-    written here dataset by dataset with the operations of :func:`roll_terms` and
-    :func:`shipid.models.roll_reduced.condition_loads` in the same order (elementwise, so the same numbers),
-    without the arrays, dictionaries and reason strings (tests compare the two). For the iteration's test of
-    the physical region (:func:`shipid.methods.masscm.iteration.left_physical_region`), called at every iterate.
-    """
-    th = [float(v) for v in theta]         # Python floats: the same IEEE operations, without numpy's scalars
-    if not all(math.isfinite(v) for v in th):
-        return False
-    k, A_x, d, K_r, K_v, K_d, z_f, m, zm = th
-    if m <= 1e-6 * known.M or abs(zm) > 10.0:
-        return False
-    zg = known.zg_bar + z_f
-    zs = known.zs_bar + z_f
-    zg2 = float(np.float64(zg) ** 2)        # numpy's power, as roll_terms' ``zg**2`` (not always zg * zg)
-    for c in conds:
-        if c == NOMINAL:
-            q, zb = 0.0 * z_f, 0.0 * z_f
-        elif c == CALIBRATION:
-            q, zb = known.m_c * (known.zc_bar + z_f), known.zc_bar + 0.0 * z_f
-        elif c == LOADED:
-            q, zb = m * (zm + z_f), zm + 0.0 * z_f
-        else:
-            raise ValueError(f"unknown loading condition {c!r}")
-        A2 = A_x + known.M * zg * (known.zg_bar - known.zs_bar) + q * (zb - known.zs_bar) - K_v * zs
-        A1 = A_x + known.M * zg2 + q * (zb + z_f)
-        k1 = k + known.M * known.g * zg + q * known.g
-        if A2 == 0.0:                       # any ratio is then infinite or undefined
-            return False
-        for v in (A1, d, k1):
-            r = v / A2                      # IEEE division: inf on overflow, no warning
-            if not (math.isfinite(r) and r > 0):
-                return False
-    return True
-
-
 _MARKED = {"m": "estimated", "zm_bar": "estimated", "rho": "derived"}   # status before mark
 
 
@@ -224,4 +184,4 @@ def dm_dzf(theta: np.ndarray, known: KnownParams) -> float:
     return rho * known.m_c * (zm - known.zc_bar) / (zm + z_f) ** 2
 
 
-__all__ = ["implausible_reasons", "implausible_identifiable", "identified_mode_physical", "Judgement", "judge", "rho_of", "dm_dzf"]
+__all__ = ["implausible_reasons", "implausible_identifiable", "Judgement", "judge", "rho_of", "dm_dzf"]
