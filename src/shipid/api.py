@@ -166,16 +166,14 @@ def validate(model, trial: Trialish, *, horizon: float | None = None, fmt: str |
     from shipid.analysis.openloop import write_csv
     from shipid.methods._trials import as_trial
     from shipid.methods.mmg.profile import flip
-    from shipid.warning_lines import repair_warnings
+    from shipid.warning_lines import repair_warnings, unconverged_model_line
 
     mod = info.submodule("validate")
     tr = as_trial(trial, fmt=fmt, channel_map=channels, trim_empty_rows=True, interpolate_gaps=1.0,
                   method="shipid validate", required=list(getattr(mod, "REQUIRED", ())) or None)
     notes = [] if tr is trial else repair_warnings([tr])        # the repairs of a file read here
     tr = flip(tr, rudder_sign or 1)
-    if (model.diagnostics or {}).get("converged") is False:
-        notes.append(f"model {label or 'the model'} did not converge when it was identified "
-                     "(diagnostics.converged false): its predictions must not be trusted")
+    notes += unconverged_model_line({"diagnostics": model.diagnostics}, label or "the model")
     v = mod.validate_result(model, tr, horizon=horizon, **kwargs)
     v.settings["warnings"] = notes + list(v.settings.get("warnings", []))
     if out is not None:

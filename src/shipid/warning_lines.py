@@ -53,6 +53,15 @@ def implied_warnings(res) -> list[str]:
     return out
 
 
+def unconverged_model_line(document: dict | None, label: str) -> list[str]:
+    """The line ``validate`` prints for a model whose identification did not converge (``diagnostics.converged``
+    false in its result ``document``), naming the model by ``label``; empty otherwise."""
+    if document is None or (document.get("diagnostics") or {}).get("converged") is not False:
+        return []
+    return [f"model {label} did not converge when it was identified (diagnostics.converged false): "
+            "its predictions must not be trusted"]
+
+
 def repair_warnings(trials: Iterable) -> list[str]:
     """One line per data repair recorded by the reader (``trial.meta["repairs"]``), naming the file."""
     out = []
@@ -102,5 +111,5 @@ def recorded(into: list) -> Iterator[None]:
             into.extend(python_warnings(rec))
 
 
-__all__ = ["UNDETERMINED", "QUIET", "one_line", "implied_warnings", "repair_warnings", "python_warnings",
-           "collect", "recorded"]
+__all__ = ["UNDETERMINED", "QUIET", "one_line", "implied_warnings", "unconverged_model_line", "repair_warnings",
+           "python_warnings", "collect", "recorded"]

@@ -8,7 +8,7 @@ validating a model loads none of the identification modules (start-up, ``benchma
 from __future__ import annotations
 
 from shipid.errors import InputError
-from shipid.warning_lines import one_line, repair_warnings
+from shipid.warning_lines import one_line, repair_warnings, unconverged_model_line
 from shipid.methods.mmg import profile as PF
 from shipid.methods.mmg import validate as V
 from shipid.methods.mmg.manoeuvres import depth_check
@@ -66,10 +66,7 @@ def validate_with_run(model, trial, *, horizon: float | None = None, fmt: str | 
     if horizon is not None and not horizon > 0:
         raise InputError("the horizon must be positive")
     mv = dict(((doc or {}).get("model") or {}).get("validate") or {})
-    notes = []
-    if doc is not None and (doc.get("diagnostics") or {}).get("converged") is False:
-        notes.append(f"model {label} did not converge when it was identified (diagnostics.converged false): "
-                     "its predictions must not be trusted")
+    notes = unconverged_model_line(doc, label)
     tr, settings, more = PF.read_for_model(trial, mv, fmt=fmt, channels=channels, rudder_sign=rudder_sign)
     notes += more
     rt = ((doc or {}).get("model") or {}).get("retime")
