@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from shipid.methods.masscm.criterion import jacobian_cs
 from shipid.methods.masscm.data import first_row
 from shipid.methods.masscm.moments import closed_loop_sim, instruments, transient_length
 from shipid.models.roll_reduced import discrete_coeffs, roll_terms
@@ -109,12 +110,13 @@ def coeff_jacobian(theta_q: np.ndarray, known, conds, T: float, free: np.ndarray
     """``d g_i / d theta_q[free]`` of (33) for every dataset by complex step: ``(n_datasets, 5, n_free)``."""
     idx = np.flatnonzero(free)
     Ts = np.full(len(conds), T)
-    D = np.empty((len(conds), 5, idx.size))
-    for j, k in enumerate(idx):
-        th = theta_q.astype(complex)
-        th[k] += 1e-30j
-        D[:, :, j] = discrete_coeffs(th, known, conds, Ts, moment=True).imag / 1e-30
-    return D
+
+    def coeffs(x):
+        th = theta_q.astype(x.dtype)
+        th[idx] = x
+        return discrete_coeffs(th, known, conds, Ts, moment=True).ravel()
+
+    return jacobian_cs(coeffs, theta_q[idx]).reshape(len(conds), 5, idx.size)
 
 
 def _newey_west(S: np.ndarray) -> np.ndarray:
