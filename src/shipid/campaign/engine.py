@@ -162,6 +162,12 @@ class CampaignResult:
     def n_failed(self) -> int:
         return len(self.failed)
 
+    def failed_text(self, shown: int = 3) -> str:
+        """The first ``shown`` failed runs as ``run i: Type: message`` joined by ``; `` (and how many more):
+        the part of a warning line that says what failed."""
+        text = "; ".join(f"run {r.index}: {r.error}" for r in self.failed[:shown])
+        return text + (f"; {self.n_failed - shown} more" if self.n_failed > shown else "")
+
     def to_frame(self):
         """A pandas DataFrame, one row per run (see :func:`shipid.campaign.store.records_frame`)."""
         return records_frame(self.records, self.name)

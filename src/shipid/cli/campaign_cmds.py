@@ -103,10 +103,8 @@ def failure_lines(res: CampaignResult) -> list[str]:
     """
     if not res.n_failed:
         return []
-    shown = "; ".join(f"run {r.index}: {r.error}" for r in res.failed[:3])
-    more = f"; {res.n_failed - 3} more" if res.n_failed > 3 else ""
     return [f"{res.name}: {res.n_failed} of {res.n_runs} runs failed and are left out of the summary "
-            f"({shown}{more})"]
+            f"({res.failed_text()})"]
 
 
 @study.command("toy")

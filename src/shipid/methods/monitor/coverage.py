@@ -143,9 +143,9 @@ def run_cases(streams: int, noise_scales=(1.0, 0.1), *, duration: float = 1800.0
                                                                  streams, kwargs=kw, name="monitor-coverage")
             k += 1
             if res.n_failed:
-                shown = "; ".join(f"run {r.index}: {r.error}" for r in res.failed[:3])
                 failures.append(f"monitor-coverage, noise x{scale:g}, {'change' if change else 'no change'}: "
-                                f"{res.n_failed} of {res.n_runs} streams failed (counted as not covered): {shown}")
+                                f"{res.n_failed} of {res.n_runs} streams failed (counted as not covered): "
+                                f"{res.failed_text()}")
             outs = [r.outputs if r.status == "ok" else None for r in res.records]
             cases.append({"noise_scale": float(scale), "change": change, "seed": campaign.seed + k - 1,
                           "summary": summarise(outs),
